@@ -1,0 +1,27 @@
+#include "renderer/engine.h"
+
+#include <fmt/format.h>
+
+#include "renderer/raster/raster_engine.h"
+#include "renderer/scene/input_error.h"
+
+namespace farm {
+
+void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                 TileBuffer& out) {
+  const Rect image{0, 0, settings.width, settings.height};
+  const Rect clipped = tile.intersect(image);
+  switch (settings.engine) {
+    case EngineKind::Raster:
+      raster::render_tile(scene, settings, clipped, out);
+      return;
+    case EngineKind::Whitted:
+    case EngineKind::Path:
+      break;
+  }
+  throw InputError(fmt::format("render.engine: '{}' is not available in this build yet "
+                               "(available: raster)",
+                               to_string(settings.engine)));
+}
+
+}  // namespace farm

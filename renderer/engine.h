@@ -1,0 +1,16 @@
+#pragma once
+// The one entry point every engine implements (DESIGN.md, "The engine contract"):
+//   render_tile(prepared scene, settings, tile rectangle, output buffer)
+// A pure function of its inputs: a pixel's value never depends on tiling or threads.
+#include "renderer/image/tile_buffer.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render_settings.h"
+
+namespace farm {
+
+// Renders `tile` (clipped to the image) into `out`, which it resizes to the tile and the
+// settings' AOVs. Throws InputError for an engine this build cannot run.
+void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                 TileBuffer& out);
+
+}  // namespace farm

@@ -1,0 +1,68 @@
+#pragma once
+// Float pixels of one rectangle of the frame: RGBA always, AOVs when asked. A whole frame (the
+// film) is simply a TileBuffer whose rect is the full image.
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+#include <limits>
+#include <vector>
+
+#include "renderer/image/aov.h"
+
+namespace farm {
+
+struct Rect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // half-open: [x0, x1) x [y0, y1)
+
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+  Rect intersect(const Rect& o) const;
+  bool operator==(const Rect&) const = default;
+};
+
+class TileBuffer {
+ public:
+  TileBuffer() = default;
+  TileBuffer(const Rect& rect, const AovSet& aovs) { reset(rect, aovs); }
+
+  // Resizes to `rect` and clears: colour and alpha 0, depth +inf, other AOVs 0.
+  void reset(const Rect& rect, const AovSet& aovs);
+
+  const Rect& rect() const { return rect_; }
+  const AovSet& aovs() const { return aovs_; }
+
+  // Pixel coordinates are absolute image coordinates inside rect().
+  glm::vec4& rgba(int x, int y) { return rgba_[index(x, y)]; }
+  const glm::vec4& rgba(int x, int y) const { return rgba_[index(x, y)]; }
+  float& depth(int x, int y) { return depth_[index(x, y)]; }
+  float depth(int x, int y) const { return depth_[index(x, y)]; }
+  glm::vec3& normal(int x, int y) { return normal_[index(x, y)]; }
+  const glm::vec3& normal(int x, int y) const { return normal_[index(x, y)]; }
+  glm::vec3& albedo(int x, int y) { return albedo_[index(x, y)]; }
+  const glm::vec3& albedo(int x, int y) const { return albedo_[index(x, y)]; }
+  float& bvh_cost(int x, int y) { return bvh_cost_[index(x, y)]; }
+  float bvh_cost(int x, int y) const { return bvh_cost_[index(x, y)]; }
+
+  // Copies the overlap of `tile` into this buffer (the merge step); AOVs this buffer lacks are
+  // skipped.
+  void paste(const TileBuffer& tile);
+
+  static constexpr float kNoDepth = std::numeric_limits<float>::infinity();
+
+ private:
+  std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(y - rect_.y0) * static_cast<std::size_t>(rect_.width()) +
+           static_cast<std::size_t>(x - rect_.x0);
+  }
+
+  Rect rect_;
+  AovSet aovs_;
+  std::vector<glm::vec4> rgba_;
+  std::vector<float> depth_;
+  std::vector<glm::vec3> normal_;
+  std::vector<glm::vec3> albedo_;
+  std::vector<float> bvh_cost_;
+};
+
+}  // namespace farm

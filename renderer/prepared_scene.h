@@ -1,0 +1,33 @@
+#pragma once
+// A scene made ready for rendering: everything that depends only on the scene (world matrices,
+// normal matrices; later the BVHs) computed once per job per process and shared by all tiles.
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+#include <vector>
+
+#include "renderer/scene/scene.h"
+
+namespace farm {
+
+struct PreparedObject {
+  const SceneObject* source = nullptr;
+  glm::mat4 model_to_world{1.0f};
+  glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
+};
+
+class PreparedScene {
+ public:
+  explicit PreparedScene(Scene scene);
+  PreparedScene(const PreparedScene&) = delete;
+  PreparedScene& operator=(const PreparedScene&) = delete;
+
+  const Scene& scene() const { return scene_; }
+  const std::vector<PreparedObject>& objects() const { return objects_; }
+  std::size_t triangle_count() const { return scene_.triangle_count(); }
+
+ private:
+  Scene scene_;
+  std::vector<PreparedObject> objects_;
+};
+
+}  // namespace farm

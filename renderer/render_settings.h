@@ -1,0 +1,33 @@
+#pragma once
+// How to render: the job's `render` block plus the AOVs asked for in `output`.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "renderer/image/aov.h"
+
+namespace farm {
+
+enum class EngineKind { Raster, Whitted, Path };
+enum class AccelKind { Bvh, BvhMedian, Naive, Embree };
+
+std::string_view to_string(EngineKind e);
+std::string_view to_string(AccelKind a);
+std::optional<EngineKind> engine_from_string(std::string_view s);
+std::optional<AccelKind> accel_from_string(std::string_view s);
+
+struct RenderSettings {
+  EngineKind engine = EngineKind::Raster;
+  int width = 640;
+  int height = 480;
+  int spp = 1;
+  int max_depth = 5;         // scattering events; -1 = unbounded (path tracer, Russian roulette)
+  std::uint64_t seed = 0;
+  int tile_size = 32;
+  int threads = 0;           // 0 = all hardware threads
+  AccelKind accel = AccelKind::Bvh;
+  AovSet aovs;               // extra channels beyond RGBA
+};
+
+}  // namespace farm

@@ -1,0 +1,26 @@
+#pragma once
+// Pinhole camera of DESIGN.md: looks from `position` at `target`; view space looks down -Z.
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <optional>
+
+namespace farm {
+
+struct Camera {
+  glm::vec3 position{5.0f, 5.0f, 5.0f};
+  glm::vec3 target{0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float fov_y_degrees = 45.0f;
+  float near = 0.1f;
+  float far = 10.0f;
+  std::optional<float> aspect;  // width / height of the image unless given
+
+  float aspect_for(int width, int height) const {
+    return aspect ? *aspect : static_cast<float>(width) / static_cast<float>(height);
+  }
+  glm::mat4 view_matrix() const;                    // world -> view (rigid)
+  glm::mat4 projection_matrix(float aspect_ratio) const;  // view -> clip, OpenGL depth range
+  glm::vec3 forward() const;                        // unit viewing axis in world space
+};
+
+}  // namespace farm

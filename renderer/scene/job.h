@@ -1,0 +1,59 @@
+#pragma once
+// A job file (DESIGN.md "Job file", version 1), parsed and strictly validated. Every error is an
+// InputError whose message starts with the file and names the JSON path, for example
+//   jobs/cow.json: scene.objects[2].scale: expected 3 numbers
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "renderer/render_settings.h"
+#include "renderer/scene/camera.h"
+#include "renderer/scene/light.h"
+#include "renderer/scene/material.h"
+#include "renderer/scene/transform.h"
+
+namespace farm {
+
+struct JobObject {
+  std::filesystem::path file;   // absolute, canonical, checked to lie inside the asset root
+  std::string file_as_written;  // as it appears in the job, for messages
+  ObjectTransform transform;
+  MaterialOverride material;
+};
+
+struct JobScene {
+  std::vector<JobObject> objects;
+  std::optional<Camera> camera;              // absent: the first model camera, else the default
+  std::optional<std::vector<Light>> lights;  // absent: the models' lights
+  glm::vec3 ambient{0.1f};
+  glm::vec3 background{100.0f / 255.0f};
+};
+
+struct JobOutput {
+  std::filesystem::path image;    // EXR; relative paths are relative to the working directory
+  std::filesystem::path preview;  // PNG/JPEG; empty = none
+};
+
+struct Job {
+  std::filesystem::path path;     // the job file
+  std::string name;
+  JobScene scene;
+  RenderSettings render;          // includes the output AOVs
+  JobOutput output;
+  std::int64_t embree_rays = 0;   // validate.embree_rays
+};
+
+struct JobLoadOptions {
+  // Model files must resolve inside this folder; empty = the job file's folder.
+  std::filesystem::path asset_root;
+};
+
+// Parses and validates `path`. Model files must exist; they are not loaded here.
+Job load_job(const std::filesystem::path& path, const JobLoadOptions& options = {});
+// Same, from JSON text; `path` names the file in messages and anchors relative model paths.
+Job parse_job(const std::string& json_text, const std::filesystem::path& path,
+              const JobLoadOptions& options = {});
+
+}  // namespace farm

@@ -1,0 +1,28 @@
+#pragma once
+// Triangle mesh in model space. Loaders bake a file's node hierarchy into the positions, so a
+// model is one triangle soup per material group and the job's object transform sits on top.
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <string>
+#include <vector>
+
+#include "renderer/geometry/aabb.h"
+
+namespace farm {
+
+struct Mesh {
+  std::string name;
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;        // one per position, unit length
+  std::vector<glm::uvec3> triangles;     // indices into positions
+  std::uint32_t material = 0;            // index into Model::materials
+
+  std::size_t triangle_count() const { return triangles.size(); }
+  AABB bounds() const;
+};
+
+// Area-weighted vertex normals. Vertices at the same position share one normal, so a mesh that a
+// loader de-indexed (one vertex per face corner) still comes out smooth.
+void generate_smooth_normals(Mesh& mesh);
+
+}  // namespace farm

@@ -1,0 +1,31 @@
+#pragma once
+// Everything one model file contributes: meshes (model space), materials, and the cameras and
+// lights it declares, which a job uses only when it gives none of its own.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "renderer/scene/camera.h"
+#include "renderer/scene/light.h"
+#include "renderer/scene/material.h"
+#include "renderer/scene/mesh.h"
+
+namespace farm {
+
+struct Model {
+  std::filesystem::path source;
+  std::vector<Mesh> meshes;
+  std::vector<Material> materials;  // never empty after loading: a default is added if needed
+  std::vector<Camera> cameras;
+  std::vector<Light> lights;
+
+  std::size_t triangle_count() const;
+  std::size_t vertex_count() const;
+  AABB bounds() const;
+};
+
+// Loads .dae/.obj/.ply (Assimp) and .gltf/.glb (tinygltf). Throws InputError naming the file and
+// what is wrong with it; never crashes on malformed input.
+Model load_model(const std::filesystem::path& file);
+
+}  // namespace farm
