@@ -1,9 +1,94 @@
-// `farm`: the render farm's command line.
+// `farm`: the render farm's command line. Exit codes: 0 ok, 2 bad input, 1 internal error.
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <exception>
+
+#include "renderer/scene/input_error.h"
+#include "server/info_command.h"
+#include "server/render_command.h"
+
+namespace {
+
+constexpr int kExitBadInput = 2;
+constexpr int kExitInternal = 1;
+
+void add_render_command(CLI::App& app, farm::RenderCommandOptions& o, std::string& preview) {
+  CLI::App* render = app.add_subcommand(
+      "render", "Render a job in this process (embedded scheduler and local worker threads)");
+  render->add_option("job", o.job_file, "Job file (JSON, see jobs/README.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  render->add_option("--engine", o.overrides.engine, "Engine: raster, whitted or path")
+      ->check(CLI::IsMember({"raster", "whitted", "path"}));
+  render->add_option("--width", o.overrides.width, "Image width in pixels")
+      ->check(CLI::Range(1, 16384));
+  render->add_option("--height", o.overrides.height, "Image height in pixels")
+      ->check(CLI::Range(1, 16384));
+  render->add_option("--spp", o.overrides.spp, "Samples per pixel")->check(CLI::Range(1, 1 << 20));
+  render->add_option("--threads", o.overrides.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::Range(0, 1024));
+  render->add_option("--tile-size", o.overrides.tile_size, "Tile edge in pixels")
+      ->check(CLI::Range(1, 16384));
+  render->add_option("--out", o.overrides.image, "EXR output path (replaces output.image)");
+  render->add_option("--preview", preview,
+                     "Preview path, .png or .jpg (replaces output.preview; 'none' for no preview)");
+  render->add_flag("--float", o.overrides.full_float, "Write 32-bit float EXR instead of half");
+  render->add_option("--asset-root", o.load.asset_root,
+                     "Folder that model files must lie in (default: the job file's folder)")
+      ->check(CLI::ExistingDirectory);
+  render->add_flag("--quiet", [&o](std::int64_t) { o.progress = false; }, "No progress bar");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"farm: render farm batch service"};
+  CLI::App app{"farm: render farm batch service.\n"
+               "  farm render JOB   render a job locally to EXR + PNG preview\n"
+               "  farm info FILE    show what a model or job file contains"};
   app.require_subcommand(1);
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", "farm 0.1.0");
+
+  farm::RenderCommandOptions render_options;
+  std::string preview;
+  add_render_command(app, render_options, preview);
+
+  std::filesystem::path info_file;
+  farm::JobLoadOptions info_load;
+  CLI::App* info = app.add_subcommand("info", "Print a model's or a job's statistics");
+  info->add_option("file", info_file, "Model (.dae .obj .ply .gltf .glb) or job (.json)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  info->add_option("--asset-root", info_load.asset_root, "Asset root for a job's model files")
+      ->check(CLI::ExistingDirectory);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kExitBadInput;
+  }
+
+  try {
+    if (app.got_subcommand("render")) {
+      if (!preview.empty()) render_options.overrides.preview = preview == "none" ? "" : preview;
+      farm::run_render_command(render_options);
+    } else if (app.got_subcommand("info")) {
+      farm::run_info_command(info_file, info_load);
+    }
+  } catch (const farm::InputError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "internal error: {}\n", e.what());
+    return kExitInternal;
+  }
   return 0;
 }

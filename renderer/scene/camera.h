@@ -4,6 +4,8 @@
 #include <glm/vec3.hpp>
 #include <optional>
 
+#include "renderer/geometry/ray.h"
+
 namespace farm {
 
 struct Camera {
@@ -21,6 +23,10 @@ struct Camera {
   glm::mat4 view_matrix() const;                    // world -> view (rigid)
   glm::mat4 projection_matrix(float aspect_ratio) const;  // view -> clip, OpenGL depth range
   glm::vec3 forward() const;                        // unit viewing axis in world space
+
+  // Ray through image point (px, py) in pixels (y down; a pixel centre is x + 0.5). Its direction
+  // has unit length along forward(), so the hit's t is the depth along the viewing axis.
+  Ray primary_ray(float px, float py, int width, int height) const;
 };
 
 }  // namespace farm

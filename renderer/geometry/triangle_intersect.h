@@ -1,0 +1,39 @@
+#pragma once
+// Möller-Trumbore ray/triangle intersection: solves origin + t*d = (1-u-v)*a + u*b + v*c by
+// Cramer's rule without precomputing the triangle's plane.
+#include <cmath>
+#include <glm/geometric.hpp>
+#include <optional>
+
+#include "renderer/geometry/ray.h"
+
+namespace farm {
+
+struct TriangleHit {
+  float t = 0.0f;
+  float u = 0.0f, v = 0.0f;  // weights of vertices b and c
+};
+
+// Hits with t in (max(ray.t_min, t_epsilon), ray.t_max); rays nearly parallel to the plane
+// (|det| below det_epsilon relative to the edge lengths) miss.
+inline std::optional<TriangleHit> intersect_triangle(const Ray& ray, const glm::vec3& a,
+                                                     const glm::vec3& b, const glm::vec3& c,
+                                                     float t_epsilon = 1e-6f) {
+  const glm::vec3 e1 = b - a, e2 = c - a;
+  const glm::vec3 p = glm::cross(ray.direction, e2);
+  const float det = glm::dot(e1, p);
+  const float scale = glm::length(e1) * glm::length(e2) * glm::length(ray.direction);
+  if (!(std::fabs(det) > 1e-12f * scale)) return std::nullopt;
+  const float inv_det = 1.0f / det;
+  const glm::vec3 s = ray.origin - a;
+  const float u = glm::dot(s, p) * inv_det;
+  if (u < 0.0f || u > 1.0f) return std::nullopt;
+  const glm::vec3 q = glm::cross(s, e1);
+  const float v = glm::dot(ray.direction, q) * inv_det;
+  if (v < 0.0f || u + v > 1.0f) return std::nullopt;
+  const float t = glm::dot(e2, q) * inv_det;
+  if (!(t > std::max(ray.t_min, t_epsilon) && t < ray.t_max)) return std::nullopt;
+  return TriangleHit{t, u, v};
+}
+
+}  // namespace farm

@@ -1,0 +1,22 @@
+#pragma once
+// OpenEXR files of a film: R G B A, plus the AOV layers Z, N.X N.Y N.Z, albedo.R albedo.G
+// albedo.B and bvh_cost, named so any EXR tool finds them.
+#include <filesystem>
+
+#include "renderer/image/tile_buffer.h"
+
+namespace farm {
+
+enum class ExrPixelType { Half, Float };
+
+// Colour, normal and albedo are stored as `type` (half by default); depth and bvh_cost are always
+// 32-bit float, since half would quantise depth to ~3 significant digits. Writes to a temporary
+// file and renames it into place, so a failed write never leaves a truncated image behind.
+void write_exr(const TileBuffer& image, const std::filesystem::path& file,
+               ExrPixelType type = ExrPixelType::Half);
+
+// Reads an EXR written by write_exr (or any EXR with those channel names) as floats. The buffer's
+// rect is the file's data window; AOVs are present when their channels are.
+TileBuffer read_exr(const std::filesystem::path& file);
+
+}  // namespace farm

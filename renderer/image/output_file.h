@@ -1,0 +1,15 @@
+#pragma once
+// Writing result files so that a crash or a full disk never leaves a half-written image where
+// the finished one should be: write next to the target, then rename over it.
+#include <filesystem>
+#include <functional>
+
+namespace farm {
+
+// Creates the parent folders, calls `write(temp_path)` with a temporary path in the same folder
+// that keeps the target's extension (image libraries pick the format by extension), then renames
+// it onto `target`. The temporary file is removed if `write` throws.
+void write_file_atomically(const std::filesystem::path& target,
+                           const std::function<void(const std::filesystem::path&)>& write);
+
+}  // namespace farm

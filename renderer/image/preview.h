@@ -1,0 +1,19 @@
+#pragma once
+// 8-bit previews (PNG, JPEG, anything OpenImageIO writes by extension) of a linear film:
+// RGB clamped to [0, 1] and sRGB-encoded.
+#include <cstdint>
+#include <filesystem>
+
+#include "renderer/image/tile_buffer.h"
+
+namespace farm {
+
+float linear_to_srgb(float linear);      // the sRGB transfer function, input clamped to [0, 1]
+std::uint8_t to_srgb8(float linear);
+
+void write_preview(const TileBuffer& image, const std::filesystem::path& file);
+
+// True when OpenImageIO can write this file type (checked before a long render starts).
+bool preview_format_supported(const std::filesystem::path& file);
+
+}  // namespace farm

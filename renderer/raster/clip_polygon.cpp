@@ -1,0 +1,76 @@
+#include "renderer/raster/clip_polygon.h"
+
+#include <glm/common.hpp>
+
+namespace farm::raster {
+namespace {
+
+constexpr int kPlaneCount = 6;
+
+// Signed distance to plane i (>= 0 inside): near z >= -w, far z <= w, guard band in x and y.
+float plane_distance(const glm::vec4& v, int plane) {
+  switch (plane) {
+    case 0: return v.z + v.w;
+    case 1: return v.w - v.z;
+    case 2: return kGuardBand * v.w - v.x;
+    case 3: return kGuardBand * v.w + v.x;
+    case 4: return kGuardBand * v.w - v.y;
+    default: return kGuardBand * v.w + v.y;
+  }
+}
+
+// Always interpolates from the inside vertex towards the outside one, so two triangles sharing
+// an edge compute bit-identical crossing points and no crack opens between them.
+ClipVertex crossing(const ClipVertex& inside, float d_inside, const ClipVertex& outside,
+                    float d_outside) {
+  const float t = d_inside / (d_inside - d_outside);
+  return {glm::mix(inside.clip, outside.clip, t),
+          glm::mix(inside.view_position, outside.view_position, t),
+          glm::mix(inside.world_normal, outside.world_normal, t)};
+}
+
+}  // namespace
+
+bool trivially_outside(const glm::vec4& a, const glm::vec4& b, const glm::vec4& c) {
+  for (int p = 0; p < kPlaneCount; ++p) {
+    if (plane_distance(a, p) < 0.0f && plane_distance(b, p) < 0.0f && plane_distance(c, p) < 0.0f)
+      return true;
+  }
+  return false;
+}
+
+bool trivially_inside(const glm::vec4& a, const glm::vec4& b, const glm::vec4& c) {
+  for (int p = 0; p < kPlaneCount; ++p) {
+    if (plane_distance(a, p) < 0.0f || plane_distance(b, p) < 0.0f || plane_distance(c, p) < 0.0f)
+      return false;
+  }
+  return true;
+}
+
+ClippedPolygon clip_triangle(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c) {
+  ClippedPolygon poly;
+  poly.vertices[0] = a;
+  poly.vertices[1] = b;
+  poly.vertices[2] = c;
+  poly.size = 3;
+  for (int plane = 0; plane < kPlaneCount && poly.size > 0; ++plane) {
+    // Sutherland-Hodgman against one plane.
+    ClippedPolygon out;
+    for (std::size_t i = 0; i < poly.size; ++i) {
+      const ClipVertex& cur = poly.vertices[i];
+      const ClipVertex& next = poly.vertices[(i + 1) % poly.size];
+      const float d_cur = plane_distance(cur.clip, plane);
+      const float d_next = plane_distance(next.clip, plane);
+      if (d_cur >= 0.0f) out.vertices[out.size++] = cur;
+      if ((d_cur >= 0.0f) != (d_next >= 0.0f)) {
+        out.vertices[out.size++] = d_cur >= 0.0f ? crossing(cur, d_cur, next, d_next)
+                                                 : crossing(next, d_next, cur, d_cur);
+      }
+    }
+    poly = out;
+  }
+  if (poly.size < 3) poly.size = 0;
+  return poly;
+}
+
+}  // namespace farm::raster

@@ -1,0 +1,27 @@
+#pragma once
+// A one-line progress bar on stderr, drawn only when stderr is a terminal (logs and CI output
+// stay clean). Redraws at most when the shown percentage changes.
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+namespace farm {
+
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::string label, bool enabled);
+  ~ProgressBar();  // finishes the line if anything was drawn
+
+  void update(std::size_t done, std::size_t total);
+
+  static bool stderr_is_terminal();
+
+ private:
+  std::string label_;
+  bool enabled_;
+  bool drawn_ = false;
+  int last_permille_ = -1;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace farm

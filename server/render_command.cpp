@@ -1,0 +1,99 @@
+#include "server/render_command.h"
+
+#include <fmt/format.h>
+#include <fmt/std.h>
+
+#include <chrono>
+
+#include "renderer/image/exr_io.h"
+#include "renderer/image/preview.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/local_pipeline.h"
+#include "server/progress_bar.h"
+
+namespace farm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::string aov_list(const AovSet& aovs) {
+  std::string s = "RGBA";
+  for (Aov a : kAllAovs) {
+    if (aovs.has(a)) s += fmt::format(" + {}", to_string(a));
+  }
+  return s;
+}
+
+}  // namespace
+
+void apply_overrides(Job& job, const RenderOverrides& o) {
+  RenderSettings& r = job.render;
+  if (o.engine) {
+    const auto engine = engine_from_string(*o.engine);
+    if (!engine) throw InputError(fmt::format("--engine: unknown engine '{}'", *o.engine));
+    r.engine = *engine;
+  }
+  if (o.width) r.width = *o.width;
+  if (o.height) r.height = *o.height;
+  if (o.spp) r.spp = *o.spp;
+  if (o.threads) r.threads = *o.threads;
+  if (o.tile_size) r.tile_size = *o.tile_size;
+  if (o.image) job.output.image = *o.image;
+  if (o.preview) job.output.preview = *o.preview;
+}
+
+void run_render_command(const RenderCommandOptions& options) {
+  const Clock::time_point t_start = Clock::now();
+  Job job = load_job(options.job_file, options.load);
+  apply_overrides(job, options.overrides);
+  if (!job.output.preview.empty() && !preview_format_supported(job.output.preview)) {
+    throw InputError(fmt::format("{}: output.preview: cannot write images of type '{}'",
+                                 options.job_file, job.output.preview.extension()));
+  }
+
+  const PreparedScene prepared(build_scene(job));
+  const double load_ms = ms_since(t_start);
+
+  const Clock::time_point t_render = Clock::now();
+  TileBuffer film;
+  {
+    ProgressBar bar(fmt::format("rendering {}", job.name),
+                    options.progress && ProgressBar::stderr_is_terminal());
+    film = render_frame(prepared, job.render,
+                        [&](const TileProgress& p) { bar.update(p.tiles_done, p.tiles_total); });
+  }
+  const double render_ms = ms_since(t_render);
+
+  const Clock::time_point t_write = Clock::now();
+  const ExrPixelType pixel_type =
+      options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
+  write_exr(film, job.output.image, pixel_type);
+  if (!job.output.preview.empty()) write_preview(film, job.output.preview);
+  const double write_ms = ms_since(t_write);
+
+  const RenderSettings& r = job.render;
+  const std::size_t tiles = split_into_tiles(r.width, r.height, r.tile_size).size();
+  fmt::print("job '{}': {} engine, {}x{}, {} spp, {} triangles in {} object(s)\n", job.name,
+             to_string(r.engine), r.width, r.height, r.spp, prepared.triangle_count(),
+             prepared.objects().size());
+  fmt::print("wrote {} ({}, {} EXR)\n", job.output.image, aov_list(r.aovs),
+             pixel_type == ExrPixelType::Half ? "half" : "float");
+  if (!job.output.preview.empty()) fmt::print("wrote {} (sRGB preview)\n", job.output.preview);
+  fmt::print("time: load+prepare {:.1f} ms, render {:.1f} ms ({} tiles of {} px, {} threads), "
+             "write {:.1f} ms, total {:.1f} ms\n",
+             load_ms, render_ms, tiles, r.tile_size, resolve_thread_count(r.threads), write_ms,
+             ms_since(t_start));
+  if (job.embree_rays > 0) {
+    fmt::print("validate: embree_rays {} requested; Embree validation needs the ray engines' BVH "
+               "and is not run by this build\n",
+               job.embree_rays);
+  }
+}
+
+}  // namespace farm

@@ -1,0 +1,146 @@
+#include <gtest/gtest.h>
+
+#include <ImfChannelList.h>
+#include <ImfHeader.h>
+#include <glm/geometric.hpp>
+#include <ImfInputFile.h>
+#include <OpenImageIO/imageio.h>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <stdexcept>
+#include <string>
+
+#include "renderer/image/exr_io.h"
+#include "renderer/image/output_file.h"
+#include "renderer/image/preview.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ImageIoTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("farm_image_io_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TileBuffer sample_film() {
+  AovSet aovs;
+  aovs.depth = aovs.normal = aovs.albedo = aovs.bvh_cost = true;
+  TileBuffer film(Rect{0, 0, 7, 5}, aovs);
+  for (int y = 0; y < 5; ++y) {
+    for (int x = 0; x < 7; ++x) {
+      film.rgba(x, y) = {0.1f * x, 0.05f * y, 1.5f, x == 0 ? 0.0f : 1.0f};
+      film.depth(x, y) = x == 0 ? TileBuffer::kNoDepth : 1.2345678f + static_cast<float>(x * y);
+      film.normal(x, y) = glm::normalize(glm::vec3(x - 3, 1, y));
+      film.albedo(x, y) = {0.8f, 0.6f, 0.4f};
+      film.bvh_cost(x, y) = static_cast<float>(100 + x + 7 * y);
+    }
+  }
+  return film;
+}
+
+TEST_F(ImageIoTest, ExrHalfRoundTripKeepsValuesAndStandardChannelNames) {
+  const TileBuffer film = sample_film();
+  const fs::path file = dir_ / "sub" / "film.exr";
+  write_exr(film, file);  // creates the missing folder
+
+  Imf::InputFile in(file.c_str());
+  std::set<std::string> names;
+  for (auto it = in.header().channels().begin(); it != in.header().channels().end(); ++it) {
+    names.insert(it.name());
+    const bool is_float = it.channel().type == Imf::FLOAT;
+    const std::string name = it.name();
+    EXPECT_EQ(is_float, name == "Z" || name == "bvh_cost") << name;
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "albedo.R",
+                                          "albedo.G", "albedo.B", "bvh_cost"}));
+
+  const TileBuffer back = read_exr(file);
+  ASSERT_EQ(back.rect(), film.rect());
+  for (int y = 0; y < 5; ++y) {
+    for (int x = 0; x < 7; ++x) {
+      for (int c = 0; c < 4; ++c) EXPECT_NEAR(back.rgba(x, y)[c], film.rgba(x, y)[c], 1e-3f);
+      EXPECT_EQ(back.depth(x, y), film.depth(x, y));  // float: exact, +inf kept
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(back.normal(x, y)[c], film.normal(x, y)[c], 1e-3f);
+      EXPECT_NEAR(back.albedo(x, y).x, 0.8f, 1e-3f);
+      EXPECT_EQ(back.bvh_cost(x, y), film.bvh_cost(x, y));
+    }
+  }
+}
+
+TEST_F(ImageIoTest, ExrFloatOptionStoresColourExactly) {
+  const TileBuffer film = sample_film();
+  const fs::path file = dir_ / "film32.exr";
+  write_exr(film, file, ExrPixelType::Float);
+  const TileBuffer back = read_exr(file);
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 7; ++x) EXPECT_EQ(back.rgba(x, y), film.rgba(x, y));
+}
+
+TEST_F(ImageIoTest, ExrOfATileKeepsItsPlaceInTheFrame) {
+  TileBuffer tile(Rect{32, 64, 40, 70}, AovSet{});
+  tile.rgba(35, 66) = {1, 2, 3, 1};
+  const fs::path file = dir_ / "tile.exr";
+  write_exr(tile, file);
+  const TileBuffer back = read_exr(file);
+  EXPECT_EQ(back.rect(), tile.rect());
+  EXPECT_EQ(back.rgba(35, 66), glm::vec4(1, 2, 3, 1));
+}
+
+TEST(Srgb, TransferFunctionMatchesTheStandardAndClamps) {
+  EXPECT_EQ(linear_to_srgb(0.0f), 0.0f);
+  EXPECT_NEAR(linear_to_srgb(1.0f), 1.0f, 1e-6f);
+  EXPECT_NEAR(linear_to_srgb(0.5f), 0.735357f, 1e-5f);
+  EXPECT_NEAR(linear_to_srgb(0.002f), 0.02584f, 1e-5f);  // linear toe
+  EXPECT_EQ(to_srgb8(7.0f), 255);
+  EXPECT_EQ(to_srgb8(-1.0f), 0);
+  EXPECT_EQ(to_srgb8(std::nanf("")), 0);
+}
+
+TEST_F(ImageIoTest, PngPreviewIsSrgbEncodedAndClamped) {
+  TileBuffer film(Rect{0, 0, 4, 2}, AovSet{});
+  film.rgba(0, 0) = {0.5f, 0.0f, 3.0f, 1.0f};
+  const fs::path file = dir_ / "preview.png";
+  write_preview(film, file);
+  auto in = OIIO::ImageInput::open(file.string());
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().width, 4);
+  EXPECT_EQ(in->spec().height, 2);
+  ASSERT_EQ(in->spec().nchannels, 3);
+  std::vector<unsigned char> pixels(4 * 2 * 3);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data()));
+  EXPECT_EQ(pixels[0], 188);  // 0.5 linear -> 0.7354 sRGB
+  EXPECT_EQ(pixels[1], 0);
+  EXPECT_EQ(pixels[2], 255);  // 3.0 clamps
+}
+
+TEST_F(ImageIoTest, FailedWriteLeavesNeitherTargetNorTemporaryFile) {
+  const fs::path target = dir_ / "never.exr";
+  EXPECT_THROW(write_file_atomically(target,
+                                     [](const fs::path& temp) {
+                                       std::FILE* f = std::fopen(temp.c_str(), "w");
+                                       std::fputs("partial", f);
+                                       std::fclose(f);
+                                       throw std::runtime_error("disk full");
+                                     }),
+               std::runtime_error);
+  EXPECT_FALSE(fs::exists(target));
+  EXPECT_TRUE(fs::is_empty(dir_));
+}
+
+TEST(PreviewFormat, UnknownExtensionIsReportedBeforeRendering) {
+  EXPECT_TRUE(preview_format_supported("x.png"));
+  EXPECT_TRUE(preview_format_supported("x.jpg"));
+  EXPECT_FALSE(preview_format_supported("x.notanimage"));
+}
+
+}  // namespace
+}  // namespace farm
