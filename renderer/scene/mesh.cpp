@@ -1,6 +1,8 @@
 #include "renderer/scene/mesh.h"
 
+#include <cmath>
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 #include <map>
 #include <tuple>
 
@@ -12,22 +14,52 @@ AABB Mesh::bounds() const {
   return box;
 }
 
-void generate_smooth_normals(Mesh& mesh) {
-  // Weld by exact position so split vertices (a de-indexed mesh) share their normal.
-  auto key = [](const glm::vec3& p) { return std::make_tuple(p.x, p.y, p.z); };
-  std::map<std::tuple<float, float, float>, glm::vec3> accumulated;
-  for (const glm::uvec3& t : mesh.triangles) {
-    const glm::vec3 &a = mesh.positions[t.x], &b = mesh.positions[t.y], &c = mesh.positions[t.z];
-    const glm::vec3 area_weighted = glm::cross(b - a, c - a);  // length = 2 * area
-    for (unsigned i : {t.x, t.y, t.z}) accumulated[key(mesh.positions[i])] += area_weighted;
+void generate_smooth_normals(Mesh& mesh, float crease_degrees) {
+  using Key = std::tuple<float, float, float>;
+  auto key = [](const glm::vec3& p) { return Key{p.x, p.y, p.z}; };
+  const std::size_t n_tris = mesh.triangles.size();
+
+  // Face normals: area-weighted (cross product, length = twice the area) and unit.
+  std::vector<glm::vec3> weighted(n_tris), unit(n_tris);
+  std::map<Key, std::vector<std::size_t>> faces_at;  // faces touching each position
+  for (std::size_t t = 0; t < n_tris; ++t) {
+    const glm::uvec3& tri = mesh.triangles[t];
+    const glm::vec3 &a = mesh.positions[tri.x], &b = mesh.positions[tri.y], &c = mesh.positions[tri.z];
+    weighted[t] = glm::cross(b - a, c - a);
+    const float len = glm::length(weighted[t]);
+    unit[t] = len > 0.0f ? weighted[t] / len : glm::vec3(0.0f);
+    for (int k = 0; k < 3; ++k) {
+      std::vector<std::size_t>& list = faces_at[key(mesh.positions[tri[k]])];
+      if (list.empty() || list.back() != t) list.push_back(t);
+    }
   }
-  mesh.normals.assign(mesh.positions.size(), glm::vec3(0.0f, 0.0f, 1.0f));
-  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
-    auto it = accumulated.find(key(mesh.positions[i]));
-    if (it == accumulated.end()) continue;
-    const float len = glm::length(it->second);
-    if (len > 0.0f) mesh.normals[i] = it->second / len;
+
+  // Each corner averages the faces at its position within the crease angle of its own face;
+  // corners that agree on position and normal share one vertex.
+  const float cos_crease = std::cos(glm::radians(crease_degrees));
+  std::vector<glm::vec3> positions, normals;
+  std::map<std::tuple<Key, float, float, float>, unsigned> vertex_of;  // (position, normal)
+  for (std::size_t t = 0; t < n_tris; ++t) {
+    glm::uvec3& tri = mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 p = mesh.positions[tri[k]];
+      glm::vec3 sum(0.0f);
+      for (std::size_t f : faces_at[key(p)]) {
+        if (glm::dot(unit[f], unit[t]) >= cos_crease) sum += weighted[f];
+      }
+      const float len = glm::length(sum);
+      const glm::vec3 n = len > 0.0f ? sum / len : glm::vec3(0.0f, 0.0f, 1.0f);
+      auto [it, inserted] = vertex_of.try_emplace({key(p), n.x, n.y, n.z},
+                                                  static_cast<unsigned>(positions.size()));
+      if (inserted) {
+        positions.push_back(p);
+        normals.push_back(n);
+      }
+      tri[k] = it->second;
+    }
   }
+  mesh.positions = std::move(positions);
+  mesh.normals = std::move(normals);
 }
 
 }  // namespace farm

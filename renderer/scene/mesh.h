@@ -21,8 +21,11 @@ struct Mesh {
   AABB bounds() const;
 };
 
-// Area-weighted vertex normals. Vertices at the same position share one normal, so a mesh that a
-// loader de-indexed (one vertex per face corner) still comes out smooth.
-void generate_smooth_normals(Mesh& mesh);
+// Area-weighted vertex normals for a mesh that has none. Faces meeting at a position are smoothed
+// together when their normals differ by less than `crease_degrees`, so a de-indexed mesh (one
+// vertex per face corner) still comes out smooth while a box keeps its hard edges. Vertices are
+// split where one position needs several normals; triangles are rewritten to match.
+inline constexpr float kDefaultCreaseDegrees = 60.0f;
+void generate_smooth_normals(Mesh& mesh, float crease_degrees = kDefaultCreaseDegrees);
 
 }  // namespace farm
