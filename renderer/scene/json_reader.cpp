@@ -119,7 +119,7 @@ class StrictDomBuilder final : public nlohmann::json_sax<Json> {
     return &slot;
   }
 
-  // Path of frame `i`'s child that is being read; `pending` = that child is not yet placed.
+  // Path of `f`'s child being read; `pending`: that child is not placed in `f` yet.
   std::string child_path(const std::string& parent, const Frame& f, bool pending) const {
     if (f.node->is_array()) return json_path_index(parent, f.node->size() - (pending ? 0 : 1));
     return json_path_key(parent, f.key);
