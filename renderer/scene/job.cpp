@@ -1,0 +1,358 @@
+#include "renderer/scene/job.h"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <fstream>
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+#include <iterator>
+#include <limits>
+#include <system_error>
+
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/json_reader.h"
+
+namespace farm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kMaxImageSide = 16384;
+constexpr std::uintmax_t kMaxJobFileBytes = 16u << 20;  // job files are small; refuse to slurp huge ones
+constexpr std::size_t kMaxShownText = 64;
+
+const NumberRange kNonNegative = NumberRange::at_least(0.0);
+const NumberRange kPositive = NumberRange::above(0.0);
+
+struct Context {
+  fs::path job_dir;     // absolute
+  fs::path asset_root;  // absolute, symlinks resolved
+};
+
+// A user's string inside a message: shortened so a hostile value cannot flood logs.
+std::string shown(const std::string& s) {
+  if (s.size() <= kMaxShownText) return s;
+  return s.substr(0, kMaxShownText) + "...";
+}
+
+// Component-wise, so /assets2 is not taken to lie inside /assets.
+bool lies_within(const fs::path& root, const fs::path& p) {
+  auto pi = p.begin();
+  for (auto ri = root.begin(); ri != root.end(); ++ri, ++pi) {
+    if (ri->empty()) continue;  // a trailing separator
+    if (pi == p.end() || *ri != *pi) return false;
+  }
+  return true;
+}
+
+fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
+  const std::string written = v.string();
+  if (written.empty()) v.fail("expected a file path, got an empty string");
+  if (written.find('\0') != std::string::npos) v.fail("file path contains a NUL character");
+
+  const fs::path as_written(written);
+  const fs::path candidate = as_written.is_absolute() ? as_written : ctx.job_dir / as_written;
+  // weakly_canonical resolves `..` and every symlink along the existing part of the path, so
+  // the containment test below sees where the file really is.
+  std::error_code ec;
+  const fs::path resolved = fs::weakly_canonical(candidate, ec);
+  if (ec) v.fail(fmt::format("cannot resolve '{}': {}", shown(written), ec.message()));
+  // Containment is checked before existence, so probing outside the root reveals nothing.
+  if (!lies_within(ctx.asset_root, resolved)) {
+    v.fail(fmt::format("'{}' lies outside the asset root '{}'", shown(written),
+                       ctx.asset_root.string()));
+  }
+  const fs::file_status status = fs::status(resolved, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory) {
+    v.fail(fmt::format("cannot access '{}': {}", shown(written), ec.message()));
+  }
+  if (!fs::exists(status)) v.fail(fmt::format("no such file '{}'", shown(written)));
+  if (!fs::is_regular_file(status)) v.fail(fmt::format("'{}' is not a regular file", shown(written)));
+  return resolved;
+}
+
+// Unit axis, computed in double so tiny but non-zero float axes still normalise.
+glm::vec3 parse_axis(const JsonValue& v) {
+  const glm::vec3 axis = v.vec3();
+  const glm::dvec3 d(axis);
+  const double len = std::sqrt(glm::dot(d, d));
+  if (!(len > 0.0)) v.fail("expected a non-zero axis, got (0, 0, 0)");
+  return glm::vec3(d / len);
+}
+
+MaterialOverride parse_material(const JsonValue& v) {
+  const JsonObject obj = v.object(
+      {"ambient", "diffuse", "specular", "emission", "shininess", "ior", "transmission"});
+  MaterialOverride m;
+  if (auto x = obj.get("ambient")) m.ambient = x->vec3(kNonNegative);
+  if (auto x = obj.get("diffuse")) m.diffuse = x->vec3(kNonNegative);
+  if (auto x = obj.get("specular")) m.specular = x->vec3(kNonNegative);
+  if (auto x = obj.get("emission")) m.emission = x->vec3(kNonNegative);
+  if (auto x = obj.get("shininess")) m.shininess = x->real(kNonNegative);
+  if (auto x = obj.get("ior")) m.ior = x->real(kPositive);
+  if (auto x = obj.get("transmission")) m.transmission = x->real(NumberRange::between(0.0, 1.0));
+  return m;
+}
+
+JobObject parse_object(const JsonValue& v, const Context& ctx) {
+  const JsonObject obj = v.object({"file", "translate", "rotate", "scale", "material"});
+  JobObject o;
+  const JsonValue file = obj.require("file");
+  o.file = resolve_model_file(file, ctx);
+  o.file_as_written = file.string();
+  if (auto x = obj.get("translate")) o.transform.translate = x->vec3();
+  if (auto x = obj.get("rotate")) {
+    const JsonObject rot = x->object({"axis", "degrees"});
+    if (auto axis = rot.get("axis")) o.transform.rotate_axis = parse_axis(*axis);
+    if (auto deg = rot.get("degrees")) o.transform.rotate_degrees = deg->real();
+  }
+  if (auto x = obj.get("scale")) {
+    o.transform.scale = x->vec3();
+    for (std::size_t i = 0; i < 3; ++i) {
+      // A zero factor flattens the object and makes the normal matrix singular.
+      if (o.transform.scale[static_cast<glm::length_t>(i)] == 0.0f) {
+        JsonValue(x->raw()[i], json_path_index(x->path(), i), x->file())
+            .fail("expected a non-zero scale factor, got 0");
+      }
+    }
+  }
+  if (auto x = obj.get("material")) o.material = parse_material(*x);
+  return o;
+}
+
+std::string vec_text(const glm::vec3& p) { return fmt::format("({}, {}, {})", p.x, p.y, p.z); }
+
+Camera parse_camera(const JsonValue& v) {
+  const JsonObject obj =
+      v.object({"position", "target", "up", "fov_y", "near", "far", "aspect"});
+  Camera cam;
+  if (auto x = obj.get("position")) cam.position = x->vec3();
+  if (auto x = obj.get("target")) cam.target = x->vec3();
+  const auto up = obj.get("up");
+  if (up) cam.up = up->vec3();
+  if (auto x = obj.get("fov_y")) cam.fov_y_degrees = x->real(NumberRange::open(0.0, 180.0));
+  const auto near = obj.get("near");
+  if (near) cam.near = near->real(kPositive);
+  const auto far = obj.get("far");
+  if (far) cam.far = far->real(kPositive);
+  if (auto x = obj.get("aspect")) cam.aspect = x->real(kPositive);
+
+  if (!(cam.far > cam.near)) {
+    if (far || !near) {
+      const JsonValue& at = far ? *far : v;
+      at.fail(fmt::format("expected far > near ({}), got {}", cam.near, cam.far));
+    }
+    near->fail(fmt::format("expected near < far ({}, the default), got {}", cam.far, cam.near));
+  }
+
+  // The view basis is built in float (glm::lookAt); refuse what would make it degenerate.
+  const glm::vec3 view = cam.target - cam.position;
+  const float view_len2 = glm::dot(view, view);
+  if (view == glm::vec3(0.0f)) {
+    v.fail(fmt::format("position and target are the same point {}", vec_text(cam.position)));
+  }
+  if (!std::isfinite(view_len2) || view_len2 < std::numeric_limits<float>::min()) {
+    v.fail(fmt::format("position {} and target {} are too close or too far apart to aim the camera",
+                       vec_text(cam.position), vec_text(cam.target)));
+  }
+  const std::string up_path = up ? up->path() : json_path_key(v.path(), "up");
+  auto fail_up = [&](const std::string& what) -> void {
+    throw InputError(fmt::format("{}: {}: {}", v.file(), up_path, what));
+  };
+  if (cam.up == glm::vec3(0.0f)) fail_up("expected a non-zero up vector, got (0, 0, 0)");
+  const glm::dvec3 f = glm::normalize(glm::dvec3(view));
+  const glm::dvec3 u = glm::normalize(glm::dvec3(cam.up));
+  if (glm::length(glm::cross(f, u)) < 1e-6) {
+    fail_up(fmt::format("{}up {} is parallel to the viewing direction (target - position)",
+                        up ? "" : "the default ", vec_text(cam.up)));
+  }
+  const glm::vec3 side = glm::cross(glm::normalize(view), cam.up);
+  const float side_len2 = glm::dot(side, side);
+  if (!std::isfinite(side_len2) || side_len2 < std::numeric_limits<float>::min()) {
+    fail_up(fmt::format("up {} is too short or too long to orient the camera", vec_text(cam.up)));
+  }
+  return cam;
+}
+
+glm::vec3 parse_intensity(const JsonValue& v) {
+  if (v.raw().is_array()) return v.vec3(kNonNegative);
+  if (!v.raw().is_number()) v.fail_expected("a number or 3 numbers");
+  return glm::vec3(v.real(kNonNegative));
+}
+
+std::vector<Light> parse_lights(const JsonValue& v) {
+  std::vector<Light> lights;
+  for (const JsonValue& item : v.array()) {
+    const JsonObject obj = item.object({"position", "intensity"});
+    Light light;
+    light.kind = Light::Kind::Point;
+    light.position = obj.require("position").vec3();
+    if (auto x = obj.get("intensity")) light.intensity = parse_intensity(*x);
+    lights.push_back(light);
+  }
+  return lights;
+}
+
+JobScene parse_scene(const JsonValue& v, const Context& ctx) {
+  const JsonObject obj = v.object({"objects", "camera", "lights", "ambient", "background"});
+  JobScene scene;
+  const JsonValue objects = obj.require("objects");
+  const std::vector<JsonValue> items = objects.array();
+  if (items.empty()) objects.fail("expected at least one object, got an empty array");
+  for (const JsonValue& item : items) scene.objects.push_back(parse_object(item, ctx));
+  if (auto x = obj.get("camera")) scene.camera = parse_camera(*x);
+  if (auto x = obj.get("lights")) scene.lights = parse_lights(*x);
+  if (auto x = obj.get("ambient")) scene.ambient = x->vec3(kNonNegative);
+  if (auto x = obj.get("background")) scene.background = x->vec3(kNonNegative);
+  return scene;
+}
+
+template <typename Enum, std::size_t N>
+std::string names_of(const Enum (&values)[N]) {
+  std::vector<std::string_view> names;
+  for (Enum e : values) names.push_back(to_string(e));
+  return join_alternatives(names);
+}
+
+constexpr EngineKind kEngines[] = {EngineKind::Raster, EngineKind::Whitted, EngineKind::Path};
+constexpr AccelKind kAccels[] = {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive,
+                                 AccelKind::Embree};
+
+void parse_render(const JsonValue& v, RenderSettings& r) {
+  const JsonObject obj = v.object({"engine", "width", "height", "spp", "max_depth", "seed",
+                                   "tile_size", "threads", "accel"});
+  constexpr int kIntMax = std::numeric_limits<int>::max();
+  if (auto x = obj.get("engine")) {
+    const std::string s = x->string();
+    const auto e = engine_from_string(s);
+    if (!e) x->fail(fmt::format("unknown engine '{}' (expected {})", shown(s), names_of(kEngines)));
+    r.engine = *e;
+  }
+  if (auto x = obj.get("width")) r.width = x->int32(1, kMaxImageSide);
+  if (auto x = obj.get("height")) r.height = x->int32(1, kMaxImageSide);
+  if (auto x = obj.get("spp")) r.spp = x->int32(1, kIntMax);
+  if (auto x = obj.get("max_depth")) r.max_depth = x->int32(-1, kIntMax);
+  if (auto x = obj.get("seed")) r.seed = x->unsigned_integer();
+  if (auto x = obj.get("tile_size")) r.tile_size = x->int32(1, kIntMax);
+  if (auto x = obj.get("threads")) r.threads = x->int32(0, kIntMax);
+  if (auto x = obj.get("accel")) {
+    const std::string s = x->string();
+    const auto a = accel_from_string(s);
+    if (!a) x->fail(fmt::format("unknown accel '{}' (expected {})", shown(s), names_of(kAccels)));
+    r.accel = *a;
+  }
+}
+
+void parse_output(const JsonValue& v, Job& job) {
+  const JsonObject obj = v.object({"image", "preview", "aovs"});
+  const auto image = obj.get("image");
+  if (image) {
+    job.output.image = image->string();
+    if (job.output.image.empty()) image->fail("expected a file path, got an empty string");
+  }
+  const auto preview = obj.get("preview");
+  if (preview) job.output.preview = preview->string();  // "" = no preview
+  if (auto x = obj.get("aovs")) {
+    for (const JsonValue& item : x->array()) {
+      const std::string s = item.string();
+      const auto aov = aov_from_string(s);
+      if (!aov) item.fail(fmt::format("unknown AOV '{}' (expected {})", shown(s), names_of(kAllAovs)));
+      if (job.render.aovs.has(*aov)) item.fail(fmt::format("duplicate AOV '{}'", s));
+      job.render.aovs.add(*aov);
+    }
+  }
+  if (!job.output.preview.empty() &&
+      job.output.image.lexically_normal() == job.output.preview.lexically_normal()) {
+    const JsonValue& at = preview ? *preview : *image;
+    at.fail(fmt::format("output.image and output.preview are the same file '{}'",
+                        shown(job.output.image.string())));
+  }
+}
+
+// The name becomes part of the default output paths, so it must be one plain path component.
+std::string parse_name(const JsonValue& v) {
+  const std::string name = v.string();
+  if (name.empty()) v.fail("expected a non-empty name");
+  if (name == "." || name == "..") v.fail(fmt::format("'{}' is not a usable name", name));
+  for (char c : name) {
+    if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20) {
+      v.fail(fmt::format("'{}' must not contain '/', '\\' or control characters", shown(name)));
+    }
+  }
+  return name;
+}
+
+std::string default_name(const fs::path& job_path) {
+  std::string stem = job_path.stem().string();
+  return stem.empty() ? "job" : stem;
+}
+
+}  // namespace
+
+Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadOptions& options) {
+  const std::string file = path.string();
+  const nlohmann::json doc = parse_json_strict(json_text, file);
+  const JsonObject top(JsonValue(doc, "", file),
+                       {"version", "name", "scene", "render", "output", "validate"});
+
+  // The version decides which keys exist, so it is checked before any of them.
+  const JsonValue version = top.require("version");
+  const std::int64_t v = version.integer();
+  if (v != 1) version.fail(fmt::format("unsupported version {} (this farm reads version 1)", v));
+  top.reject_unknown_keys();
+
+  Context ctx;
+  ctx.job_dir = path.empty() ? fs::current_path() : fs::absolute(path).parent_path();
+  {
+    const fs::path root = options.asset_root.empty() ? ctx.job_dir : fs::absolute(options.asset_root);
+    std::error_code ec;
+    ctx.asset_root = fs::weakly_canonical(root, ec);
+    if (ec) throw InputError(fmt::format("{}: cannot resolve the asset root '{}': {}", file,
+                                         root.string(), ec.message()));
+  }
+
+  Job job;
+  job.path = path;
+  job.name = default_name(path);
+  if (auto x = top.get("name")) job.name = parse_name(*x);
+  job.scene = parse_scene(top.require("scene"), ctx);
+  if (auto x = top.get("render")) parse_render(*x, job.render);
+  job.output.image = fs::path("out") / (job.name + ".exr");
+  job.output.preview = fs::path("out") / (job.name + ".png");
+  if (auto x = top.get("output")) parse_output(*x, job);
+  if (auto x = top.get("validate")) {
+    const JsonObject obj = x->object({"embree_rays"});
+    if (auto rays = obj.get("embree_rays")) job.embree_rays = rays->integer(0);
+  }
+  return job;
+}
+
+Job load_job(const fs::path& path, const JobLoadOptions& options) {
+  const std::string file = path.string();
+  auto fail = [&](const std::string& what) -> void {
+    throw InputError(fmt::format("{}: {}", file, what));
+  };
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory) {
+    fail(fmt::format("cannot read the job file: {}", ec.message()));
+  }
+  if (!fs::exists(status)) fail("no such job file");
+  // Devices and FIFOs could block or never end; a job is always a plain file.
+  if (!fs::is_regular_file(status)) fail("the job file is not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) fail(fmt::format("cannot read the job file: {}", ec.message()));
+  if (size > kMaxJobFileBytes) {
+    fail(fmt::format("the job file is {} bytes; the limit is {}", size, kMaxJobFileBytes));
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(fmt::format("cannot open the job file: {}", std::generic_category().message(errno)));
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (in.bad()) fail("cannot read the job file");
+  return parse_job(text, path, options);
+}
+
+}  // namespace farm
