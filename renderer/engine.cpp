@@ -7,6 +7,8 @@
 
 namespace farm {
 
+bool engine_available(EngineKind engine) { return engine == EngineKind::Raster; }
+
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out) {
   const Rect image{0, 0, settings.width, settings.height};

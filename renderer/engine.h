@@ -8,6 +8,9 @@
 
 namespace farm {
 
+// Whether this build can run `engine` (the ray engines arrive in later issues).
+bool engine_available(EngineKind engine);
+
 // Renders `tile` (clipped to the image) into `out`, which it resizes to the tile and the
 // settings' AOVs. Throws InputError for an engine this build cannot run.
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,

@@ -1,7 +1,6 @@
 #include "server/info_command.h"
 
 #include <fmt/format.h>
-#include <fmt/std.h>
 
 #include <glm/vec3.hpp>
 
@@ -28,7 +27,7 @@ void print_light(const Light& l) {
 void print_model(const std::filesystem::path& file) {
   const Model model = load_model(file);
   const AABB b = model.bounds();
-  fmt::print("model {}\n", file);
+  fmt::print("model {}\n", file.string());
   fmt::print("  {} triangles, {} vertices, {} mesh(es), {} material(s)\n", model.triangle_count(),
              model.vertex_count(), model.meshes.size(), model.materials.size());
   fmt::print("  bounds {} .. {}\n", vec(b.min), vec(b.max));
@@ -50,11 +49,11 @@ void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
   const Job job = load_job(file, load);
   const Scene scene = build_scene(job);
   const RenderSettings& r = job.render;
-  fmt::print("job '{}' ({})\n", job.name, file);
+  fmt::print("job '{}' ({})\n", job.name, file.string());
   fmt::print("  {} object(s), {} triangles\n", scene.objects.size(), scene.triangle_count());
   for (const SceneObject& o : scene.objects) {
     fmt::print("  object '{}': {} triangles from {}\n", o.name, o.model->triangle_count(),
-               o.model->source);
+               o.model->source.string());
   }
   print_camera(scene.camera);
   for (const Light& l : scene.lights) print_light(l);
@@ -62,7 +61,7 @@ void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
              "accel {}\n",
              to_string(r.engine), r.width, r.height, r.spp, r.max_depth, r.seed, r.tile_size,
              r.threads, to_string(r.accel));
-  fmt::print("  output: image {} preview {}\n", job.output.image,
+  fmt::print("  output: image {} preview {}\n", job.output.image.string(),
              job.output.preview.empty() ? std::string("(none)") : job.output.preview.string());
 }
 

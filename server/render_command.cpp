@@ -1,10 +1,10 @@
 #include "server/render_command.h"
 
 #include <fmt/format.h>
-#include <fmt/std.h>
 
 #include <chrono>
 
+#include "renderer/engine.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/preview.h"
 #include "renderer/prepared_scene.h"
@@ -52,9 +52,14 @@ void run_render_command(const RenderCommandOptions& options) {
   const Clock::time_point t_start = Clock::now();
   Job job = load_job(options.job_file, options.load);
   apply_overrides(job, options.overrides);
+  if (!engine_available(job.render.engine)) {
+    throw InputError(fmt::format("{}: render.engine: '{}' is not available in this build yet "
+                                 "(available: raster)",
+                                 options.job_file.string(), to_string(job.render.engine)));
+  }
   if (!job.output.preview.empty() && !preview_format_supported(job.output.preview)) {
     throw InputError(fmt::format("{}: output.preview: cannot write images of type '{}'",
-                                 options.job_file, job.output.preview.extension()));
+                                 options.job_file.string(), job.output.preview.extension().string()));
   }
 
   const PreparedScene prepared(build_scene(job));
@@ -82,9 +87,9 @@ void run_render_command(const RenderCommandOptions& options) {
   fmt::print("job '{}': {} engine, {}x{}, {} spp, {} triangles in {} object(s)\n", job.name,
              to_string(r.engine), r.width, r.height, r.spp, prepared.triangle_count(),
              prepared.objects().size());
-  fmt::print("wrote {} ({}, {} EXR)\n", job.output.image, aov_list(r.aovs),
+  fmt::print("wrote {} ({}, {} EXR)\n", job.output.image.string(), aov_list(r.aovs),
              pixel_type == ExrPixelType::Half ? "half" : "float");
-  if (!job.output.preview.empty()) fmt::print("wrote {} (sRGB preview)\n", job.output.preview);
+  if (!job.output.preview.empty()) fmt::print("wrote {} (sRGB preview)\n", job.output.preview.string());
   fmt::print("time: load+prepare {:.1f} ms, render {:.1f} ms ({} tiles of {} px, {} threads), "
              "write {:.1f} ms, total {:.1f} ms\n",
              load_ms, render_ms, tiles, r.tile_size, resolve_thread_count(r.threads), write_ms,

@@ -7,7 +7,6 @@
 #include <ImfOutputFile.h>
 #include <Iex.h>
 #include <fmt/format.h>
-#include <fmt/std.h>
 
 #include <Imath/half.h>
 #include <functional>
@@ -68,7 +67,7 @@ std::vector<ChannelSpec> channels_for(const AovSet& aovs) {
 
 void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPixelType type) {
   const Rect& r = image.rect();
-  if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file));
+  if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
   const int width = r.width(), height = r.height();
   const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
 
@@ -112,7 +111,7 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
       out.setFrameBuffer(frame);
       out.writePixels(height);
     } catch (const std::exception& e) {
-      throw std::runtime_error(fmt::format("{}: cannot write EXR: {}", file, e.what()));
+      throw std::runtime_error(fmt::format("{}: cannot write EXR: {}", file.string(), e.what()));
     }
   });
 }
@@ -152,7 +151,7 @@ TileBuffer read_exr(const std::filesystem::path& file) {
           specs[c].set(image, x, y, planes[c][static_cast<std::size_t>((y - r.y0) * width + (x - r.x0))]);
     return image;
   } catch (const Iex::BaseExc& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read EXR: {}", file, e.what()));
+    throw std::runtime_error(fmt::format("{}: cannot read EXR: {}", file.string(), e.what()));
   }
 }
 

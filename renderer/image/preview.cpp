@@ -1,7 +1,6 @@
 #include "renderer/image/preview.h"
 
 #include <fmt/format.h>
-#include <fmt/std.h>
 
 #include <OpenImageIO/imageio.h>
 #include <algorithm>
@@ -30,7 +29,7 @@ bool preview_format_supported(const std::filesystem::path& file) {
 
 void write_preview(const TileBuffer& image, const std::filesystem::path& file) {
   const Rect& r = image.rect();
-  if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file));
+  if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
   std::vector<std::uint8_t> pixels(static_cast<std::size_t>(r.width()) *
                                    static_cast<std::size_t>(r.height()) * 3);
   std::size_t i = 0;
@@ -45,14 +44,14 @@ void write_preview(const TileBuffer& image, const std::filesystem::path& file) {
   write_file_atomically(file, [&](const std::filesystem::path& temp) {
     auto out = OIIO::ImageOutput::create(temp.string());
     if (!out) {
-      throw std::runtime_error(fmt::format("{}: no image writer for this extension ({})", file,
+      throw std::runtime_error(fmt::format("{}: no image writer for this extension ({})", file.string(),
                                            OIIO::geterror()));
     }
     OIIO::ImageSpec spec(r.width(), r.height(), 3, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
     if (!out->open(temp.string(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) ||
         !out->close()) {
-      throw std::runtime_error(fmt::format("{}: cannot write preview: {}", file, out->geterror()));
+      throw std::runtime_error(fmt::format("{}: cannot write preview: {}", file.string(), out->geterror()));
     }
   });
 }

@@ -415,21 +415,40 @@ TEST(LoaderGltf, EveryTruncationAndByteCorruptionOfTheGlbFailsCleanly) {
 
 TEST(LoaderNormals, ModelWithoutNormalsGetsSmoothUnitNormals) {
   TempDir dir;
-  // A roof: two slopes meeting at a ridge along x, no `vn` lines. The normals are area weighted,
-  // so each ridge vertex is given equal area on both slopes, making its normal point straight up.
+  // A shallow roof: two slopes 53 degrees apart (within the 60 degree crease angle) meeting at a
+  // ridge along x, no `vn` lines. Normals are area weighted and each ridge vertex has equal area
+  // on both slopes, so its normal points straight up.
   const fs::path roof = dir.write("roof.obj",
-                                  "v 0 0 1\nv 1 0 1\nv 1 1 0\nv 0 1 0\nv 1 0 -1\nv 0 0 -1\n"
+                                  "v 0 0 1\nv 1 0 1\nv 1 0.5 0\nv 0 0.5 0\nv 1 0 -1\nv 0 0 -1\n"
                                   "f 1 2 3\nf 1 3 4\nf 3 5 6\nf 3 6 4\n");
   const Model m = load_model(roof);
   ASSERT_EQ(m.triangle_count(), 4u);
   expect_unit_normals(m);
   const Mesh& mesh = m.meshes.at(0);
-  const float s = std::sqrt(0.5f);
+  const glm::vec3 up_slope = glm::normalize(glm::vec3(0.0f, 1.0f, 0.5f));
   for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
     const glm::vec3& p = mesh.positions[i];
     SCOPED_TRACE(testing::Message() << "vertex " << p.x << " " << p.y << " " << p.z);
-    if (p.y == 1.0f) expect_near(mesh.normals[i], {0.0f, 1.0f, 0.0f});  // ridge: both slopes
-    else expect_near(mesh.normals[i], {0.0f, s, p.z > 0.0f ? s : -s});  // eave: its own slope
+    if (p.y == 0.5f) expect_near(mesh.normals[i], {0.0f, 1.0f, 0.0f});  // ridge: both slopes
+    else expect_near(mesh.normals[i], {0.0f, up_slope.y, p.z > 0.0f ? up_slope.z : -up_slope.z});
+  }
+}
+
+TEST(LoaderNormals, SteepRidgeBeyondTheCreaseAngleStaysSharp) {
+  TempDir dir;
+  // Slopes 90 degrees apart: each face keeps its own normal at the shared ridge.
+  const fs::path roof = dir.write("steep.obj",
+                                  "v 0 0 1\nv 1 0 1\nv 1 1 0\nv 0 1 0\nv 1 0 -1\nv 0 0 -1\n"
+                                  "f 1 2 3\nf 1 3 4\nf 3 5 6\nf 3 6 4\n");
+  const Model m = load_model(roof);
+  expect_unit_normals(m);
+  const Mesh& mesh = m.meshes.at(0);
+  const float s = std::sqrt(0.5f);
+  for (const glm::uvec3& t : mesh.triangles) {
+    const glm::vec3 face = glm::normalize(glm::cross(mesh.positions[t.y] - mesh.positions[t.x],
+                                                     mesh.positions[t.z] - mesh.positions[t.x]));
+    ASSERT_NEAR(std::fabs(face.z), s, 1e-5f);
+    for (int k = 0; k < 3; ++k) expect_near(mesh.normals[t[k]], face);
   }
 }
 

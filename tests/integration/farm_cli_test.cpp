@@ -1,0 +1,133 @@
+// Drives the real `farm` binary as a user would and checks exit codes, messages and files.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "renderer/image/exr_io.h"
+#include "tests/support/run_command.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using test::run_command;
+using test::shell_quote;
+
+const fs::path kSource = FARM_SOURCE_DIR;
+
+std::string farm(const std::string& args) { return shell_quote(FARM_BINARY) + " " + args; }
+
+class FarmCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("farm_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  fs::path write_job(const std::string& name, const std::string& json) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << json;
+    return p;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(FarmCliTest, RenderCornellJobWritesExrWithAovsAndPreview) {
+  const fs::path exr = dir_ / "c.exr", png = dir_ / "c.png";
+  const auto r = run_command(farm("render " + shell_quote((kSource / "jobs/cornell.json").string()) +
+                                  " --width 96 --height 96 --out " + shell_quote(exr.string()) +
+                                  " --preview " + shell_quote(png.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(exr.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("time:"), std::string::npos) << r.output;
+  ASSERT_TRUE(fs::exists(png));
+  const TileBuffer image = read_exr(exr);
+  EXPECT_EQ(image.rect(), (Rect{0, 0, 96, 96}));
+  EXPECT_TRUE(image.aovs().depth && image.aovs().normal && image.aovs().albedo);
+  // The room fills the middle of the frame: covered, lit, at a finite depth.
+  EXPECT_EQ(image.rgba(48, 48).w, 1.0f);
+  EXPECT_GT(image.rgba(48, 48).x, 0.0f);
+  EXPECT_TRUE(std::isfinite(image.depth(48, 48)));
+}
+
+TEST_F(FarmCliTest, ThreadsAndTileSizeDoNotChangeASingleBit) {
+  const std::string job = shell_quote((kSource / "jobs/torus.json").string());
+  const fs::path a = dir_ / "a.exr", b = dir_ / "b.exr";
+  const std::string common = " --width 160 --height 100 --float --preview none";
+  ASSERT_EQ(run_command(farm("render " + job + common + " --threads 1 --tile-size 7 --out " +
+                             shell_quote(a.string()))).exit_code, 0);
+  ASSERT_EQ(run_command(farm("render " + job + common + " --threads 2 --tile-size 64 --out " +
+                             shell_quote(b.string()))).exit_code, 0);
+  const TileBuffer ia = read_exr(a), ib = read_exr(b);
+  for (int y = 0; y < 100; ++y)
+    for (int x = 0; x < 160; ++x)
+      ASSERT_EQ(std::memcmp(&ia.rgba(x, y), &ib.rgba(x, y), sizeof(glm::vec4)), 0) << x << "," << y;
+}
+
+TEST_F(FarmCliTest, BadJobExitsWith2AndNamesTheJsonPath) {
+  std::ofstream(dir_ / "m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const fs::path job = write_job("bad.json", R"({"version": 1, "scene": {"objects": [{"file": "m.obj"}]},
+                                                  "render": {"width": -5}})");
+  const auto r = run_command(farm("render " + shell_quote(job.string())));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("render.width"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bad.json"), std::string::npos) << r.output;
+}
+
+TEST_F(FarmCliTest, MissingModelFileExitsWith2AndNamesIt) {
+  const fs::path job = write_job("nomodel.json",
+                                 R"({"version": 1, "scene": {"objects": [{"file": "missing.dae"}]}})");
+  const auto r = run_command(farm("render " + shell_quote(job.string())));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("missing.dae"), std::string::npos) << r.output;
+}
+
+TEST_F(FarmCliTest, EngineThisBuildLacksIsABadInputNotACrash) {
+  const auto r = run_command(farm("render " + shell_quote((kSource / "jobs/cornell.json").string()) +
+                                  " --engine path --width 8 --height 8 --out " +
+                                  shell_quote((dir_ / "p.exr").string())));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("render.engine"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "p.exr"));
+}
+
+TEST_F(FarmCliTest, OutOfRangeOptionExitsWith2) {
+  const auto r = run_command(farm("render " + shell_quote((kSource / "jobs/cornell.json").string()) +
+                                  " --width 0"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--width"), std::string::npos) << r.output;
+}
+
+TEST_F(FarmCliTest, HelpExplainsTheCommandsAndExitsZero) {
+  const auto r = run_command(farm("--help"));
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("render"), std::string::npos);
+  EXPECT_NE(r.output.find("info"), std::string::npos);
+  const auto rr = run_command(farm("render --help"));
+  EXPECT_EQ(rr.exit_code, 0);
+  EXPECT_NE(rr.output.find("--tile-size"), std::string::npos);
+}
+
+TEST_F(FarmCliTest, InfoPrintsAModelsTriangleCount) {
+  const auto r = run_command(farm("info " + shell_quote((kSource / "jobs/assets/cornell_box.obj").string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("32 triangles"), std::string::npos) << r.output;
+}
+
+TEST_F(FarmCliTest, InfoOfAJobListsObjectsAndSettings) {
+  const auto r = run_command(farm("info " + shell_quote((kSource / "jobs/torus.json").string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("2 object(s)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("engine raster"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace farm
