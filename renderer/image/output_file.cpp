@@ -2,8 +2,9 @@
 
 #include <unistd.h>
 
+#include <fmt/format.h>
+
 #include <atomic>
-#include <string>
 
 namespace farm {
 
@@ -13,8 +14,8 @@ void write_file_atomically(const std::filesystem::path& target,
   static std::atomic<unsigned> counter{0};
   const fs::path folder = target.parent_path();
   if (!folder.empty()) fs::create_directories(folder);
-  const fs::path temp = folder / ("." + target.stem().string() + ".tmp" + std::to_string(getpid()) +
-                                  "-" + std::to_string(counter++) + target.extension().string());
+  const fs::path temp = folder / fmt::format(".{}.tmp{}-{}{}", target.stem().string(), getpid(),
+                                             counter++, target.extension().string());
   try {
     write(temp);
     fs::rename(temp, target);
