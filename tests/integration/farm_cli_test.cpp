@@ -9,6 +9,7 @@
 
 #include "renderer/image/exr_io.h"
 #include "tests/support/run_command.h"
+#include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
@@ -23,21 +24,7 @@ std::string farm(const std::string& args) { return shell_quote(FARM_BINARY) + " 
 
 class FarmCliTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("farm_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  fs::path write_job(const std::string& name, const std::string& json) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << json;
-    return p;
-  }
-
-  fs::path dir_;
+  test::TempDir dir_;
 };
 
 TEST_F(FarmCliTest, RenderCornellJobWritesExrWithAovsAndPreview) {
@@ -74,7 +61,7 @@ TEST_F(FarmCliTest, ThreadsAndTileSizeDoNotChangeASingleBit) {
 
 TEST_F(FarmCliTest, BadJobExitsWith2AndNamesTheJsonPath) {
   std::ofstream(dir_ / "m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-  const fs::path job = write_job("bad.json", R"({"version": 1, "scene": {"objects": [{"file": "m.obj"}]},
+  const fs::path job = dir_.write("bad.json", R"({"version": 1, "scene": {"objects": [{"file": "m.obj"}]},
                                                   "render": {"width": -5}})");
   const auto r = run_command(farm("render " + shell_quote(job.string())));
   EXPECT_EQ(r.exit_code, 2) << r.output;
@@ -83,7 +70,7 @@ TEST_F(FarmCliTest, BadJobExitsWith2AndNamesTheJsonPath) {
 }
 
 TEST_F(FarmCliTest, MissingModelFileExitsWith2AndNamesIt) {
-  const fs::path job = write_job("nomodel.json",
+  const fs::path job = dir_.write("nomodel.json",
                                  R"({"version": 1, "scene": {"objects": [{"file": "missing.dae"}]}})");
   const auto r = run_command(farm("render " + shell_quote(job.string())));
   EXPECT_EQ(r.exit_code, 2) << r.output;

@@ -14,6 +14,7 @@
 #include "renderer/image/exr_io.h"
 #include "renderer/image/output_file.h"
 #include "renderer/image/preview.h"
+#include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
@@ -22,13 +23,7 @@ namespace fs = std::filesystem;
 
 class ImageIoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("farm_image_io_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path dir_;
+  test::TempDir dir_;
 };
 
 TileBuffer sample_film() {
@@ -133,7 +128,7 @@ TEST_F(ImageIoTest, FailedWriteLeavesNeitherTargetNorTemporaryFile) {
                                      }),
                std::runtime_error);
   EXPECT_FALSE(fs::exists(target));
-  EXPECT_TRUE(fs::is_empty(dir_));
+  EXPECT_TRUE(fs::is_empty(dir_.path()));
 }
 
 TEST(PreviewFormat, UnknownExtensionIsReportedBeforeRendering) {

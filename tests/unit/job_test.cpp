@@ -1,16 +1,14 @@
 #include <gtest/gtest.h>
-#include <unistd.h>
 
-#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job.h"
+#include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
@@ -27,10 +25,6 @@ namespace fs = std::filesystem;
 class JobFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    static std::atomic<int> counter{0};
-    root_ = fs::temp_directory_path() /
-            ("farm-job-test-" + std::to_string(::getpid()) + "-" +
-             std::to_string(std::random_device{}()) + "-" + std::to_string(counter++));
     fs::create_directories(root_ / "jobs" / "assets");
     fs::create_directories(root_ / "jobs2");
     fs::create_directories(root_ / "outside");
@@ -41,11 +35,6 @@ class JobFiles : public ::testing::Test {
     fs::create_symlink("cow.dae", root_ / "jobs" / "assets" / "inside.dae");
     fs::create_symlink(root_ / "outside" / "secret.dae", root_ / "jobs" / "assets" / "escape.dae");
   }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(root_, ec);
-  }
-
   static void touch(const fs::path& p) { std::ofstream(p) << "not loaded by the job parser\n"; }
 
   fs::path job_path() const { return root_ / "jobs" / "job.json"; }
@@ -68,7 +57,8 @@ class JobFiles : public ::testing::Test {
     return {};
   }
 
-  fs::path root_;
+  test::TempDir temp_;
+  fs::path root_ = temp_.path();
 };
 
 std::string job_with_object(const std::string& object) {

@@ -15,6 +15,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/model.h"
+#include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
@@ -30,34 +31,7 @@ const fs::path kData = FARM_TEST_DATA;
     GTEST_SKIP() << "shared assets not found at " << kShared << " (../shared is absent)"; \
   }
 
-// A fresh folder under the system temp dir, removed with everything in it at scope exit.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("farm_loader_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  const fs::path& path() const { return path_; }
-  fs::path write(const fs::path& name, const std::string& contents) const {
-    const fs::path file = path_ / name;
-    fs::create_directories(file.parent_path());
-    std::ofstream(file, std::ios::binary) << contents;
-    return file;
-  }
-
- private:
-  fs::path path_;
-};
+using test::TempDir;
 
 std::string read_file(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
