@@ -9,6 +9,10 @@ namespace farm {
 
 bool engine_available(EngineKind engine) { return engine == EngineKind::Raster; }
 
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool) {
+  if (settings.engine == EngineKind::Raster) raster::prepare_frame(scene, settings, pool);
+}
+
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out) {
   const Rect image{0, 0, settings.width, settings.height};

@@ -5,11 +5,17 @@
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
+#include "renderer/thread_pool.h"
 
 namespace farm {
 
 // Whether this build can run `engine` (the ray engines arrive in later issues).
 bool engine_available(EngineKind engine);
+
+// Optional: does the per-frame work an engine shares between tiles (the rasterizer's vertex
+// stage, set-up and binning) on `pool`, before tiles are dispatched. render_tile does it lazily
+// on its own thread when this was not called.
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool);
 
 // Renders `tile` (clipped to the image) into `out`, which it resizes to the tile and the
 // settings' AOVs. Throws InputError for an engine this build cannot run.

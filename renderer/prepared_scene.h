@@ -5,6 +5,7 @@
 #include <glm/mat4x4.hpp>
 #include <vector>
 
+#include "renderer/frame_cache.h"
 #include "renderer/scene/scene.h"
 
 namespace farm {
@@ -25,9 +26,13 @@ class PreparedScene {
   const std::vector<PreparedObject>& objects() const { return objects_; }
   std::size_t triangle_count() const { return scene_.triangle_count(); }
 
+  // Engines keep per-frame set-up here; it is derived data, so a const scene may fill it.
+  FrameCache& frame_cache() const { return frame_cache_; }
+
  private:
   Scene scene_;
   std::vector<PreparedObject> objects_;
+  mutable FrameCache frame_cache_;
 };
 
 }  // namespace farm

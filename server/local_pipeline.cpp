@@ -1,12 +1,11 @@
 #include "server/local_pipeline.h"
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
 #include <mutex>
 #include <thread>
 
 #include "renderer/engine.h"
+#include "renderer/thread_pool.h"
 
 namespace farm {
 
@@ -22,7 +21,7 @@ std::vector<Rect> split_into_tiles(int width, int height, int tile_size) {
 
 int resolve_thread_count(int threads) {
   if (threads > 0) return threads;
-  return std::max(1u, std::thread::hardware_concurrency());
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
 TileBuffer render_frame(const PreparedScene& scene, const RenderSettings& settings,
@@ -30,39 +29,25 @@ TileBuffer render_frame(const PreparedScene& scene, const RenderSettings& settin
   TileBuffer film(Rect{0, 0, settings.width, settings.height}, settings.aovs);
   const std::vector<Rect> tiles = split_into_tiles(settings.width, settings.height,
                                                    settings.tile_size);
-  const int workers = std::min<int>(resolve_thread_count(settings.threads),
-                                    static_cast<int>(tiles.size()));
+  // One pool for the whole render: the engine's per-frame set-up and then the tiles.
+  ThreadPool pool(resolve_thread_count(settings.threads));
+  prepare_frame(scene, settings, pool);
 
-  // Tiles are handed out dynamically; each worker pastes its finished tile under the lock, so
-  // the film sees whole tiles and the progress callback runs on one thread at a time.
-  std::atomic<std::size_t> next{0};
+  // Tiles are handed out one at a time; each worker renders into its own buffer and pastes the
+  // finished tile under the lock, so the film only ever sees whole tiles.
+  std::vector<TileBuffer> scratch(static_cast<std::size_t>(pool.size()));
   std::mutex merge_mutex;
   std::size_t done = 0;
-  std::exception_ptr failure;
-
-  auto work = [&] {
-    TileBuffer tile;
-    for (std::size_t i = next++; i < tiles.size(); i = next++) {
-      try {
-        render_tile(scene, settings, tiles[i], tile);
-      } catch (...) {
-        std::lock_guard lock(merge_mutex);
-        if (!failure) failure = std::current_exception();
-        next = tiles.size();
-        return;
-      }
+  pool.parallel_for(tiles.size(), 1, [&](std::size_t begin, std::size_t end, int worker) {
+    TileBuffer& tile = scratch[static_cast<std::size_t>(worker)];
+    for (std::size_t i = begin; i < end; ++i) {
+      render_tile(scene, settings, tiles[i], tile);
       std::lock_guard lock(merge_mutex);
       film.paste(tile);
       ++done;
       if (progress) progress({done, tiles.size()});
     }
-  };
-
-  std::vector<std::thread> pool;
-  for (int i = 1; i < workers; ++i) pool.emplace_back(work);
-  work();
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
+  });
   return film;
 }
 

@@ -13,6 +13,7 @@ Rect Rect::intersect(const Rect& o) const {
 void TileBuffer::reset(const Rect& rect, const AovSet& aovs) {
   rect_ = rect.empty() ? Rect{} : rect;
   aovs_ = aovs;
+  stats_ = RenderStats{};
   const std::size_t n = static_cast<std::size_t>(rect_.width()) * static_cast<std::size_t>(rect_.height());
   rgba_.assign(n, glm::vec4(0.0f));
   depth_.assign(aovs.depth ? n : 0, kNoDepth);
@@ -22,6 +23,7 @@ void TileBuffer::reset(const Rect& rect, const AovSet& aovs) {
 }
 
 void TileBuffer::paste(const TileBuffer& tile) {
+  stats_ += tile.stats();
   const Rect overlap = rect_.intersect(tile.rect());
   for (int y = overlap.y0; y < overlap.y1; ++y) {
     for (int x = overlap.x0; x < overlap.x1; ++x) {

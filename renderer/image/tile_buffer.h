@@ -1,6 +1,7 @@
 #pragma once
 // Float pixels of one rectangle of the frame: RGBA always, AOVs when asked. A whole frame (the
 // film) is simply a TileBuffer whose rect is the full image.
+#include <cstdint>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 #include <limits>
@@ -19,6 +20,16 @@ struct Rect {
   bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
   Rect intersect(const Rect& o) const;
   bool operator==(const Rect&) const = default;
+};
+
+// Work counters that travel with a tile and add up when tiles are merged.
+struct RenderStats {
+  std::uint64_t fragments = 0;  // rasterizer: samples that passed the coverage test
+
+  RenderStats& operator+=(const RenderStats& o) {
+    fragments += o.fragments;
+    return *this;
+  }
 };
 
 class TileBuffer {
@@ -44,8 +55,11 @@ class TileBuffer {
   float& bvh_cost(int x, int y) { return bvh_cost_[index(x, y)]; }
   float bvh_cost(int x, int y) const { return bvh_cost_[index(x, y)]; }
 
-  // Copies the overlap of `tile` into this buffer (the merge step); AOVs this buffer lacks are
-  // skipped.
+  RenderStats& stats() { return stats_; }
+  const RenderStats& stats() const { return stats_; }
+
+  // Copies the overlap of `tile` into this buffer (the merge step) and adds its stats; AOVs this
+  // buffer lacks are skipped.
   void paste(const TileBuffer& tile);
 
   static constexpr float kNoDepth = std::numeric_limits<float>::infinity();
@@ -58,6 +72,7 @@ class TileBuffer {
 
   Rect rect_;
   AovSet aovs_;
+  RenderStats stats_;
   std::vector<glm::vec4> rgba_;
   std::vector<float> depth_;
   std::vector<glm::vec3> normal_;

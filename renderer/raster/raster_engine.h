@@ -1,14 +1,28 @@
 #pragma once
-// The software rasterizer: vertex stage, homogeneous clipping, edge-function coverage with a
-// top-left fill rule on a fixed-point grid, perspective-correct interpolation, z-buffer, and
-// Blinn-Phong shading (renderer/scene/blinn_phong.h).
+// The software rasterizer, sort-middle: once per frame the vertex stage, triangle set-up and
+// binning (raster_frame.h); per tile, each bin it overlaps is rasterized (edge functions with a
+// top-left fill rule on a fixed-point grid, perspective-correct interpolation, z-buffer) and
+// then shaded with Blinn-Phong (renderer/scene/blinn_phong.h), with no shared mutable state.
+#include <cstdint>
+#include <memory>
+
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/raster/raster_frame.h"
 #include "renderer/render_settings.h"
+#include "renderer/thread_pool.h"
 
 namespace farm::raster {
 
+// Builds the frame set-up on `pool` and caches it in the prepared scene for the tiles that follow.
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool);
+
+// Renders one tile; uses the cached frame set-up, building it on this thread if missing.
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out);
+
+// Renders one tile from an explicit frame set-up (benchmarks time the two halves separately).
+void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene,
+                            const RenderSettings& settings, const Rect& requested, TileBuffer& out);
 
 }  // namespace farm::raster

@@ -186,9 +186,20 @@ Scene busy_scene() {
   shiny.diffuse = {0.7f, 0.3f, 0.2f};
   shiny.specular = glm::vec3(0.4f);
   shiny.shininess = 40;
-  scene.objects.push_back(object_of(make_sphere(24, 48), glm::scale(glm::mat4(1.0f), {1.0f, 1.4f, 0.8f}), shiny));
-  scene.objects.push_back(object_of(make_box({-3, -1.6f, -3}, {3, -1.2f, 3})));
+  // Two identical quads, first and last in scene order, so every pixel of them is an exact depth
+  // tie that only scene order can decide; the sphere between them puts them in different
+  // set-up chunks.
+  Material first_colour, last_colour;
+  first_colour.diffuse = {0.9f, 0.1f, 0.1f};
+  last_colour.diffuse = {0.1f, 0.1f, 0.9f};
+  const Model tie_quad = make_quad({-2, -1, -2.5f}, {2, -1, -2.5f}, {2, 2, -2.5f}, {-2, 2, -2.5f});
+  scene.objects.push_back(object_of(tie_quad, glm::mat4(1.0f), first_colour));
+  // Over 8192 triangles, so set-up is split into several chunks that must merge in order.
+  scene.objects.push_back(object_of(make_sphere(80, 100), glm::scale(glm::mat4(1.0f), {1.0f, 1.4f, 0.8f}), shiny));
+  // A floor that passes under and behind the camera: its triangles are clipped at the near plane.
+  scene.objects.push_back(object_of(make_box({-6, -1.6f, -6}, {6, -1.2f, 6})));
   scene.objects.push_back(object_of(make_grid(9), glm::translate(glm::mat4(1.0f), {0.5f, 0.2f, -1.5f})));
+  scene.objects.push_back(object_of(tie_quad, glm::mat4(1.0f), last_colour));
   scene.camera.position = {2.5f, 1.5f, 3.5f};
   scene.camera.target = {0, 0, 0};
   scene.lights.push_back(Light{Light::Kind::Point, {3, 4, 2}, {}, glm::vec3(20.0f)});
@@ -210,12 +221,32 @@ bool same_bits(const TileBuffer& a, const TileBuffer& b) {
   return true;
 }
 
-TEST(RasterRenderTile, AnyTilingAndThreadCountGivesTheSameBitsAsOnePiece) {
+TEST(RasterDepth, ExactTiesGoToTheTriangleEarlierInSceneOrder) {
   const PreparedScene prepared(busy_scene());
+  RenderSettings settings = raster_settings(123, 77);
+  settings.threads = 3;
+  const TileBuffer image = render_frame(prepared, settings);
+  int tie_pixels = 0;
+  for (int y = 0; y < 77; ++y) {
+    for (int x = 0; x < 123; ++x) {
+      const glm::vec4 c = image.rgba(x, y);
+      if (c.w == 1.0f && c.z > 2.0f * c.x) ADD_FAILURE() << "later quad won the tie at " << x << "," << y;
+      if (c.w == 1.0f && c.x > 2.0f * c.z && c.x > 3.0f * c.y) ++tie_pixels;
+    }
+  }
+  EXPECT_GT(tie_pixels, 100);  // the tied quads are in view
+}
+
+TEST(RasterRenderTile, AnyTilingAndThreadCountGivesTheSameBitsAsOnePiece) {
+  // Single-threaded, one tile: the reference.
   RenderSettings settings = raster_settings(123, 77, depth_and_normal());
-  const TileBuffer whole = render_full(prepared, settings);
-  for (int tile_size : {7, 16, 32, 50, 128}) {
-    for (int threads : {1, 3}) {
+  settings.spp = 2;
+  const PreparedScene reference_scene(busy_scene());
+  const TileBuffer whole = render_full(reference_scene, settings);
+  for (int threads : {1, 2, 3, 8}) {
+    for (int tile_size : {8, 16, 32, 64, 128}) {
+      // A fresh scene each time, so the frame set-up itself also runs on `threads` threads.
+      const PreparedScene prepared(busy_scene());
       settings.tile_size = tile_size;
       settings.threads = threads;
       EXPECT_TRUE(same_bits(whole, render_frame(prepared, settings)))

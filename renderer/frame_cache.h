@@ -1,0 +1,58 @@
+#pragma once
+// Per-frame data an engine derives from a prepared scene and a frame's settings (the
+// rasterizer's transformed, set-up and binned triangles), built once and shared by every tile of
+// that frame. Concurrent requests for the same key wait for a single build. A few recent frames
+// are kept: a job renders one frame size, but a worker may interleave several jobs' tiles.
+#include <future>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+
+namespace farm {
+
+class FrameCache {
+ public:
+  template <typename T, typename Build>
+  std::shared_ptr<const T> get_or_build(const std::string& key, Build&& build) {
+    std::promise<std::shared_ptr<const void>> promise;
+    std::shared_future<std::shared_ptr<const void>> future;
+    {
+      std::lock_guard lock(mutex_);
+      for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+        if (it->first == key) {
+          entries_.splice(entries_.begin(), entries_, it);  // most recently used first
+          future = it->second;
+          break;
+        }
+      }
+      if (!future.valid()) {
+        entries_.emplace_front(key, promise.get_future().share());
+        if (entries_.size() > kCapacity) entries_.pop_back();
+      }
+    }
+    if (future.valid()) return std::static_pointer_cast<const T>(future.get());
+    try {
+      std::shared_ptr<const T> value = build();
+      promise.set_value(value);
+      return value;
+    } catch (...) {
+      forget(key);  // let a later request try again
+      promise.set_exception(std::current_exception());
+      throw;
+    }
+  }
+
+ private:
+  void forget(const std::string& key) {
+    std::lock_guard lock(mutex_);
+    entries_.remove_if([&](const auto& e) { return e.first == key; });
+  }
+
+  static constexpr std::size_t kCapacity = 4;
+  std::mutex mutex_;
+  std::list<std::pair<std::string, std::shared_future<std::shared_ptr<const void>>>> entries_;
+};
+
+}  // namespace farm

@@ -1,0 +1,264 @@
+#include "renderer/raster/raster_frame.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
+
+namespace farm::raster {
+namespace {
+
+constexpr std::size_t kVertexGrain = 4096;
+constexpr std::size_t kSetupGrain = 8192;
+constexpr std::uint32_t kExtraVertex = 0x80000000u;  // index refers to a chunk's clipped vertices
+
+// One mesh of one object: where its vertices and triangles sit in the frame's flat numbering.
+struct MeshRange {
+  const PreparedObject* object;
+  const Mesh* mesh;
+  std::size_t first_vertex;
+  std::size_t first_triangle;
+};
+
+// What one set-up chunk produces, merged in chunk order afterwards.
+struct SetupChunk {
+  std::vector<ScreenTriangle> triangles;
+  std::vector<ScreenVertex> clipped_vertices;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> binned;  // (bin, local triangle)
+};
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+class FrameBuilder {
+ public:
+  FrameBuilder(const PreparedScene& scene, const RenderSettings& settings, RasterFrame& frame)
+      : frame_(frame) {
+    const Camera& camera = scene.scene().camera;
+    view_ = camera.view_matrix();
+    view_projection_ = camera.projection_matrix(camera.aspect_for(settings.width, settings.height)) * view_;
+    frame.width = settings.width;
+    frame.height = settings.height;
+    frame.bins_x = (settings.width + kBinSize - 1) / kBinSize;
+    frame.bins_y = (settings.height + kBinSize - 1) / kBinSize;
+    frame.view_to_world = glm::inverse(view_);
+    frame.eye = camera.position;
+    std::size_t vertices = 0, triangles = 0;
+    for (const PreparedObject& object : scene.objects()) {
+      for (const Mesh& mesh : object.source->model->meshes) {
+        ranges_.push_back({&object, &mesh, vertices, triangles});
+        frame.materials.push_back(&object.source->materials.at(mesh.material));
+        vertices += mesh.positions.size();
+        triangles += mesh.triangles.size();
+      }
+    }
+    frame.vertices.resize(vertices);
+    frame.input_triangles = triangles;
+  }
+
+  void run(ThreadPool* pool) {
+    const auto parallel = [pool](std::size_t count, std::size_t grain, auto&& body) {
+      const std::function<void(std::size_t, std::size_t, int)> fn = body;
+      if (pool) {
+        pool->parallel_for(count, grain, fn);
+      } else {
+        for (std::size_t b = 0; b < count; b += grain) fn(b, std::min(count, b + grain), 0);
+      }
+    };
+    parallel(frame_.vertices.size(), kVertexGrain,
+             [this](std::size_t b, std::size_t e, int) { transform_vertices(b, e); });
+    chunks_.resize((frame_.input_triangles + kSetupGrain - 1) / kSetupGrain);
+    parallel(frame_.input_triangles, kSetupGrain,
+             [this](std::size_t b, std::size_t e, int) { set_up(b, e, chunks_[b / kSetupGrain]); });
+    plan_merge();
+    parallel(chunks_.size(), 1, [this](std::size_t b, std::size_t e, int) {
+      for (std::size_t c = b; c < e; ++c) merge_chunk(c);
+    });
+  }
+
+ private:
+  // The mesh range holding flat vertex or triangle index i.
+  std::size_t range_of_vertex(std::size_t i) const {
+    auto it = std::upper_bound(ranges_.begin(), ranges_.end(), i,
+                               [](std::size_t v, const MeshRange& r) { return v < r.first_vertex; });
+    return static_cast<std::size_t>(it - ranges_.begin()) - 1;
+  }
+  std::size_t range_of_triangle(std::size_t i) const {
+    auto it = std::upper_bound(ranges_.begin(), ranges_.end(), i,
+                               [](std::size_t t, const MeshRange& r) { return t < r.first_triangle; });
+    return static_cast<std::size_t>(it - ranges_.begin()) - 1;
+  }
+
+  void project(ScreenVertex& v) const {
+    if (!(v.attributes.clip.w > 0.0f)) return;  // behind the camera: only used after clipping
+    const glm::vec4& c = v.attributes.clip;
+    v.inv_w = 1.0f / c.w;
+    const float ndc_x = c.x * v.inv_w, ndc_y = c.y * v.inv_w;
+    v.ndc_depth = c.z * v.inv_w;
+    // Guard-band clipping keeps every rasterized vertex well inside the fixed-point range; the
+    // margin covers rounding at the band's edge. Vertices beyond it are only ever clipped.
+    if (std::fabs(ndc_x) <= 2.0f * kGuardBand && std::fabs(ndc_y) <= 2.0f * kGuardBand) {
+      v.position = {to_fixed((ndc_x * 0.5f + 0.5f) * static_cast<float>(frame_.width)),
+                    to_fixed((0.5f - ndc_y * 0.5f) * static_cast<float>(frame_.height))};
+    }
+  }
+
+  void transform_vertices(std::size_t begin, std::size_t end) {
+    std::size_t r = range_of_vertex(begin);
+    while (begin < end) {
+      while (begin >= ranges_[r].first_vertex + ranges_[r].mesh->positions.size()) ++r;
+      const MeshRange& range = ranges_[r];
+      const glm::mat4 to_clip = view_projection_ * range.object->model_to_world;
+      const glm::mat4 to_view = view_ * range.object->model_to_world;
+      const glm::mat3& to_world_normal = range.object->normal_to_world;
+      const std::size_t stop = std::min(end, range.first_vertex + range.mesh->positions.size());
+      for (std::size_t i = begin; i < stop; ++i) {
+        const std::size_t local = i - range.first_vertex;
+        const glm::vec4 p(range.mesh->positions[local], 1.0f);
+        ScreenVertex& v = frame_.vertices[i];
+        v.attributes.clip = to_clip * p;
+        v.attributes.view_position = glm::vec3(to_view * p);
+        const glm::vec3 n = to_world_normal * range.mesh->normals[local];
+        const float len = glm::length(n);
+        v.attributes.world_normal = len > 0.0f ? n / len : n;
+        project(v);
+      }
+      begin = stop;
+    }
+  }
+
+  const ScreenVertex& vertex(const SetupChunk& chunk, std::uint32_t index) const {
+    return (index & kExtraVertex) ? chunk.clipped_vertices[index & ~kExtraVertex] : frame_.vertices[index];
+  }
+
+  void emit(SetupChunk& chunk, std::uint32_t material, std::uint32_t i0, std::uint32_t i1,
+            std::uint32_t i2) const {
+    const FixedPoint &p0 = vertex(chunk, i0).position, &p1 = vertex(chunk, i1).position,
+                     &p2 = vertex(chunk, i2).position;
+    const std::int64_t area = edge_function(p0, p1, p2);
+    if (area == 0) return;  // covers no sample
+    if (area < 0) std::swap(i1, i2);
+    ScreenTriangle t;
+    t.v[0] = i0;
+    t.v[1] = i1;
+    t.v[2] = i2;
+    t.material = material;
+    // Every pixel a sample of which (at any sub-pixel offset) could fall inside.
+    t.x0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(std::min({p0.x, p1.x, p2.x}), kSubpixelScale)));
+    t.y0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(std::min({p0.y, p1.y, p2.y}), kSubpixelScale)));
+    t.x1 = static_cast<int>(std::min<std::int64_t>(frame_.width - 1, floor_div(std::max({p0.x, p1.x, p2.x}), kSubpixelScale)));
+    t.y1 = static_cast<int>(std::min<std::int64_t>(frame_.height - 1, floor_div(std::max({p0.y, p1.y, p2.y}), kSubpixelScale)));
+    if (t.x0 > t.x1 || t.y0 > t.y1) return;  // entirely off screen
+    const auto local = static_cast<std::uint32_t>(chunk.triangles.size());
+    chunk.triangles.push_back(t);
+    for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by)
+      for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx)
+        chunk.binned.emplace_back(static_cast<std::uint32_t>(by * frame_.bins_x + bx), local);
+  }
+
+  void set_up(std::size_t begin, std::size_t end, SetupChunk& chunk) const {
+    std::size_t r = range_of_triangle(begin);
+    for (std::size_t i = begin; i < end; ++i) {
+      while (i >= ranges_[r].first_triangle + ranges_[r].mesh->triangles.size()) ++r;
+      const MeshRange& range = ranges_[r];
+      const glm::uvec3 local = range.mesh->triangles[i - range.first_triangle];
+      const auto base = static_cast<std::uint32_t>(range.first_vertex);
+      const std::uint32_t ia = base + local.x, ib = base + local.y, ic = base + local.z;
+      const auto material = static_cast<std::uint32_t>(r);
+      const ClipVertex &a = frame_.vertices[ia].attributes, &b = frame_.vertices[ib].attributes,
+                       &c = frame_.vertices[ic].attributes;
+      if (trivially_outside(a.clip, b.clip, c.clip)) continue;
+      if (trivially_inside(a.clip, b.clip, c.clip)) {
+        emit(chunk, material, ia, ib, ic);
+        continue;
+      }
+      const ClippedPolygon poly = clip_triangle(a, b, c);
+      if (poly.size < 3) continue;
+      const auto first = static_cast<std::uint32_t>(chunk.clipped_vertices.size()) | kExtraVertex;
+      for (std::size_t k = 0; k < poly.size; ++k) {
+        ScreenVertex v;
+        v.attributes = poly.vertices[k];
+        project(v);
+        chunk.clipped_vertices.push_back(v);
+      }
+      for (std::uint32_t k = 2; k < poly.size; ++k) emit(chunk, material, first, first + k - 1, first + k);
+    }
+  }
+
+  // Where each chunk's triangles, clipped vertices and bin entries go in the frame's arrays.
+  void plan_merge() {
+    const std::size_t bins = static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y);
+    triangle_base_.resize(chunks_.size());
+    vertex_base_.resize(chunks_.size());
+    std::size_t triangles = 0, vertices = frame_.vertices.size();
+    for (std::size_t c = 0; c < chunks_.size(); ++c) {
+      triangle_base_[c] = triangles;
+      vertex_base_[c] = vertices;
+      triangles += chunks_[c].triangles.size();
+      vertices += chunks_[c].clipped_vertices.size();
+    }
+    frame_.triangles.resize(triangles);
+    frame_.vertices.resize(vertices);
+
+    // Counting sort by bin, stable in chunk order, so every bin lists triangles in scene order.
+    std::vector<std::uint32_t> counts(chunks_.size() * bins, 0);
+    for (std::size_t c = 0; c < chunks_.size(); ++c)
+      for (const auto& [bin, local] : chunks_[c].binned) ++counts[c * bins + bin];
+    frame_.bin_start.assign(bins + 1, 0);
+    bin_cursor_.assign(chunks_.size() * bins, 0);
+    std::uint32_t total = 0;
+    for (std::size_t b = 0; b < bins; ++b) {
+      frame_.bin_start[b] = total;
+      for (std::size_t c = 0; c < chunks_.size(); ++c) {
+        bin_cursor_[c * bins + b] = total;
+        total += counts[c * bins + b];
+      }
+    }
+    frame_.bin_start[bins] = total;
+    frame_.bin_triangles.resize(total);
+  }
+
+  void merge_chunk(std::size_t c) {
+    const SetupChunk& chunk = chunks_[c];
+    const std::size_t bins = frame_.bin_start.size() - 1;
+    const auto vertex_base = static_cast<std::uint32_t>(vertex_base_[c]);
+    std::copy(chunk.clipped_vertices.begin(), chunk.clipped_vertices.end(),
+              frame_.vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
+    for (std::size_t t = 0; t < chunk.triangles.size(); ++t) {
+      ScreenTriangle tri = chunk.triangles[t];
+      for (std::uint32_t& v : tri.v) {
+        if (v & kExtraVertex) v = vertex_base + (v & ~kExtraVertex);
+      }
+      frame_.triangles[triangle_base_[c] + t] = tri;
+    }
+    for (const auto& [bin, local] : chunk.binned) {
+      frame_.bin_triangles[bin_cursor_[c * bins + bin]++] =
+          static_cast<std::uint32_t>(triangle_base_[c] + local);
+    }
+  }
+
+  RasterFrame& frame_;
+  glm::mat4 view_{1.0f}, view_projection_{1.0f};
+  std::vector<MeshRange> ranges_;
+  std::vector<SetupChunk> chunks_;
+  std::vector<std::size_t> triangle_base_, vertex_base_;
+  std::vector<std::uint32_t> bin_cursor_;
+};
+
+}  // namespace
+
+Rect RasterFrame::bin_rect(int bx, int by) const {
+  return Rect{bx * kBinSize, by * kBinSize, std::min(width, (bx + 1) * kBinSize),
+              std::min(height, (by + 1) * kBinSize)};
+}
+
+std::shared_ptr<const RasterFrame> build_raster_frame(const PreparedScene& scene,
+                                                      const RenderSettings& settings,
+                                                      ThreadPool* pool) {
+  auto frame = std::make_shared<RasterFrame>();
+  FrameBuilder builder(scene, settings, *frame);
+  builder.run(pool);
+  return frame;
+}
+
+}  // namespace farm::raster
