@@ -6,6 +6,7 @@
 #include <exception>
 
 #include "renderer/scene/input_error.h"
+#include "server/bench_command.h"
 #include "server/info_command.h"
 #include "server/render_command.h"
 
@@ -46,7 +47,8 @@ void add_render_command(CLI::App& app, farm::RenderCommandOptions& o, std::strin
 int main(int argc, char** argv) {
   CLI::App app{"farm: render farm batch service.\n"
                "  farm render JOB   render a job locally to EXR + PNG preview\n"
-               "  farm info FILE    show what a model or job file contains"};
+               "  farm info FILE    show what a model or job file contains\n"
+               "  farm bench raster measure rasterizer speed and thread scaling"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "farm 0.1.0");
 
@@ -62,6 +64,36 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   info->add_option("--asset-root", info_load.asset_root, "Asset root for a job's model files")
       ->check(CLI::ExistingDirectory);
+
+  farm::RasterBenchOptions raster_bench;
+  CLI::App* bench = app.add_subcommand("bench", "Measure engine performance");
+  bench->require_subcommand(1);
+  CLI::App* bench_raster = bench->add_subcommand(
+      "raster", "Rasterizer frame times for the cow and the 100-cow grid at 1920x1080 "
+                "across thread counts");
+  bench_raster->add_option("--model", raster_bench.model,
+                           "The cow model (default ../shared/assets/dae/cow.dae)");
+  bench_raster->add_option("--threads", raster_bench.threads, "Thread counts to measure")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  bench_raster->add_option("--frames", raster_bench.frames, "Timed frames per configuration")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  bench_raster->add_option("--warmup", raster_bench.warmup, "Untimed frames first")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
+  bench_raster->add_option("--scene", raster_bench.scene, "Which scene: cow, cow-grid-100 or all")
+      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))
+      ->capture_default_str();
+  bench_raster->add_flag("--oversubscribe", raster_bench.oversubscribe,
+                         "Also run thread counts above the number of cores");
+  bench_raster->add_option("--width", raster_bench.width, "Image width")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  bench_raster->add_option("--height", raster_bench.height, "Image height")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -80,6 +112,8 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("render")) {
       if (!preview.empty()) render_options.overrides.preview = preview == "none" ? "" : preview;
       farm::run_render_command(render_options);
+    } else if (bench_raster->parsed()) {
+      farm::run_raster_bench(raster_bench);
     } else if (app.got_subcommand("info")) {
       farm::run_info_command(info_file, info_load);
     }

@@ -8,6 +8,7 @@
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
+#include "renderer/thread_pool.h"
 
 namespace farm {
 
@@ -23,8 +24,21 @@ std::vector<Rect> split_into_tiles(int width, int height, int tile_size);
 // Number of worker threads `threads` asks for (0 = all hardware threads).
 int resolve_thread_count(int threads);
 
-// Renders the whole frame. The result does not depend on tile size or thread count.
+// Where a frame's time went: the engine's per-frame set-up (prepare_frame), then the tiles.
+struct FrameTimings {
+  double setup_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+// Renders the whole frame on `pool` into `film` (resized to the image; its memory is reused when
+// it is big enough, as a frame loop would). The result does not depend on tile size or thread
+// count.
+void render_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool,
+                  TileBuffer& film, const ProgressCallback& progress = {},
+                  FrameTimings* timings = nullptr);
+
+// The same on a pool of settings.threads threads, created for this render.
 TileBuffer render_frame(const PreparedScene& scene, const RenderSettings& settings,
-                        const ProgressCallback& progress = {});
+                        const ProgressCallback& progress = {}, FrameTimings* timings = nullptr);
 
 }  // namespace farm

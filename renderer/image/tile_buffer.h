@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "renderer/image/aov.h"
+#include "renderer/uninitialized_array.h"
 
 namespace farm {
 
@@ -39,6 +40,10 @@ class TileBuffer {
 
   // Resizes to `rect` and clears: colour and alpha 0, depth +inf, other AOVs 0.
   void reset(const Rect& rect, const AovSet& aovs);
+  // Resizes to `rect` leaving the pixels unspecified, for a film that tiles will cover
+  // completely: nothing is cleared only to be overwritten, and the pages are first touched by
+  // the threads that paste into them.
+  void reset_for_overwrite(const Rect& rect, const AovSet& aovs);
 
   const Rect& rect() const { return rect_; }
   const AovSet& aovs() const { return aovs_; }
@@ -58,8 +63,9 @@ class TileBuffer {
   RenderStats& stats() { return stats_; }
   const RenderStats& stats() const { return stats_; }
 
-  // Copies the overlap of `tile` into this buffer (the merge step) and adds its stats; AOVs this
-  // buffer lacks are skipped.
+  // Copies the pixels of the overlap of `tile` into this buffer (the merge step); AOVs this buffer
+  // lacks are skipped. Stats are not touched: callers add them up, so that pastes of disjoint
+  // tiles may run concurrently.
   void paste(const TileBuffer& tile);
 
   static constexpr float kNoDepth = std::numeric_limits<float>::infinity();
@@ -73,11 +79,11 @@ class TileBuffer {
   Rect rect_;
   AovSet aovs_;
   RenderStats stats_;
-  std::vector<glm::vec4> rgba_;
-  std::vector<float> depth_;
-  std::vector<glm::vec3> normal_;
-  std::vector<glm::vec3> albedo_;
-  std::vector<float> bvh_cost_;
+  UninitializedArray<glm::vec4> rgba_;
+  UninitializedArray<float> depth_;
+  UninitializedArray<glm::vec3> normal_;
+  UninitializedArray<glm::vec3> albedo_;
+  UninitializedArray<float> bvh_cost_;
 };
 
 }  // namespace farm

@@ -31,20 +31,12 @@ ClipVertex crossing(const ClipVertex& inside, float d_inside, const ClipVertex& 
 
 }  // namespace
 
-bool trivially_outside(const glm::vec4& a, const glm::vec4& b, const glm::vec4& c) {
+std::uint8_t outcode(const glm::vec4& clip) {
+  std::uint8_t code = 0;
   for (int p = 0; p < kPlaneCount; ++p) {
-    if (plane_distance(a, p) < 0.0f && plane_distance(b, p) < 0.0f && plane_distance(c, p) < 0.0f)
-      return true;
+    if (plane_distance(clip, p) < 0.0f) code = static_cast<std::uint8_t>(code | (1u << p));
   }
-  return false;
-}
-
-bool trivially_inside(const glm::vec4& a, const glm::vec4& b, const glm::vec4& c) {
-  for (int p = 0; p < kPlaneCount; ++p) {
-    if (plane_distance(a, p) < 0.0f || plane_distance(b, p) < 0.0f || plane_distance(c, p) < 0.0f)
-      return false;
-  }
-  return true;
+  return code;
 }
 
 ClippedPolygon clip_triangle(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c) {

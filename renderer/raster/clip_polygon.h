@@ -5,16 +5,18 @@
 // rasterizer. Pixels outside the image are excluded later by the bounding box, not by clipping.
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
 namespace farm::raster {
 
 // The attributes that travel with a vertex through clipping; all are linear in clip space.
+// Trivial (no member initializers), so per-frame arrays of them can start uninitialized.
 struct ClipVertex {
-  glm::vec4 clip{0.0f};
-  glm::vec3 view_position{0.0f};
-  glm::vec3 world_normal{0.0f};
+  glm::vec4 clip;
+  glm::vec3 view_position;
+  glm::vec3 world_normal;
 };
 
 // |x|, |y| <= kGuardBand * w after clipping, i.e. NDC within [-kGuardBand, kGuardBand].
@@ -29,10 +31,8 @@ struct ClippedPolygon {
 // Clips triangle (a, b, c); the result keeps the winding order and may be empty.
 ClippedPolygon clip_triangle(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c);
 
-// True when all three vertices lie strictly outside one plane: nothing of the triangle is visible.
-bool trivially_outside(const glm::vec4& a, const glm::vec4& b, const glm::vec4& c);
-
-// True when all three vertices are inside every plane: no clipping needed.
-bool trivially_inside(const glm::vec4& a, const glm::vec4& b, const glm::vec4& c);
+// One bit per clip plane that `clip` lies outside of. A triangle whose vertices share a bit is
+// invisible (all outside one plane); one whose vertices have no bits needs no clipping.
+std::uint8_t outcode(const glm::vec4& clip);
 
 }  // namespace farm::raster

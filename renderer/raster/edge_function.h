@@ -13,7 +13,7 @@ inline constexpr int kSubpixelBits = 8;
 inline constexpr std::int64_t kSubpixelScale = std::int64_t{1} << kSubpixelBits;
 
 struct FixedPoint {
-  std::int64_t x = 0, y = 0;
+  std::int64_t x, y;  // trivial, so vertex arrays holding it can start uninitialized
 };
 
 inline std::int64_t to_fixed(float pixels) {
@@ -38,6 +38,17 @@ inline bool is_top_left(const FixedPoint& a, const FixedPoint& b) {
 // Value to add to an edge function so that `>= 0` means covered under the fill rule.
 inline std::int64_t fill_rule_bias(const FixedPoint& a, const FixedPoint& b) {
   return is_top_left(a, b) ? 0 : -1;
+}
+
+// The first pixel whose sample (pixel * kSubpixelScale + offset) lies at or after `lo`, and the
+// last whose sample lies at or before `hi` (fixed-point, either sign).
+inline int first_sample_pixel(std::int64_t lo, std::int64_t offset) {
+  const std::int64_t n = lo - offset;
+  return static_cast<int>(n >= 0 ? (n + kSubpixelScale - 1) / kSubpixelScale : -((-n) / kSubpixelScale));
+}
+inline int last_sample_pixel(std::int64_t hi, std::int64_t offset) {
+  const std::int64_t n = hi - offset;
+  return static_cast<int>(n >= 0 ? n / kSubpixelScale : -((-n + kSubpixelScale - 1) / kSubpixelScale));
 }
 
 // Screen-space barycentric weights of p in triangle (a, b, c), in the order (a, b, c).

@@ -13,12 +13,12 @@ namespace farm::raster {
 namespace {
 
 // What the z-buffer keeps per pixel: the nearest surface so far. Shading waits until every
-// triangle is in (deferred), so each pixel is shaded once however deep the overdraw.
-struct SurfaceSample {
-  float ndc_depth = INFINITY;
-  glm::vec3 view_position{0.0f};
-  glm::vec3 world_normal{0.0f};
-  const Material* material = nullptr;
+// triangle is in (deferred), so each pixel is shaded once however deep the overdraw. The
+// interpolated attributes are only valid where `material` is set, so clearing a region touches
+// just depth and material.
+struct SurfaceAttributes {
+  glm::vec3 view_position;
+  glm::vec3 world_normal;
 };
 
 // Rasterizes the triangles of one bin into one region (a bin, or the part of it inside a tile)
@@ -26,27 +26,33 @@ struct SurfaceSample {
 class RegionRasterizer {
  public:
   explicit RegionRasterizer(const RasterFrame& frame) : frame_(frame) {
-    samples_.resize(static_cast<std::size_t>(kBinSize) * kBinSize);
+    constexpr std::size_t kPixels = static_cast<std::size_t>(kBinSize) * kBinSize;
+    depth_.resize(kPixels);
+    material_.resize(kPixels);
+    attributes_.resize(kPixels);
   }
 
   void begin(const Rect& region, FixedPoint sample_offset) {
     region_ = region;
     offset_ = sample_offset;
-    std::fill_n(samples_.begin(), static_cast<std::size_t>(region.width()) * region.height(),
-                SurfaceSample{});
+    const std::size_t n = static_cast<std::size_t>(region.width()) * region.height();
+    std::fill_n(depth_.begin(), n, INFINITY);
+    std::fill_n(material_.begin(), n, nullptr);
   }
 
-  const SurfaceSample& sample(int x, int y) const { return samples_[index(x, y)]; }
+  // The surface seen at a pixel: null where no triangle covers its sample.
+  const Material* material(int x, int y) const { return material_[index(x, y)]; }
+  const SurfaceAttributes& attributes(int x, int y) const { return attributes_[index(x, y)]; }
   std::uint64_t fragments() const { return fragments_; }
 
   void draw(const ScreenTriangle& t) {
-    const ScreenVertex &s0 = frame_.vertices[t.v[0]], &s1 = frame_.vertices[t.v[1]],
-                       &s2 = frame_.vertices[t.v[2]];
+    const ScreenVertex &s0 = frame_.vertex(t.v[0]), &s1 = frame_.vertex(t.v[1]),
+                       &s2 = frame_.vertex(t.v[2]);
     const FixedPoint &p0 = s0.position, &p1 = s1.position, &p2 = s2.position;
-    const int x_begin = std::max({region_.x0, t.x0, first_sample(std::min({p0.x, p1.x, p2.x}), offset_.x)});
-    const int x_end = std::min({region_.x1 - 1, t.x1, last_sample(std::max({p0.x, p1.x, p2.x}), offset_.x)});
-    const int y_begin = std::max({region_.y0, t.y0, first_sample(std::min({p0.y, p1.y, p2.y}), offset_.y)});
-    const int y_end = std::min({region_.y1 - 1, t.y1, last_sample(std::max({p0.y, p1.y, p2.y}), offset_.y)});
+    const int x_begin = std::max({region_.x0, t.x0, first_sample_pixel(std::min({p0.x, p1.x, p2.x}), offset_.x)});
+    const int x_end = std::min({region_.x1 - 1, t.x1, last_sample_pixel(std::max({p0.x, p1.x, p2.x}), offset_.x)});
+    const int y_begin = std::max({region_.y0, t.y0, first_sample_pixel(std::min({p0.y, p1.y, p2.y}), offset_.y)});
+    const int y_end = std::min({region_.y1 - 1, t.y1, last_sample_pixel(std::max({p0.y, p1.y, p2.y}), offset_.y)});
     if (x_begin > x_end || y_begin > y_end) return;
 
     // Edge i is opposite vertex i, so its value is vertex i's barycentric weight times the area.
@@ -71,16 +77,16 @@ class RegionRasterizer {
                     l2 = static_cast<float>(e2) * inv_area;
         // NDC depth is affine in screen space; attributes are not, so they use 1/w weights.
         const float depth = l0 * s0.ndc_depth + l1 * s1.ndc_depth + l2 * s2.ndc_depth;
-        SurfaceSample& target = samples_[index(x, y)];
-        if (!(depth < target.ndc_depth)) continue;  // ties keep the earlier triangle
+        const std::size_t i = index(x, y);
+        if (!(depth < depth_[i])) continue;  // ties keep the earlier triangle
         const float q0 = l0 * s0.inv_w, q1 = l1 * s1.inv_w, q2 = l2 * s2.inv_w;
         const float inv_q = 1.0f / (q0 + q1 + q2);
-        target.ndc_depth = depth;
-        target.view_position =
+        depth_[i] = depth;
+        material_[i] = material;
+        attributes_[i].view_position =
             (q0 * a0.view_position + q1 * a1.view_position + q2 * a2.view_position) * inv_q;
-        target.world_normal =
+        attributes_[i].world_normal =
             (q0 * a0.world_normal + q1 * a1.world_normal + q2 * a2.world_normal) * inv_q;
-        target.material = material;
       }
     }
   }
@@ -90,20 +96,13 @@ class RegionRasterizer {
     return static_cast<std::size_t>(y - region_.y0) * static_cast<std::size_t>(region_.width()) +
            static_cast<std::size_t>(x - region_.x0);
   }
-  // Pixel index range whose sample points (pixel * 256 + offset) lie in [lo, hi].
-  static int first_sample(std::int64_t lo, std::int64_t offset) {
-    const std::int64_t n = lo - offset;
-    return static_cast<int>(n >= 0 ? (n + kSubpixelScale - 1) / kSubpixelScale : -((-n) / kSubpixelScale));
-  }
-  static int last_sample(std::int64_t hi, std::int64_t offset) {
-    const std::int64_t n = hi - offset;
-    return static_cast<int>(n >= 0 ? n / kSubpixelScale : -((-n + kSubpixelScale - 1) / kSubpixelScale));
-  }
 
   const RasterFrame& frame_;
   Rect region_;
   FixedPoint offset_;
-  std::vector<SurfaceSample> samples_;
+  std::vector<float> depth_;  // NDC depth of the nearest surface so far
+  std::vector<const Material*> material_;
+  std::vector<SurfaceAttributes> attributes_;
   std::uint64_t fragments_ = 0;
 };
 
@@ -112,27 +111,31 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
                   const Rect& region, bool write_aovs, TileBuffer& out) {
   for (int y = region.y0; y < region.y1; ++y) {
     for (int x = region.x0; x < region.x1; ++x) {
-      const SurfaceSample& hit = raster.sample(x, y);
+      const Material* material = raster.material(x, y);
       glm::vec4& pixel = out.rgba(x, y);
-      if (!hit.material) {
+      if (!material) {
         pixel += glm::vec4(scene.background, 0.0f);
         continue;
       }
+      const SurfaceAttributes& hit = raster.attributes(x, y);
       const glm::vec3 world = glm::vec3(frame.view_to_world * glm::vec4(hit.view_position, 1.0f));
       const glm::vec3 to_eye = glm::normalize(frame.eye - world);
       glm::vec3 n = glm::normalize(hit.world_normal);
       if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: light the face we see
-      pixel += glm::vec4(shade_blinn_phong(*hit.material, world, n, to_eye, scene.lights, scene.ambient), 1.0f);
+      pixel += glm::vec4(shade_blinn_phong(*material, world, n, to_eye, scene.lights, scene.ambient), 1.0f);
       if (!write_aovs) continue;
       if (out.aovs().depth) out.depth(x, y) = -hit.view_position.z;
       if (out.aovs().normal) out.normal(x, y) = n;
-      if (out.aovs().albedo) out.albedo(x, y) = hit.material->diffuse;
+      if (out.aovs().albedo) out.albedo(x, y) = material->diffuse;
     }
   }
 }
 
+// The set-up depends on the image size, and (through culling) on whether only pixel centres
+// are sampled.
 std::string frame_key(const RenderSettings& settings) {
-  return fmt::format("raster {}x{}", settings.width, settings.height);
+  return fmt::format("raster {}x{} {}", settings.width, settings.height,
+                     settings.spp > 1 ? "supersampled" : "centres");
 }
 
 }  // namespace
@@ -164,7 +167,7 @@ void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene
       for (int s = 0; s < samples; ++s) {
         raster.begin(region, sample_offset(s));
         for (std::uint32_t i = frame.bin_start[bin]; i < frame.bin_start[bin + 1]; ++i) {
-          raster.draw(frame.triangles[frame.bin_triangles[i]]);
+          raster.draw(*frame.bin_triangles[i]);
         }
         shade_region(raster, frame, scene.scene(), region, s == 0, out);
       }

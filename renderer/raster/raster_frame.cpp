@@ -11,7 +11,6 @@ namespace {
 
 constexpr std::size_t kVertexGrain = 4096;
 constexpr std::size_t kSetupGrain = 8192;
-constexpr std::uint32_t kExtraVertex = 0x80000000u;  // index refers to a chunk's clipped vertices
 
 // One mesh of one object: where its vertices and triangles sit in the frame's flat numbering.
 struct MeshRange {
@@ -33,7 +32,7 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) { return a >= 0 ? a / b :
 class FrameBuilder {
  public:
   FrameBuilder(const PreparedScene& scene, const RenderSettings& settings, RasterFrame& frame)
-      : frame_(frame) {
+      : frame_(frame), centres_only_(settings.spp <= 1) {
     const Camera& camera = scene.scene().camera;
     view_ = camera.view_matrix();
     view_projection_ = camera.projection_matrix(camera.aspect_for(settings.width, settings.height)) * view_;
@@ -52,7 +51,7 @@ class FrameBuilder {
         triangles += mesh.triangles.size();
       }
     }
-    frame.vertices.resize(vertices);
+    frame.vertices.allocate(vertices);
     frame.input_triangles = triangles;
   }
 
@@ -71,6 +70,7 @@ class FrameBuilder {
     parallel(frame_.input_triangles, kSetupGrain,
              [this](std::size_t b, std::size_t e, int) { set_up(b, e, chunks_[b / kSetupGrain]); });
     plan_merge();
+    frame_.triangle_chunks.resize(chunks_.size());
     parallel(chunks_.size(), 1, [this](std::size_t b, std::size_t e, int) {
       for (std::size_t c = b; c < e; ++c) merge_chunk(c);
     });
@@ -121,14 +121,16 @@ class FrameBuilder {
         const glm::vec3 n = to_world_normal * range.mesh->normals[local];
         const float len = glm::length(n);
         v.attributes.world_normal = len > 0.0f ? n / len : n;
+        v.outcode = outcode(v.attributes.clip);
         project(v);
       }
       begin = stop;
     }
   }
 
+  // While set-up runs, a clipped vertex index is local to its chunk; the merge rebases it.
   const ScreenVertex& vertex(const SetupChunk& chunk, std::uint32_t index) const {
-    return (index & kExtraVertex) ? chunk.clipped_vertices[index & ~kExtraVertex] : frame_.vertices[index];
+    return (index & kClippedVertex) ? chunk.clipped_vertices[index & ~kClippedVertex] : frame_.vertices[index];
   }
 
   void emit(SetupChunk& chunk, std::uint32_t material, std::uint32_t i0, std::uint32_t i1,
@@ -143,12 +145,23 @@ class FrameBuilder {
     t.v[1] = i1;
     t.v[2] = i2;
     t.material = material;
-    // Every pixel a sample of which (at any sub-pixel offset) could fall inside.
-    t.x0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(std::min({p0.x, p1.x, p2.x}), kSubpixelScale)));
-    t.y0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(std::min({p0.y, p1.y, p2.y}), kSubpixelScale)));
-    t.x1 = static_cast<int>(std::min<std::int64_t>(frame_.width - 1, floor_div(std::max({p0.x, p1.x, p2.x}), kSubpixelScale)));
-    t.y1 = static_cast<int>(std::min<std::int64_t>(frame_.height - 1, floor_div(std::max({p0.y, p1.y, p2.y}), kSubpixelScale)));
-    if (t.x0 > t.x1 || t.y0 > t.y1) return;  // entirely off screen
+    const std::int64_t min_x = std::min({p0.x, p1.x, p2.x}), max_x = std::max({p0.x, p1.x, p2.x}),
+                       min_y = std::min({p0.y, p1.y, p2.y}), max_y = std::max({p0.y, p1.y, p2.y});
+    if (centres_only_) {
+      // Pixels whose centre lies in the bounding box: none means the triangle covers no sample.
+      const std::int64_t centre = kSubpixelScale / 2;
+      t.x0 = std::max(0, first_sample_pixel(min_x, centre));
+      t.y0 = std::max(0, first_sample_pixel(min_y, centre));
+      t.x1 = std::min(frame_.width - 1, last_sample_pixel(max_x, centre));
+      t.y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, centre));
+    } else {
+      // Every pixel a sample of which (at any sub-pixel offset) could fall inside.
+      t.x0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(min_x, kSubpixelScale)));
+      t.y0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(min_y, kSubpixelScale)));
+      t.x1 = static_cast<int>(std::min<std::int64_t>(frame_.width - 1, floor_div(max_x, kSubpixelScale)));
+      t.y1 = static_cast<int>(std::min<std::int64_t>(frame_.height - 1, floor_div(max_y, kSubpixelScale)));
+    }
+    if (t.x0 > t.x1 || t.y0 > t.y1) return;  // off screen, or between samples
     const auto local = static_cast<std::uint32_t>(chunk.triangles.size());
     chunk.triangles.push_back(t);
     for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by)
@@ -157,6 +170,8 @@ class FrameBuilder {
   }
 
   void set_up(std::size_t begin, std::size_t end, SetupChunk& chunk) const {
+    chunk.triangles.reserve(end - begin);
+    chunk.binned.reserve(end - begin + (end - begin) / 4);
     std::size_t r = range_of_triangle(begin);
     for (std::size_t i = begin; i < end; ++i) {
       while (i >= ranges_[r].first_triangle + ranges_[r].mesh->triangles.size()) ++r;
@@ -165,16 +180,15 @@ class FrameBuilder {
       const auto base = static_cast<std::uint32_t>(range.first_vertex);
       const std::uint32_t ia = base + local.x, ib = base + local.y, ic = base + local.z;
       const auto material = static_cast<std::uint32_t>(r);
-      const ClipVertex &a = frame_.vertices[ia].attributes, &b = frame_.vertices[ib].attributes,
-                       &c = frame_.vertices[ic].attributes;
-      if (trivially_outside(a.clip, b.clip, c.clip)) continue;
-      if (trivially_inside(a.clip, b.clip, c.clip)) {
+      const ScreenVertex &a = frame_.vertices[ia], &b = frame_.vertices[ib], &c = frame_.vertices[ic];
+      if (a.outcode & b.outcode & c.outcode) continue;  // wholly outside one plane
+      if ((a.outcode | b.outcode | c.outcode) == 0) {
         emit(chunk, material, ia, ib, ic);
         continue;
       }
-      const ClippedPolygon poly = clip_triangle(a, b, c);
+      const ClippedPolygon poly = clip_triangle(a.attributes, b.attributes, c.attributes);
       if (poly.size < 3) continue;
-      const auto first = static_cast<std::uint32_t>(chunk.clipped_vertices.size()) | kExtraVertex;
+      const auto first = static_cast<std::uint32_t>(chunk.clipped_vertices.size()) | kClippedVertex;
       for (std::size_t k = 0; k < poly.size; ++k) {
         ScreenVertex v;
         v.attributes = poly.vertices[k];
@@ -185,20 +199,16 @@ class FrameBuilder {
     }
   }
 
-  // Where each chunk's triangles, clipped vertices and bin entries go in the frame's arrays.
+  // Where each chunk's clipped vertices and bin entries go in the frame's arrays.
   void plan_merge() {
     const std::size_t bins = static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y);
-    triangle_base_.resize(chunks_.size());
     vertex_base_.resize(chunks_.size());
-    std::size_t triangles = 0, vertices = frame_.vertices.size();
+    std::size_t vertices = 0;
     for (std::size_t c = 0; c < chunks_.size(); ++c) {
-      triangle_base_[c] = triangles;
       vertex_base_[c] = vertices;
-      triangles += chunks_[c].triangles.size();
       vertices += chunks_[c].clipped_vertices.size();
     }
-    frame_.triangles.resize(triangles);
-    frame_.vertices.resize(vertices);
+    frame_.clipped_vertices.resize(vertices);
 
     // Counting sort by bin, stable in chunk order, so every bin lists triangles in scene order.
     std::vector<std::uint32_t> counts(chunks_.size() * bins, 0);
@@ -215,33 +225,37 @@ class FrameBuilder {
       }
     }
     frame_.bin_start[bins] = total;
-    frame_.bin_triangles.resize(total);
+    frame_.bin_triangles.allocate(total);
   }
 
+  // Rebases the chunk's clipped vertex indices, hands its triangles to the frame where they
+  // lie, and files them in their bins.
   void merge_chunk(std::size_t c) {
-    const SetupChunk& chunk = chunks_[c];
+    SetupChunk& chunk = chunks_[c];
     const std::size_t bins = frame_.bin_start.size() - 1;
     const auto vertex_base = static_cast<std::uint32_t>(vertex_base_[c]);
     std::copy(chunk.clipped_vertices.begin(), chunk.clipped_vertices.end(),
-              frame_.vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
-    for (std::size_t t = 0; t < chunk.triangles.size(); ++t) {
-      ScreenTriangle tri = chunk.triangles[t];
-      for (std::uint32_t& v : tri.v) {
-        if (v & kExtraVertex) v = vertex_base + (v & ~kExtraVertex);
+              frame_.clipped_vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
+    if (!chunk.clipped_vertices.empty()) {
+      for (ScreenTriangle& tri : chunk.triangles) {
+        for (std::uint32_t& v : tri.v) {
+          if (v & kClippedVertex) v = kClippedVertex | (vertex_base + (v & ~kClippedVertex));
+        }
       }
-      frame_.triangles[triangle_base_[c] + t] = tri;
     }
+    std::vector<ScreenTriangle>& triangles = frame_.triangle_chunks[c];
+    triangles = std::move(chunk.triangles);  // the buffer moves; pointers into it stay valid
     for (const auto& [bin, local] : chunk.binned) {
-      frame_.bin_triangles[bin_cursor_[c * bins + bin]++] =
-          static_cast<std::uint32_t>(triangle_base_[c] + local);
+      frame_.bin_triangles[bin_cursor_[c * bins + bin]++] = &triangles[local];
     }
   }
 
   RasterFrame& frame_;
+  bool centres_only_;  // spp 1: a triangle between pixel centres can be dropped here
   glm::mat4 view_{1.0f}, view_projection_{1.0f};
   std::vector<MeshRange> ranges_;
   std::vector<SetupChunk> chunks_;
-  std::vector<std::size_t> triangle_base_, vertex_base_;
+  std::vector<std::size_t> vertex_base_;
   std::vector<std::uint32_t> bin_cursor_;
 };
 

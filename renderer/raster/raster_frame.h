@@ -16,6 +16,7 @@
 #include "renderer/raster/edge_function.h"
 #include "renderer/render_settings.h"
 #include "renderer/thread_pool.h"
+#include "renderer/uninitialized_array.h"
 
 namespace farm::raster {
 
@@ -23,19 +24,25 @@ namespace farm::raster {
 // that miss it, large enough that a typical triangle lands in one bin.
 inline constexpr int kBinSize = 32;
 
-// A vertex after the vertex stage, with its screen position when it lies in front of the camera.
+// A vertex after the vertex stage. Its screen fields are set only when it lies inside the guard
+// band in front of the camera; a vertex outside is only ever used through clipping.
 struct ScreenVertex {
   ClipVertex attributes;
   FixedPoint position;
-  float ndc_depth = 0.0f;
-  float inv_w = 0.0f;
+  float ndc_depth;
+  float inv_w;
+  std::uint8_t outcode;  // clip planes it lies outside of
 };
 
-// A triangle ready to rasterize: positively oriented on the sample grid, non-degenerate.
+// Marks a triangle's vertex index as one into RasterFrame::clipped_vertices.
+inline constexpr std::uint32_t kClippedVertex = 0x80000000u;
+
+// A triangle ready to rasterize: positively oriented on the sample grid, non-degenerate, and
+// (when only pixel centres are sampled) covering at least the bounding box of one centre.
 struct ScreenTriangle {
-  std::uint32_t v[3];            // indices into RasterFrame::vertices
+  std::uint32_t v[3];            // RasterFrame::vertex() indices
   std::uint32_t material;        // index into RasterFrame::materials
-  int x0, y0, x1, y1;            // pixels whose area it may touch, inclusive, clamped to the image
+  int x0, y0, x1, y1;            // pixels whose samples it may cover, inclusive, in the image
 };
 
 struct RasterFrame {
@@ -43,12 +50,18 @@ struct RasterFrame {
   int bins_x = 0, bins_y = 0;
   glm::mat4 view_to_world{1.0f};
   glm::vec3 eye{0.0f};
-  std::vector<ScreenVertex> vertices;
-  std::vector<ScreenTriangle> triangles;
+  UninitializedArray<ScreenVertex> vertices;  // one per scene vertex
+  std::vector<ScreenVertex> clipped_vertices;  // made by clipping, in scene order
+  // Set-up triangles in scene order, in the chunks the set-up ran in (never copied together).
+  std::vector<std::vector<ScreenTriangle>> triangle_chunks;
   std::vector<const Material*> materials;
-  // Bin b holds triangles bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order.
+  // Bin b holds bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order.
   std::vector<std::uint32_t> bin_start;
-  std::vector<std::uint32_t> bin_triangles;
+  UninitializedArray<const ScreenTriangle*> bin_triangles;
+
+  const ScreenVertex& vertex(std::uint32_t i) const {
+    return (i & kClippedVertex) ? clipped_vertices[i & ~kClippedVertex] : vertices[i];
+  }
 
   std::size_t input_triangles = 0;  // before clipping and culling of invisible ones
 
