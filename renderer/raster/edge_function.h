@@ -42,13 +42,12 @@ inline std::int64_t fill_rule_bias(const FixedPoint& a, const FixedPoint& b) {
 
 // The first pixel whose sample (pixel * kSubpixelScale + offset) lies at or after `lo`, and the
 // last whose sample lies at or before `hi` (fixed-point, either sign).
+// (C++20 defines >> of a negative number as an arithmetic shift, i.e. floor division.)
 inline int first_sample_pixel(std::int64_t lo, std::int64_t offset) {
-  const std::int64_t n = lo - offset;
-  return static_cast<int>(n >= 0 ? (n + kSubpixelScale - 1) / kSubpixelScale : -((-n) / kSubpixelScale));
+  return static_cast<int>((lo - offset + kSubpixelScale - 1) >> kSubpixelBits);
 }
 inline int last_sample_pixel(std::int64_t hi, std::int64_t offset) {
-  const std::int64_t n = hi - offset;
-  return static_cast<int>(n >= 0 ? n / kSubpixelScale : -((-n + kSubpixelScale - 1) / kSubpixelScale));
+  return static_cast<int>((hi - offset) >> kSubpixelBits);
 }
 
 // Screen-space barycentric weights of p in triangle (a, b, c), in the order (a, b, c).

@@ -166,7 +166,11 @@ void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene
       // One pass per sample position; pass 0 is the pixel centre and also feeds the AOVs.
       for (int s = 0; s < samples; ++s) {
         raster.begin(region, sample_offset(s));
-        for (std::uint32_t i = frame.bin_start[bin]; i < frame.bin_start[bin + 1]; ++i) {
+        const std::uint32_t first = frame.bin_start[bin], last = frame.bin_start[bin + 1];
+        for (std::uint32_t i = first; i < last; ++i) {
+          // The triangles of a bin sit far apart in memory: fetch ahead to hide the latency.
+          if (i + 8 < last) __builtin_prefetch(frame.bin_triangles[i + 8]);
+          if (i + 4 < last) frame.prefetch_vertices(*frame.bin_triangles[i + 4]);
           raster.draw(*frame.bin_triangles[i]);
         }
         shade_region(raster, frame, scene.scene(), region, s == 0, out);

@@ -22,12 +22,14 @@ struct MeshRange {
 
 // What one set-up chunk produces, merged in chunk order afterwards.
 struct SetupChunk {
-  std::vector<ScreenTriangle> triangles;
+  TriangleChunk triangles;
   std::vector<ScreenVertex> clipped_vertices;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> binned;  // (bin, local triangle)
+  std::vector<std::uint32_t> bin_counts;                          // entries per bin
 };
 
-std::int64_t floor_div(std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+// A local triangle index with this bit refers to TriangleChunk::from_clipping.
+constexpr std::uint32_t kFromClipping = 0x80000000u;
 
 class FrameBuilder {
  public:
@@ -133,8 +135,8 @@ class FrameBuilder {
     return (index & kClippedVertex) ? chunk.clipped_vertices[index & ~kClippedVertex] : frame_.vertices[index];
   }
 
-  void emit(SetupChunk& chunk, std::uint32_t material, std::uint32_t i0, std::uint32_t i1,
-            std::uint32_t i2) const {
+  void emit(SetupChunk& chunk, bool from_clipping, std::uint32_t material, std::uint32_t i0,
+            std::uint32_t i1, std::uint32_t i2) const {
     const FixedPoint &p0 = vertex(chunk, i0).position, &p1 = vertex(chunk, i1).position,
                      &p2 = vertex(chunk, i2).position;
     const std::int64_t area = edge_function(p0, p1, p2);
@@ -156,21 +158,33 @@ class FrameBuilder {
       t.y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, centre));
     } else {
       // Every pixel a sample of which (at any sub-pixel offset) could fall inside.
-      t.x0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(min_x, kSubpixelScale)));
-      t.y0 = static_cast<int>(std::max<std::int64_t>(0, floor_div(min_y, kSubpixelScale)));
-      t.x1 = static_cast<int>(std::min<std::int64_t>(frame_.width - 1, floor_div(max_x, kSubpixelScale)));
-      t.y1 = static_cast<int>(std::min<std::int64_t>(frame_.height - 1, floor_div(max_y, kSubpixelScale)));
+      t.x0 = std::max(0, last_sample_pixel(min_x, 0));
+      t.y0 = std::max(0, last_sample_pixel(min_y, 0));
+      t.x1 = std::min(frame_.width - 1, last_sample_pixel(max_x, 0));
+      t.y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, 0));
     }
     if (t.x0 > t.x1 || t.y0 > t.y1) return;  // off screen, or between samples
-    const auto local = static_cast<std::uint32_t>(chunk.triangles.size());
-    chunk.triangles.push_back(t);
-    for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by)
-      for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx)
-        chunk.binned.emplace_back(static_cast<std::uint32_t>(by * frame_.bins_x + bx), local);
+    TriangleChunk& out = chunk.triangles;
+    std::uint32_t local;
+    if (from_clipping) {
+      local = static_cast<std::uint32_t>(out.from_clipping.size()) | kFromClipping;
+      out.from_clipping.push_back(t);
+    } else {
+      local = static_cast<std::uint32_t>(out.direct_count);
+      out.direct[out.direct_count++] = t;
+    }
+    for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by) {
+      for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) {
+        const auto bin = static_cast<std::uint32_t>(by * frame_.bins_x + bx);
+        chunk.binned.emplace_back(bin, local);
+        ++chunk.bin_counts[bin];
+      }
+    }
   }
 
   void set_up(std::size_t begin, std::size_t end, SetupChunk& chunk) const {
-    chunk.triangles.reserve(end - begin);
+    chunk.triangles.direct.allocate(end - begin);
+    chunk.bin_counts.assign(static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y), 0);
     chunk.binned.reserve(end - begin + (end - begin) / 4);
     std::size_t r = range_of_triangle(begin);
     for (std::size_t i = begin; i < end; ++i) {
@@ -183,7 +197,7 @@ class FrameBuilder {
       const ScreenVertex &a = frame_.vertices[ia], &b = frame_.vertices[ib], &c = frame_.vertices[ic];
       if (a.outcode & b.outcode & c.outcode) continue;  // wholly outside one plane
       if ((a.outcode | b.outcode | c.outcode) == 0) {
-        emit(chunk, material, ia, ib, ic);
+        emit(chunk, false, material, ia, ib, ic);
         continue;
       }
       const ClippedPolygon poly = clip_triangle(a.attributes, b.attributes, c.attributes);
@@ -195,7 +209,9 @@ class FrameBuilder {
         project(v);
         chunk.clipped_vertices.push_back(v);
       }
-      for (std::uint32_t k = 2; k < poly.size; ++k) emit(chunk, material, first, first + k - 1, first + k);
+      for (std::uint32_t k = 2; k < poly.size; ++k) {
+        emit(chunk, true, material, first, first + k - 1, first + k);
+      }
     }
   }
 
@@ -211,17 +227,22 @@ class FrameBuilder {
     frame_.clipped_vertices.resize(vertices);
 
     // Counting sort by bin, stable in chunk order, so every bin lists triangles in scene order.
-    std::vector<std::uint32_t> counts(chunks_.size() * bins, 0);
-    for (std::size_t c = 0; c < chunks_.size(); ++c)
-      for (const auto& [bin, local] : chunks_[c].binned) ++counts[c * bins + bin];
+    // Loops run chunk by chunk so that each walks one contiguous count array.
+    std::vector<std::uint32_t> running(bins, 0);
+    for (const SetupChunk& chunk : chunks_)
+      for (std::size_t b = 0; b < bins; ++b) running[b] += chunk.bin_counts[b];
     frame_.bin_start.assign(bins + 1, 0);
-    bin_cursor_.assign(chunks_.size() * bins, 0);
     std::uint32_t total = 0;
     for (std::size_t b = 0; b < bins; ++b) {
       frame_.bin_start[b] = total;
-      for (std::size_t c = 0; c < chunks_.size(); ++c) {
-        bin_cursor_[c * bins + b] = total;
-        total += counts[c * bins + b];
+      total += running[b];
+      running[b] = frame_.bin_start[b];
+    }
+    bin_cursor_.resize(chunks_.size() * bins);
+    for (std::size_t c = 0; c < chunks_.size(); ++c) {
+      for (std::size_t b = 0; b < bins; ++b) {
+        bin_cursor_[c * bins + b] = running[b];
+        running[b] += chunks_[c].bin_counts[b];
       }
     }
     frame_.bin_start[bins] = total;
@@ -236,17 +257,18 @@ class FrameBuilder {
     const auto vertex_base = static_cast<std::uint32_t>(vertex_base_[c]);
     std::copy(chunk.clipped_vertices.begin(), chunk.clipped_vertices.end(),
               frame_.clipped_vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
-    if (!chunk.clipped_vertices.empty()) {
-      for (ScreenTriangle& tri : chunk.triangles) {
-        for (std::uint32_t& v : tri.v) {
-          if (v & kClippedVertex) v = kClippedVertex | (vertex_base + (v & ~kClippedVertex));
-        }
+    // Only triangles made by clipping use clipped vertices.
+    for (ScreenTriangle& tri : chunk.triangles.from_clipping) {
+      for (std::uint32_t& v : tri.v) {
+        if (v & kClippedVertex) v = kClippedVertex | (vertex_base + (v & ~kClippedVertex));
       }
     }
-    std::vector<ScreenTriangle>& triangles = frame_.triangle_chunks[c];
-    triangles = std::move(chunk.triangles);  // the buffer moves; pointers into it stay valid
+    TriangleChunk& triangles = frame_.triangle_chunks[c];
+    triangles = std::move(chunk.triangles);  // the buffers move; pointers into them stay valid
     for (const auto& [bin, local] : chunk.binned) {
-      frame_.bin_triangles[bin_cursor_[c * bins + bin]++] = &triangles[local];
+      frame_.bin_triangles[bin_cursor_[c * bins + bin]++] =
+          (local & kFromClipping) ? &triangles.from_clipping[local & ~kFromClipping]
+                                  : &triangles.direct[local];
     }
   }
 

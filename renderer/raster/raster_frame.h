@@ -45,6 +45,14 @@ struct ScreenTriangle {
   int x0, y0, x1, y1;            // pixels whose samples it may cover, inclusive, in the image
 };
 
+// The set-up triangles of one chunk of the scene's triangles: at most one per input triangle in
+// `direct` (recycled frame memory, sized up front), and the fans of clipped ones aside.
+struct TriangleChunk {
+  UninitializedArray<ScreenTriangle> direct;
+  std::size_t direct_count = 0;
+  std::vector<ScreenTriangle> from_clipping;
+};
+
 struct RasterFrame {
   int width = 0, height = 0;
   int bins_x = 0, bins_y = 0;
@@ -52,8 +60,9 @@ struct RasterFrame {
   glm::vec3 eye{0.0f};
   UninitializedArray<ScreenVertex> vertices;  // one per scene vertex
   std::vector<ScreenVertex> clipped_vertices;  // made by clipping, in scene order
-  // Set-up triangles in scene order, in the chunks the set-up ran in (never copied together).
-  std::vector<std::vector<ScreenTriangle>> triangle_chunks;
+  // Set-up triangles in the chunks the set-up ran in (never copied together); the bins give
+  // the order.
+  std::vector<TriangleChunk> triangle_chunks;
   std::vector<const Material*> materials;
   // Bin b holds bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order.
   std::vector<std::uint32_t> bin_start;
@@ -61,6 +70,10 @@ struct RasterFrame {
 
   const ScreenVertex& vertex(std::uint32_t i) const {
     return (i & kClippedVertex) ? clipped_vertices[i & ~kClippedVertex] : vertices[i];
+  }
+
+  void prefetch_vertices(const ScreenTriangle& t) const {
+    for (std::uint32_t v : t.v) __builtin_prefetch(&vertex(v));
   }
 
   std::size_t input_triangles = 0;  // before clipping and culling of invisible ones
