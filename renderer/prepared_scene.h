@@ -1,18 +1,24 @@
 #pragma once
 // A scene made ready for rendering: everything that depends only on the scene (world matrices,
-// normal matrices; later the BVHs) computed once per job per process and shared by all tiles.
+// normal matrices, flattened triangles per model) computed once per job per process and shared
+// by all tiles; engines cache their own derived structures (BVHs, frame set-up) in frame_cache().
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <vector>
 
+#include <memory>
+
 #include "renderer/frame_cache.h"
+#include "renderer/geometry/model_triangles.h"
 #include "renderer/scene/scene.h"
 
 namespace farm {
 
 struct PreparedObject {
   const SceneObject* source = nullptr;
+  const ModelTriangles* triangles = nullptr;  // shared by every object of the same model
   glm::mat4 model_to_world{1.0f};
+  glm::mat4 world_to_model{1.0f};
   glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
 };
 
@@ -32,6 +38,7 @@ class PreparedScene {
  private:
   Scene scene_;
   std::vector<PreparedObject> objects_;
+  std::vector<std::unique_ptr<ModelTriangles>> model_triangles_;  // one per distinct model
   mutable FrameCache frame_cache_;
 };
 

@@ -1,0 +1,29 @@
+#pragma once
+// Checks one SceneIntersector against another (ours against Embree) on a deterministic set of
+// rays: primary rays through the image plus random secondary rays (origins in the scene's
+// bounds, directions uniform on the sphere).
+#include <cstdint>
+#include <string>
+
+#include "renderer/geometry/scene_intersector.h"
+#include "renderer/render_settings.h"
+
+namespace farm {
+
+struct AccelValidation {
+  std::uint64_t rays = 0;
+  std::uint64_t hit_miss_disagreements = 0;   // one hit, the other missed
+  std::uint64_t triangle_disagreements = 0;   // both hit, different (object, triangle)
+  double max_relative_t_difference = 0.0;     // over rays both hit
+  double mean_relative_t_difference = 0.0;
+
+  std::string summary() const;  // one line for the render summary and `farm validate`
+};
+
+// `rays` rays: half primary (through a jittered pixel grid of the settings' image), half
+// secondary; the same rays for the same (scene, settings, rays, seed).
+AccelValidation validate_accel(const PreparedScene& scene, const RenderSettings& settings,
+                               const SceneIntersector& ours, const SceneIntersector& reference,
+                               std::uint64_t rays);
+
+}  // namespace farm

@@ -1,0 +1,61 @@
+#pragma once
+// A bounding volume hierarchy over primitives given by their boxes: triangles of a model (the
+// bottom level) or object instances (the top level). Built top-down by the surface area
+// heuristic over binned centroids, or by splitting at the median of the longest axis (the
+// lab's build); stored as one flat array, depth-first, the first child right after its parent.
+// Traversal visits the nearer child first and skips nodes farther than the closest hit so far.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "renderer/geometry/aabb.h"
+#include "renderer/geometry/ray.h"
+#include "renderer/geometry/traversal_stats.h"
+
+namespace farm {
+
+enum class BvhSplit { Sah, Median };
+
+struct BvhNode {
+  AABB bounds;
+  std::uint32_t offset = 0;  // inner: index of the second child; leaf: first index into order()
+  std::uint16_t count = 0;   // leaf: number of primitives; 0 marks an inner node
+  std::uint8_t axis = 0;     // inner: the split axis, which decides the near child
+};
+
+class Bvh {
+ public:
+  struct Options {
+    BvhSplit split = BvhSplit::Sah;
+    int max_leaf_size = 8;
+  };
+
+  static Bvh build(std::span<const AABB> primitive_bounds, const Options& options);
+
+  const std::vector<BvhNode>& nodes() const { return nodes_; }
+  // Leaf entries: primitive indices in the order leaves refer to them.
+  const std::vector<std::uint32_t>& order() const { return order_; }
+  int depth() const { return depth_; }
+
+  // Calls visit(bounds, level) for every node of level <= max_level (the root is level 0).
+  template <typename Visit>
+  void visit_levels(int max_level, Visit&& visit) const;
+
+  // Closest-hit traversal. `test(primitive, t_max)` intersects one primitive and, on a hit
+  // nearer than t_max, lowers t_max and returns true. Returns whether anything was hit.
+  template <typename Test>
+  bool closest(const Ray& ray, Test&& test, TraversalStats* stats) const;
+
+  // Any-hit traversal: stops at the first primitive for which test(primitive) is true.
+  template <typename Test>
+  bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
+
+ private:
+  std::vector<BvhNode> nodes_;
+  std::vector<std::uint32_t> order_;
+  int depth_ = 0;
+};
+
+}  // namespace farm
+
+#include "renderer/geometry/bvh_traversal.h"  // the template definitions

@@ -1,0 +1,13 @@
+#pragma once
+// Embree 3 behind the SceneIntersector interface: one Embree scene per model (shared vertex and
+// index buffers from ModelTriangles), one instance per object with the object's transform, so
+// Embree's hits use exactly our (object, triangle) numbering.
+#include <memory>
+
+#include "renderer/geometry/scene_intersector.h"
+
+namespace farm {
+
+std::unique_ptr<SceneIntersector> build_embree_intersector(const PreparedScene& scene);
+
+}  // namespace farm

@@ -1,0 +1,38 @@
+#pragma once
+// Ray queries against one model's triangles in model space (a bottom-level structure). One
+// instance serves every object that uses the model. Implementations: every triangle (`naive`),
+// and BVHs split at the median or by the surface area heuristic (bvh.h).
+#include <cstdint>
+#include <memory>
+
+#include "renderer/geometry/model_triangles.h"
+#include "renderer/geometry/ray.h"
+#include "renderer/geometry/traversal_stats.h"
+#include "renderer/render_settings.h"
+
+namespace farm {
+
+struct TriangleHit {
+  float t = 0.0f;            // in units of the ray's direction (unchanged by an affine map)
+  float u = 0.0f, v = 0.0f;  // barycentric weights of corners 1 and 2
+  std::uint32_t triangle = 0;
+};
+
+class Bvh;
+
+class MeshAccel {
+ public:
+  virtual ~MeshAccel() = default;
+  // Nearest hit with t in (ray.t_min, ray.t_max); `stats` (optional) counts the work.
+  virtual bool closest_hit(const Ray& ray, TriangleHit& hit, TraversalStats* stats) const = 0;
+  // Whether anything is hit with t in (ray.t_min, ray.t_max).
+  virtual bool any_hit(const Ray& ray, TraversalStats* stats) const = 0;
+  // The BVH behind it, for drawing its boxes; null for `naive`.
+  virtual const Bvh* bvh() const { return nullptr; }
+};
+
+// `accel` must be Naive, BvhMedian or Bvh (Embree works on whole scenes: embree_intersector.h).
+// `triangles` must outlive the result.
+std::unique_ptr<MeshAccel> build_mesh_accel(const ModelTriangles& triangles, AccelKind accel);
+
+}  // namespace farm

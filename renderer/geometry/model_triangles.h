@@ -1,0 +1,26 @@
+#pragma once
+// One model's triangles flattened across its meshes, in model space: the numbering every ray
+// acceleration structure (ours and Embree) and every hit uses. Triangle t of a model is
+// triangles[t]; its corners index the concatenated positions and normals.
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <vector>
+
+#include "renderer/geometry/aabb.h"
+#include "renderer/scene/model.h"
+
+namespace farm {
+
+struct ModelTriangles {
+  std::vector<glm::vec3> positions;    // all meshes' vertices, concatenated
+  std::vector<glm::vec3> normals;      // one per position, unit
+  std::vector<glm::uvec3> triangles;   // indices into positions
+  std::vector<std::uint32_t> material; // per triangle: index into Model::materials
+  AABB bounds;
+
+  explicit ModelTriangles(const Model& model);
+  std::size_t size() const { return triangles.size(); }
+  AABB triangle_bounds(std::uint32_t t) const;
+};
+
+}  // namespace farm
