@@ -2,15 +2,26 @@
 
 #include <fmt/format.h>
 
+#include "renderer/geometry/scene_intersector.h"
 #include "renderer/raster/raster_engine.h"
 #include "renderer/scene/input_error.h"
+#include "renderer/trace/whitted.h"
 
 namespace farm {
 
-bool engine_available(EngineKind engine) { return engine == EngineKind::Raster; }
+bool engine_available(EngineKind engine) { return engine != EngineKind::Path; }
 
 void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool) {
-  if (settings.engine == EngineKind::Raster) raster::prepare_frame(scene, settings, pool);
+  switch (settings.engine) {
+    case EngineKind::Raster:
+      raster::prepare_frame(scene, settings, pool);
+      return;
+    case EngineKind::Whitted:
+      cached_scene_intersector(scene, settings.accel);  // build the BVHs before the tiles start
+      return;
+    case EngineKind::Path:
+      return;
+  }
 }
 
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
@@ -22,11 +33,13 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
       raster::render_tile(scene, settings, clipped, out);
       return;
     case EngineKind::Whitted:
+      whitted::render_tile(scene, settings, clipped, out);
+      return;
     case EngineKind::Path:
       break;
   }
   throw InputError(fmt::format("render.engine: '{}' is not available in this build yet "
-                               "(available: raster)",
+                               "(available: raster, whitted)",
                                to_string(settings.engine)));
 }
 

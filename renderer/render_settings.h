@@ -27,6 +27,7 @@ struct RenderSettings {
   int tile_size = 32;
   int threads = 0;           // 0 = all hardware threads
   AccelKind accel = AccelKind::Bvh;
+  bool shadows = true;       // whitted: shadow rays (off: every light reaches every point)
   AovSet aovs;               // extra channels beyond RGBA
 };
 

@@ -54,7 +54,7 @@ void run_render_command(const RenderCommandOptions& options) {
   apply_overrides(job, options.overrides);
   if (!engine_available(job.render.engine)) {
     throw InputError(fmt::format("{}: render.engine: '{}' is not available in this build yet "
-                                 "(available: raster)",
+                                 "(available: raster, whitted)",
                                  options.job_file.string(), to_string(job.render.engine)));
   }
   if (!job.output.preview.empty() && !preview_format_supported(job.output.preview)) {

@@ -40,6 +40,11 @@ class SceneIntersector {
 // Builds the intersector for `accel` (Embree included).
 std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel);
 
+// The same, built once per prepared scene and accel and then shared by every tile (cached in
+// the scene's frame cache).
+std::shared_ptr<const SceneIntersector> cached_scene_intersector(const PreparedScene& scene,
+                                                                 AccelKind accel);
+
 // Fills position, normals and material of a hit given (object, triangle, u, v, t): shared by
 // every implementation so they agree on everything but the hit itself.
 void complete_surface_hit(const PreparedScene& scene, const Ray& ray, SurfaceHit& hit);

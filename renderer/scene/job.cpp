@@ -223,7 +223,7 @@ constexpr AccelKind kAccels[] = {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind
 
 void parse_render(const JsonValue& v, RenderSettings& r) {
   const JsonObject obj = v.object({"engine", "width", "height", "spp", "max_depth", "seed",
-                                   "tile_size", "threads", "accel"});
+                                   "tile_size", "threads", "accel", "shadows"});
   constexpr int kIntMax = std::numeric_limits<int>::max();
   if (auto x = obj.get("engine")) {
     const std::string s = x->string();
@@ -244,6 +244,7 @@ void parse_render(const JsonValue& v, RenderSettings& r) {
     if (!a) x->fail(fmt::format("unknown accel '{}' (expected {})", shown(s), names_of(kAccels)));
     r.accel = *a;
   }
+  if (auto x = obj.get("shadows")) r.shadows = x->boolean();
 }
 
 void parse_output(const JsonValue& v, Job& job) {

@@ -292,6 +292,11 @@ std::uint64_t JsonValue::unsigned_integer() const {
   fail_expected("an unsigned integer");
 }
 
+bool JsonValue::boolean() const {
+  if (!value_->is_boolean()) fail_expected("true or false");
+  return value_->get<bool>();
+}
+
 std::string JsonValue::string() const {
   if (!value_->is_string()) fail_expected("a string");
   return value_->get<std::string>();

@@ -64,6 +64,7 @@ class JsonValue {
             int max = std::numeric_limits<int>::max()) const;
   std::uint64_t unsigned_integer() const;
   std::string string() const;
+  bool boolean() const;
   // Exactly three numbers, each within `range`; element errors name the index.
   glm::vec3 vec3(const NumberRange& range = {}) const;
 

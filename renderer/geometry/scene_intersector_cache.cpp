@@ -1,0 +1,15 @@
+#include <string>
+
+#include "renderer/geometry/scene_intersector.h"
+#include "renderer/prepared_scene.h"
+
+namespace farm {
+
+std::shared_ptr<const SceneIntersector> cached_scene_intersector(const PreparedScene& scene,
+                                                                 AccelKind accel) {
+  return scene.frame_cache().get_or_build<SceneIntersector>(
+      "intersector " + std::string(to_string(accel)),
+      [&] { return std::shared_ptr<const SceneIntersector>(build_scene_intersector(scene, accel)); });
+}
+
+}  // namespace farm

@@ -1,0 +1,29 @@
+#pragma once
+// Counter-based random numbers (DESIGN.md, engine contract): a value is a pure function of
+// (seed, pixel, sample index, dimension), so an image never depends on tiling, threads or retries.
+#include <cstdint>
+
+namespace farm {
+
+// SplitMix64's finaliser: a bijective 64-bit mix with good avalanche.
+inline std::uint64_t mix64(std::uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+struct SampleKey {
+  std::uint64_t seed;
+  std::uint64_t pixel;  // y * width + x
+  std::uint32_t sample;
+};
+
+// Uniform in [0, 1), for dimension `dimension` of one sample.
+inline float sample_uniform(const SampleKey& key, std::uint32_t dimension) {
+  std::uint64_t h = mix64(key.seed ^ 0x9e3779b97f4a7c15ULL);
+  h = mix64(h ^ key.pixel);
+  h = mix64(h ^ ((static_cast<std::uint64_t>(key.sample) << 32) | dimension));
+  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);  // top 24 bits
+}
+
+}  // namespace farm

@@ -1,0 +1,156 @@
+#include "renderer/trace/whitted.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/geometric.hpp>
+
+#include "renderer/geometry/scene_intersector.h"
+#include "renderer/scene/blinn_phong.h"
+#include "renderer/trace/fresnel.h"
+#include "renderer/trace/sampler.h"
+
+namespace farm::whitted {
+namespace {
+
+// Where a secondary ray starts: off the surface along the geometric normal, on the side the
+// ray leaves by, far enough to clear float error at this distance from the origin.
+glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& geometric_normal, const glm::vec3& dir) {
+  const float scale = 1e-4f * (1.0f + std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}));
+  return p + (glm::dot(dir, geometric_normal) > 0.0f ? scale : -scale) * geometric_normal;
+}
+
+class WhittedTracer {
+ public:
+  WhittedTracer(const PreparedScene& scene, const RenderSettings& settings,
+                const SceneIntersector& intersector)
+      : scene_(scene.scene()), settings_(settings), intersector_(intersector) {}
+
+  struct Primary {
+    glm::vec3 color{0.0f};
+    bool hit = false;
+    SurfaceHit surface;
+    glm::vec3 facing_normal{0.0f};
+  };
+
+  // The first hit is returned too, for the AOVs.
+  Primary trace_primary(const Ray& ray, TraversalStats* stats) const {
+    Primary p;
+    if (!intersector_.closest_hit(ray, p.surface, stats)) {
+      p.color = scene_.background;
+      return p;
+    }
+    p.hit = true;
+    p.color = shade(ray, p.surface, 0, &p.facing_normal);
+    return p;
+  }
+
+ private:
+  glm::vec3 trace(const Ray& ray, int depth) const {
+    SurfaceHit hit;
+    if (!intersector_.closest_hit(ray, hit, nullptr)) return scene_.background;
+    return shade(ray, hit, depth, nullptr);
+  }
+
+  bool light_visible(const glm::vec3& point, const glm::vec3& geometric_normal,
+                     const LightIncidence& in) const {
+    if (!settings_.shadows) return true;
+    Ray shadow;
+    shadow.origin = offset_origin(point, geometric_normal, in.to_light);
+    if (std::isinf(in.distance)) {
+      shadow.direction = in.to_light;
+    } else {
+      // Aim at the light itself: only hits with t < 1 (before the light) occlude.
+      shadow.direction = in.to_light * in.distance + (point - shadow.origin);
+      shadow.t_max = 1.0f - 1e-4f;
+    }
+    return !intersector_.occluded(shadow);
+  }
+
+  glm::vec3 shade(const Ray& ray, const SurfaceHit& hit, int depth, glm::vec3* facing_normal) const {
+    const Material& m = *hit.material;
+    const glm::vec3 d = glm::normalize(ray.direction);
+    const glm::vec3 to_eye = -d;
+    // Two-sided shading, as in the rasterizer: light the side we see.
+    glm::vec3 n = hit.shading_normal;
+    if (glm::dot(n, to_eye) < 0.0f) n = -n;
+    if (facing_normal) *facing_normal = n;
+    const glm::vec3& ng = hit.geometric_normal;
+
+    const glm::vec3 local = shade_blinn_phong(
+        m, hit.position, n, to_eye, scene_.lights, scene_.ambient,
+        [&](const glm::vec3& p, const LightIncidence& in) { return light_visible(p, ng, in); });
+    if (depth >= settings_.max_depth) return local;
+
+    const bool dielectric = m.transmission > 0.0f && m.ior > 1.0f;
+    if (!dielectric && !m.is_mirror()) return local;
+
+    // The normal on the side the ray comes from, and the indices on either side.
+    const bool entering = glm::dot(d, ng) < 0.0f;
+    glm::vec3 nf = hit.shading_normal;
+    if (glm::dot(nf, d) > 0.0f) nf = -nf;
+    const float cos_i = std::min(1.0f, -glm::dot(d, nf));
+    const float eta_i = entering ? 1.0f : m.ior, eta_t = entering ? m.ior : 1.0f;
+    const float reflectance = fresnel_dielectric(cos_i, eta_i, eta_t);
+
+    const glm::vec3 reflected_dir = d + 2.0f * cos_i * nf;
+    const glm::vec3 reflected =
+        trace(Ray{offset_origin(hit.position, ng, reflected_dir), reflected_dir}, depth + 1);
+    if (!dielectric) return local + reflectance * reflected;
+
+    glm::vec3 through(0.0f);
+    if (reflectance < 1.0f) {
+      // Snell's law in vector form.
+      const float eta = eta_i / eta_t;
+      const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
+      const glm::vec3 refracted_dir = eta * d + (eta * cos_i - cos_t) * nf;
+      through = trace(Ray{offset_origin(hit.position, ng, refracted_dir), refracted_dir}, depth + 1);
+    }
+    return (1.0f - m.transmission) * local +
+           m.transmission * (reflectance * reflected + (1.0f - reflectance) * through);
+  }
+
+  const Scene& scene_;
+  const RenderSettings& settings_;
+  const SceneIntersector& intersector_;
+};
+
+}  // namespace
+
+void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                 TileBuffer& out) {
+  out.reset(tile, settings.aovs);
+  if (tile.empty()) return;
+  const auto intersector = cached_scene_intersector(scene, settings.accel);
+  const WhittedTracer tracer(scene, settings, *intersector);
+  const Camera& camera = scene.scene().camera;
+  const int samples = std::max(1, settings.spp);
+
+  for (int y = tile.y0; y < tile.y1; ++y) {
+    for (int x = tile.x0; x < tile.x1; ++x) {
+      glm::vec4 sum(0.0f);
+      const SampleKey key{settings.seed, static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
+                                             static_cast<std::uint64_t>(x), 0};
+      for (int s = 0; s < samples; ++s) {
+        // Sample 0 is the pixel centre; further samples are jittered within the pixel.
+        SampleKey k = key;
+        k.sample = static_cast<std::uint32_t>(s);
+        const float ox = s == 0 ? 0.5f : sample_uniform(k, 0), oy = s == 0 ? 0.5f : sample_uniform(k, 1);
+        const Ray ray = camera.primary_ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy,
+                                           settings.width, settings.height);
+        TraversalStats stats;
+        const WhittedTracer::Primary p = tracer.trace_primary(ray, s == 0 ? &stats : nullptr);
+        sum += glm::vec4(p.color, p.hit ? 1.0f : 0.0f);
+        if (s != 0) continue;
+        if (out.aovs().bvh_cost) out.bvh_cost(x, y) = static_cast<float>(stats.cost());
+        if (!p.hit) continue;
+        // primary_ray's direction has unit length along the viewing axis, so t is the depth.
+        if (out.aovs().depth) out.depth(x, y) = p.surface.t;
+        if (out.aovs().normal) out.normal(x, y) = p.facing_normal;
+        if (out.aovs().albedo) out.albedo(x, y) = p.surface.material->diffuse;
+      }
+      out.rgba(x, y) = sum / static_cast<float>(samples);
+    }
+  }
+}
+
+}  // namespace farm::whitted

@@ -1,0 +1,15 @@
+#pragma once
+// Whitted-style ray tracing: a primary ray per sample, Blinn-Phong at the hit with a shadow ray
+// per light, and recursion for mirrors (shininess >= 1000, weighted by the Fresnel reflectance)
+// and smooth dielectrics (transmission > 0 and ior > 1: Fresnel-weighted reflection and
+// refraction, total internal reflection included), up to max_depth bounces.
+#include "renderer/image/tile_buffer.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render_settings.h"
+
+namespace farm::whitted {
+
+void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                 TileBuffer& out);
+
+}  // namespace farm::whitted
