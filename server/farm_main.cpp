@@ -8,6 +8,7 @@
 #include "renderer/scene/input_error.h"
 #include "server/bench_command.h"
 #include "server/info_command.h"
+#include "server/rt_bench_command.h"
 #include "server/render_command.h"
 
 namespace {
@@ -48,7 +49,8 @@ int main(int argc, char** argv) {
   CLI::App app{"farm: render farm batch service.\n"
                "  farm render JOB   render a job locally to EXR + PNG preview\n"
                "  farm info FILE    show what a model or job file contains\n"
-               "  farm bench raster measure rasterizer speed and thread scaling"};
+               "  farm bench raster measure rasterizer speed and thread scaling\n"
+               "  farm bench rt     compare our BVHs with Embree"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "farm 0.1.0");
 
@@ -95,6 +97,16 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 16384))
       ->capture_default_str();
 
+  farm::RtBenchOptions rt_bench;
+  CLI::App* bench_rt = bench->add_subcommand(
+      "rt", "Our BVHs against Embree: build time and single-thread Mrays/s (primary and incoherent, "
+            "closest and any hit) on cow, bunny, CBbunny and the 100-cow grid");
+  bench_rt->add_option("--assets", rt_bench.assets,
+                       "The lab's assets folder (default ../shared/assets)");
+  bench_rt->add_option("--rays", rt_bench.rays, "Rays per set")
+      ->check(CLI::Range(1000, 100'000'000))
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -112,6 +124,8 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("render")) {
       if (!preview.empty()) render_options.overrides.preview = preview == "none" ? "" : preview;
       farm::run_render_command(render_options);
+    } else if (bench_rt->parsed()) {
+      farm::run_rt_bench(rt_bench);
     } else if (bench_raster->parsed()) {
       farm::run_raster_bench(raster_bench);
     } else if (app.got_subcommand("info")) {
