@@ -21,6 +21,45 @@ struct AABB {
   }
   glm::vec3 extent() const { return max - min; }
   glm::vec3 center() const { return 0.5f * (min + max); }
+  // Half the surface area: all the surface area heuristic needs (it only compares ratios).
+  float half_area() const {
+    if (empty()) return 0.0f;
+    const glm::vec3 e = extent();
+    return e.x * e.y + e.y * e.z + e.z * e.x;
+  }
+  bool contains(const AABB& b) const {
+    return b.empty() || (min.x <= b.min.x && min.y <= b.min.y && min.z <= b.min.z &&
+                         max.x >= b.max.x && max.y >= b.max.y && max.z >= b.max.z);
+  }
+
+  // Slab test against the closed box: whether the ray origin + t*d meets it for some t in
+  // [t_min, t_max]; t_entry is then the first such t. inv_dir = 1/d per component, so a zero
+  // component gives +-inf. A ray lying exactly in a slab's plane (d = 0 there) gives
+  // 0 * inf = NaN for that plane; the comparisons below are written so a NaN never replaces
+  // the running interval, which treats the ray as inside that slab (the box is closed). Off
+  // the plane, d = 0 gives -inf..+inf inside the slab and an empty +-inf interval outside it.
+  bool intersect(const glm::vec3& origin, const glm::vec3& inv_dir, float t_min, float t_max,
+                 float& t_entry) const {
+    // The far distances are widened by a few ulps so a ray that the triangle test hits right on
+    // the box's boundary is never culled by rounding here (pbrt's 1 + 2*gamma(3)).
+    constexpr float kWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
+                                        (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
+    float t0 = t_min, t1 = t_max;
+    for (int a = 0; a < 3; ++a) {
+      // Picking the planes by the sign of inv_dir keeps near <= far without a swap, including
+      // for -0.0 directions (inv_dir = -inf).
+      const bool negative = inv_dir[a] < 0.0f;
+      const float near_plane = negative ? max[a] : min[a];
+      const float far_plane = negative ? min[a] : max[a];
+      const float t_near = (near_plane - origin[a]) * inv_dir[a];
+      const float t_far = (far_plane - origin[a]) * inv_dir[a] * kWiden;
+      // Comparisons are false for NaN, which leaves t0/t1 unchanged.
+      if (t_near > t0) t0 = t_near;
+      if (t_far < t1) t1 = t_far;
+    }
+    t_entry = t0;
+    return t0 <= t1;
+  }
 };
 
 }  // namespace farm

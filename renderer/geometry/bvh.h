@@ -25,16 +25,24 @@ struct BvhNode {
 
 class Bvh {
  public:
+  // Deeper than any sane tree: builds switch to splitting by count well before it, so the
+  // traversal stack (one entry per level) can be a fixed array.
+  static constexpr int kMaxDepth = 64;
+
   struct Options {
     BvhSplit split = BvhSplit::Sah;
     int max_leaf_size = 8;
   };
 
+  // Primitive i has bounds primitive_bounds[i]. Empty boxes (e.g. objects without triangles)
+  // can never be hit and are left out of the tree. max_leaf_size is clamped to [1, 255]. The
+  // tree has fewer than kMaxDepth levels whatever the input.
   static Bvh build(std::span<const AABB> primitive_bounds, const Options& options);
 
   const std::vector<BvhNode>& nodes() const { return nodes_; }
   // Leaf entries: primitive indices in the order leaves refer to them.
   const std::vector<std::uint32_t>& order() const { return order_; }
+  // The deepest level (a lone root leaf: 0; no nodes at all: -1).
   int depth() const { return depth_; }
 
   // Calls visit(bounds, level) for every node of level <= max_level (the root is level 0).
@@ -53,7 +61,7 @@ class Bvh {
  private:
   std::vector<BvhNode> nodes_;
   std::vector<std::uint32_t> order_;
-  int depth_ = 0;
+  int depth_ = -1;
 };
 
 }  // namespace farm

@@ -8,15 +8,10 @@
 #include "renderer/geometry/model_triangles.h"
 #include "renderer/geometry/ray.h"
 #include "renderer/geometry/traversal_stats.h"
+#include "renderer/geometry/triangle_intersect.h"  // TriangleHit
 #include "renderer/render_settings.h"
 
 namespace farm {
-
-struct TriangleHit {
-  float t = 0.0f;            // in units of the ray's direction (unchanged by an affine map)
-  float u = 0.0f, v = 0.0f;  // barycentric weights of corners 1 and 2
-  std::uint32_t triangle = 0;
-};
 
 class Bvh;
 

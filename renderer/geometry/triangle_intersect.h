@@ -1,7 +1,9 @@
 #pragma once
 // Möller-Trumbore ray/triangle intersection: solves origin + t*d = (1-u-v)*a + u*b + v*c by
 // Cramer's rule without precomputing the triangle's plane.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <glm/geometric.hpp>
 #include <optional>
 
@@ -9,9 +11,11 @@
 
 namespace farm {
 
+// One ray/triangle hit; MeshAccel (mesh_accel.h) reports the same type with `triangle` set.
 struct TriangleHit {
-  float t = 0.0f;
-  float u = 0.0f, v = 0.0f;  // weights of vertices b and c
+  float t = 0.0f;            // in units of the ray's direction (unchanged by an affine map)
+  float u = 0.0f, v = 0.0f;  // barycentric weights of corners 1 and 2 (vertices b and c)
+  std::uint32_t triangle = 0;  // index into ModelTriangles; intersect_triangle leaves it 0
 };
 
 // Hits with t in (max(ray.t_min, t_epsilon), ray.t_max); rays nearly parallel to the plane
@@ -33,7 +37,7 @@ inline std::optional<TriangleHit> intersect_triangle(const Ray& ray, const glm::
   if (v < 0.0f || u + v > 1.0f) return std::nullopt;
   const float t = glm::dot(e2, q) * inv_det;
   if (!(t > std::max(ray.t_min, t_epsilon) && t < ray.t_max)) return std::nullopt;
-  return TriangleHit{t, u, v};
+  return TriangleHit{t, u, v, 0};
 }
 
 }  // namespace farm

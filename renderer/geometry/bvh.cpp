@@ -1,0 +1,219 @@
+#include "renderer/geometry/bvh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace farm {
+namespace {
+
+constexpr int kBins = 16;
+// Cost of visiting a node relative to testing one primitive (pbrt's choice). Leaves cost their
+// primitive count, so a split must save more than this to be worth a level.
+constexpr float kTraversalCost = 0.5f;
+// Below this level every split halves the primitive count, so the tree stays shallower than
+// Bvh::kMaxDepth (28 + at most 32 more levels for up to 2^32 primitives).
+constexpr int kCountSplitLevel = 28;
+constexpr std::uint32_t kNoParent = ~0u;
+
+struct Task {
+  std::uint32_t begin, end;  // range of order_
+  std::uint32_t parent;      // the node whose second-child offset this node is, or kNoParent
+  int level;
+};
+
+struct Bin {
+  AABB bounds;
+  std::uint32_t count = 0;
+};
+
+class Builder {
+ public:
+  Builder(std::span<const AABB> boxes, const Bvh::Options& options, std::vector<BvhNode>& nodes,
+          std::vector<std::uint32_t>& order)
+      : boxes_(boxes),
+        split_(options.split),
+        max_leaf_(static_cast<std::uint32_t>(std::clamp(options.max_leaf_size, 1, 255))),
+        nodes_(nodes),
+        order_(order),
+        centroids_(boxes.size()) {
+    order_.reserve(boxes.size());
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      if (boxes[i].empty()) continue;
+      glm::vec3 c = boxes[i].center();
+      // An infinite box has a NaN centre; NaN would break the orderings below.
+      for (int a = 0; a < 3; ++a) {
+        if (std::isnan(c[a])) c[a] = 0.0f;
+      }
+      centroids_[i] = c;
+      order_.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+
+  int run() {
+    if (order_.empty()) return -1;
+    nodes_.reserve(2 * order_.size());
+    int depth = 0;
+    // Depth-first with an explicit stack: pushing the second child before the first puts the
+    // first child right after its parent, and no recursion depth limit applies.
+    std::vector<Task> stack;
+    stack.reserve(2 * static_cast<std::size_t>(Bvh::kMaxDepth));
+    stack.push_back({0, static_cast<std::uint32_t>(order_.size()), kNoParent, 0});
+    while (!stack.empty()) {
+      const Task task = stack.back();
+      stack.pop_back();
+      const auto index = static_cast<std::uint32_t>(nodes_.size());
+      if (task.parent != kNoParent) nodes_[task.parent].offset = index;
+      depth = std::max(depth, task.level);
+
+      AABB bounds, centroid_bounds;
+      for (std::uint32_t i = task.begin; i < task.end; ++i) {
+        bounds.grow(boxes_[order_[i]]);
+        centroid_bounds.grow(centroids_[order_[i]]);
+      }
+      BvhNode node;
+      node.bounds = bounds;
+      int axis = 0;
+      std::uint32_t mid = 0;
+      if (!split(task, bounds, centroid_bounds, axis, mid)) {
+        node.offset = task.begin;
+        node.count = static_cast<std::uint16_t>(task.end - task.begin);
+        nodes_.push_back(node);
+        continue;
+      }
+      node.axis = static_cast<std::uint8_t>(axis);
+      nodes_.push_back(node);
+      stack.push_back({mid, task.end, index, task.level + 1});
+      stack.push_back({task.begin, mid, kNoParent, task.level + 1});
+    }
+    return depth;
+  }
+
+ private:
+  // Chooses how to split order_[task.begin, task.end): false for a leaf.
+  bool split(const Task& task, const AABB& bounds, const AABB& centroid_bounds, int& axis,
+             std::uint32_t& mid) {
+    const std::uint32_t n = task.end - task.begin;
+    if (n <= 1) return false;
+    if (split_ == BvhSplit::Median || task.level >= kCountSplitLevel) {
+      if (n <= max_leaf_) return false;
+      split_at_median(task, centroid_bounds, axis, mid);
+      return true;
+    }
+    if (n <= std::min<std::uint32_t>(2, max_leaf_)) return false;
+    if (!sah_split(task, bounds, centroid_bounds, axis, mid)) {
+      if (n <= max_leaf_) return false;
+      // All centroids coincide (or SAH found nothing): only a split by count can help.
+      split_at_median(task, centroid_bounds, axis, mid);
+    }
+    return true;
+  }
+
+  void split_at_median(const Task& task, const AABB& centroid_bounds, int& axis,
+                       std::uint32_t& mid) {
+    const glm::vec3 e = centroid_bounds.extent();
+    axis = (e.x >= e.y && e.x >= e.z) ? 0 : (e.y >= e.z ? 1 : 2);
+    mid = task.begin + (task.end - task.begin) / 2;
+    const int a = axis;
+    std::nth_element(order_.begin() + task.begin, order_.begin() + mid, order_.begin() + task.end,
+                     [&](std::uint32_t p, std::uint32_t q) { return centroids_[p][a] < centroids_[q][a]; });
+  }
+
+  static int bin_of(float c, float lo, float scale, float last_bin) {
+    // std::max(0, NaN) is 0, so even a non-finite product lands in a valid bin.
+    const float b = std::min(std::max(0.0f, (c - lo) * scale), last_bin);
+    return static_cast<int>(b);
+  }
+
+  // Binned SAH over the three axes. False when no split is cheaper than a leaf (with n <= the
+  // leaf cap) or no axis can be binned; otherwise partitions the range.
+  bool sah_split(const Task& task, const AABB& bounds, const AABB& centroid_bounds, int& axis,
+                 std::uint32_t& mid) {
+    const std::uint32_t n = task.end - task.begin;
+    const glm::vec3 lo = centroid_bounds.min, extent = centroid_bounds.extent();
+    // Small nodes need fewer bins, and their per-node cost is what dominates the build.
+    const int bin_count = static_cast<int>(std::min<std::uint32_t>(kBins, std::max<std::uint32_t>(4, n)));
+    const float last_bin = static_cast<float>(bin_count - 1);
+    std::array<float, 3> scale{};
+    std::array<std::array<Bin, kBins>, 3> bins;
+    bool any_axis = false;
+    for (int a = 0; a < 3; ++a) {
+      scale[a] = extent[a] > 0.0f ? static_cast<float>(bin_count) / extent[a] : 0.0f;
+      if (!std::isfinite(scale[a])) scale[a] = 0.0f;
+      any_axis = any_axis || scale[a] > 0.0f;
+      for (int b = 0; b < bin_count; ++b) bins[a][b] = Bin{};
+    }
+    if (!any_axis) return false;
+    for (std::uint32_t i = task.begin; i < task.end; ++i) {
+      const std::uint32_t p = order_[i];
+      const glm::vec3& c = centroids_[p];
+      const AABB& box = boxes_[p];
+      for (int a = 0; a < 3; ++a) {
+        Bin& bin = bins[a][bin_of(c[a], lo[a], scale[a], last_bin)];
+        bin.bounds.grow(box);
+        ++bin.count;
+      }
+    }
+
+    const float parent_area = bounds.half_area();
+    float best_cost = std::numeric_limits<float>::infinity();
+    int best_axis = -1, best_bin = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (scale[a] == 0.0f) continue;
+      // right_cost[b]: area * count of bins b+1.. (the right side of a split after bin b).
+      std::array<float, kBins> right_cost{};
+      AABB right;
+      std::uint32_t right_count = 0;
+      for (int b = bin_count - 1; b > 0; --b) {
+        right.grow(bins[a][b].bounds);
+        right_count += bins[a][b].count;
+        right_cost[b - 1] = right.half_area() * static_cast<float>(right_count);
+      }
+      AABB left;
+      std::uint32_t left_count = 0;
+      for (int b = 0; b < bin_count - 1; ++b) {
+        left.grow(bins[a][b].bounds);
+        left_count += bins[a][b].count;
+        if (left_count == 0 || left_count == n) continue;
+        const float cost = left.half_area() * static_cast<float>(left_count) + right_cost[b];
+        if (cost < best_cost) {
+          best_cost = cost;
+          best_axis = a;
+          best_bin = b;
+        }
+      }
+    }
+    if (best_axis < 0) return false;
+    // Leaf cost n against kTraversalCost + (A_L n_L + A_R n_R) / A, without the division so a
+    // flat (zero-area) node compares sensibly too.
+    if (n <= max_leaf_ && kTraversalCost * parent_area + best_cost >= static_cast<float>(n) * parent_area) {
+      return false;
+    }
+    axis = best_axis;
+    const float a_lo = lo[axis], a_scale = scale[axis];
+    const auto first = order_.begin();
+    const auto split_it = std::partition(first + task.begin, first + task.end, [&](std::uint32_t p) {
+      return bin_of(centroids_[p][axis], a_lo, a_scale, last_bin) <= best_bin;
+    });
+    mid = static_cast<std::uint32_t>(split_it - first);
+    return mid > task.begin && mid < task.end;  // cannot fail: both sides were counted non-empty
+  }
+
+  std::span<const AABB> boxes_;
+  BvhSplit split_;
+  std::uint32_t max_leaf_;
+  std::vector<BvhNode>& nodes_;
+  std::vector<std::uint32_t>& order_;
+  std::vector<glm::vec3> centroids_;
+};
+
+}  // namespace
+
+Bvh Bvh::build(std::span<const AABB> primitive_bounds, const Options& options) {
+  Bvh bvh;
+  Builder builder(primitive_bounds, options, bvh.nodes_, bvh.order_);
+  bvh.depth_ = builder.run();
+  return bvh;
+}
+
+}  // namespace farm

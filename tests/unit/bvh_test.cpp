@@ -1,0 +1,414 @@
+// Bvh builds (SAH and median) and the MeshAccel queries over them, checked against brute
+// force: the naive accel tests every triangle with the same triangle test, so a correct BVH
+// gives exactly its hits (up to which of several triangles at the same t wins).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "renderer/geometry/bvh.h"
+#include "renderer/geometry/mesh_accel.h"
+#include "renderer/geometry/model_triangles.h"
+#include "renderer/scene/model.h"
+#include "tests/support/ray_fixtures.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+#ifdef NDEBUG
+constexpr std::size_t kRayDivisor = 1;
+#else
+constexpr std::size_t kRayDivisor = 10;  // unoptimised builds: fewer rays, the same kinds
+#endif
+
+std::vector<AABB> bounds_of(const ModelTriangles& triangles) {
+  std::vector<AABB> out(triangles.size());
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) out[t] = triangles.triangle_bounds(t);
+  return out;
+}
+
+// Every promise of bvh.h: each non-empty primitive exactly once in order(); depth-first layout
+// with the first child right after its parent; leaves of 1..max_leaf entries covering order()
+// exactly once; every box containing its children's and its primitives' boxes.
+void expect_well_formed(const Bvh& bvh, const std::vector<AABB>& primitives, int max_leaf) {
+  const std::vector<BvhNode>& nodes = bvh.nodes();
+  const std::vector<std::uint32_t>& order = bvh.order();
+  std::vector<int> seen(primitives.size(), 0);
+  for (const std::uint32_t p : order) {
+    ASSERT_LT(p, primitives.size());
+    ++seen[p];
+  }
+  for (std::size_t p = 0; p < primitives.size(); ++p) {
+    ASSERT_EQ(seen[p], primitives[p].empty() ? 0 : 1) << "primitive " << p;
+  }
+  if (order.empty()) {
+    EXPECT_TRUE(nodes.empty());
+    EXPECT_EQ(bvh.depth(), -1);
+    return;
+  }
+  std::vector<int> visits(nodes.size(), 0), covered(order.size(), 0);
+  int deepest = 0;
+  std::vector<std::pair<std::uint32_t, int>> stack{{0u, 0}};
+  while (!stack.empty()) {
+    const auto [index, level] = stack.back();
+    stack.pop_back();
+    ASSERT_LT(index, nodes.size());
+    ++visits[index];
+    deepest = std::max(deepest, level);
+    const BvhNode& node = nodes[index];
+    if (node.count > 0) {
+      EXPECT_LE(node.count, max_leaf) << "leaf " << index;
+      ASSERT_LE(node.offset + node.count, order.size());
+      for (std::uint32_t i = node.offset; i < node.offset + node.count; ++i) {
+        ++covered[i];
+        EXPECT_TRUE(node.bounds.contains(primitives[order[i]])) << "leaf " << index << " entry " << i;
+      }
+    } else {
+      ASSERT_GT(node.offset, index + 1) << "second child must follow the first child's subtree";
+      ASSERT_LT(node.offset, nodes.size());
+      EXPECT_LT(node.axis, 3);
+      EXPECT_TRUE(node.bounds.contains(nodes[index + 1].bounds)) << "node " << index;
+      EXPECT_TRUE(node.bounds.contains(nodes[node.offset].bounds)) << "node " << index;
+      stack.push_back({node.offset, level + 1});
+      stack.push_back({index + 1, level + 1});
+    }
+  }
+  EXPECT_TRUE(std::all_of(visits.begin(), visits.end(), [](int v) { return v == 1; }))
+      << "every node reachable exactly once";
+  EXPECT_TRUE(std::all_of(covered.begin(), covered.end(), [](int c) { return c == 1; }))
+      << "leaves cover order() exactly once";
+  EXPECT_EQ(bvh.depth(), deepest);
+  EXPECT_LT(bvh.depth(), Bvh::kMaxDepth);
+}
+
+std::uint32_t subtree_size(const Bvh& bvh, std::uint32_t index) {
+  const BvhNode& node = bvh.nodes()[index];
+  if (node.count > 0) return node.count;
+  return subtree_size(bvh, index + 1) + subtree_size(bvh, node.offset);
+}
+
+std::vector<AABB> random_boxes(std::size_t n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> s(-10.0f, 10.0f), e(0.0f, 1.0f);
+  std::vector<AABB> boxes(n);
+  for (AABB& b : boxes) {
+    const glm::vec3 lo{s(rng), s(rng), s(rng)};
+    b.grow(lo);
+    b.grow(lo + glm::vec3(e(rng), e(rng), e(rng) < 0.2f ? 0.0f : e(rng)));
+  }
+  return boxes;
+}
+
+TEST(BvhBuild, SahTreeIsWellFormed) {
+  const std::vector<AABB> boxes = random_boxes(5000, 1);
+  for (const int leaf : {1, 2, 4, 8, 16}) {
+    SCOPED_TRACE(leaf);
+    const Bvh bvh = Bvh::build(boxes, {BvhSplit::Sah, leaf});
+    expect_well_formed(bvh, boxes, leaf);
+    EXPECT_GT(bvh.nodes().size(), 5000u / leaf);
+  }
+}
+
+TEST(BvhBuild, MedianTreeSplitsEveryNodeIntoHalves) {
+  const std::vector<AABB> boxes = random_boxes(3001, 2);
+  for (const int leaf : {1, 4, 8}) {
+    SCOPED_TRACE(leaf);
+    const Bvh bvh = Bvh::build(boxes, {BvhSplit::Median, leaf});
+    expect_well_formed(bvh, boxes, leaf);
+    for (std::uint32_t i = 0; i < bvh.nodes().size(); ++i) {
+      const BvhNode& node = bvh.nodes()[i];
+      if (node.count > 0) continue;
+      const std::uint32_t left = subtree_size(bvh, i + 1), right = subtree_size(bvh, node.offset);
+      EXPECT_LE(left, right);
+      EXPECT_LE(right - left, 1u) << "node " << i;
+      EXPECT_GT(left + right, static_cast<std::uint32_t>(leaf)) << "only nodes over the cap split";
+    }
+    // The median tree is balanced: ceil(log2(n / leaf)) levels.
+    EXPECT_EQ(bvh.depth(), static_cast<int>(std::ceil(std::log2(3001.0 / leaf))));
+  }
+}
+
+TEST(BvhBuild, HandlesNoneOneAndCoincidentPrimitives) {
+  for (const BvhSplit split : {BvhSplit::Sah, BvhSplit::Median}) {
+    const Bvh none = Bvh::build({}, {split, 4});
+    EXPECT_TRUE(none.nodes().empty());
+    EXPECT_EQ(none.depth(), -1);
+    Ray ray;
+    EXPECT_FALSE(none.closest(ray, [](std::uint32_t, float&) { return true; }, nullptr));
+    EXPECT_FALSE(none.any(ray, [](std::uint32_t) { return true; }, nullptr));
+
+    std::vector<AABB> one(1);
+    one[0].grow(glm::vec3(1.0f));
+    const Bvh single = Bvh::build(one, {split, 4});
+    expect_well_formed(single, one, 4);
+    EXPECT_EQ(single.depth(), 0);
+
+    // 1000 identical boxes, and 1000 identical points: no axis to bin, so splits by count.
+    for (const float size : {1.0f, 0.0f}) {
+      std::vector<AABB> same(1000);
+      for (AABB& b : same) {
+        b.grow(glm::vec3(0.5f));
+        b.grow(glm::vec3(0.5f + size));
+      }
+      const Bvh bvh = Bvh::build(same, {split, 4});
+      expect_well_formed(bvh, same, 4);
+    }
+  }
+}
+
+TEST(BvhBuild, LeavesEmptyBoxesOutOfTheTree) {
+  std::vector<AABB> boxes = random_boxes(200, 3);
+  for (std::size_t i = 0; i < boxes.size(); i += 3) boxes[i] = AABB{};
+  for (const BvhSplit split : {BvhSplit::Sah, BvhSplit::Median}) {
+    const Bvh bvh = Bvh::build(boxes, {split, 4});
+    expect_well_formed(bvh, boxes, 4);
+    EXPECT_EQ(bvh.order().size(), 200u - 67u);
+  }
+  const Bvh all_empty = Bvh::build(std::vector<AABB>(10), {BvhSplit::Sah, 4});
+  EXPECT_TRUE(all_empty.nodes().empty());
+}
+
+TEST(BvhBuild, StaysShallowWhenSahWouldPeelOnePrimitiveAtATime) {
+  // Boxes at exponentially growing distances: each SAH split separates the farthest one, which
+  // would make a tree as deep as the box count; the build bounds the depth instead.
+  std::vector<AABB> boxes(400);
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const float x = std::pow(1.2f, static_cast<float>(i));
+    boxes[i].grow(glm::vec3(x, 0.0f, 0.0f));
+    boxes[i].grow(glm::vec3(x + 0.1f, 1.0f, 1.0f));
+  }
+  const Bvh bvh = Bvh::build(boxes, {BvhSplit::Sah, 1});
+  expect_well_formed(bvh, boxes, 1);
+  EXPECT_GE(bvh.depth(), 20);  // it did peel for a while
+  // Traversal over the deep tree still finds every box along the x axis.
+  Ray ray;
+  ray.origin = {0.0f, 0.5f, 0.5f};
+  ray.direction = {1.0f, 0.0f, 0.0f};
+  std::vector<int> tested(boxes.size(), 0);
+  bvh.closest(
+      ray,
+      [&](std::uint32_t p, float&) {
+        ++tested[p];
+        return false;
+      },
+      nullptr);
+  EXPECT_TRUE(std::all_of(tested.begin(), tested.end(), [](int t) { return t == 1; }));
+}
+
+TEST(BvhVisit, VisitsEachNodeOnceUpToTheLevelAsked) {
+  const std::vector<AABB> boxes = random_boxes(1000, 4);
+  const Bvh bvh = Bvh::build(boxes, {BvhSplit::Sah, 4});
+  std::size_t all = 0;
+  bvh.visit_levels(bvh.depth(), [&](const AABB&, int level) {
+    EXPECT_LE(level, bvh.depth());
+    ++all;
+  });
+  EXPECT_EQ(all, bvh.nodes().size());
+  std::vector<int> per_level(3, 0);
+  bvh.visit_levels(2, [&](const AABB& box, int level) {
+    ASSERT_LE(level, 2);
+    ++per_level[level];
+    if (level == 0) {
+      EXPECT_TRUE(box.contains(bvh.nodes()[0].bounds) && bvh.nodes()[0].bounds.contains(box));
+    }
+  });
+  EXPECT_EQ(per_level[0], 1);
+  EXPECT_EQ(per_level[1], 2);
+  EXPECT_EQ(per_level[2], 4);
+  int none = 0;
+  bvh.visit_levels(-1, [&](const AABB&, int) { ++none; });
+  EXPECT_EQ(none, 0);
+}
+
+struct Expected {
+  bool hit = false;
+  TriangleHit nearest;
+};
+
+std::vector<Expected> closest_hits(const MeshAccel& reference, const std::vector<Ray>& rays) {
+  std::vector<Expected> out(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) out[i].hit = reference.closest_hit(rays[i], out[i].nearest, nullptr);
+  return out;
+}
+
+// Compares `tested` with the reference's closest hits on every ray: hit or miss, triangle
+// (another one only at the same t), t, and any_hit, including shadow rays stopped just short
+// of and just past the hit.
+void expect_same_hits(const MeshAccel& tested, const std::vector<Expected>& expected,
+                      const std::vector<Ray>& rays, const std::string& what) {
+  std::size_t hits = 0, ties = 0, failures = 0;
+  auto fail = [&](std::size_t i, const std::string& why) {
+    if (++failures <= 5) ADD_FAILURE() << what << ", ray " << i << ": " << why;
+  };
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Ray& ray = rays[i];
+    const TriangleHit& want = expected[i].nearest;
+    const bool want_hit = expected[i].hit;
+    TriangleHit got;
+    const bool got_hit = tested.closest_hit(ray, got, nullptr);
+    if (want_hit != got_hit) {
+      fail(i, want_hit ? "missed triangle " + std::to_string(want.triangle) : "hit nothing there");
+      continue;
+    }
+    if (tested.any_hit(ray, nullptr) != want_hit) fail(i, "any_hit disagrees with closest_hit");
+    if (!want_hit) continue;
+    ++hits;
+    const float tolerance = 1e-5f * want.t;
+    if (std::abs(got.t - want.t) > tolerance) {
+      fail(i, "t " + std::to_string(got.t) + " instead of " + std::to_string(want.t));
+    } else if (got.triangle != want.triangle) {
+      ++ties;  // another triangle at the same distance: a shared edge or a duplicate
+    } else if (got.u != want.u || got.v != want.v) {
+      fail(i, "same triangle, different barycentrics");
+    }
+    Ray shadow = ray;
+    shadow.t_max = want.t * (1.0f - 1e-4f);
+    if (tested.any_hit(shadow, nullptr)) fail(i, "any_hit before the closest hit");
+    shadow.t_max = want.t * (1.0f + 1e-4f);
+    if (!tested.any_hit(shadow, nullptr)) fail(i, "any_hit misses up to just past the closest hit");
+  }
+  EXPECT_EQ(failures, 0u) << what;
+  EXPECT_GT(hits, rays.size() / 10) << what << ": the rays should mostly hit something";
+  // Soups hold duplicates and shared edges on purpose, so ties occur, but not most of the time.
+  EXPECT_LT(ties, hits / 10 + 10) << what;
+}
+
+std::vector<glm::vec3> some_vertices(const ModelTriangles& triangles, std::size_t n) {
+  std::vector<glm::vec3> out;
+  const std::size_t step = std::max<std::size_t>(1, triangles.positions.size() / n);
+  for (std::size_t i = 0; i < triangles.positions.size(); i += step) out.push_back(triangles.positions[i]);
+  return out;
+}
+
+TEST(MeshAccel, BvhClosestAndAnyHitMatchBruteForceOnRandomSoups) {
+  // 100k rays through a small soup, fewer through a larger, deeper one (brute force is slow).
+  for (const auto& [size, ray_count] : {std::pair<std::size_t, std::size_t>{200, 100000},
+                                        std::pair<std::size_t, std::size_t>{1000, 30000}}) {
+    const auto seed = static_cast<std::uint32_t>(size);
+    const ModelTriangles triangles(test::random_soup(size, seed));
+    const auto sah = build_mesh_accel(triangles, AccelKind::Bvh);
+    const auto median = build_mesh_accel(triangles, AccelKind::BvhMedian);
+    expect_well_formed(*sah->bvh(), bounds_of(triangles), 8);
+    expect_well_formed(*median->bvh(), bounds_of(triangles), 8);
+    const std::vector<Ray> rays = test::random_rays(triangles.bounds, ray_count / kRayDivisor, seed,
+                                                    some_vertices(triangles, 64));
+    const auto expected = closest_hits(*build_mesh_accel(triangles, AccelKind::Naive), rays);
+    expect_same_hits(*sah, expected, rays, "sah, soup of " + std::to_string(size));
+    expect_same_hits(*median, expected, rays, "median, soup of " + std::to_string(size));
+  }
+}
+
+// The lab's models: SAH against the median tree on 100k rays (two independent trees), and both
+// against brute force on as many of those rays as keep the suite fast.
+TEST(MeshAccel, BvhClosestAndAnyHitMatchBruteForceOnLabModels) {
+  const fs::path shared = FARM_SHARED_ASSETS;
+  int checked = 0;
+  for (const char* name : {"dae/cow.dae", "dae/bunny.dae", "dae/CBbunny.dae"}) {
+    if (!fs::exists(shared / name)) continue;
+    SCOPED_TRACE(name);
+    const ModelTriangles triangles(load_model(shared / name));
+    const auto sah = build_mesh_accel(triangles, AccelKind::Bvh);
+    const auto median = build_mesh_accel(triangles, AccelKind::BvhMedian);
+    expect_well_formed(*sah->bvh(), bounds_of(triangles), 8);
+    expect_well_formed(*median->bvh(), bounds_of(triangles), 8);
+    std::vector<Ray> rays = test::random_rays(triangles.bounds, 100000 / kRayDivisor, 21,
+                                              some_vertices(triangles, 256));
+    expect_same_hits(*sah, closest_hits(*median, rays), rays, std::string(name) + ", sah vs median");
+    rays.resize(std::min(rays.size(), 20'000'000 / kRayDivisor / triangles.size()));
+    const auto expected = closest_hits(*build_mesh_accel(triangles, AccelKind::Naive), rays);
+    expect_same_hits(*sah, expected, rays, std::string(name) + ", sah");
+    expect_same_hits(*median, expected, rays, std::string(name) + ", median");
+    ++checked;
+  }
+  if (checked == 0) GTEST_SKIP() << "needs the lab's models under " << shared;
+}
+
+TEST(MeshAccel, BvhVisitsFarLessThanEveryTriangle) {
+  const Model soup = test::random_soup(4000, 31);
+  const ModelTriangles triangles(soup);
+  const std::vector<Ray> rays = test::random_rays(triangles.bounds, 2000 / kRayDivisor, 31);
+  for (const AccelKind kind : {AccelKind::Naive, AccelKind::Bvh, AccelKind::BvhMedian}) {
+    const auto accel = build_mesh_accel(triangles, kind);
+    TraversalStats closest, any;
+    for (const Ray& ray : rays) {
+      TriangleHit hit;
+      accel->closest_hit(ray, hit, &closest);
+      accel->any_hit(ray, &any);
+    }
+    const double per_ray = static_cast<double>(closest.cost()) / rays.size();
+    if (kind == AccelKind::Naive) {
+      EXPECT_EQ(closest.triangles, rays.size() * triangles.size());
+      EXPECT_EQ(closest.nodes, 0u);
+      EXPECT_LE(any.triangles, closest.triangles);
+    } else {
+      EXPECT_GT(closest.nodes, rays.size());
+      EXPECT_GT(closest.triangles, 0u);
+      EXPECT_LT(per_ray, triangles.size() / 20.0) << to_string(kind);
+      EXPECT_LE(any.cost(), closest.cost()) << "any-hit stops at the first hit";
+    }
+  }
+}
+
+TEST(MeshAccel, HonoursTheRaysInterval) {
+  // Two parallel quads at z = 1 and z = 2, seen along +z.
+  Mesh mesh;
+  mesh.positions = {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},
+                    {-1, -1, 2}, {1, -1, 2}, {1, 1, 2}, {-1, 1, 2}};
+  mesh.normals.assign(8, {0, 0, -1});
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  Model model;
+  model.meshes.push_back(mesh);
+  model.materials.push_back(Material{});
+  const ModelTriangles triangles(model);
+  for (const AccelKind kind : {AccelKind::Naive, AccelKind::Bvh, AccelKind::BvhMedian}) {
+    SCOPED_TRACE(std::string(to_string(kind)));
+    const auto accel = build_mesh_accel(triangles, kind);
+    Ray ray;
+    ray.origin = {0.2f, 0.3f, 0.0f};
+    ray.direction = {0.0f, 0.0f, 2.0f};  // t in units of |direction|: the quads at t 0.5 and 1
+    TriangleHit hit;
+    ASSERT_TRUE(accel->closest_hit(ray, hit, nullptr));
+    EXPECT_FLOAT_EQ(hit.t, 0.5f);
+    EXPECT_LT(hit.triangle, 2u);
+    ray.t_min = 0.6f;
+    ASSERT_TRUE(accel->closest_hit(ray, hit, nullptr));
+    EXPECT_FLOAT_EQ(hit.t, 1.0f);
+    EXPECT_GE(hit.triangle, 2u);
+    ray.t_max = 0.99f;
+    EXPECT_FALSE(accel->closest_hit(ray, hit, nullptr));
+    EXPECT_FALSE(accel->any_hit(ray, nullptr));
+    ray.t_min = 0.0f;
+    ray.direction = -ray.direction;
+    ray.t_max = std::numeric_limits<float>::infinity();
+    EXPECT_FALSE(accel->closest_hit(ray, hit, nullptr));
+    EXPECT_FALSE(accel->any_hit(ray, nullptr));
+  }
+}
+
+TEST(MeshAccel, ModelWithoutTrianglesIsNeverHit) {
+  Model model;
+  model.materials.push_back(Material{});
+  const ModelTriangles triangles(model);
+  for (const AccelKind kind : {AccelKind::Naive, AccelKind::Bvh, AccelKind::BvhMedian}) {
+    const auto accel = build_mesh_accel(triangles, kind);
+    TriangleHit hit;
+    EXPECT_FALSE(accel->closest_hit(Ray{}, hit, nullptr));
+    EXPECT_FALSE(accel->any_hit(Ray{}, nullptr));
+  }
+}
+
+TEST(MeshAccel, EmbreeIsNotAMeshAccel) {
+  const ModelTriangles triangles(test::random_soup(10, 1));
+  EXPECT_THROW(build_mesh_accel(triangles, AccelKind::Embree), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace farm

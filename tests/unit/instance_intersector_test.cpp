@@ -1,0 +1,405 @@
+// The instanced scene intersector (top-level BVH over objects, rays carried into model space)
+// against a brute force over every triangle transformed into world space, under rotations,
+// non-uniform and mirroring scales; and the SurfaceHit it completes.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <glm/geometric.hpp>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "renderer/geometry/instance_intersector.h"
+#include "renderer/geometry/triangle_intersect.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/transform.h"
+#include "tests/support/ray_fixtures.h"
+#include "tests/support/scene_fixtures.h"
+
+namespace farm {
+namespace {
+
+#ifdef NDEBUG
+constexpr std::size_t kRayDivisor = 1;
+#else
+constexpr std::size_t kRayDivisor = 10;
+#endif
+
+struct WorldTriangle {
+  glm::vec3 a, b, c;
+  std::uint32_t object, triangle;
+};
+
+std::vector<WorldTriangle> world_triangles(const PreparedScene& scene, AABB& bounds) {
+  std::vector<WorldTriangle> out;
+  for (std::uint32_t o = 0; o < scene.objects().size(); ++o) {
+    const PreparedObject& object = scene.objects()[o];
+    const ModelTriangles& model = *object.triangles;
+    auto world = [&](std::uint32_t i) {
+      const glm::vec3 p = glm::vec3(object.model_to_world * glm::vec4(model.positions[i], 1.0f));
+      bounds.grow(p);
+      return p;
+    };
+    for (std::uint32_t t = 0; t < model.size(); ++t) {
+      const glm::uvec3& tri = model.triangles[t];
+      out.push_back({world(tri.x), world(tri.y), world(tri.z), o, t});
+    }
+  }
+  return out;
+}
+
+struct Reference {
+  float t = 0.0f, u = 0.0f, v = 0.0f;
+  std::uint32_t object = 0, triangle = 0;
+};
+
+bool brute_force(const std::vector<WorldTriangle>& triangles, Ray ray, Reference& nearest) {
+  bool found = false;
+  for (const WorldTriangle& w : triangles) {
+    if (auto h = intersect_triangle(ray, w.a, w.b, w.c)) {
+      nearest = {h->t, h->u, h->v, w.object, w.triangle};
+      ray.t_max = h->t;
+      found = true;
+    }
+  }
+  return found;
+}
+
+// Within rounding of a triangle's edge, world- and model-space tests may decide differently.
+bool near_edge(float u, float v) { return std::min({u, v, 1.0f - u - v}) < 1e-4f; }
+
+glm::mat4 placed(glm::vec3 translate, glm::vec3 axis, float degrees, glm::vec3 scale) {
+  ObjectTransform transform;
+  transform.translate = translate;
+  transform.rotate_axis = axis;
+  transform.rotate_degrees = degrees;
+  transform.scale = scale;
+  return transform.matrix();
+}
+
+SceneObject instance(std::shared_ptr<const Model> model, const glm::mat4& model_to_world,
+                     float shade) {
+  SceneObject object;
+  object.name = "object";
+  object.model = std::move(model);
+  object.model_to_world = model_to_world;
+  object.materials = object.model->materials;
+  for (Material& m : object.materials) m.diffuse = glm::vec3(shade);
+  return object;
+}
+
+// Overlapping spheres, boxes and a grid, rotated, scaled non-uniformly and mirrored; object
+// o's material has diffuse o / 100, and object 7 is a model without triangles.
+Scene mixed_scene() {
+  const auto sphere = std::make_shared<const Model>(test::make_sphere(12, 24));
+  const auto box = std::make_shared<const Model>(test::make_box({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}));
+  const auto grid = std::make_shared<const Model>(test::make_grid(8));
+  auto empty = std::make_shared<Model>();
+  empty->materials.push_back(Material{});
+  Scene scene;
+  const std::vector<std::pair<std::shared_ptr<const Model>, glm::mat4>> placements = {
+      {sphere, placed({0.0f, 0.0f, 0.0f}, {1, 1, 0}, 30.0f, {0.3f, 2.0f, 1.0f})},
+      {sphere, placed({2.5f, 0.0f, 0.0f}, {0, 0, 1}, -20.0f, {-0.8f, 0.8f, 0.8f})},  // mirrored
+      {box, placed({-2.0f, 0.0f, 1.0f}, {0, 1, 0}, 45.0f, {1.0f, 0.2f, 3.0f})},
+      {grid, placed({0.0f, -2.5f, 0.0f}, {1, 0, 0}, -90.0f, {3.0f, 3.0f, 1.0f})},
+      {sphere, placed({0.5f, 0.8f, 0.3f}, {0, 1, 0}, 10.0f, {1.0f, 1.0f, 1.0f})},  // overlaps 0
+      {box, placed({0.0f, 1.5f, -1.5f}, {1, 0, 1}, 60.0f, {-1.0f, 1.0f, -0.5f})},  // two mirrors
+      {sphere, placed({-1.0f, -1.0f, -1.0f}, {0, 1, 1}, 75.0f, {-1.5f, 0.4f, 1.0f})},
+      {empty, glm::mat4(1.0f)},
+  };
+  for (std::size_t o = 0; o < placements.size(); ++o) {
+    scene.objects.push_back(instance(placements[o].first, placements[o].second,
+                                     static_cast<float>(o) / 100.0f));
+  }
+  return scene;
+}
+
+struct Tally {
+  std::size_t hits = 0, ties = 0, edge_cases = 0, failures = 0;
+};
+
+// One ray: ours against the world-space brute force, occluded() against closest_hit(), and
+// the completed SurfaceHit against the world triangle it reports.
+struct Expected {
+  bool hit = false;
+  Reference nearest;
+};
+
+std::vector<Expected> brute_force(const std::vector<WorldTriangle>& world, const std::vector<Ray>& rays) {
+  std::vector<Expected> out(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) out[i].hit = brute_force(world, rays[i], out[i].nearest);
+  return out;
+}
+
+void check_ray(const PreparedScene& scene, const SceneIntersector& ours,
+               const std::vector<WorldTriangle>& world, const std::vector<std::size_t>& first_of,
+               const Ray& ray, const Expected& expected, std::size_t i, const std::string& what,
+               Tally& tally) {
+  auto fail = [&](const std::string& why) {
+    if (++tally.failures <= 5) ADD_FAILURE() << what << ", ray " << i << ": " << why;
+  };
+  const Reference& want = expected.nearest;
+  const bool want_hit = expected.hit;
+  SurfaceHit got;
+  const bool got_hit = ours.closest_hit(ray, got);
+  if (ours.occluded(ray) != got_hit) fail("occluded() disagrees with closest_hit()");
+  // Hits that rounding decides differently in world and model space: near an edge, or by a ray
+  // (nearly) in the triangle's plane.
+  auto grazing = [&](const WorldTriangle& w) {
+    const glm::vec3 n = glm::normalize(glm::cross(w.b - w.a, w.c - w.a));
+    return std::abs(glm::dot(n, glm::normalize(ray.direction))) < 1e-4f;
+  };
+  const bool want_fragile =
+      want_hit && (near_edge(want.u, want.v) || grazing(world[first_of[want.object] + want.triangle]));
+  const bool got_fragile =
+      got_hit && (near_edge(got.u, got.v) || grazing(world[first_of[got.object] + got.triangle]));
+  if (want_hit != got_hit) {
+    if (want_fragile || got_fragile) {
+      ++tally.edge_cases;
+    } else {
+      fail(want_hit ? "missed object " + std::to_string(want.object) : "hit where nothing is");
+    }
+    return;
+  }
+  if (!want_hit) return;
+  ++tally.hits;
+  const bool same = want.object == got.object && want.triangle == got.triangle;
+  // 1e-4 relative, and for hits very near the origin the rounding of world coordinates.
+  const float tolerance = 1e-4f * want.t + 1e-5f * (1.0f + glm::length(ray.origin)) / glm::length(ray.direction);
+  if (std::abs(got.t - want.t) > tolerance) {
+    if (want_fragile || got_fragile) {
+      ++tally.edge_cases;
+    } else {
+      fail("t " + std::to_string(got.t) + " instead of " + std::to_string(want.t) + " (object " +
+           std::to_string(got.object) + " vs " + std::to_string(want.object) + ")");
+    }
+    return;
+  }
+  if (!same) ++tally.ties;
+
+  Ray shadow = ray;
+  shadow.t_max = got.t * (1.0f - 1e-3f);
+  if (ours.occluded(shadow)) fail("occluded before the closest hit");
+
+  // The SurfaceHit: unit normals, the geometric one perpendicular to the world triangle.
+  const WorldTriangle& w = world[first_of[got.object] + got.triangle];
+  ASSERT_EQ(w.object, got.object);
+  ASSERT_EQ(w.triangle, got.triangle);
+  if (std::abs(glm::length(got.geometric_normal) - 1.0f) > 1e-5f) fail("geometric normal not unit");
+  if (std::abs(glm::length(got.shading_normal) - 1.0f) > 1e-5f) fail("shading normal not unit");
+  const glm::vec3 e1 = glm::normalize(w.b - w.a), e2 = glm::normalize(w.c - w.a);
+  if (std::abs(glm::dot(got.geometric_normal, e1)) > 1e-4f ||
+      std::abs(glm::dot(got.geometric_normal, e2)) > 1e-4f) {
+    fail("geometric normal not perpendicular to the world triangle");
+  }
+  if (glm::distance(got.position, ray.at(got.t)) > 1e-6f * glm::length(got.position) + 1e-6f) {
+    fail("position is not ray.at(t)");
+  }
+  const float plane_distance = std::abs(glm::dot(got.geometric_normal, got.position - w.a));
+  if (plane_distance > 1e-4f * (1.0f + glm::length(got.position))) fail("position off the triangle's plane");
+  const PreparedObject& object = scene.objects()[got.object];
+  if (got.material != &object.source->materials[object.triangles->material[got.triangle]] ||
+      got.material->diffuse.x != static_cast<float>(got.object) / 100.0f) {
+    fail("wrong material");
+  }
+  // The geometric and shading normals keep their model-space relation (same side or not)
+  // under every transform, mirrors included.
+  const ModelTriangles& model = *object.triangles;
+  const glm::uvec3& tri = model.triangles[got.triangle];
+  const glm::vec3 n_model = glm::cross(model.positions[tri.y] - model.positions[tri.x],
+                                       model.positions[tri.z] - model.positions[tri.x]);
+  const glm::vec3 s_model = (1.0f - got.u - got.v) * model.normals[tri.x] +
+                            got.u * model.normals[tri.y] + got.v * model.normals[tri.z];
+  if ((glm::dot(n_model, s_model) > 0.0f) != (glm::dot(got.geometric_normal, got.shading_normal) > 0.0f)) {
+    fail("geometric and shading normals changed sides");
+  }
+}
+
+std::vector<std::size_t> first_triangle_of(const PreparedScene& scene) {
+  std::vector<std::size_t> first;
+  std::size_t n = 0;
+  for (const PreparedObject& o : scene.objects()) {
+    first.push_back(n);
+    n += o.triangles->size();
+  }
+  return first;
+}
+
+TEST(InstanceIntersector, MatchesWorldSpaceBruteForceUnderRotationNonUniformScaleAndMirrors) {
+  const PreparedScene scene(mixed_scene());
+  AABB bounds;
+  const std::vector<WorldTriangle> world = world_triangles(scene, bounds);
+  const std::vector<std::size_t> first_of = first_triangle_of(scene);
+  std::vector<glm::vec3> planes;
+  for (std::size_t i = 0; i < world.size(); i += 17) planes.push_back(world[i].a);
+  const std::vector<Ray> rays = test::random_rays(bounds, 20000 / kRayDivisor, 5, planes);
+  const std::vector<Expected> expected = brute_force(world, rays);
+  for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
+    const std::string what(to_string(kind));
+    const auto ours = build_scene_intersector(scene, kind);
+    Tally tally;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      check_ray(scene, *ours, world, first_of, rays[i], expected[i], i, what, tally);
+    }
+    EXPECT_EQ(tally.failures, 0u) << what;
+    std::printf("%s: %zu rays, %zu hits, %zu ties, %zu edge cases\n", what.c_str(), rays.size(), tally.hits, tally.ties, tally.edge_cases);
+    EXPECT_GT(tally.hits, rays.size() / 4) << what;
+    // Only the rays placed on vertex coordinates meet edges that exactly (about 0.1%).
+    EXPECT_LE(tally.edge_cases, rays.size() / 200 + 5) << what << ": rounding at edges should be rare";
+    EXPECT_LE(tally.ties, tally.hits / 50) << what;
+  }
+}
+
+TEST(InstanceIntersector, HitDistanceIsInUnitsOfTheWorldDirectionUnderNonUniformScale) {
+  // A unit sphere stretched to y radius 2 and x radius 0.3: along +y from y = -5 the surface is
+  // at y = -2, so t = 3 / |d|-units whatever the model-space direction's length.
+  Scene s;
+  s.objects.push_back(instance(std::make_shared<const Model>(test::make_sphere(32, 64)),
+                               placed({0, 0, 0}, {0, 1, 0}, 0.0f, {0.3f, 2.0f, 1.0f}), 0.0f));
+  const PreparedScene scene(std::move(s));
+  for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
+    const auto ours = build_scene_intersector(scene, kind);
+    Ray ray;
+    ray.origin = {0.0f, -5.0f, 0.0f};
+    ray.direction = {0.0f, 0.5f, 0.0f};
+    SurfaceHit hit;
+    ASSERT_TRUE(ours->closest_hit(ray, hit));
+    EXPECT_NEAR(hit.t, 6.0f, 1e-4f);
+    EXPECT_NEAR(hit.position.y, -2.0f, 1e-4f);
+    EXPECT_LT(hit.geometric_normal.y, -0.9f);  // a facet of the pole's fan
+    // Along x the stretched sphere is 0.3 thick: hit at x = -0.3 from x = -1, t = 0.7.
+    ray.origin = {-1.0f, 0.0f, 0.0f};
+    ray.direction = {1.0f, 0.0f, 0.0f};
+    ASSERT_TRUE(ours->closest_hit(ray, hit));
+    EXPECT_NEAR(hit.t, 0.7f, 1e-3f);
+    EXPECT_LT(hit.shading_normal.x, -0.99f);
+  }
+}
+
+TEST(InstanceIntersector, HundredInstancesShareOneMeshAccel) {
+  const auto sphere = std::make_shared<const Model>(test::make_sphere(8, 16));
+  Scene s;
+  for (int i = 0; i < 100; ++i) {
+    const glm::vec3 at{static_cast<float>(i % 10) * 2.5f, 0.0f, static_cast<float>(i / 10) * 2.5f};
+    const glm::vec3 scale{1.0f + 0.05f * static_cast<float>(i % 7), 1.0f - 0.05f * static_cast<float>(i % 5),
+                          i % 3 == 0 ? -1.0f : 1.0f};
+    s.objects.push_back(instance(sphere, placed(at, {0, 1, 0}, 3.6f * static_cast<float>(i), scale),
+                                 static_cast<float>(i) / 100.0f));
+  }
+  const PreparedScene scene(std::move(s));
+  for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
+    const InstanceIntersector ours(scene, kind);
+    EXPECT_EQ(ours.mesh_accel_count(), 1u);
+    EXPECT_EQ(&ours.mesh_accel_of(0), &ours.mesh_accel_of(99));
+  }
+  // And it still finds the right instance.
+  const auto ours = build_scene_intersector(scene, AccelKind::Bvh);
+  AABB bounds;
+  const std::vector<WorldTriangle> world = world_triangles(scene, bounds);
+  const std::vector<std::size_t> first_of = first_triangle_of(scene);
+  const std::vector<Ray> rays = test::random_rays(bounds, 1500 / kRayDivisor, 9);
+  const std::vector<Expected> expected = brute_force(world, rays);
+  Tally tally;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    check_ray(scene, *ours, world, first_of, rays[i], expected[i], i, "100 spheres", tally);
+  }
+  EXPECT_EQ(tally.failures, 0u);
+  EXPECT_GT(tally.hits, rays.size() / 10);
+}
+
+TEST(InstanceIntersector, CountsTopAndBottomLevelWork) {
+  const PreparedScene scene(mixed_scene());
+  const auto bvh = build_scene_intersector(scene, AccelKind::Bvh);
+  const auto naive = build_scene_intersector(scene, AccelKind::Naive);
+  Ray ray;
+  ray.origin = {0.0f, 0.0f, 10.0f};
+  ray.direction = {0.0f, 0.0f, -1.0f};
+  TraversalStats bvh_stats, naive_stats;
+  SurfaceHit hit;
+  ASSERT_TRUE(bvh->closest_hit(ray, hit, &bvh_stats));
+  ASSERT_TRUE(naive->closest_hit(ray, hit, &naive_stats));
+  EXPECT_GT(bvh_stats.nodes, 2u);
+  EXPECT_GT(bvh_stats.triangles, 0u);
+  EXPECT_EQ(naive_stats.nodes, 0u);
+  EXPECT_EQ(naive_stats.triangles, scene.triangle_count());
+  EXPECT_LT(bvh_stats.cost(), naive_stats.cost());
+}
+
+// Corners of `box` under `m`, as a world-space box.
+AABB transformed(const AABB& box, const glm::mat4& m) {
+  AABB out;
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec3 p{(c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
+                      (c & 4) ? box.max.z : box.min.z};
+    out.grow(glm::vec3(m * glm::vec4(p, 1.0f)));
+  }
+  return out;
+}
+
+TEST(InstanceIntersector, VisitsTopLevelAndPerObjectBoxesForDrawing) {
+  const PreparedScene scene(mixed_scene());
+  AABB bounds;
+  const std::vector<WorldTriangle> world = world_triangles(scene, bounds);
+  const InstanceIntersector ours(scene, AccelKind::Bvh);
+  ASSERT_NE(ours.top_level(), nullptr);
+  std::size_t top = 0;
+  std::vector<std::size_t> roots(scene.objects().size(), 0);
+  ours.visit_bvh_boxes(100, [&](const BvhBox& box) {
+    if (box.object < 0) {
+      ++top;
+      EXPECT_EQ(box.to_world, glm::mat4(1.0f));
+      if (box.level == 0) {
+        const glm::vec3 slack(1e-4f);
+        EXPECT_TRUE(box.bounds.contains(AABB{bounds.min + slack, bounds.max - slack}));
+      }
+      return;
+    }
+    const auto o = static_cast<std::size_t>(box.object);
+    EXPECT_EQ(box.to_world, scene.objects()[o].model_to_world);
+    if (box.level != 0) return;
+    ++roots[o];
+    // The root box, carried to world space, holds every world vertex of the object.
+    AABB w = transformed(box.bounds, box.to_world);
+    w.min -= glm::vec3(1e-4f);
+    w.max += glm::vec3(1e-4f);
+    for (const WorldTriangle& t : world) {
+      if (t.object != o) continue;
+      AABB tb;
+      tb.grow(t.a);
+      tb.grow(t.b);
+      tb.grow(t.c);
+      EXPECT_TRUE(w.contains(tb));
+    }
+  });
+  EXPECT_EQ(top, ours.top_level()->nodes().size());
+  for (std::size_t o = 0; o < scene.objects().size(); ++o) {
+    EXPECT_EQ(roots[o], scene.objects()[o].triangles->size() > 0 ? 1u : 0u) << "object " << o;
+  }
+  std::size_t shallow = 0;
+  ours.visit_bvh_boxes(0, [&](const BvhBox& box) {
+    EXPECT_EQ(box.level, 0);
+    ++shallow;
+  });
+  EXPECT_EQ(shallow, 1u + 7u);  // the top-level root and one root per object with triangles
+
+  const InstanceIntersector naive(scene, AccelKind::Naive);
+  std::size_t none = 0;
+  naive.visit_bvh_boxes(100, [&](const BvhBox&) { ++none; });
+  EXPECT_EQ(none, 0u);
+}
+
+TEST(InstanceIntersector, EmptySceneIsNeverHit) {
+  const PreparedScene scene{Scene{}};
+  for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
+    const auto ours = build_scene_intersector(scene, kind);
+    SurfaceHit hit;
+    EXPECT_FALSE(ours->closest_hit(Ray{}, hit));
+    EXPECT_FALSE(ours->occluded(Ray{}));
+  }
+}
+
+}  // namespace
+}  // namespace farm
