@@ -37,6 +37,10 @@ void add_render_command(CLI::App& app, farm::RenderCommandOptions& o, std::strin
   render->add_option("--preview", preview,
                      "Preview path, .png or .jpg (replaces output.preview; 'none' for no preview)");
   render->add_flag("--float", o.overrides.full_float, "Write 32-bit float EXR instead of half");
+  render->add_option("--show-bvh", o.overrides.show_bvh,
+                     "Draw the BVH boxes of levels <= DEPTH over the preview (white: the tree over "
+                     "objects; colours: each object's tree by level)")
+      ->check(CLI::Range(0, 64));
   render->add_option("--asset-root", o.load.asset_root,
                      "Folder that model files must lie in (default: the job file's folder)")
       ->check(CLI::ExistingDirectory);

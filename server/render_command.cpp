@@ -5,6 +5,8 @@
 #include <chrono>
 
 #include "renderer/engine.h"
+#include "renderer/geometry/instance_intersector.h"
+#include "renderer/image/box_overlay.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/preview.h"
 #include "renderer/prepared_scene.h"
@@ -28,6 +30,23 @@ std::string aov_list(const AovSet& aovs) {
     if (aovs.has(a)) s += fmt::format(" + {}", to_string(a));
   }
   return s;
+}
+
+// The film's colours with the boxes of the scene's BVH levels <= max_level drawn over them: the
+// top level (over objects) in white, each object's own tree in a colour per level.
+TileBuffer with_bvh_overlay(const TileBuffer& film, const PreparedScene& scene, AccelKind accel,
+                            int max_level) {
+  TileBuffer image(film.rect(), AovSet{});
+  image.paste(film);
+  // Embree's tree is not ours to draw, and `naive` has none: show our SAH BVH for those.
+  const AccelKind drawn = accel == AccelKind::BvhMedian ? accel : AccelKind::Bvh;
+  const auto intersector = build_instance_intersector(scene, drawn);
+  BoxOverlay overlay(image, scene.scene().camera);
+  intersector->visit_bvh_boxes(max_level, [&](const BvhBox& box) {
+    overlay.draw_box(box.bounds, box.to_world,
+                     box.object < 0 ? glm::vec3(1.0f) : BoxOverlay::level_color(box.level));
+  });
+  return image;
 }
 
 }  // namespace
@@ -57,6 +76,10 @@ void run_render_command(const RenderCommandOptions& options) {
                                  "(available: raster, whitted)",
                                  options.job_file.string(), to_string(job.render.engine)));
   }
+  if (options.overrides.show_bvh && job.output.preview.empty()) {
+    throw InputError("--show-bvh draws over the preview, but this render writes none "
+                     "(give --preview FILE.png)");
+  }
   if (!job.output.preview.empty() && !preview_format_supported(job.output.preview)) {
     throw InputError(fmt::format("{}: output.preview: cannot write images of type '{}'",
                                  options.job_file.string(), job.output.preview.extension().string()));
@@ -79,7 +102,14 @@ void run_render_command(const RenderCommandOptions& options) {
   const ExrPixelType pixel_type =
       options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
   write_exr(film, job.output.image, pixel_type);
-  if (!job.output.preview.empty()) write_preview(film, job.output.preview);
+  if (!job.output.preview.empty()) {
+    if (options.overrides.show_bvh) {
+      write_preview(with_bvh_overlay(film, prepared, job.render.accel, *options.overrides.show_bvh),
+                    job.output.preview);
+    } else {
+      write_preview(film, job.output.preview);
+    }
+  }
   const double write_ms = ms_since(t_write);
 
   const RenderSettings& r = job.render;
@@ -89,7 +119,12 @@ void run_render_command(const RenderCommandOptions& options) {
              prepared.objects().size());
   fmt::print("wrote {} ({}, {} EXR)\n", job.output.image.string(), aov_list(r.aovs),
              pixel_type == ExrPixelType::Half ? "half" : "float");
-  if (!job.output.preview.empty()) fmt::print("wrote {} (sRGB preview)\n", job.output.preview.string());
+  if (!job.output.preview.empty()) {
+    fmt::print("wrote {} (sRGB preview{})\n", job.output.preview.string(),
+               options.overrides.show_bvh
+                   ? fmt::format(", BVH levels <= {} drawn over it", *options.overrides.show_bvh)
+                   : std::string());
+  }
   fmt::print("time: load+prepare {:.1f} ms, render {:.1f} ms ({} tiles of {} px, {} threads), "
              "write {:.1f} ms, total {:.1f} ms\n",
              load_ms, render_ms, tiles, r.tile_size, resolve_thread_count(r.threads), write_ms,

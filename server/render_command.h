@@ -15,6 +15,7 @@ struct RenderOverrides {
   std::optional<int> width, height, spp, threads, tile_size;
   std::optional<std::filesystem::path> image, preview;  // preview "" = none
   bool full_float = false;                              // 32-bit EXR instead of half
+  std::optional<int> show_bvh;  // draw BVH boxes of levels <= this over the preview
 };
 
 struct RenderCommandOptions {

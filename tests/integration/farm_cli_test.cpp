@@ -118,3 +118,44 @@ TEST_F(FarmCliTest, InfoOfAJobListsObjectsAndSettings) {
 
 }  // namespace
 }  // namespace farm
+
+namespace farm {
+namespace {
+
+TEST_F(FarmCliTest, ShowBvhDrawsBoxesOverThePreviewOnly) {
+  const std::string job = test::shell_quote((kSource / "jobs/whitted.json").string());
+  const fs::path plain = dir_ / "plain.png", boxes = dir_ / "boxes.png";
+  const fs::path plain_exr = dir_ / "plain.exr", boxes_exr = dir_ / "boxes.exr";
+  const std::string common = " --width 96 --height 96 --spp 1 --float";
+  ASSERT_EQ(run_command(farm("render " + job + common + " --out " + test::shell_quote(plain_exr.string()) +
+                             " --preview " + test::shell_quote(plain.string()))).exit_code, 0);
+  const auto r = run_command(farm("render " + job + common + " --show-bvh 2 --out " +
+                                  test::shell_quote(boxes_exr.string()) + " --preview " +
+                                  test::shell_quote(boxes.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("BVH levels <= 2"), std::string::npos) << r.output;
+  // The EXR stays clean; the preview differs (the lines).
+  const TileBuffer a = read_exr(plain_exr), b = read_exr(boxes_exr);
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x) ASSERT_EQ(a.rgba(x, y), b.rgba(x, y));
+  std::ifstream pa(plain, std::ios::binary), pb(boxes, std::ios::binary);
+  const std::string sa((std::istreambuf_iterator<char>(pa)), {}), sb((std::istreambuf_iterator<char>(pb)), {});
+  EXPECT_NE(sa, sb);
+}
+
+TEST_F(FarmCliTest, WhittedBvhCostAovCountsTraversalWork) {
+  const fs::path exr = dir_ / "cost.exr";
+  const auto r = run_command(farm("render " + shell_quote((kSource / "jobs/whitted.json").string()) +
+                                  " --width 64 --height 64 --spp 1 --preview none --out " +
+                                  shell_quote(exr.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const TileBuffer image = read_exr(exr);
+  ASSERT_TRUE(image.aovs().bvh_cost);
+  // Every pixel of the closed box is a hit that took at least a root visit and a triangle test,
+  // and far fewer than the scene's 7968 triangles.
+  EXPECT_GE(image.bvh_cost(32, 32), 2.0f);
+  EXPECT_LT(image.bvh_cost(32, 32), 1000.0f);
+}
+
+}  // namespace
+}  // namespace farm
