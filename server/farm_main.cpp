@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 
@@ -10,6 +11,7 @@
 #include "server/info_command.h"
 #include "server/rt_bench_command.h"
 #include "server/render_command.h"
+#include "server/validate_command.h"
 
 namespace {
 
@@ -53,6 +55,7 @@ int main(int argc, char** argv) {
   CLI::App app{"farm: render farm batch service.\n"
                "  farm render JOB   render a job locally to EXR + PNG preview\n"
                "  farm info FILE    show what a model or job file contains\n"
+               "  farm validate JOB compare our BVH's ray hits with Embree's on a job's scene\n"
                "  farm bench raster measure rasterizer speed and thread scaling\n"
                "  farm bench rt     compare our BVHs with Embree"};
   app.require_subcommand(1);
@@ -70,6 +73,26 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   info->add_option("--asset-root", info_load.asset_root, "Asset root for a job's model files")
       ->check(CLI::ExistingDirectory);
+
+  farm::ValidateCommandOptions validate_options;
+  CLI::App* validate = app.add_subcommand(
+      "validate", "Compare our acceleration structure's ray hits with Embree's on a job's scene");
+  validate->add_option("job", validate_options.job_file, "Job file (JSON, see jobs/README.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  validate->add_option("--rays", validate_options.rays,
+                       "Rays to compare, half primary and half from inside the scene "
+                       "(default: the job's validate.embree_rays, else 100000)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 32));
+  validate->add_option("--accel", validate_options.accel,
+                       "Ours to compare: bvh, bvh-median or naive (default: the job's render.accel; "
+                       "bvh when that is embree)")
+      ->check(CLI::IsMember({"bvh", "bvh-median", "naive"}));
+  validate->add_option("--asset-root", validate_options.load.asset_root,
+                       "Folder that model files must lie in (default: the job file's folder)")
+      ->check(CLI::ExistingDirectory);
+  validate->footer("Exit codes: 0 the hits agree (hit/miss disagreements at most 0.001% of the "
+                   "rays), 1 they do not (or an internal error), 2 bad input.");
 
   farm::RasterBenchOptions raster_bench;
   CLI::App* bench = app.add_subcommand("bench", "Measure engine performance");
@@ -134,6 +157,8 @@ int main(int argc, char** argv) {
       farm::run_raster_bench(raster_bench);
     } else if (app.got_subcommand("info")) {
       farm::run_info_command(info_file, info_load);
+    } else if (validate->parsed()) {
+      return farm::run_validate_command(validate_options);
     }
   } catch (const farm::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -13,8 +13,14 @@ namespace farm {
 struct AccelValidation {
   std::uint64_t rays = 0;
   std::uint64_t hit_miss_disagreements = 0;   // one hit, the other missed
-  std::uint64_t triangle_disagreements = 0;   // both hit, different (object, triangle)
-  double max_relative_t_difference = 0.0;     // over rays both hit
+  // Both hit, different (object, triangle) and t more than 1e-5 apart (relative, as below):
+  // closer than that it is one point on an edge or vertex that two triangles share, a tie.
+  std::uint64_t triangle_disagreements = 0;
+  // |t_ours - t_ref| / max(|t_ref|, D / |direction|), D the diagonal of the scene's bounds: the
+  // difference relative to the hit distance, or to the scene's size for hits nearer than that
+  // (float noise in t scales with the coordinates, not with t). Over the rays both hit, except
+  // those counted as triangle disagreements (their t difference would only repeat that count).
+  double max_relative_t_difference = 0.0;
   double mean_relative_t_difference = 0.0;
 
   std::string summary() const;  // one line for the render summary and `farm validate`

@@ -8,6 +8,8 @@
 
 namespace farm {
 
+// `scene` must outlive the result: Embree reads its triangle indices in place. Throws
+// std::runtime_error naming the step when Embree reports an error.
 std::unique_ptr<SceneIntersector> build_embree_intersector(const PreparedScene& scene);
 
 }  // namespace farm
