@@ -50,11 +50,13 @@ class Bvh {
   void visit_levels(int max_level, Visit&& visit) const;
 
   // Closest-hit traversal. `test(primitive, t_max)` intersects one primitive and, on a hit
-  // nearer than t_max, lowers t_max and returns true. Returns whether anything was hit.
+  // nearer than t_max, lowers t_max and returns true. Returns whether anything was hit. A test
+  // may also take (primitive, leaf_entry, t_max), leaf_entry being the index into order().
   template <typename Test>
   bool closest(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
-  // Any-hit traversal: stops at the first primitive for which test(primitive) is true.
+  // Any-hit traversal: stops at the first primitive for which test(primitive) (or
+  // test(primitive, leaf_entry)) is true.
   template <typename Test>
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 

@@ -55,12 +55,14 @@ class BvhAccel final : public MeshAccel {
     std::vector<AABB> bounds(triangles.size());
     for (std::uint32_t t = 0; t < triangles.size(); ++t) bounds[t] = triangles.triangle_bounds(t);
     bvh_ = Bvh::build(bounds, Bvh::Options{split, split == BvhSplit::Sah ? 8 : 4});
-    // Corners copied per triangle: one contiguous load per test instead of an index lookup and
-    // three scattered position reads. Same float values, so hits equal the naive ones exactly.
-    corners_.resize(triangles.size());
-    for (std::uint32_t t = 0; t < triangles.size(); ++t) {
-      const glm::uvec3& tri = triangles.triangles[t];
-      corners_[t] = {triangles.positions[tri.x], triangles.positions[tri.y], triangles.positions[tri.z]};
+    // Corners copied per triangle, in the BVH's leaf order: a leaf's triangles are one
+    // contiguous read instead of an index lookup and three scattered position reads. Same float
+    // values, so hits equal the naive ones exactly.
+    const std::vector<std::uint32_t>& order = bvh_.order();
+    corners_.resize(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const glm::uvec3& tri = triangles.triangles[order[i]];
+      corners_[i] = {triangles.positions[tri.x], triangles.positions[tri.y], triangles.positions[tri.z]};
     }
   }
 
@@ -68,9 +70,9 @@ class BvhAccel final : public MeshAccel {
     Ray r = ray;
     return bvh_.closest(
         ray,
-        [&](std::uint32_t t, float& t_max) {
+        [&](std::uint32_t t, std::uint32_t leaf_entry, float& t_max) {
           r.t_max = t_max;
-          const Corners& c = corners_[t];
+          const Corners& c = corners_[leaf_entry];
           const auto h = intersect_triangle(r, c.a, c.b, c.c);
           if (!h) return false;
           hit = *h;
@@ -84,8 +86,8 @@ class BvhAccel final : public MeshAccel {
   bool any_hit(const Ray& ray, TraversalStats* stats) const override {
     return bvh_.any(
         ray,
-        [&](std::uint32_t t) {
-          const Corners& c = corners_[t];
+        [&](std::uint32_t, std::uint32_t leaf_entry) {
+          const Corners& c = corners_[leaf_entry];
           return intersect_triangle(ray, c.a, c.b, c.c).has_value();
         },
         stats);
@@ -98,7 +100,7 @@ class BvhAccel final : public MeshAccel {
     glm::vec3 a, b, c;
   };
   Bvh bvh_;
-  std::vector<Corners> corners_;
+  std::vector<Corners> corners_;  // indexed by leaf entry (position in bvh_.order())
 };
 
 }  // namespace

@@ -26,8 +26,7 @@ inline std::optional<TriangleHit> intersect_triangle(const Ray& ray, const glm::
   const glm::vec3 e1 = b - a, e2 = c - a;
   const glm::vec3 p = glm::cross(ray.direction, e2);
   const float det = glm::dot(e1, p);
-  const float scale = glm::length(e1) * glm::length(e2) * glm::length(ray.direction);
-  if (!(std::fabs(det) > 1e-12f * scale)) return std::nullopt;
+  if (det == 0.0f) return std::nullopt;
   const float inv_det = 1.0f / det;
   const glm::vec3 s = ray.origin - a;
   const float u = glm::dot(s, p) * inv_det;
@@ -37,6 +36,10 @@ inline std::optional<TriangleHit> intersect_triangle(const Ray& ray, const glm::
   if (v < 0.0f || u + v > 1.0f) return std::nullopt;
   const float t = glm::dot(e2, q) * inv_det;
   if (!(t > std::max(ray.t_min, t_epsilon) && t < ray.t_max)) return std::nullopt;
+  // The determinant epsilon, relative to |e1| |e2| |d| and compared squared: checked last, since
+  // most tests have failed above and it needs no square roots this way.
+  const float scale2 = glm::dot(e1, e1) * glm::dot(e2, e2) * glm::dot(ray.direction, ray.direction);
+  if (!(det * det > 1e-24f * scale2)) return std::nullopt;
   return TriangleHit{t, u, v, 0};
 }
 
