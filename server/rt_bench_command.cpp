@@ -117,16 +117,16 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
 
   fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), 1 thread, Mrays/s\n",
              name, prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays);
-  fmt::print("{:<12} {:>9} {:>16} {:>12} {:>19} {:>15}\n", "accel", "build ms", "primary closest",
+  fmt::print("{:<18} {:>9} {:>16} {:>12} {:>19} {:>15}\n", "accel", "build ms", "primary closest",
              "primary any", "incoherent closest", "incoherent any");
   for (const Row& r : rows) {
-    fmt::print("{:<12} {:>9.2f} {:>16.2f} {:>12.2f} {:>19.2f} {:>15.2f}\n", to_string(r.accel),
+    fmt::print("{:<18} {:>9.2f} {:>16.2f} {:>12.2f} {:>19.2f} {:>15.2f}\n", to_string(r.accel),
                r.build_ms, r.primary.closest, r.primary.any, r.incoherent.closest, r.incoherent.any);
   }
   const Row& embree = rows[2];
   for (const Row& r : rows) {
     if (r.accel == AccelKind::Embree) continue;
-    fmt::print("{:<12} {:>9} {:>15.2f}x {:>11.2f}x {:>18.2f}x {:>14.2f}x\n",
+    fmt::print("{:<18} {:>9} {:>15.2f}x {:>11.2f}x {:>18.2f}x {:>14.2f}x\n",
                fmt::format("{}/embree", to_string(r.accel)), "",
                r.primary.closest / embree.primary.closest, r.primary.any / embree.primary.any,
                r.incoherent.closest / embree.incoherent.closest,
