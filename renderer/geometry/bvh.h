@@ -61,6 +61,9 @@ class Bvh {
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
  private:
+  template <bool kAnyHit, typename Test>
+  bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
+
   std::vector<BvhNode> nodes_;
   std::vector<std::uint32_t> order_;
   int depth_ = -1;

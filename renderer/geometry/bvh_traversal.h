@@ -42,9 +42,9 @@ bool call_primitive_test(Test& test, std::uint32_t primitive, std::uint32_t leaf
 // Both traversals test a node's two children together and descend into the nearer one that the
 // ray meets, keeping the farther one (with its entry distance) on a stack; a stacked node is
 // dropped when it starts beyond the closest hit found since. `nodes` counts the nodes entered.
-
-template <typename Test>
-bool Bvh::closest(const Ray& ray, Test&& test, TraversalStats* stats) const {
+// kAnyHit: stop at the first primitive hit (t_max never shrinks); otherwise keep the nearest.
+template <bool kAnyHit, typename Test>
+bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
   if (nodes_.empty()) return false;
   const glm::vec3 inv_dir = 1.0f / ray.direction;
   float t_max = ray.t_max;
@@ -83,8 +83,14 @@ bool Bvh::closest(const Ray& ray, Test&& test, TraversalStats* stats) const {
     } else {
       for (std::uint32_t i = node.offset; i < node.offset + node.count; ++i) {
         ++primitives_tested;
-        if (call_primitive_test(test, order_[i], i, t_max)) hit = true;
+        if constexpr (kAnyHit) {
+          hit = call_primitive_test(test, order_[i], i);
+          if (hit) break;
+        } else {
+          if (call_primitive_test(test, order_[i], i, t_max)) hit = true;
+        }
       }
+      if (kAnyHit && hit) break;
     }
     // Next: the nearest pending node that still starts before the closest hit.
     while (top > 0 && stack[top - 1].t_entry > t_max) --top;
@@ -99,53 +105,13 @@ bool Bvh::closest(const Ray& ray, Test&& test, TraversalStats* stats) const {
 }
 
 template <typename Test>
+bool Bvh::closest(const Ray& ray, Test&& test, TraversalStats* stats) const {
+  return traverse<false>(ray, test, stats);
+}
+
+template <typename Test>
 bool Bvh::any(const Ray& ray, Test&& test, TraversalStats* stats) const {
-  if (nodes_.empty()) return false;
-  const glm::vec3 inv_dir = 1.0f / ray.direction;
-  float t_entry;
-  if (!nodes_[0].bounds.intersect(ray.origin, inv_dir, ray.t_min, ray.t_max, t_entry)) return false;
-  bool hit = false;
-  std::uint64_t nodes_visited = 0, primitives_tested = 0;
-  std::array<std::uint32_t, kMaxDepth> stack;
-  int top = 0;
-  std::uint32_t index = 0;
-  for (;;) {
-    const BvhNode& node = nodes_[index];
-    ++nodes_visited;
-    if (node.count == 0) {
-      std::uint32_t first = index + 1, second = node.offset;
-      float t_first, t_second;
-      const bool hit_first = nodes_[first].bounds.intersect(ray.origin, inv_dir, ray.t_min, ray.t_max, t_first);
-      const bool hit_second = nodes_[second].bounds.intersect(ray.origin, inv_dir, ray.t_min, ray.t_max, t_second);
-      if (hit_first && hit_second) {
-        // Any hit will do, but the nearer child is the likelier to hold one.
-        if (t_second < t_first) std::swap(first, second);
-        stack[top++] = second;
-        index = first;
-        continue;
-      }
-      if (hit_first || hit_second) {
-        index = hit_first ? first : second;
-        continue;
-      }
-    } else {
-      for (std::uint32_t i = node.offset; i < node.offset + node.count; ++i) {
-        ++primitives_tested;
-        if (call_primitive_test(test, order_[i], i)) {
-          hit = true;
-          break;
-        }
-      }
-      if (hit) break;
-    }
-    if (top == 0) break;
-    index = stack[--top];
-  }
-  if (stats) {
-    stats->nodes += nodes_visited;
-    stats->triangles += primitives_tested;
-  }
-  return hit;
+  return traverse<true>(ray, test, stats);
 }
 
 }  // namespace farm

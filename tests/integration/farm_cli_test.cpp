@@ -20,7 +20,7 @@ using test::shell_quote;
 
 const fs::path kSource = FARM_SOURCE_DIR;
 
-std::string farm(const std::string& args) { return shell_quote(FARM_BINARY) + " " + args; }
+std::string farm(const std::string& args) { return test::farm_command(args); }
 
 class FarmCliTest : public ::testing::Test {
  protected:

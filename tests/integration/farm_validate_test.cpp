@@ -18,7 +18,7 @@ using test::shell_quote;
 
 const fs::path kSource = FARM_SOURCE_DIR;
 
-std::string farm(const std::string& args) { return shell_quote(FARM_BINARY) + " " + args; }
+std::string farm(const std::string& args) { return test::farm_command(args); }
 
 bool unavailable(const test::CommandResult& r) {
   return r.output.find("not available in this build") != std::string::npos;

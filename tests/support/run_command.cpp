@@ -28,4 +28,6 @@ std::string shell_quote(const std::string& arg) {
   return quoted + "'";
 }
 
+std::string farm_command(const std::string& args) { return shell_quote(FARM_BINARY) + " " + args; }
+
 }  // namespace farm::test

@@ -14,4 +14,7 @@ CommandResult run_command(const std::string& command_line);
 // Quotes one argument for /bin/sh.
 std::string shell_quote(const std::string& arg);
 
+// The `farm` binary under test followed by `args` (already quoted as needed).
+std::string farm_command(const std::string& args);
+
 }  // namespace farm::test
