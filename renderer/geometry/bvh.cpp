@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <vector>
 
 namespace farm {
 namespace {
@@ -213,7 +214,77 @@ Bvh Bvh::build(std::span<const AABB> primitive_bounds, const Options& options) {
   Bvh bvh;
   Builder builder(primitive_bounds, options, bvh.nodes_, bvh.order_);
   bvh.depth_ = builder.run();
+  bvh.build_wide();
   return bvh;
+}
+
+// Each wide node takes a binary node's two children and keeps opening its largest inner child
+// (by surface area, the likeliest to be entered) until it has four.
+void Bvh::build_wide() {
+  wide_.clear();
+  if (nodes_.empty()) return;
+  struct Pending {
+    std::uint32_t binary;  // binary node whose children the wide node holds
+    std::uint32_t wide;    // the wide node to fill
+  };
+  std::vector<Pending> work;
+  wide_.emplace_back();
+  work.push_back({0, 0});
+  while (!work.empty()) {
+    const Pending p = work.back();
+    work.pop_back();
+    std::array<std::uint32_t, 4> slots{};
+    int used = 0;
+    if (nodes_[p.binary].count != 0) {
+      slots[used++] = p.binary;  // a root that is a leaf
+    } else {
+      slots[used++] = p.binary + 1;
+      slots[used++] = nodes_[p.binary].offset;
+      while (used < 4) {
+        int widest = -1;
+        float widest_area = -1.0f;
+        for (int i = 0; i < used; ++i) {
+          const BvhNode& n = nodes_[slots[static_cast<std::size_t>(i)]];
+          if (n.count == 0 && n.bounds.half_area() > widest_area) {
+            widest = i;
+            widest_area = n.bounds.half_area();
+          }
+        }
+        if (widest < 0) break;
+        const std::uint32_t opened = slots[static_cast<std::size_t>(widest)];
+        slots[static_cast<std::size_t>(widest)] = opened + 1;
+        slots[static_cast<std::size_t>(used++)] = nodes_[opened].offset;
+      }
+    }
+    WideBvhNode node;
+    node.children = static_cast<std::uint8_t>(used);
+    for (int i = 0; i < 4; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (i >= used) {
+        for (int a = 0; a < 3; ++a) {
+          node.bounds[a][k] = INFINITY;
+          node.bounds[3 + a][k] = -INFINITY;
+        }
+        node.child[k] = 0;
+        node.count[k] = 0;
+        continue;
+      }
+      const BvhNode& n = nodes_[slots[k]];
+      for (int a = 0; a < 3; ++a) {
+        node.bounds[a][k] = n.bounds.min[a];
+        node.bounds[3 + a][k] = n.bounds.max[a];
+      }
+      node.count[k] = static_cast<std::uint8_t>(n.count);
+      if (n.count != 0) {
+        node.child[k] = n.offset;
+      } else {
+        node.child[k] = static_cast<std::uint32_t>(wide_.size());
+        wide_.emplace_back();
+        work.push_back({slots[k], node.child[k]});
+      }
+    }
+    wide_[p.wide] = node;
+  }
 }
 
 }  // namespace farm

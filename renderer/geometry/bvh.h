@@ -3,7 +3,8 @@
 // bottom level) or object instances (the top level). Built top-down by the surface area
 // heuristic over binned centroids, or by splitting at the median of the longest axis (the
 // lab's build); stored as one flat array, depth-first, the first child right after its parent.
-// Traversal visits the nearer child first and skips nodes farther than the closest hit so far.
+// Traversal runs over a 4-wide collapse of the tree (WideBvhNode), visiting nearer children
+// first and skipping nodes farther than the closest hit so far.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -21,6 +22,15 @@ struct BvhNode {
   std::uint32_t offset = 0;  // inner: index of the second child; leaf: first index into order()
   std::uint16_t count = 0;   // leaf: number of primitives; 0 marks an inner node
   std::uint8_t axis = 0;     // inner: the split axis, which decides the near child
+};
+
+// The traversal form of a Bvh: the binary tree collapsed into nodes of up to four children,
+// whose boxes are stored axis by axis so that one SSE instruction tests all four.
+struct alignas(16) WideBvhNode {
+  float bounds[6][4];        // min x, y, z then max x, y, z, per child
+  std::uint32_t child[4];    // inner child: its WideBvhNode index; leaf child: first order() entry
+  std::uint8_t count[4];     // leaf child: primitives; 0: an inner child
+  std::uint8_t children = 0; // slots in use
 };
 
 class Bvh {
@@ -63,8 +73,10 @@ class Bvh {
  private:
   template <bool kAnyHit, typename Test>
   bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
+  void build_wide();
 
   std::vector<BvhNode> nodes_;
+  std::vector<WideBvhNode> wide_;  // what closest() and any() walk; nodes_ is for drawing
   std::vector<std::uint32_t> order_;
   int depth_ = -1;
 };
