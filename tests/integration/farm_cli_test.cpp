@@ -8,8 +8,7 @@
 #include <string>
 
 #include "renderer/image/exr_io.h"
-#include "tests/support/run_command.h"
-#include "tests/support/temp_dir.h"
+#include "tests/support/farm_cli_fixture.h"
 
 namespace farm {
 namespace {
@@ -18,14 +17,9 @@ namespace fs = std::filesystem;
 using test::run_command;
 using test::shell_quote;
 
-const fs::path kSource = FARM_SOURCE_DIR;
+using test::kSource;
 
-std::string farm(const std::string& args) { return test::farm_command(args); }
-
-class FarmCliTest : public ::testing::Test {
- protected:
-  test::TempDir dir_;
-};
+class FarmCliTest : public test::FarmCliFixture {};
 
 TEST_F(FarmCliTest, RenderCornellJobWritesExrWithAovsAndPreview) {
   const fs::path exr = dir_ / "c.exr", png = dir_ / "c.png";

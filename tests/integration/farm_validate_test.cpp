@@ -6,8 +6,7 @@
 #include <fstream>
 #include <string>
 
-#include "tests/support/run_command.h"
-#include "tests/support/temp_dir.h"
+#include "tests/support/farm_cli_fixture.h"
 
 namespace farm {
 namespace {
@@ -16,14 +15,9 @@ namespace fs = std::filesystem;
 using test::run_command;
 using test::shell_quote;
 
-const fs::path kSource = FARM_SOURCE_DIR;
+using test::kSource;
 
-std::string farm(const std::string& args) { return test::farm_command(args); }
-
-class FarmValidateCli : public ::testing::Test {
- protected:
-  test::TempDir dir_;
-};
+class FarmValidateCli : public test::FarmCliFixture {};
 
 TEST_F(FarmValidateCli, CornellNaiveAgreesWithEmbree) {
   const auto r = run_command(farm("validate " + shell_quote((kSource / "jobs/cornell.json").string()) +
