@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <stdexcept>
 
 #include "renderer/engine.h"
 #include "renderer/geometry/instance_intersector.h"
@@ -39,9 +40,12 @@ TileBuffer with_bvh_overlay(const TileBuffer& film, const PreparedScene& scene, 
                             int max_level) {
   TileBuffer image(film.rect(), AovSet{});
   image.paste(film);
-  // Embree's tree is not ours to draw, and `naive` has none: show our SAH BVH for those.
+  // Embree's tree is not ours to draw, and `naive` has none: show our SAH BVH for those. The
+  // render may already have built (and cached) this intersector.
   const AccelKind drawn = accel == AccelKind::BvhMedian ? accel : AccelKind::Bvh;
-  const auto intersector = build_instance_intersector(scene, drawn);
+  const auto cached = cached_scene_intersector(scene, drawn);
+  const auto* intersector = dynamic_cast<const InstanceIntersector*>(cached.get());
+  if (!intersector) throw std::logic_error("--show-bvh: expected our own BVH intersector");
   BoxOverlay overlay(image, scene.scene().camera);
   intersector->visit_bvh_boxes(max_level, [&](const BvhBox& box) {
     overlay.draw_box(box.bounds, box.to_world,
