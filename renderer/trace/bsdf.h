@@ -1,0 +1,54 @@
+#pragma once
+// Scattering functions for the path tracer, mapped from the Phong material (DESIGN.md):
+//   smooth dielectric  transmission > 0 and ior > 1 (Fresnel reflection and refraction)
+//   perfect mirror     shininess >= 1000 (reflectance ks, or white when ks is black)
+//   diffuse + glossy   (1 - max ks) * Lambert(kd) + ks * GGX, roughness from the shininess
+// All are energy conserving. Directions live in the local shading frame: z is the normal, and
+// wo (towards the viewer) and wi (towards the light) both point away from the surface.
+#include <glm/vec3.hpp>
+#include <optional>
+
+#include "renderer/scene/material.h"
+
+namespace farm {
+
+struct BsdfSample {
+  glm::vec3 wi{0.0f};
+  glm::vec3 weight{0.0f};  // f * |cos(wi)| / pdf: what the path throughput is multiplied by
+  float pdf = 0.0f;        // solid-angle density; for delta lobes the discrete probability
+  bool specular = false;   // a delta lobe: eval() and pdf() never see this direction
+};
+
+class Bsdf {
+ public:
+  explicit Bsdf(const Material& material);
+
+  // f(wo, wi) of the non-delta lobes (without the cosine).
+  glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi) const;
+  // Density with which sample() picks wi given wo, non-delta lobes only.
+  float pdf(const glm::vec3& wo, const glm::vec3& wi) const;
+  // Picks wi for uniform numbers u_lobe, u1, u2 in [0, 1); none when the sample is lost (a
+  // glossy reflection that points below the surface).
+  std::optional<BsdfSample> sample(const glm::vec3& wo, float u_lobe, float u1, float u2) const;
+
+  // Only delta lobes: next-event estimation has nothing to add here.
+  bool is_specular() const { return kind_ == Kind::Mirror || kind_ == Kind::Dielectric; }
+
+  // Blinn-Phong exponent -> GGX roughness alpha, through Beckmann's sqrt(2 / (p + 2)).
+  static float roughness_from_shininess(float shininess);
+
+ private:
+  enum class Kind { Layered, Mirror, Dielectric };
+
+  glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
+  float pdf_layered(const glm::vec3& wo, const glm::vec3& wi) const;
+
+  Kind kind_ = Kind::Layered;
+  glm::vec3 diffuse_{0.0f};   // kd scaled by what the specular layer leaves
+  glm::vec3 specular_{0.0f};  // ks, or the mirror's reflectance
+  float alpha_ = 1.0f;        // GGX roughness
+  float ior_ = 1.5f;
+  float specular_probability_ = 0.0f;  // chance of sampling the GGX lobe
+};
+
+}  // namespace farm

@@ -1,0 +1,152 @@
+#include "renderer/trace/bsdf.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <glm/geometric.hpp>
+#include <numbers>
+#include <random>
+
+#include "renderer/trace/fresnel.h"
+
+namespace farm {
+namespace {
+
+constexpr float kPi = std::numbers::pi_v<float>;
+
+glm::vec3 direction_at(float theta_degrees) {
+  const float t = theta_degrees * kPi / 180.0f;
+  return {std::sin(t), 0.0f, std::cos(t)};
+}
+
+// Albedo (directional reflectance) by sampling the BSDF: the mean of the sample weights.
+glm::vec3 albedo_by_bsdf_sampling(const Bsdf& bsdf, const glm::vec3& wo, int n, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  glm::vec3 sum(0.0f);
+  for (int i = 0; i < n; ++i) {
+    if (auto s = bsdf.sample(wo, u(rng), u(rng), u(rng))) sum += s->weight;
+  }
+  return sum / static_cast<float>(n);
+}
+
+// The same integral estimated independently, with directions uniform on the hemisphere.
+glm::vec3 albedo_by_uniform_sampling(const Bsdf& bsdf, const glm::vec3& wo, int n, std::mt19937& rng) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  glm::vec3 sum(0.0f);
+  for (int i = 0; i < n; ++i) {
+    const float z = u(rng), phi = 2.0f * kPi * u(rng), r = std::sqrt(1.0f - z * z);
+    const glm::vec3 wi{r * std::cos(phi), r * std::sin(phi), z};
+    sum += bsdf.eval(wo, wi) * wi.z * (2.0f * kPi);
+  }
+  return sum / static_cast<float>(n);
+}
+
+TEST(Bsdf, WhiteLambertianReflectsAllEnergyAndItsSamplesMatchItsPdf) {
+  Material white;
+  white.diffuse = glm::vec3(1.0f);
+  white.specular = glm::vec3(0.0f);
+  const Bsdf bsdf(white);
+  std::mt19937 rng(1);
+  for (float theta : {0.0f, 45.0f, 85.0f}) {
+    const glm::vec3 a = albedo_by_bsdf_sampling(bsdf, direction_at(theta), 20000, rng);
+    EXPECT_NEAR(a.x, 1.0f, 1e-4f) << theta;  // every sample weighs exactly kd
+    EXPECT_NEAR(albedo_by_uniform_sampling(bsdf, direction_at(theta), 200000, rng).x, 1.0f, 0.01f);
+  }
+}
+
+TEST(Bsdf, GlossySamplingAgreesWithIndependentIntegrationAndNeverCreatesEnergy) {
+  std::mt19937 rng(2);
+  for (float shininess : {5.0f, 50.0f, 500.0f}) {
+    Material m;
+    m.diffuse = {0.6f, 0.5f, 0.4f};
+    m.specular = glm::vec3(0.4f);
+    m.shininess = shininess;
+    const Bsdf bsdf(m);
+    for (float theta : {10.0f, 50.0f, 80.0f}) {
+      const glm::vec3 wo = direction_at(theta);
+      const glm::vec3 sampled = albedo_by_bsdf_sampling(bsdf, wo, 200000, rng);
+      const glm::vec3 uniform = albedo_by_uniform_sampling(bsdf, wo, 400000, rng);
+      // Two unbiased estimators of one integral: they agree within Monte Carlo noise (the uniform
+      // one is noisy for sharp lobes, hence the tolerance).
+      EXPECT_NEAR(sampled.x, uniform.x, 0.03f) << "p " << shininess << " theta " << theta;
+      EXPECT_LE(sampled.x, 1.0f + 1e-3f);
+      EXPECT_LE(sampled.x, 0.6f * 0.6f + 0.4f + 0.01f);  // diffuse layer + at most all of ks
+    }
+  }
+}
+
+TEST(Bsdf, PdfOfSampledDirectionsMatchesThePdfFunction) {
+  Material m;
+  m.diffuse = glm::vec3(0.5f);
+  m.specular = glm::vec3(0.5f);
+  m.shininess = 80.0f;
+  const Bsdf bsdf(m);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const glm::vec3 wo = direction_at(35.0f);
+  for (int i = 0; i < 1000; ++i) {
+    const auto s = bsdf.sample(wo, u(rng), u(rng), u(rng));
+    if (!s) continue;
+    EXPECT_FALSE(s->specular);
+    EXPECT_NEAR(s->pdf, bsdf.pdf(wo, s->wi), 1e-4f * s->pdf);
+    const glm::vec3 expected = bsdf.eval(wo, s->wi) * s->wi.z / s->pdf;
+    EXPECT_NEAR(s->weight.x, expected.x, 1e-4f);
+  }
+  // The density integrates to at most 1 over the sphere (samples below the surface are lost).
+  double integral = 0.0;
+  const int n = 400000;
+  for (int i = 0; i < n; ++i) {
+    const float z = 2.0f * u(rng) - 1.0f, phi = 2.0f * kPi * u(rng), r = std::sqrt(1.0f - z * z);
+    integral += bsdf.pdf(wo, {r * std::cos(phi), r * std::sin(phi), z}) * 4.0 * kPi;
+  }
+  EXPECT_NEAR(integral / n, 1.0, 0.03);
+}
+
+TEST(Bsdf, MirrorReflectsAboutTheNormalWithItsReflectance) {
+  Material m;
+  m.shininess = 1000;
+  m.specular = {0.9f, 0.8f, 0.7f};
+  const Bsdf bsdf(m);
+  EXPECT_TRUE(bsdf.is_specular());
+  const auto s = bsdf.sample(glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f)), 0.5f, 0.5f, 0.5f);
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->specular);
+  EXPECT_NEAR(s->wi.x, -0.3f / glm::length(glm::vec3(0.3f, -0.2f, 0.9f)), 1e-6f);
+  EXPECT_EQ(s->weight, glm::vec3(0.9f, 0.8f, 0.7f));
+  Material white_mirror;
+  white_mirror.shininess = 5000;
+  EXPECT_EQ(Bsdf(white_mirror).sample({0, 0, 1}, 0.1f, 0.2f, 0.3f)->weight, glm::vec3(1.0f));
+}
+
+TEST(Bsdf, DielectricSplitsByFresnelFollowsSnellAndConservesEnergy) {
+  Material glass;
+  glass.transmission = 1.0f;
+  glass.ior = 1.5f;
+  const Bsdf bsdf(glass);
+  EXPECT_TRUE(bsdf.is_specular());
+  const glm::vec3 wo = direction_at(40.0f);
+  const float reflectance = fresnel_dielectric(wo.z, 1.0f, 1.5f);
+  const auto reflected = bsdf.sample(wo, reflectance * 0.5f, 0.0f, 0.0f);
+  const auto refracted = bsdf.sample(wo, reflectance + 0.5f * (1.0f - reflectance), 0.0f, 0.0f);
+  ASSERT_TRUE(reflected && refracted);
+  EXPECT_NEAR(reflected->pdf, reflectance, 1e-6f);
+  EXPECT_NEAR(refracted->pdf, 1.0f - reflectance, 1e-6f);
+  EXPECT_GT(reflected->wi.z, 0.0f);
+  EXPECT_LT(refracted->wi.z, 0.0f);
+  // Snell: sin(theta_i) = 1.5 sin(theta_t).
+  const float sin_t = std::sqrt(1.0f - refracted->wi.z * refracted->wi.z);
+  EXPECT_NEAR(std::sin(40.0f * kPi / 180.0f), 1.5f * sin_t, 1e-5f);
+  // Power: everything is either reflected or transmitted (the weight's (1/1.5)^2 is the radiance
+  // compression, not a loss).
+  EXPECT_NEAR(reflected->pdf * reflected->weight.x + refracted->pdf * refracted->weight.x * 1.5f * 1.5f, 1.0f, 1e-5f);
+  // From inside beyond the critical angle: always reflected.
+  const glm::vec3 inside{std::sin(0.8f), 0.0f, -std::cos(0.8f)};  // 45.8 degrees > 41.8
+  for (float u : {0.0f, 0.5f, 0.999f}) {
+    const auto s = bsdf.sample(inside, u, 0.0f, 0.0f);
+    ASSERT_TRUE(s);
+    EXPECT_LT(s->wi.z, 0.0f) << "total internal reflection stays inside";
+  }
+}
+
+}  // namespace
+}  // namespace farm
