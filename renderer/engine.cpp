@@ -5,11 +5,10 @@
 #include "renderer/geometry/scene_intersector.h"
 #include "renderer/raster/raster_engine.h"
 #include "renderer/scene/input_error.h"
+#include "renderer/trace/path_tracer.h"
 #include "renderer/trace/whitted.h"
 
 namespace farm {
-
-bool engine_available(EngineKind engine) { return engine != EngineKind::Path; }
 
 void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool) {
   switch (settings.engine) {
@@ -17,9 +16,8 @@ void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, T
       raster::prepare_frame(scene, settings, pool);
       return;
     case EngineKind::Whitted:
-      cached_scene_intersector(scene, settings.accel);  // build the BVHs before the tiles start
-      return;
     case EngineKind::Path:
+      cached_scene_intersector(scene, settings.accel);  // build the BVHs before the tiles start
       return;
   }
 }
@@ -36,11 +34,10 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
       whitted::render_tile(scene, settings, clipped, out);
       return;
     case EngineKind::Path:
-      break;
+      path::render_tile(scene, settings, clipped, out);
+      return;
   }
-  throw InputError(fmt::format("render.engine: '{}' is not available in this build yet "
-                               "(available: raster, whitted)",
-                               to_string(settings.engine)));
+  throw InputError(fmt::format("render.engine: unknown engine {}", static_cast<int>(settings.engine)));
 }
 
 }  // namespace farm

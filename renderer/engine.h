@@ -9,9 +9,6 @@
 
 namespace farm {
 
-// Whether this build can run `engine` (the ray engines arrive in later issues).
-bool engine_available(EngineKind engine);
-
 // Optional: does the per-frame work an engine shares between tiles (the rasterizer's vertex
 // stage, set-up and binning) on `pool`, before tiles are dispatched. render_tile does it lazily
 // on its own thread when this was not called.

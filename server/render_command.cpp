@@ -76,11 +76,6 @@ void run_render_command(const RenderCommandOptions& options) {
   const Clock::time_point t_start = Clock::now();
   Job job = load_job(options.job_file, options.load);
   apply_overrides(job, options.overrides);
-  if (!engine_available(job.render.engine)) {
-    throw InputError(fmt::format("{}: render.engine: '{}' is not available in this build yet "
-                                 "(available: raster, whitted)",
-                                 options.job_file.string(), to_string(job.render.engine)));
-  }
   if (options.overrides.show_bvh && job.output.preview.empty()) {
     throw InputError("--show-bvh draws over the preview, but this render writes none "
                      "(give --preview FILE.png)");
@@ -129,6 +124,10 @@ void run_render_command(const RenderCommandOptions& options) {
                options.overrides.show_bvh
                    ? fmt::format(", BVH levels <= {} drawn over it", *options.overrides.show_bvh)
                    : std::string());
+  }
+  if (film.stats().samples > 0) {
+    fmt::print("samples: {} traced, {} NaN/inf samples caught and dropped\n", film.stats().samples,
+               film.stats().invalid_samples);
   }
   fmt::print("time: load+prepare {:.1f} ms, render {:.1f} ms ({} tiles of {} px, {} threads), "
              "write {:.1f} ms, total {:.1f} ms\n",

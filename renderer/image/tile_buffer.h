@@ -25,10 +25,14 @@ struct Rect {
 
 // Work counters that travel with a tile and add up when tiles are merged.
 struct RenderStats {
-  std::uint64_t fragments = 0;  // rasterizer: samples that passed the coverage test
+  std::uint64_t fragments = 0;        // rasterizer: samples that passed the coverage test
+  std::uint64_t samples = 0;          // path tracer: camera samples traced
+  std::uint64_t invalid_samples = 0;  // path tracer: samples that came out NaN or inf (dropped)
 
   RenderStats& operator+=(const RenderStats& o) {
     fragments += o.fragments;
+    samples += o.samples;
+    invalid_samples += o.invalid_samples;
     return *this;
   }
 };

@@ -1,0 +1,74 @@
+#include "renderer/trace/emitters.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/geometric.hpp>
+
+#include "renderer/prepared_scene.h"
+
+namespace farm {
+namespace {
+
+float luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+}  // namespace
+
+Emitters::Emitters(const PreparedScene& scene) {
+  std::vector<float> power;
+  for (std::uint32_t o = 0; o < scene.objects().size(); ++o) {
+    const PreparedObject& object = scene.objects()[o];
+    const ModelTriangles& mesh = *object.triangles;
+    for (std::uint32_t t = 0; t < mesh.size(); ++t) {
+      const glm::vec3 le = object.source->materials[mesh.material[t]].emission;
+      if (luminance(le) <= 0.0f) continue;
+      const glm::uvec3& tri = mesh.triangles[t];
+      const auto world = [&](std::uint32_t i) {
+        return glm::vec3(object.model_to_world * glm::vec4(mesh.positions[i], 1.0f));
+      };
+      Triangle w;
+      w.p0 = world(tri.x);
+      w.e1 = world(tri.y) - w.p0;
+      w.e2 = world(tri.z) - w.p0;
+      const glm::vec3 c = glm::cross(w.e1, w.e2);
+      w.area = 0.5f * glm::length(c);
+      if (!(w.area > 0.0f)) continue;
+      w.normal = c / (2.0f * w.area);
+      w.radiance = le;
+      index_of_[(std::uint64_t{o} << 32) | t] = static_cast<std::uint32_t>(triangles_.size());
+      triangles_.push_back(w);
+      power.push_back(luminance(le) * w.area);
+    }
+  }
+  double total = 0.0;
+  for (float p : power) total += p;
+  double running = 0.0;
+  for (float p : power) {
+    running += p;
+    cdf_.push_back(static_cast<float>(running / total));
+    probability_.push_back(static_cast<float>(p / total));
+  }
+  if (!cdf_.empty()) cdf_.back() = 1.0f;
+}
+
+EmitterSample Emitters::sample(float u_pick, float u1, float u2) const {
+  const auto it = std::upper_bound(cdf_.begin(), cdf_.end(), u_pick);
+  const std::size_t i = std::min<std::size_t>(static_cast<std::size_t>(it - cdf_.begin()), cdf_.size() - 1);
+  const Triangle& t = triangles_[i];
+  // Uniform on the triangle: fold the unit square onto it.
+  const float s = std::sqrt(u1);
+  const float b1 = 1.0f - s, b2 = u2 * s;
+  EmitterSample out;
+  out.position = t.p0 + b1 * t.e1 + b2 * t.e2;
+  out.normal = t.normal;
+  out.radiance = t.radiance;
+  out.pdf_area = probability_[i] / t.area;
+  return out;
+}
+
+float Emitters::pdf_area(std::uint32_t object, std::uint32_t triangle) const {
+  const auto it = index_of_.find((std::uint64_t{object} << 32) | triangle);
+  if (it == index_of_.end()) return 0.0f;
+  return probability_[it->second] / triangles_[it->second].area;
+}
+
+}  // namespace farm

@@ -1,0 +1,50 @@
+#pragma once
+// The scene's emissive triangles as area lights, in world space, chosen with probability
+// proportional to their power (luminance of the emitted radiance times area) and sampled
+// uniformly by area. Emission is two-sided: a model's winding does not decide whether its
+// lamp shines.
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+namespace farm {
+
+class PreparedScene;
+
+struct EmitterSample {
+  glm::vec3 position{0.0f};
+  glm::vec3 normal{0.0f};     // unit, world
+  glm::vec3 radiance{0.0f};   // emitted radiance Le
+  float pdf_area = 0.0f;      // density of this point per unit area (choice included)
+};
+
+class Emitters {
+ public:
+  explicit Emitters(const PreparedScene& scene);
+
+  bool empty() const { return triangles_.empty(); }
+  std::size_t size() const { return triangles_.size(); }
+
+  // A point on the emitters for uniform numbers u_pick, u1, u2 in [0, 1).
+  EmitterSample sample(float u_pick, float u1, float u2) const;
+
+  // Density per unit area with which sample() produces a point on (object, triangle); 0 if
+  // that triangle does not emit.
+  float pdf_area(std::uint32_t object, std::uint32_t triangle) const;
+
+ private:
+  struct Triangle {
+    glm::vec3 p0, e1, e2;  // world corner and edges
+    glm::vec3 normal;
+    glm::vec3 radiance;
+    float area;
+  };
+  std::vector<Triangle> triangles_;
+  std::vector<float> cdf_;  // cdf_[i] = P(pick <= i)
+  std::vector<float> probability_;
+  std::unordered_map<std::uint64_t, std::uint32_t> index_of_;  // (object << 32 | triangle) -> i
+};
+
+}  // namespace farm

@@ -1,0 +1,228 @@
+#include "renderer/trace/path_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/geometric.hpp>
+#include <memory>
+
+#include "renderer/geometry/scene_intersector.h"
+#include "renderer/trace/bsdf.h"
+#include "renderer/trace/emitters.h"
+#include "renderer/trace/sampler.h"
+
+namespace farm::path {
+namespace {
+
+constexpr int kRouletteStart = 3;  // bounces traced in full before Russian roulette may stop
+
+// An orthonormal frame around a unit normal (Duff et al. 2017), for the BSDF's local space.
+struct Frame {
+  glm::vec3 t, b, n;
+  explicit Frame(const glm::vec3& normal) : n(normal) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float c = n.x * n.y * a;
+    t = {1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x};
+    b = {c, sign + n.y * n.y * a, -n.y};
+  }
+  glm::vec3 to_local(const glm::vec3& v) const { return {glm::dot(v, t), glm::dot(v, b), glm::dot(v, n)}; }
+  glm::vec3 to_world(const glm::vec3& v) const { return v.x * t + v.y * b + v.z * n; }
+};
+
+float power_heuristic(float f, float g) {
+  const float f2 = f * f, g2 = g * g;
+  return f2 + g2 > 0.0f ? f2 / (f2 + g2) : 0.0f;
+}
+
+glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& geometric_normal, const glm::vec3& dir) {
+  const float scale = 1e-4f * (1.0f + std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}));
+  return p + (glm::dot(dir, geometric_normal) > 0.0f ? scale : -scale) * geometric_normal;
+}
+
+bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+class PathTracer {
+ public:
+  PathTracer(const PreparedScene& scene, const RenderSettings& settings,
+             const SceneIntersector& intersector, const Emitters& emitters)
+      : scene_(scene), settings_(settings), intersector_(intersector), emitters_(emitters) {}
+
+  struct Result {
+    glm::vec3 radiance{0.0f};
+    bool hit = false;
+    SurfaceHit first;
+    glm::vec3 first_normal{0.0f};
+  };
+
+  Result trace(Ray ray, const SampleKey& key) const {
+    Result result;
+    glm::vec3 beta(1.0f);
+    bool after_specular = true;  // emission seen directly or through mirrors counts in full
+    float previous_pdf = 0.0f;
+    glm::vec3 previous_position = ray.origin;
+    std::uint32_t dim = 2;  // 0 and 1 placed the sample in the pixel
+    const auto next = [&] { return sample_uniform(key, dim++); };
+
+    for (int bounce = 0;; ++bounce) {
+      SurfaceHit hit;
+      if (!intersector_.closest_hit(ray, hit)) {
+        result.radiance += beta * scene_.scene().background;  // a constant environment
+        break;
+      }
+      const Material& material = *hit.material;
+      const glm::vec3 wo_world = -glm::normalize(ray.direction);
+      if (bounce == 0) {
+        result.hit = true;
+        result.first = hit;
+        result.first_normal = glm::dot(hit.shading_normal, wo_world) < 0.0f ? -hit.shading_normal
+                                                                            : hit.shading_normal;
+      }
+
+      // Emission met by BSDF sampling, weighted against next-event estimation's chance of it.
+      if (material.emission != glm::vec3(0.0f)) {
+        float weight = 1.0f;
+        if (!after_specular) {
+          const glm::vec3 d = hit.position - previous_position;
+          const float cos_light = std::fabs(glm::dot(hit.geometric_normal, glm::normalize(d)));
+          const float light_pdf = cos_light > 0.0f
+                                      ? emitters_.pdf_area(hit.object, hit.triangle) * glm::dot(d, d) / cos_light
+                                      : 0.0f;
+          weight = power_heuristic(previous_pdf, light_pdf);
+        }
+        result.radiance += beta * material.emission * weight;
+      }
+      if (settings_.max_depth >= 0 && bounce >= settings_.max_depth) break;
+
+      // The shading frame on the side the ray arrives from (for dielectrics: the geometric
+      // side decides inside or outside).
+      const Bsdf bsdf(material);
+      glm::vec3 n = hit.shading_normal;
+      if (glm::dot(n, hit.geometric_normal) < 0.0f) n = -n;
+      const bool dielectric = material.transmission > 0.0f && material.ior > 1.0f;
+      if (!dielectric && glm::dot(n, wo_world) < 0.0f) n = -n;
+      const Frame frame(n);
+      const glm::vec3 wo = frame.to_local(wo_world);
+
+      if (!bsdf.is_specular()) result.radiance += beta * direct_light(hit, frame, bsdf, wo, next);
+
+      const float u_lobe = next(), u1 = next(), u2 = next();
+      const auto s = bsdf.sample(wo, u_lobe, u1, u2);
+      if (!s) break;
+      beta *= s->weight;
+      after_specular = s->specular;
+      previous_pdf = s->pdf;
+      previous_position = hit.position;
+      const glm::vec3 wi = frame.to_world(s->wi);
+      ray = Ray{offset_origin(hit.position, hit.geometric_normal, wi), wi};
+
+      // Russian roulette: continue with a probability that follows the throughput, and make up
+      // for the paths it ends by weighting the survivors, so the mean is unchanged.
+      if (bounce + 1 >= kRouletteStart) {
+        const float survive = std::min(0.95f, std::max({beta.x, beta.y, beta.z}));
+        if (next() >= survive) break;
+        beta /= survive;
+      }
+      if (beta == glm::vec3(0.0f)) break;
+    }
+    return result;
+  }
+
+ private:
+  template <typename Next>
+  glm::vec3 direct_light(const SurfaceHit& hit, const Frame& frame, const Bsdf& bsdf,
+                         const glm::vec3& wo, Next&& next) const {
+    glm::vec3 sum(0.0f);
+    // One point on the area lights, weighted against BSDF sampling.
+    const float u_pick = next(), u1 = next(), u2 = next();
+    if (!emitters_.empty()) {
+      const EmitterSample light = emitters_.sample(u_pick, u1, u2);
+      const glm::vec3 d = light.position - hit.position;
+      const float dist2 = glm::dot(d, d);
+      const glm::vec3 wi_world = d / std::sqrt(dist2);
+      const float cos_light = std::fabs(glm::dot(light.normal, wi_world));
+      const glm::vec3 wi = frame.to_local(wi_world);
+      const glm::vec3 f = bsdf.eval(wo, wi) * std::fabs(wi.z);
+      if (cos_light > 0.0f && f != glm::vec3(0.0f) && visible(hit, light.position)) {
+        const float light_pdf = light.pdf_area * dist2 / cos_light;
+        sum += f * light.radiance * power_heuristic(light_pdf, bsdf.pdf(wo, wi)) / light_pdf;
+      }
+    }
+    // Point lights: delta lights, nothing for BSDF sampling to find.
+    for (const Light& light : scene_.scene().lights) {
+      glm::vec3 wi_world, target;
+      glm::vec3 irradiance = light.intensity;
+      if (light.kind == Light::Kind::Directional) {
+        wi_world = -glm::normalize(light.direction);
+        target = hit.position + wi_world * 1e30f;
+      } else {
+        const glm::vec3 d = light.position - hit.position;
+        wi_world = glm::normalize(d);
+        irradiance /= glm::dot(d, d);
+        target = light.position;
+      }
+      const glm::vec3 wi = frame.to_local(wi_world);
+      const glm::vec3 f = bsdf.eval(wo, wi) * std::fabs(wi.z);
+      if (f != glm::vec3(0.0f) && visible(hit, target)) sum += f * irradiance;
+    }
+    return sum;
+  }
+
+  bool visible(const SurfaceHit& from, const glm::vec3& to) const {
+    Ray shadow;
+    shadow.origin = offset_origin(from.position, from.geometric_normal, to - from.position);
+    shadow.direction = to - shadow.origin;
+    shadow.t_max = 1.0f - 1e-3f;  // stop short of the light's own surface
+    return !intersector_.occluded(shadow);
+  }
+
+  const PreparedScene& scene_;
+  const RenderSettings& settings_;
+  const SceneIntersector& intersector_;
+  const Emitters& emitters_;
+};
+
+}  // namespace
+
+void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                 TileBuffer& out) {
+  out.reset(tile, settings.aovs);
+  if (tile.empty()) return;
+  const auto intersector = cached_scene_intersector(scene, settings.accel);
+  const auto emitters = scene.frame_cache().get_or_build<Emitters>(
+      "emitters", [&] { return std::make_shared<const Emitters>(scene); });
+  const PathTracer tracer(scene, settings, *intersector, *emitters);
+  const Camera& camera = scene.scene().camera;
+  const int samples = std::max(1, settings.spp);
+
+  for (int y = tile.y0; y < tile.y1; ++y) {
+    for (int x = tile.x0; x < tile.x1; ++x) {
+      glm::vec3 sum(0.0f);
+      float coverage = 0.0f;
+      const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
+                                  static_cast<std::uint64_t>(x);
+      for (int s = 0; s < samples; ++s) {
+        const SampleKey key{settings.seed, pixel, static_cast<std::uint32_t>(s)};
+        // Box filter: the sample lands uniformly anywhere in the pixel.
+        const Ray ray = camera.primary_ray(static_cast<float>(x) + sample_uniform(key, 0),
+                                           static_cast<float>(y) + sample_uniform(key, 1),
+                                           settings.width, settings.height);
+        const PathTracer::Result r = tracer.trace(ray, key);
+        ++out.stats().samples;
+        if (!finite(r.radiance)) {
+          ++out.stats().invalid_samples;  // counted, and never allowed into the pixel
+        } else {
+          sum += r.radiance;
+        }
+        coverage += r.hit ? 1.0f : 0.0f;
+        if (s != 0 || !r.hit) continue;
+        if (out.aovs().depth) out.depth(x, y) = r.first.t;
+        if (out.aovs().normal) out.normal(x, y) = r.first_normal;
+        if (out.aovs().albedo) out.albedo(x, y) = r.first.material->diffuse;
+      }
+      const float inv = 1.0f / static_cast<float>(samples);
+      out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);
+    }
+  }
+}
+
+}  // namespace farm::path

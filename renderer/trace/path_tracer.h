@@ -1,0 +1,16 @@
+#pragma once
+// The `path` engine: unidirectional Monte Carlo path tracing with next-event estimation at every
+// non-specular vertex (area lights sampled by power, point lights), combined with BSDF sampling
+// by multiple importance sampling (power heuristic), and Russian roulette after a few bounces.
+// Samples are box-filtered over the pixel; every random number comes from the counter-based
+// sampler, so any tiling gives the same image.
+#include "renderer/image/tile_buffer.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render_settings.h"
+
+namespace farm::path {
+
+void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                 TileBuffer& out);
+
+}  // namespace farm::path

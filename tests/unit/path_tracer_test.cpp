@@ -1,0 +1,105 @@
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "renderer/engine.h"
+#include "server/local_pipeline.h"
+#include "tests/support/scene_fixtures.h"
+
+namespace farm {
+namespace {
+
+RenderSettings path_settings(int width, int height, int spp) {
+  RenderSettings s = test::raster_settings(width, height);
+  s.engine = EngineKind::Path;
+  s.spp = spp;
+  s.max_depth = -1;  // unbounded: Russian roulette ends the paths
+  return s;
+}
+
+double mean_red(const TileBuffer& image) {
+  double sum = 0.0;
+  const Rect& r = image.rect();
+  for (int y = r.y0; y < r.y1; ++y)
+    for (int x = r.x0; x < r.x1; ++x) sum += image.rgba(x, y).x;
+  return sum / (static_cast<double>(r.width()) * r.height());
+}
+
+// Inside a closed sphere that emits Le and reflects a fraction rho diffusely, every point sees
+// L = Le + rho * L, so L = Le / (1 - rho) everywhere.
+TEST(PathFurnace, ClosedEmissiveLambertianSphereConvergesToLeOverOneMinusAlbedo) {
+  Material m;
+  m.diffuse = glm::vec3(0.5f);
+  m.specular = glm::vec3(0.0f);
+  m.emission = glm::vec3(0.5f);
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
+  scene.camera.position = {0.3f, -0.2f, 0.1f};
+  scene.camera.target = {1, 0.5f, -1};
+  scene.camera.far = 100;
+  const PreparedScene prepared(std::move(scene));
+  const TileBuffer image = render_frame(prepared, path_settings(24, 24, 64));
+  EXPECT_NEAR(mean_red(image), 1.0, 0.02);
+  EXPECT_EQ(image.stats().invalid_samples, 0u);
+  EXPECT_EQ(image.stats().samples, 24u * 24u * 64u);
+}
+
+TEST(PathFurnace, DepthLimitCutsTheSeriesWhereMaxDepthSays) {
+  // max_depth 0: only emission seen directly (Le); 1: plus one scattering (Le + rho Le).
+  Material m;
+  m.diffuse = glm::vec3(0.5f);
+  m.specular = glm::vec3(0.0f);
+  m.emission = glm::vec3(0.5f);
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
+  scene.camera.position = {0, 0, 0};
+  scene.camera.target = {0, 0, -1};
+  scene.camera.far = 100;
+  const PreparedScene prepared(std::move(scene));
+  RenderSettings settings = path_settings(16, 16, 64);
+  settings.max_depth = 0;
+  EXPECT_NEAR(mean_red(render_frame(prepared, settings)), 0.5, 1e-4);
+  settings.max_depth = 1;
+  EXPECT_NEAR(mean_red(render_frame(prepared, settings)), 0.75, 0.01);
+}
+
+TEST(PathRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
+  Material light;
+  light.emission = glm::vec3(4.0f);
+  Material glossy;
+  glossy.diffuse = {0.6f, 0.3f, 0.2f};
+  glossy.specular = glm::vec3(0.3f);
+  glossy.shininess = 60;
+  Material glass;
+  glass.transmission = 1;
+  glass.ior = 1.5f;
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_box({-3, -1.6f, -3}, {3, -1.2f, 3}), glm::mat4(1.0f), glossy));
+  scene.objects.push_back(test::object_of(test::make_sphere(16, 32), glm::mat4(1.0f), glass));
+  scene.objects.push_back(test::object_of(test::make_quad({-1, 3, -1}, {1, 3, -1}, {1, 3, 1}, {-1, 3, 1}), glm::mat4(1.0f), light));
+  scene.camera.position = {2.5f, 1.5f, 3.5f};
+  scene.camera.far = 50;
+  const PreparedScene prepared(std::move(scene));
+  RenderSettings settings = path_settings(37, 29, 4);
+  settings.seed = 7;
+  const TileBuffer whole = test::render_full(prepared, settings);
+  for (int threads : {1, 3}) {
+    for (int tile : {8, 16}) {
+      settings.threads = threads;
+      settings.tile_size = tile;
+      const TileBuffer tiled = render_frame(prepared, settings);
+      for (int y = 0; y < 29; ++y)
+        for (int x = 0; x < 37; ++x) ASSERT_EQ(whole.rgba(x, y), tiled.rgba(x, y)) << x << "," << y;
+    }
+  }
+  // A different seed gives a different (noisy) image.
+  settings.seed = 8;
+  const TileBuffer other = render_frame(prepared, settings);
+  int differ = 0;
+  for (int y = 0; y < 29; ++y)
+    for (int x = 0; x < 37; ++x) differ += whole.rgba(x, y) != other.rgba(x, y) ? 1 : 0;
+  EXPECT_GT(differ, 100);
+}
+
+}  // namespace
+}  // namespace farm
