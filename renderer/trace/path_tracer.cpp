@@ -8,6 +8,7 @@
 #include "renderer/geometry/scene_intersector.h"
 #include "renderer/trace/bsdf.h"
 #include "renderer/trace/emitters.h"
+#include "renderer/trace/ray_offset.h"
 #include "renderer/trace/sampler.h"
 
 namespace farm::path {
@@ -32,11 +33,6 @@ struct Frame {
 float power_heuristic(float f, float g) {
   const float f2 = f * f, g2 = g * g;
   return f2 + g2 > 0.0f ? f2 / (f2 + g2) : 0.0f;
-}
-
-glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& geometric_normal, const glm::vec3& dir) {
-  const float scale = 1e-4f * (1.0f + std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}));
-  return p + (glm::dot(dir, geometric_normal) > 0.0f ? scale : -scale) * geometric_normal;
 }
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -113,7 +109,7 @@ class PathTracer {
       previous_pdf = s->pdf;
       previous_position = hit.position;
       const glm::vec3 wi = frame.to_world(s->wi);
-      ray = Ray{offset_origin(hit.position, hit.geometric_normal, wi), wi};
+      ray = Ray{offset_ray_origin(hit.position, hit.geometric_normal, wi), wi};
 
       // Russian roulette: continue with a probability that follows the throughput, and make up
       // for the paths it ends by weighting the survivors, so the mean is unchanged.
@@ -169,7 +165,7 @@ class PathTracer {
 
   bool visible(const SurfaceHit& from, const glm::vec3& to) const {
     Ray shadow;
-    shadow.origin = offset_origin(from.position, from.geometric_normal, to - from.position);
+    shadow.origin = offset_ray_origin(from.position, from.geometric_normal, to - from.position);
     shadow.direction = to - shadow.origin;
     shadow.t_max = 1.0f - 1e-3f;  // stop short of the light's own surface
     return !intersector_.occluded(shadow);

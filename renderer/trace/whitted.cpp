@@ -7,17 +7,11 @@
 #include "renderer/geometry/scene_intersector.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/trace/fresnel.h"
+#include "renderer/trace/ray_offset.h"
 #include "renderer/trace/sampler.h"
 
 namespace farm::whitted {
 namespace {
-
-// Where a secondary ray starts: off the surface along the geometric normal, on the side the
-// ray leaves by, far enough to clear float error at this distance from the origin.
-glm::vec3 offset_origin(const glm::vec3& p, const glm::vec3& geometric_normal, const glm::vec3& dir) {
-  const float scale = 1e-4f * (1.0f + std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}));
-  return p + (glm::dot(dir, geometric_normal) > 0.0f ? scale : -scale) * geometric_normal;
-}
 
 class WhittedTracer {
  public:
@@ -55,7 +49,7 @@ class WhittedTracer {
                      const LightIncidence& in) const {
     if (!settings_.shadows) return true;
     Ray shadow;
-    shadow.origin = offset_origin(point, geometric_normal, in.to_light);
+    shadow.origin = offset_ray_origin(point, geometric_normal, in.to_light);
     if (std::isinf(in.distance)) {
       shadow.direction = in.to_light;
     } else {
@@ -94,7 +88,7 @@ class WhittedTracer {
 
     const glm::vec3 reflected_dir = d + 2.0f * cos_i * nf;
     const glm::vec3 reflected =
-        trace(Ray{offset_origin(hit.position, ng, reflected_dir), reflected_dir}, depth + 1);
+        trace(Ray{offset_ray_origin(hit.position, ng, reflected_dir), reflected_dir}, depth + 1);
     if (!dielectric) return local + reflectance * reflected;
 
     glm::vec3 through(0.0f);
@@ -103,7 +97,7 @@ class WhittedTracer {
       const float eta = eta_i / eta_t;
       const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
       const glm::vec3 refracted_dir = eta * d + (eta * cos_i - cos_t) * nf;
-      through = trace(Ray{offset_origin(hit.position, ng, refracted_dir), refracted_dir}, depth + 1);
+      through = trace(Ray{offset_ray_origin(hit.position, ng, refracted_dir), refracted_dir}, depth + 1);
     }
     return (1.0f - m.transmission) * local +
            m.transmission * (reflectance * reflected + (1.0f - reflectance) * through);
