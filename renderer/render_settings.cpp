@@ -35,4 +35,15 @@ std::optional<AccelKind> accel_from_string(std::string_view s) {
   return std::nullopt;
 }
 
+std::string_view to_string(LightSampling l) {
+  return l == LightSampling::NeeMis ? "nee-mis" : "bsdf";
+}
+
+std::optional<LightSampling> light_sampling_from_string(std::string_view s) {
+  for (LightSampling l : {LightSampling::NeeMis, LightSampling::BsdfOnly}) {
+    if (to_string(l) == s) return l;
+  }
+  return std::nullopt;
+}
+
 }  // namespace farm

@@ -11,11 +11,17 @@ namespace farm {
 
 enum class EngineKind { Raster, Whitted, Path };
 enum class AccelKind { Bvh, BvhMedian, Naive, Embree };
+// How the path tracer finds light: next-event estimation combined with BSDF sampling by MIS
+// (the default), or BSDF sampling alone (a reference for checking MIS; point lights, which
+// BSDF sampling can never hit, then contribute nothing).
+enum class LightSampling { NeeMis, BsdfOnly };
 
 std::string_view to_string(EngineKind e);
 std::string_view to_string(AccelKind a);
 std::optional<EngineKind> engine_from_string(std::string_view s);
 std::optional<AccelKind> accel_from_string(std::string_view s);
+std::string_view to_string(LightSampling l);
+std::optional<LightSampling> light_sampling_from_string(std::string_view s);
 
 struct RenderSettings {
   EngineKind engine = EngineKind::Raster;
@@ -28,6 +34,7 @@ struct RenderSettings {
   int threads = 0;           // 0 = all hardware threads
   AccelKind accel = AccelKind::Bvh;
   bool shadows = true;       // whitted: shadow rays (off: every light reaches every point)
+  LightSampling light_sampling = LightSampling::NeeMis;  // path
   AovSet aovs;               // extra channels beyond RGBA
 };
 

@@ -223,7 +223,7 @@ constexpr AccelKind kAccels[] = {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind
 
 void parse_render(const JsonValue& v, RenderSettings& r) {
   const JsonObject obj = v.object({"engine", "width", "height", "spp", "max_depth", "seed",
-                                   "tile_size", "threads", "accel", "shadows"});
+                                   "tile_size", "threads", "accel", "shadows", "light_sampling"});
   constexpr int kIntMax = std::numeric_limits<int>::max();
   if (auto x = obj.get("engine")) {
     const std::string s = x->string();
@@ -245,6 +245,12 @@ void parse_render(const JsonValue& v, RenderSettings& r) {
     r.accel = *a;
   }
   if (auto x = obj.get("shadows")) r.shadows = x->boolean();
+  if (auto x = obj.get("light_sampling")) {
+    const std::string s = x->string();
+    const auto l = light_sampling_from_string(s);
+    if (!l) x->fail(fmt::format("unknown light_sampling '{}' (expected nee-mis or bsdf)", shown(s)));
+    r.light_sampling = *l;
+  }
 }
 
 void parse_output(const JsonValue& v, Job& job) {

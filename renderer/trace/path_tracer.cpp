@@ -41,7 +41,8 @@ class PathTracer {
  public:
   PathTracer(const PreparedScene& scene, const RenderSettings& settings,
              const SceneIntersector& intersector, const Emitters& emitters)
-      : scene_(scene), settings_(settings), intersector_(intersector), emitters_(emitters) {}
+      : scene_(scene), settings_(settings), intersector_(intersector), emitters_(emitters),
+        next_event_estimation_(settings.light_sampling == LightSampling::NeeMis) {}
 
   struct Result {
     glm::vec3 radiance{0.0f};
@@ -77,7 +78,7 @@ class PathTracer {
       // Emission met by BSDF sampling, weighted against next-event estimation's chance of it.
       if (material.emission != glm::vec3(0.0f)) {
         float weight = 1.0f;
-        if (!after_specular) {
+        if (!after_specular && next_event_estimation_) {
           const glm::vec3 d = hit.position - previous_position;
           const float cos_light = std::fabs(glm::dot(hit.geometric_normal, glm::normalize(d)));
           const float light_pdf = cos_light > 0.0f
@@ -99,7 +100,9 @@ class PathTracer {
       const Frame frame(n);
       const glm::vec3 wo = frame.to_local(wo_world);
 
-      if (!bsdf.is_specular()) result.radiance += beta * direct_light(hit, frame, bsdf, wo, next);
+      if (next_event_estimation_ && !bsdf.is_specular()) {
+        result.radiance += beta * direct_light(hit, frame, bsdf, wo, next);
+      }
 
       const float u_lobe = next(), u1 = next(), u2 = next();
       const auto s = bsdf.sample(wo, u_lobe, u1, u2);
@@ -111,9 +114,10 @@ class PathTracer {
       const glm::vec3 wi = frame.to_world(s->wi);
       ray = Ray{offset_ray_origin(hit.position, hit.geometric_normal, wi), wi};
 
-      // Russian roulette: continue with a probability that follows the throughput, and make up
-      // for the paths it ends by weighting the survivors, so the mean is unchanged.
-      if (bounce + 1 >= kRouletteStart) {
+      // Russian roulette, for unbounded paths only: continue with a probability that follows the
+      // throughput, and make up for the paths it ends by weighting the survivors, so the mean is
+      // unchanged. A fixed max_depth is honoured exactly instead.
+      if (settings_.max_depth < 0 && bounce + 1 >= kRouletteStart) {
         const float survive = std::min(0.95f, std::max({beta.x, beta.y, beta.z}));
         if (next() >= survive) break;
         beta /= survive;
@@ -175,6 +179,7 @@ class PathTracer {
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
   const Emitters& emitters_;
+  bool next_event_estimation_;
 };
 
 }  // namespace
