@@ -26,19 +26,24 @@ double mean_red(const TileBuffer& image) {
   return sum / (static_cast<double>(r.width()) * r.height());
 }
 
+// A closed sphere of radius 3 that emits `le` and reflects `albedo` diffusely, seen from inside.
+PreparedScene furnace(float albedo, float le, const glm::vec3& eye, const glm::vec3& target) {
+  Material m;
+  m.diffuse = glm::vec3(albedo);
+  m.specular = glm::vec3(0.0f);
+  m.emission = glm::vec3(le);
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
+  scene.camera.position = eye;
+  scene.camera.target = target;
+  scene.camera.far = 100;
+  return PreparedScene(std::move(scene));
+}
+
 // Inside a closed sphere that emits Le and reflects a fraction rho diffusely, every point sees
 // L = Le + rho * L, so L = Le / (1 - rho) everywhere.
 TEST(PathFurnace, ClosedEmissiveLambertianSphereConvergesToLeOverOneMinusAlbedo) {
-  Material m;
-  m.diffuse = glm::vec3(0.5f);
-  m.specular = glm::vec3(0.0f);
-  m.emission = glm::vec3(0.5f);
-  Scene scene;
-  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
-  scene.camera.position = {0.3f, -0.2f, 0.1f};
-  scene.camera.target = {1, 0.5f, -1};
-  scene.camera.far = 100;
-  const PreparedScene prepared(std::move(scene));
+  const PreparedScene prepared = furnace(0.5f, 0.5f, {0.3f, -0.2f, 0.1f}, {1, 0.5f, -1});
   const TileBuffer image = render_frame(prepared, path_settings(24, 24, 64));
   EXPECT_NEAR(mean_red(image), 1.0, 0.02);
   EXPECT_EQ(image.stats().invalid_samples, 0u);
@@ -47,16 +52,7 @@ TEST(PathFurnace, ClosedEmissiveLambertianSphereConvergesToLeOverOneMinusAlbedo)
 
 TEST(PathFurnace, DepthLimitCutsTheSeriesWhereMaxDepthSays) {
   // max_depth 0: only emission seen directly (Le); 1: plus one scattering (Le + rho Le).
-  Material m;
-  m.diffuse = glm::vec3(0.5f);
-  m.specular = glm::vec3(0.0f);
-  m.emission = glm::vec3(0.5f);
-  Scene scene;
-  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
-  scene.camera.position = {0, 0, 0};
-  scene.camera.target = {0, 0, -1};
-  scene.camera.far = 100;
-  const PreparedScene prepared(std::move(scene));
+  const PreparedScene prepared = furnace(0.5f, 0.5f, {0, 0, 0}, {0, 0, -1});
   RenderSettings settings = path_settings(16, 16, 64);
   settings.max_depth = 0;
   EXPECT_NEAR(mean_red(render_frame(prepared, settings)), 0.5, 1e-4);
@@ -65,16 +61,7 @@ TEST(PathFurnace, DepthLimitCutsTheSeriesWhereMaxDepthSays) {
 }
 
 TEST(PathRussianRoulette, LeavesTheMeanOfADeepFixedDepthRenderUnchanged) {
-  Material m;
-  m.diffuse = glm::vec3(0.7f);
-  m.specular = glm::vec3(0.0f);
-  m.emission = glm::vec3(0.3f);
-  Scene scene;
-  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
-  scene.camera.position = {0.5f, 0.1f, -0.3f};
-  scene.camera.target = {-1, 0.2f, 1};
-  scene.camera.far = 100;
-  const PreparedScene prepared(std::move(scene));
+  const PreparedScene prepared = furnace(0.7f, 0.3f, {0.5f, 0.1f, -0.3f}, {-1, 0.2f, 1});
   RenderSettings fixed = path_settings(16, 16, 64);
   fixed.max_depth = 40;  // 0.7^41 of the series is left out: nothing measurable
   const RenderSettings roulette = path_settings(16, 16, 64);
