@@ -18,13 +18,7 @@ AccelKind accel_to_validate(AccelKind accel) {
 
 AccelValidation validate_against_embree(const PreparedScene& scene, const RenderSettings& settings,
                                         AccelKind accel, std::uint64_t rays) {
-  std::unique_ptr<SceneIntersector> ours;
-  try {
-    ours = build_scene_intersector(scene, accel);
-  } catch (const std::logic_error& e) {
-    throw AccelUnavailable(fmt::format("accel '{}' is not available in this build ({})",
-                                       to_string(accel), e.what()));
-  }
+  const auto ours = cached_scene_intersector(scene, accel);
   const std::unique_ptr<SceneIntersector> embree = build_embree_intersector(scene);
   return validate_accel(scene, settings, *ours, *embree, rays);
 }
@@ -57,14 +51,7 @@ int run_validate_command(const ValidateCommandOptions& options) {
              "{}x{}, {} from inside the scene's bounds)\n",
              job.name, prepared.triangle_count(), prepared.objects().size(), to_string(accel), rays,
              rays / 2, r.width, r.height, rays - rays / 2);
-  AccelValidation result;
-  try {
-    result = validate_against_embree(prepared, r, accel, rays);
-  } catch (const AccelUnavailable& e) {
-    const std::string where =
-        options.accel ? "--accel" : options.job_file.string() + ": render.accel";
-    throw AccelUnavailable(fmt::format("{}: {}", where, e.what()));
-  }
+  const AccelValidation result = validate_against_embree(prepared, r, accel, rays);
   fmt::print("{}\n", result.summary());
   const bool passes = validation_passes(result);
   fmt::print("{}: {} hit/miss disagreements, {} tolerated (0.001% of rays); {:.1f} ms in all\n",

@@ -18,18 +18,11 @@ inline constexpr std::uint64_t kDefaultValidationRays = 100000;
 // Hit/miss disagreements tolerated before validation fails: 0.001% of the rays.
 inline constexpr double kHitMissTolerance = 1e-5;
 
-// An accel this build cannot construct yet: bad input for `farm validate`, a skipped check for
-// `farm render`.
-class AccelUnavailable : public InputError {
- public:
-  using InputError::InputError;
-};
-
 // The accel compared with Embree when the job's own is `accel`: Embree is compared with `bvh`.
 AccelKind accel_to_validate(AccelKind accel);
 
-// Builds `accel` and Embree on `scene` and compares them on `rays` rays; throws
-// AccelUnavailable when `accel` is not in this build.
+// Compares `accel` (the scene's cached intersector, so a render's BVHs are reused) with Embree
+// on `rays` rays.
 AccelValidation validate_against_embree(const PreparedScene& scene, const RenderSettings& settings,
                                         AccelKind accel, std::uint64_t rays);
 
