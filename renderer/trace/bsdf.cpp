@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "renderer/trace/fresnel.h"
+#include "renderer/trace/ggx.h"
 
 namespace farm {
 namespace {
@@ -13,50 +14,6 @@ namespace {
 constexpr float kPi = std::numbers::pi_v<float>;
 
 float max_component(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
-
-// GGX (Trowbridge-Reitz) normal distribution and Smith masking, isotropic, local frame.
-float ggx_d(const glm::vec3& m, float alpha) {
-  if (m.z <= 0.0f) return 0.0f;
-  const float a2 = alpha * alpha;
-  const float t = m.z * m.z * (a2 - 1.0f) + 1.0f;
-  return a2 / (kPi * t * t);
-}
-
-float smith_lambda(const glm::vec3& w, float alpha) {
-  const float cos2 = w.z * w.z;
-  if (cos2 <= 0.0f) return 0.0f;
-  const float tan2 = std::max(0.0f, 1.0f - cos2) / cos2;
-  return 0.5f * (-1.0f + std::sqrt(1.0f + alpha * alpha * tan2));
-}
-
-float smith_g1(const glm::vec3& w, float alpha) { return 1.0f / (1.0f + smith_lambda(w, alpha)); }
-
-float smith_g2(const glm::vec3& wo, const glm::vec3& wi, float alpha) {
-  return 1.0f / (1.0f + smith_lambda(wo, alpha) + smith_lambda(wi, alpha));
-}
-
-// Density of the visible normal m seen from wo (Heitz 2018), the distribution sampled below.
-float visible_normal_pdf(const glm::vec3& wo, const glm::vec3& m, float alpha) {
-  if (wo.z <= 0.0f) return 0.0f;
-  return smith_g1(wo, alpha) * std::max(0.0f, glm::dot(wo, m)) * ggx_d(m, alpha) / wo.z;
-}
-
-// Samples a normal from the visible-normal distribution: stretch the view to the unit-roughness
-// configuration, pick a point on the projected hemisphere, unstretch.
-glm::vec3 sample_visible_normal(const glm::vec3& wo, float alpha, float u1, float u2) {
-  const glm::vec3 v = glm::normalize(glm::vec3(alpha * wo.x, alpha * wo.y, wo.z));
-  const float len2 = v.x * v.x + v.y * v.y;
-  const glm::vec3 t1 = len2 > 0.0f ? glm::vec3(-v.y, v.x, 0.0f) / std::sqrt(len2) : glm::vec3(1, 0, 0);
-  const glm::vec3 t2 = glm::cross(v, t1);
-  const float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
-  const float p1 = r * std::cos(phi);
-  const float s = 0.5f * (1.0f + v.z);
-  const float p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * r * std::sin(phi);
-  const glm::vec3 n = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2)) * v;
-  return glm::normalize(glm::vec3(alpha * n.x, alpha * n.y, std::max(1e-6f, n.z)));
-}
-
-glm::vec3 reflect_about(const glm::vec3& w, const glm::vec3& n) { return 2.0f * glm::dot(w, n) * n - w; }
 
 // Cosine-weighted hemisphere direction (Malley's method).
 glm::vec3 cosine_hemisphere(float u1, float u2) {
@@ -85,16 +42,24 @@ Bsdf::Bsdf(const Material& m) {
   specular_ = glm::clamp(m.specular, 0.0f, 1.0f);
   diffuse_ = glm::clamp(m.diffuse, 0.0f, 1.0f) * (1.0f - max_component(specular_));
   alpha_ = roughness_from_shininess(m.shininess);
+  // ks is the glossy layer's albedo: single scattering reflects ks * E(mu) of it, and the
+  // multiple-scattering lobe (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) the rest, so the
+  // layer reflects exactly ks at every angle and roughness.
+  const float e_avg = ggx::average_albedo(alpha_);
+  if (e_avg < 1.0f) multiple_scattering_ = specular_ / (kPi * (1.0f - e_avg));
+  // VNDF sampling for the single-scattering part, the cosine lobe for diffuse and the rest.
   const float s = max_component(specular_), d = max_component(diffuse_);
-  specular_probability_ = s + d > 0.0f ? s / (s + d) : 0.0f;
+  specular_probability_ = s + d > 0.0f ? s * e_avg / (s + d) : 0.0f;
 }
 
 glm::vec3 Bsdf::eval_layered(const glm::vec3& wo, const glm::vec3& wi) const {
   if (wo.z <= 0.0f || wi.z <= 0.0f) return glm::vec3(0.0f);
   glm::vec3 f = diffuse_ / kPi;
-  if (specular_probability_ > 0.0f) {
+  if (specular_ != glm::vec3(0.0f)) {
     const glm::vec3 m = glm::normalize(wo + wi);
-    f += specular_ * (ggx_d(m, alpha_) * smith_g2(wo, wi, alpha_) / (4.0f * wo.z * wi.z));
+    f += specular_ * (ggx::distribution(m, alpha_) * ggx::smith_g2(wo, wi, alpha_) / (4.0f * wo.z * wi.z));
+    f += multiple_scattering_ *
+         ((1.0f - ggx::directional_albedo(alpha_, wo.z)) * (1.0f - ggx::directional_albedo(alpha_, wi.z)));
   }
   return f;
 }
@@ -104,7 +69,7 @@ float Bsdf::pdf_layered(const glm::vec3& wo, const glm::vec3& wi) const {
   float pdf = (1.0f - specular_probability_) * wi.z / kPi;
   if (specular_probability_ > 0.0f) {
     const glm::vec3 m = glm::normalize(wo + wi);
-    pdf += specular_probability_ * visible_normal_pdf(wo, m, alpha_) / (4.0f * glm::dot(wo, m));
+    pdf += specular_probability_ * ggx::visible_normal_pdf(wo, m, alpha_) / (4.0f * glm::dot(wo, m));
   }
   return pdf;
 }
@@ -155,7 +120,7 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
     case Kind::Layered: {
       if (wo.z <= 0.0f) return std::nullopt;
       if (u_lobe < specular_probability_) {
-        s.wi = reflect_about(wo, sample_visible_normal(wo, alpha_, u1, u2));
+        s.wi = ggx::reflect_about(wo, ggx::sample_visible_normal(wo, alpha_, u1, u2));
       } else {
         s.wi = cosine_hemisphere(u1, u2);
       }

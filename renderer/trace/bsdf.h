@@ -2,7 +2,8 @@
 // Scattering functions for the path tracer, mapped from the Phong material (DESIGN.md):
 //   smooth dielectric  transmission > 0 and ior > 1 (Fresnel reflection and refraction)
 //   perfect mirror     shininess >= 1000 (reflectance ks, or white when ks is black)
-//   diffuse + glossy   (1 - max ks) * Lambert(kd) + ks * GGX, roughness from the shininess
+//   diffuse + glossy   (1 - max ks) * Lambert(kd) + ks * GGX, roughness from the shininess, with
+//                      the energy single scattering loses given back (multiple scattering)
 // All are energy conserving. Directions live in the local shading frame: z is the normal, and
 // wo (towards the viewer) and wi (towards the light) both point away from the surface.
 #include <glm/vec3.hpp>
@@ -46,9 +47,10 @@ class Bsdf {
   Kind kind_ = Kind::Layered;
   glm::vec3 diffuse_{0.0f};   // kd scaled by what the specular layer leaves
   glm::vec3 specular_{0.0f};  // ks, or the mirror's reflectance
+  glm::vec3 multiple_scattering_{0.0f};  // ks / (pi (1 - E_avg))
   float alpha_ = 1.0f;        // GGX roughness
   float ior_ = 1.5f;
-  float specular_probability_ = 0.0f;  // chance of sampling the GGX lobe
+  float specular_probability_ = 0.0f;  // chance of sampling GGX visible normals
 };
 
 }  // namespace farm

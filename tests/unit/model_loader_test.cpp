@@ -15,6 +15,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/model.h"
+#include "renderer/trace/bsdf.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {
@@ -284,6 +285,8 @@ TEST(LoaderGltf, MaterialsMapPbrAndExtensionsToPhong) {
     expect_near(emitter.diffuse, {0.8f, 0.2f, 0.1f});   // not metallic: all of the base colour
     expect_near(emitter.specular, glm::vec3(0.04f));
     EXPECT_NEAR(emitter.shininess, 30.0f, 1e-3f);  // 2 / 0.5^4 - 2
+    // ... which the path tracer turns back into glTF's GGX alpha = roughness^2.
+    EXPECT_NEAR(Bsdf::roughness_from_shininess(emitter.shininess), 0.25f, 1e-5f);
     const Material& glass = m.materials[1];
     EXPECT_FLOAT_EQ(glass.ior, 1.5f);
     EXPECT_FLOAT_EQ(glass.transmission, 0.9f);
