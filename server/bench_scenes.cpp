@@ -1,5 +1,6 @@
 #include "server/bench_scenes.h"
 
+#include "renderer/scene/input_error.h"
 #include "renderer/scene/transform.h"
 
 namespace farm::bench {
@@ -49,6 +50,23 @@ Scene cow_grid(const std::shared_ptr<const Model>& cow, int side) {
   scene.camera.far = 4.0f * extent;
   scene.lights.push_back(Light{Light::Kind::Point, {0.0f, extent, 0.3f * extent},
                                {}, glm::vec3(extent * extent)});
+  return scene;
+}
+
+Scene cbbunny_area_lit(Model cbbunny) {
+  bool lamp = false;
+  for (Material& m : cbbunny.materials) {
+    if (m.name == "light") {
+      m.emission = glm::vec3(12.0f);
+      lamp = true;
+    }
+  }
+  if (!lamp) throw InputError("CBbunny: no material named 'light' to make the lamp of");
+  Scene scene;
+  if (!cbbunny.cameras.empty()) scene.camera = cbbunny.cameras.front();
+  const auto model = std::make_shared<const Model>(std::move(cbbunny));
+  scene.objects.push_back(instance_of(model, glm::vec3(0.0f), 0.0f, "CBbunny"));
+  scene.background = glm::vec3(0.0f);
   return scene;
 }
 

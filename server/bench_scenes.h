@@ -19,4 +19,8 @@ Scene single_cow(const std::shared_ptr<const Model>& cow);
 // that all of them are in view; one light over the middle.
 Scene cow_grid(const std::shared_ptr<const Model>& cow, int side);
 
+// The lab's CBbunny (a Cornell box with the bunny) for the path tracer: its ceiling lamp, a plain
+// white quad with a point light under it in the file, made an emitter instead; the file's camera.
+Scene cbbunny_area_lit(Model cbbunny);
+
 }  // namespace farm::bench

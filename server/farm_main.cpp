@@ -9,6 +9,7 @@
 #include "renderer/scene/input_error.h"
 #include "server/bench_command.h"
 #include "server/info_command.h"
+#include "server/path_bench_command.h"
 #include "server/rt_bench_command.h"
 #include "server/render_command.h"
 #include "server/validate_command.h"
@@ -57,7 +58,8 @@ int main(int argc, char** argv) {
                "  farm info FILE    show what a model or job file contains\n"
                "  farm validate JOB compare our BVH's ray hits with Embree's on a job's scene\n"
                "  farm bench raster measure rasterizer speed and thread scaling\n"
-               "  farm bench rt     compare our BVHs with Embree"};
+               "  farm bench rt     compare our BVHs with Embree\n"
+               "  farm bench path   path tracer throughput (and Mitsuba's, side by side)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "farm 0.1.0");
 
@@ -134,6 +136,35 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1000, 100'000'000))
       ->capture_default_str();
 
+  farm::PathBenchOptions path_bench;
+  CLI::App* bench_path = bench->add_subcommand(
+      "path", "Path tracer Msamples/s and Mrays/s on the Cornell box and CBbunny at 512x512, on one "
+              "thread and all; with --mitsuba, Mitsuba 3 scalar_rgb on the same Cornell box beside it");
+  bench_path->add_option("--job", path_bench.cornell_job, "The Cornell box job")->capture_default_str();
+  bench_path->add_option("--assets", path_bench.assets,
+                         "The lab's assets folder, for CBbunny (default ../shared/assets)");
+  bench_path->add_option("--threads", path_bench.threads, "Thread counts (default: 1 and all)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1024));
+  bench_path->add_option("--spp", path_bench.spp, "Samples per pixel")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
+  bench_path->add_option("--width", path_bench.width, "Image width")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  bench_path->add_option("--height", path_bench.height, "Image height")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  bench_path->add_option("--scene", path_bench.scene, "Which scene: cornell, cbbunny or all")
+      ->check(CLI::IsMember({"cornell", "cbbunny", "all"}))
+      ->capture_default_str();
+  bench_path->add_option("--mitsuba", path_bench.mitsuba_python,
+                         "A Python with the mitsuba package (see tools/requirements-mitsuba.txt): "
+                         "time Mitsuba 3 scalar_rgb on the Cornell box too");
+  bench_path->add_option("--mitsuba-script", path_bench.mitsuba_script,
+                         "The script that renders a job with Mitsuba")
+      ->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -153,6 +184,8 @@ int main(int argc, char** argv) {
       farm::run_render_command(render_options);
     } else if (bench_rt->parsed()) {
       farm::run_rt_bench(rt_bench);
+    } else if (bench_path->parsed()) {
+      farm::run_path_bench(path_bench);
     } else if (bench_raster->parsed()) {
       farm::run_raster_bench(raster_bench);
     } else if (app.got_subcommand("info")) {

@@ -129,6 +129,10 @@ void run_render_command(const RenderCommandOptions& options) {
     fmt::print("samples: {} traced, {} NaN/inf samples caught and dropped\n", film.stats().samples,
                film.stats().invalid_samples);
   }
+  if (film.stats().rays > 0) {
+    fmt::print("rays: {} traced ({:.2f} Mrays/s)\n", film.stats().rays,
+               static_cast<double>(film.stats().rays) / (render_ms * 1e3));
+  }
   fmt::print("time: load+prepare {:.1f} ms, render {:.1f} ms ({} tiles of {} px, {} threads), "
              "write {:.1f} ms, total {:.1f} ms\n",
              load_ms, render_ms, tiles, r.tile_size, resolve_thread_count(r.threads), write_ms,

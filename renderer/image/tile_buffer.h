@@ -28,11 +28,13 @@ struct RenderStats {
   std::uint64_t fragments = 0;        // rasterizer: samples that passed the coverage test
   std::uint64_t samples = 0;          // path tracer: camera samples traced
   std::uint64_t invalid_samples = 0;  // path tracer: samples that came out NaN or inf (dropped)
+  std::uint64_t rays = 0;             // ray engines: rays traced (closest-hit and shadow)
 
   RenderStats& operator+=(const RenderStats& o) {
     fragments += o.fragments;
     samples += o.samples;
     invalid_samples += o.invalid_samples;
+    rays += o.rays;
     return *this;
   }
 };

@@ -51,6 +51,9 @@ class PathTracer {
     glm::vec3 first_normal{0.0f};
   };
 
+  // Closest-hit and shadow rays traced so far.
+  std::uint64_t rays_traced() const { return rays_; }
+
   Result trace(Ray ray, const SampleKey& key) const {
     Result result;
     glm::vec3 beta(1.0f);
@@ -62,6 +65,7 @@ class PathTracer {
 
     for (int bounce = 0;; ++bounce) {
       SurfaceHit hit;
+      ++rays_;
       if (!intersector_.closest_hit(ray, hit)) {
         result.radiance += beta * scene_.scene().background;  // a constant environment
         break;
@@ -172,6 +176,7 @@ class PathTracer {
     shadow.origin = offset_ray_origin(from.position, from.geometric_normal, to - from.position);
     shadow.direction = to - shadow.origin;
     shadow.t_max = 1.0f - 1e-3f;  // stop short of the light's own surface
+    ++rays_;
     return !intersector_.occluded(shadow);
   }
 
@@ -180,6 +185,7 @@ class PathTracer {
   const SceneIntersector& intersector_;
   const Emitters& emitters_;
   bool next_event_estimation_;
+  mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
 };
 
 }  // namespace
@@ -224,6 +230,7 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
       out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);
     }
   }
+  out.stats().rays += tracer.rays_traced();
 }
 
 }  // namespace farm::path

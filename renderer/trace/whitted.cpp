@@ -26,9 +26,13 @@ class WhittedTracer {
     glm::vec3 facing_normal{0.0f};
   };
 
+  // Closest-hit and shadow rays traced so far.
+  std::uint64_t rays_traced() const { return rays_; }
+
   // The first hit is returned too, for the AOVs.
   Primary trace_primary(const Ray& ray, TraversalStats* stats) const {
     Primary p;
+    ++rays_;
     if (!intersector_.closest_hit(ray, p.surface, stats)) {
       p.color = scene_.background;
       return p;
@@ -41,6 +45,7 @@ class WhittedTracer {
  private:
   glm::vec3 trace(const Ray& ray, int depth) const {
     SurfaceHit hit;
+    ++rays_;
     if (!intersector_.closest_hit(ray, hit, nullptr)) return scene_.background;
     return shade(ray, hit, depth, nullptr);
   }
@@ -57,6 +62,7 @@ class WhittedTracer {
       shadow.direction = in.to_light * in.distance + (point - shadow.origin);
       shadow.t_max = 1.0f - 1e-4f;
     }
+    ++rays_;
     return !intersector_.occluded(shadow);
   }
 
@@ -106,6 +112,7 @@ class WhittedTracer {
   const Scene& scene_;
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
+  mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
 };
 
 }  // namespace
@@ -145,6 +152,7 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
       out.rgba(x, y) = sum / static_cast<float>(samples);
     }
   }
+  out.stats().rays += tracer.rays_traced();
 }
 
 }  // namespace farm::whitted

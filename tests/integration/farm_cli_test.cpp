@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -157,6 +158,24 @@ TEST_F(FarmCliTest, WhittedBvhCostAovCountsTraversalWork) {
   // and far fewer than the scene's 7968 triangles.
   EXPECT_GE(image.bvh_cost(32, 32), 2.0f);
   EXPECT_LT(image.bvh_cost(32, 32), 1000.0f);
+}
+
+TEST_F(FarmCliTest, BenchPathReportsThroughputAndRaysPerSample) {
+  const auto r = run_command("cd " + shell_quote(kSource.string()) + " && " +
+                             farm("bench path --scene cornell --threads 1 --spp 1 --width 32 --height 32"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // "farm path  1  seconds  Msamples/s  Mrays/s  rays/sample  speedup"
+  const auto row = r.output.find("farm path");
+  ASSERT_NE(row, std::string::npos) << r.output;
+  int threads = 0;
+  double seconds = 0, msamples = 0, mrays = 0, rays_per_sample = 0;
+  ASSERT_EQ(std::sscanf(r.output.c_str() + row, "farm path %d %lf %lf %lf %lf", &threads, &seconds,
+                        &msamples, &mrays, &rays_per_sample), 5) << r.output;
+  EXPECT_EQ(threads, 1);
+  EXPECT_GT(msamples, 0.0);
+  // Nearly every camera ray hits the room, then traces a shadow ray and a bounce at least.
+  EXPECT_GE(rays_per_sample, 2.0) << r.output;
+  EXPECT_NEAR(mrays / msamples, rays_per_sample, 0.02 * rays_per_sample);
 }
 
 }  // namespace

@@ -1,0 +1,25 @@
+#pragma once
+// `farm bench path`: path tracer throughput on the project's Cornell box and the lab's CBbunny
+// (lit by its ceiling lamp made emissive) at 512x512: Msamples/s and Mrays/s on one thread and on
+// all of them, and, given a Python with Mitsuba 3, Mitsuba's scalar_rgb on the same Cornell box
+// and thread counts in the same run.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace farm {
+
+struct PathBenchOptions {
+  std::filesystem::path cornell_job = "jobs/cornell_path.json";
+  std::filesystem::path assets;       // the lab's assets; default ../shared/assets
+  std::vector<int> threads;           // default: 1 and every hardware thread
+  int width = 512, height = 512;
+  int spp = 16;
+  std::string scene = "all";          // cornell, cbbunny or all
+  std::string mitsuba_python;         // a python with `mitsuba` installed; empty: skip Mitsuba
+  std::filesystem::path mitsuba_script = "tools/mitsuba_reference.py";
+};
+
+void run_path_bench(const PathBenchOptions& options);
+
+}  // namespace farm

@@ -1,0 +1,223 @@
+#!/usr/bin/env python3
+"""Renders a farm job with Mitsuba 3, an independent path tracer, for reference images and timings.
+
+The job file is read as `farm render` reads it (camera, objects, OBJ/MTL materials, point lights,
+background, max_depth) and turned into the same scene in Mitsuba:
+
+  * Phong kd becomes a diffuse BSDF, two-sided like ours; Ke becomes an area emitter. Our emitters
+    shine from both faces (a model's winding does not decide whether its lamp shines), Mitsuba's
+    from the front only, so every emissive triangle gets a back-to-back twin 1e-4 behind it.
+  * Our max_depth counts scattering events, Mitsuba's path segments: Mitsuba's is ours + 1.
+  * A box pixel filter, as ours, and the `independent` sampler.
+
+Only what the reference scenes need is supported (OBJ models, diffuse + emissive materials,
+translate/rotate/scale); anything else is refused with a message rather than silently changed.
+
+Set-up (a venv, since Mitsuba comes from PyPI, not Debian):
+  python3 -m venv build/mitsuba-venv
+  build/mitsuba-venv/bin/pip install -r tools/requirements-mitsuba.txt
+Reference image (what tests/data/reference/ holds):
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
+      --width 128 --height 128 --spp 8192 -o tests/data/reference/cornell_path_mitsuba.exr
+Throughput beside `farm bench path`:
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
+      --width 512 --height 512 --spp 16 --threads 1 --bench
+"""
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+
+
+class RefusedScene(Exception):
+    pass
+
+
+def parse_mtl(path):
+    materials, current = {}, None
+    with open(path) as f:
+        for number, line in enumerate(f, 1):
+            words = line.split()
+            if not words or words[0].startswith("#"):
+                continue
+            key, values = words[0], words[1:]
+            if key == "newmtl":
+                current = materials.setdefault(values[0], {"Kd": [0.5] * 3, "Ke": [0.0] * 3, "Ks": [0.0] * 3})
+            elif current is not None and key in ("Kd", "Ke", "Ks"):
+                current[key] = [float(v) for v in values[:3]]
+            elif current is not None and key in ("d", "Tr", "Ni", "Ns", "Ka", "illum"):
+                current[key] = [float(v) for v in values]
+    return materials
+
+
+def parse_obj(path):
+    """Triangles grouped by material name: {material: [(p0, p1, p2), ...]}."""
+    folder = os.path.dirname(path)
+    vertices, groups, materials, material = [], {}, {}, "default"
+    with open(path) as f:
+        for number, line in enumerate(f, 1):
+            words = line.split()
+            if not words or words[0].startswith("#"):
+                continue
+            if words[0] == "v":
+                vertices.append(tuple(float(v) for v in words[1:4]))
+            elif words[0] == "mtllib":
+                materials.update(parse_mtl(os.path.join(folder, words[1])))
+            elif words[0] == "usemtl":
+                material = words[1]
+            elif words[0] == "f":
+                corners = [vertices[int(w.split("/")[0]) - 1] for w in words[1:]]
+                for i in range(1, len(corners) - 1):  # a fan: the polygons are planar and convex
+                    groups.setdefault(material, []).append((corners[0], corners[i], corners[i + 1]))
+    return groups, materials
+
+
+def transform_of(mi, obj):
+    t = mi.ScalarTransform4f()
+    if "translate" in obj:
+        t = t.translate(obj["translate"])
+    if "rotate" in obj:
+        t = t.rotate(obj["rotate"].get("axis", [0, 1, 0]), obj["rotate"].get("degrees", 0))
+    if "scale" in obj:
+        t = t.scale(obj["scale"])
+    return t
+
+
+def write_triangles(path, triangles, flip=False, offset=0.0):
+    """A plain OBJ of separate triangles; `flip` reverses them and moves them `offset` behind."""
+    lines = []
+    for a, b, c in triangles:
+        if flip:
+            e1 = [b[k] - a[k] for k in range(3)]
+            e2 = [c[k] - a[k] for k in range(3)]
+            n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]]
+            length = math.sqrt(sum(x * x for x in n)) or 1.0
+            shift = [-offset * x / length for x in n]
+            a, b, c = [tuple(p[k] + shift[k] for k in range(3)) for p in (a, c, b)]
+        for p in (a, b, c):
+            lines.append("v %.9g %.9g %.9g" % p)
+    for i in range(len(triangles)):
+        lines.append("f %d %d %d" % (3 * i + 1, 3 * i + 2, 3 * i + 3))
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
+    folder = os.path.dirname(os.path.abspath(job_path))
+    scene_json = job["scene"]
+    render = job.get("render", {})
+    camera = scene_json.get("camera", {})
+    if not camera:
+        raise RefusedScene("the job must give its camera (model cameras are not read here)")
+    max_depth = render.get("max_depth", 5)
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": -1 if max_depth < 0 else max_depth + 1},
+        "sensor": {
+            "type": "perspective",
+            "fov": camera.get("fov_y", 45),
+            "fov_axis": "y",
+            "near_clip": camera.get("near", 0.1),
+            "far_clip": camera.get("far", 10),
+            "to_world": mi.ScalarTransform4f().look_at(
+                origin=camera.get("position", [5, 5, 5]), target=camera.get("target", [0, 0, 0]),
+                up=camera.get("up", [0, 1, 0])),
+            "film": {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb",
+                     "component_format": "float32", "rfilter": {"type": "box"}},
+            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
+        },
+    }
+    background = scene_json.get("background", [100 / 255] * 3)
+    if max(background) > 0:
+        scene["background"] = {"type": "constant", "radiance": {"type": "rgb", "value": background}}
+    for i, light in enumerate(scene_json.get("lights", [])):
+        if "position" not in light:
+            raise RefusedScene(f"scene.lights[{i}]: only point lights are supported")
+        intensity = light.get("intensity", 10)
+        if not isinstance(intensity, list):
+            intensity = [intensity] * 3
+        scene[f"light_{i}"] = {"type": "point", "position": light["position"],
+                               "intensity": {"type": "rgb", "value": intensity}}
+    for i, obj in enumerate(scene_json["objects"]):
+        if not obj["file"].lower().endswith(".obj"):
+            raise RefusedScene(f"scene.objects[{i}].file: only OBJ models are supported")
+        if "material" in obj:
+            raise RefusedScene(f"scene.objects[{i}].material: overrides are not supported")
+        groups, materials = parse_obj(os.path.join(folder, obj["file"]))
+        to_world = transform_of(mi, obj)
+        for name, triangles in groups.items():
+            m = materials.get(name, {"Kd": [0.5] * 3, "Ke": [0.0] * 3, "Ks": [0.0] * 3})
+            if max(m["Ks"]) > 0 or m.get("d", [1])[0] < 1 or m.get("Tr", [0])[0] > 0:
+                raise RefusedScene(f"{obj['file']}: material '{name}': only diffuse and emissive materials are supported")
+            bsdf = {"type": "twosided", "bsdf": {"type": "diffuse",
+                                                 "reflectance": {"type": "rgb", "value": m["Kd"]}}}
+            twins = [("front", False)] + ([("back", True)] if max(m["Ke"]) > 0 else [])
+            for side, flip in twins:
+                path = os.path.join(workdir, f"object{i}_{name}_{side}.obj")
+                write_triangles(path, triangles, flip=flip, offset=1e-4)
+                shape = {"type": "obj", "filename": path, "face_normals": True, "to_world": to_world,
+                         "bsdf": bsdf}
+                if max(m["Ke"]) > 0:
+                    shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": m["Ke"]}}
+                scene[f"object{i}_{name}_{side}"] = shape
+    return scene
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("job", help="farm job file (JSON)")
+    parser.add_argument("-o", "--output", help="EXR to write (float RGB)")
+    parser.add_argument("--width", type=int, help="image width (default: the job's)")
+    parser.add_argument("--height", type=int, help="image height (default: the job's)")
+    parser.add_argument("--spp", type=int, help="samples per pixel (default: the job's)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=0, help="render threads (0: all)")
+    parser.add_argument("--variant", default="scalar_rgb")
+    parser.add_argument("--bench", action="store_true", help="print throughput as one JSON line")
+    args = parser.parse_args()
+
+    import mitsuba as mi
+    import drjit as dr
+    mi.set_variant(args.variant)
+    if args.threads > 0:
+        dr.set_thread_count(args.threads)
+
+    with open(args.job) as f:
+        job = json.load(f)
+    render = job.get("render", {})
+    width = args.width or render.get("width", 640)
+    height = args.height or render.get("height", 480)
+    spp = args.spp or render.get("spp", 1)
+    with tempfile.TemporaryDirectory() as workdir:
+        try:
+            scene = mi.load_dict(scene_of(mi, args.job, job, width, height, spp, args.seed, workdir))
+        except RefusedScene as e:
+            print(f"{args.job}: {e}", file=sys.stderr)
+            return 2
+        start = time.perf_counter()
+        image = mi.render(scene, spp=spp, seed=args.seed)
+        seconds = time.perf_counter() - start
+    samples = width * height * spp
+    if args.bench:
+        print(json.dumps({"renderer": f"mitsuba {mi.__version__} {args.variant}", "threads": dr.thread_count(),
+                          "width": width, "height": height, "spp": spp, "seconds": seconds,
+                          "msamples_per_s": samples / seconds / 1e6}))
+    else:
+        print(f"mitsuba {mi.__version__} {args.variant}: {width}x{height}, {spp} spp, "
+              f"{seconds:.1f} s on {dr.thread_count()} threads ({samples / seconds / 1e6:.3f} Msamples/s)")
+    if args.output:
+        bitmap = mi.Bitmap(image)
+        metadata = bitmap.metadata()  # written into the EXR header, so the file says what it is
+        metadata["farm.job"] = os.path.basename(args.job)
+        metadata["farm.spp"] = str(spp)
+        metadata["farm.renderer"] = f"mitsuba {mi.__version__} {args.variant}"
+        bitmap.write(args.output)
+        print(f"wrote {args.output}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
