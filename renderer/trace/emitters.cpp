@@ -20,7 +20,10 @@ Emitters::Emitters(const PreparedScene& scene) {
     const ModelTriangles& mesh = *object.triangles;
     for (std::uint32_t t = 0; t < mesh.size(); ++t) {
       const glm::vec3 le = object.source->materials[mesh.material[t]].emission;
-      if (luminance(le) <= 0.0f) continue;
+      // Non-finite emission (possible only in scenes built in code) is not sampled: it would
+      // poison the whole table; paths that hit it are dropped and counted by the engine.
+      const float l = luminance(le);
+      if (!(l > 0.0f) || !std::isfinite(l)) continue;
       const glm::uvec3& tri = mesh.triangles[t];
       const auto world = [&](std::uint32_t i) {
         return glm::vec3(object.model_to_world * glm::vec4(mesh.positions[i], 1.0f));
@@ -36,7 +39,7 @@ Emitters::Emitters(const PreparedScene& scene) {
       w.radiance = le;
       index_of_[(std::uint64_t{o} << 32) | t] = static_cast<std::uint32_t>(triangles_.size());
       triangles_.push_back(w);
-      power.push_back(luminance(le) * w.area);
+      power.push_back(l * w.area);
     }
   }
   double total = 0.0;

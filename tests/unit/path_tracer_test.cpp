@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "renderer/engine.h"
@@ -155,6 +157,38 @@ TEST(PathMis, TinyAndLargeLightsGiveTheSameMeanWithNeeMisAsWithBsdfSamplingAlone
   std::printf("direct light: NEE+MIS %.4f, BSDF sampling only %.4f\n", a, b);
   EXPECT_GT(a, 0.05);
   EXPECT_NEAR(a, b, 0.08 * b);
+}
+
+TEST(PathRenderTile, NanAndInfSamplesAreCountedAndNeverReachThePixel) {
+  // A lamp whose radiance is NaN in red and inf in green (a scene built in code: job files refuse
+  // such numbers) next to a sane one: every sample that sees the bad lamp is dropped and counted.
+  Material bad;
+  bad.emission = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), 1.0f};
+  Material good;
+  good.emission = glm::vec3(1.0f);
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_quad({-2, -1, 0}, {0, -1, 0}, {0, 1, 0}, {-2, 1, 0}), glm::mat4(1.0f), bad));
+  scene.objects.push_back(test::object_of(test::make_quad({0, -1, 0}, {2, -1, 0}, {2, 1, 0}, {0, 1, 0}), glm::mat4(1.0f), good));
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {0, 0, 3};
+  scene.camera.target = {0, 0, 0};
+  scene.camera.fov_y_degrees = 30;
+  const PreparedScene prepared(std::move(scene));
+  for (int depth : {0, 3}) {  // seen directly; and with next-event estimation sampling lamps
+    RenderSettings settings = path_settings(16, 8, 4);
+    settings.max_depth = depth;
+    const TileBuffer image = render_frame(prepared, settings);
+    EXPECT_GT(image.stats().invalid_samples, 8u * 8u * 4u / 2);  // about the left half
+    EXPECT_LT(image.stats().invalid_samples, image.stats().samples);
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 16; ++x) {
+        const glm::vec4 p = image.rgba(x, y);
+        ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << x << "," << y;
+      }
+    }
+    EXPECT_NEAR(image.rgba(13, 4).x, 1.0f, 1e-6f);  // the sane lamp, untouched
+    EXPECT_EQ(image.rgba(2, 4).x, 0.0f);            // all of its samples were bad: dropped, not NaN
+  }
 }
 
 TEST(PathRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
