@@ -243,6 +243,49 @@ TEST_F(FarmWorkerTest, HealthCheckReportsServing) {
   }
 }
 
+TEST_F(FarmWorkerTest, ReflectionListsTheWorkerService) {
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "cache").string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  // What `grpcurl list` sends: ServerReflectionRequest{list_services: ""} (field 7, empty string:
+  // bytes 3a 00); the reply lists the service names as strings.
+  auto channel = grpc::CreateChannel(worker.address(), grpc::InsecureChannelCredentials());
+  grpc::GenericStub stub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 30s);
+  grpc::CompletionQueue cq;
+  const auto step = [&cq] {
+    void* tag = nullptr;
+    bool ok = false;
+    return cq.Next(&tag, &ok) && ok;
+  };
+  auto call = stub.PrepareCall(
+      &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
+  call->StartCall(nullptr);
+  ASSERT_TRUE(step());
+  grpc::Slice list_services(std::string("\x3a\x00", 2));
+  const grpc::ByteBuffer request(&list_services, 1);
+  call->Write(request, nullptr);
+  ASSERT_TRUE(step());
+  call->WritesDone(nullptr);
+  ASSERT_TRUE(step());
+  grpc::ByteBuffer reply;
+  call->Read(&reply, nullptr);
+  ASSERT_TRUE(step());
+  grpc::Status status;
+  call->Finish(&status, nullptr);
+  ASSERT_TRUE(step());
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(reply.Dump(&slices).ok());
+  std::string bytes;
+  for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  EXPECT_NE(bytes.find("farm.v1.Worker"), std::string::npos);
+  EXPECT_NE(bytes.find("grpc.health.v1.Health"), std::string::npos);
+  cq.Shutdown();
+  while (step()) {
+  }
+}
+
 TEST_F(FarmWorkerTest, DeadlineStopsTheRenderAndTheWorkerStaysResponsive) {
   auto worker = start_worker_with_scheduler();
   ASSERT_FALSE(worker->address().empty());
