@@ -13,6 +13,7 @@
 #include "server/rt_bench_command.h"
 #include "server/render_command.h"
 #include "server/validate_command.h"
+#include "server/worker_command.h"
 
 namespace {
 
@@ -50,6 +51,37 @@ void add_render_command(CLI::App& app, farm::RenderCommandOptions& o, std::strin
   render->add_flag("--quiet", [&o](std::int64_t) { o.progress = false; }, "No progress bar");
 }
 
+CLI::App* add_worker_command(CLI::App& app, farm::WorkerOptions& o) {
+  CLI::App* worker = app.add_subcommand(
+      "worker", "Serve farm.v1.Worker (RenderTile) plus gRPC health and reflection");
+  worker->add_option("--listen", o.listen,
+                     "Address to serve on, HOST:PORT (port 0 picks a free port; the address is "
+                     "printed as 'worker listening on HOST:PORT')")
+      ->required();
+  worker->add_option("--threads", o.threads, "Render threads shared by all calls (0 = all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  worker->add_option("--scheduler", o.scheduler,
+                     "Scheduler HOST:PORT to fetch assets this worker lacks from (by SHA-256); "
+                     "without it, a job whose assets are not in the cache fails with "
+                     "FAILED_PRECONDITION");
+  worker->add_option("--cache-dir", o.cache_dir,
+                     "Folder for fetched assets (blobs/<sha256>) and laid-out scenes "
+                     "(scenes/<scene hash>/) (default: <temp>/farm-worker-cache)");
+  worker->add_option("--max-scenes", o.max_scenes, "Prepared scenes kept in memory (LRU)")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  worker->add_option("--cache-memory", o.cache_memory_mb,
+                     "Approximate memory budget of the prepared scenes, MiB (LRU)")
+      ->check(CLI::Range(1, 1 << 24))
+      ->capture_default_str();
+  worker->footer("Each RenderTile call renders its rectangle on all render threads, in 16x16 "
+                 "sub-tiles shared with concurrent calls; a call stops when its client cancels "
+                 "or its deadline passes. Scenes are prepared once per scene hash. SIGINT or "
+                 "SIGTERM shut the worker down cleanly.");
+  return worker;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -59,7 +91,8 @@ int main(int argc, char** argv) {
                "  farm validate JOB compare our BVH's ray hits with Embree's on a job's scene\n"
                "  farm bench raster measure rasterizer speed and thread scaling\n"
                "  farm bench rt     compare our BVHs with Embree\n"
-               "  farm bench path   path tracer throughput (and Mitsuba's, side by side)"};
+               "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
+               "  farm worker       serve tiles to a scheduler over gRPC"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "farm 0.1.0");
 
@@ -164,6 +197,8 @@ int main(int argc, char** argv) {
   bench_path->add_option("--mitsuba-script", path_bench.mitsuba_script,
                          "The script that renders a job with Mitsuba")
       ->capture_default_str();
+  farm::WorkerOptions worker_options;
+  CLI::App* worker = add_worker_command(app, worker_options);
 
   try {
     app.parse(argc, argv);
@@ -192,6 +227,8 @@ int main(int argc, char** argv) {
       farm::run_info_command(info_file, info_load);
     } else if (validate->parsed()) {
       return farm::run_validate_command(validate_options);
+    } else if (worker->parsed()) {
+      return farm::run_worker_command(worker_options);
     }
   } catch (const farm::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -1,0 +1,337 @@
+// Starts the real `farm worker` binary and calls it through the generated farm.v1.Worker stub:
+// tiles must come back bit-identical to render_tile in this process, bad input must be answered
+// with the right status without hurting the worker, and deadlines and signals must be honoured.
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <future>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "proto/farm.grpc.pb.h"
+#include "renderer/engine.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/asset_store.h"
+#include "server/scene_hash.h"
+#include "server/tile_codec.h"
+#include "tests/support/background_process.h"
+#include "tests/support/fake_scheduler.h"
+#include "tests/support/farm_cli_fixture.h"
+#include "tests/support/job_specs.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using test::kSource;
+
+std::unique_ptr<v1::Worker::Stub> worker_stub(const std::string& address) {
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(-1);
+  return v1::Worker::NewStub(
+      grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args));
+}
+
+v1::RenderTileRequest tile_request(const v1::JobSpec& spec, const Rect& r) {
+  v1::RenderTileRequest request;
+  *request.mutable_job() = spec;
+  request.set_scene_hash(scene_hash(spec));
+  request.mutable_rect()->set_x0(r.x0);
+  request.mutable_rect()->set_y0(r.y0);
+  request.mutable_rect()->set_x1(r.x1);
+  request.mutable_rect()->set_y1(r.y1);
+  return request;
+}
+
+grpc::Status render(v1::Worker::Stub& stub, const v1::RenderTileRequest& request,
+                    v1::RenderTileResponse& response, std::chrono::milliseconds timeout = 120s) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + timeout);
+  return stub.RenderTile(&context, request, &response);
+}
+
+// The same rect rendered here, from the job as the project ships it (jobs/ is its folder).
+v1::TileData render_in_process(const v1::JobSpec& spec, const Rect& rect) {
+  const Job job = parse_job(spec.job_json(), kSource / "jobs" / spec.file_name());
+  const PreparedScene scene(build_scene(job));
+  TileBuffer tile;
+  render_tile(scene, job.render, rect, tile);
+  v1::TileData data;
+  encode_tile(tile, data);
+  return data;
+}
+
+void expect_bit_identical(const v1::TileData& got, const v1::TileData& want, const std::string& what) {
+  EXPECT_EQ(got.width(), want.width()) << what;
+  EXPECT_EQ(got.height(), want.height()) << what;
+  EXPECT_TRUE(got.rgba() == want.rgba()) << what << ": rgba differs";
+  EXPECT_TRUE(got.depth() == want.depth()) << what << ": depth differs";
+  EXPECT_TRUE(got.normal() == want.normal()) << what << ": normal differs";
+  EXPECT_TRUE(got.albedo() == want.albedo()) << what << ": albedo differs";
+  EXPECT_TRUE(got.bvh_cost() == want.bvh_cost()) << what << ": bvh_cost differs";
+}
+
+class FarmWorkerTest : public ::testing::Test {
+ protected:
+  // A worker fetching assets from a fake scheduler that has the Cornell box's files.
+  std::unique_ptr<test::WorkerProcess> start_worker_with_scheduler() {
+    for (const auto& [path, file] : test::cornell_assets()) scheduler_.add_asset(test::read_file(file));
+    auto worker = std::make_unique<test::WorkerProcess>(std::vector<std::string>{
+        "--threads", "2", "--scheduler", scheduler_.address(), "--cache-dir",
+        (dir_ / "cache").string()});
+    EXPECT_FALSE(worker->address().empty()) << worker->process().output();
+    return worker;
+  }
+
+  test::TempDir dir_;
+  test::FakeScheduler scheduler_;
+};
+
+TEST_F(FarmWorkerTest, RenderTileIsBitIdenticalToInProcessRenderTileForEveryEngine) {
+  auto worker = start_worker_with_scheduler();
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  const Rect rect{5, 3, 45, 37};  // crosses sub-tile boundaries; not aligned to anything
+  for (const std::string engine : {"raster", "whitted", "path"}) {
+    const v1::JobSpec spec = test::cornell_job_spec(engine, 48, 40, engine == "path" ? 4 : 1);
+    v1::RenderTileResponse response;
+    const grpc::Status status = render(*stub, tile_request(spec, rect), response);
+    ASSERT_TRUE(status.ok()) << engine << ": " << status.error_message() << "\n"
+                             << worker->process().output();
+    EXPECT_EQ(response.tile().rect().x0(), 5);
+    EXPECT_EQ(response.tile().rect().y1(), 37);
+    EXPECT_FALSE(response.tile().depth().empty());  // the job asks for depth, normal, albedo
+    expect_bit_identical(response.tile(), render_in_process(spec, rect), engine);
+    // Not trivially equal: the middle of the box is covered and lit.
+    const TileBuffer tile = decode_tile(response.tile());
+    EXPECT_EQ(tile.rgba(24, 20).w, 1.0f) << engine;
+    EXPECT_GT(tile.rgba(24, 20).x, 0.0f) << engine;
+    EXPECT_FALSE(response.stats().scene_cache_hit());
+    if (engine == "raster") {
+      EXPECT_GT(response.stats().fragments(), 0u);
+    }
+    if (engine == "path") {
+      EXPECT_EQ(response.stats().samples(), 40u * 34u * 4u);
+    }
+
+    // The second tile of the same job reuses the prepared scene.
+    v1::RenderTileResponse again;
+    ASSERT_TRUE(render(*stub, tile_request(spec, {0, 0, 48, 40}), again).ok());
+    EXPECT_TRUE(again.stats().scene_cache_hit());
+    expect_bit_identical(again.tile(), render_in_process(spec, {0, 0, 48, 40}), engine + " full");
+  }
+  // Each blob was fetched once, though three jobs use it.
+  EXPECT_EQ(scheduler_.get_asset_calls(), 2);
+}
+
+TEST_F(FarmWorkerTest, ConcurrentTilesOfOneJobMatchInProcess) {
+  auto worker = start_worker_with_scheduler();
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  const v1::JobSpec spec = test::cornell_job_spec("path", 40, 40, 2);
+  const std::vector<Rect> quads{{0, 0, 20, 20}, {20, 0, 40, 20}, {0, 20, 20, 40}, {20, 20, 40, 40}};
+  std::vector<std::future<std::pair<grpc::Status, v1::RenderTileResponse>>> calls;
+  for (const Rect& q : quads) {
+    calls.push_back(std::async(std::launch::async, [&, q] {
+      v1::RenderTileResponse response;
+      grpc::Status status = render(*stub, tile_request(spec, q), response);
+      return std::make_pair(status, response);
+    }));
+  }
+  int prepared = 0;
+  for (std::size_t i = 0; i < quads.size(); ++i) {
+    auto [status, response] = calls[i].get();
+    ASSERT_TRUE(status.ok()) << status.error_message();
+    expect_bit_identical(response.tile(), render_in_process(spec, quads[i]), "quad " + std::to_string(i));
+    prepared += response.stats().scene_cache_hit() ? 0 : 1;
+  }
+  EXPECT_EQ(prepared, 1);  // one call prepared the scene, the others waited for it
+}
+
+TEST_F(FarmWorkerTest, MalformedJobIsInvalidArgumentAndTheWorkerKeepsServing) {
+  auto worker = start_worker_with_scheduler();
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+
+  v1::JobSpec broken = test::cornell_job_spec("raster", 16, 16, 1);
+  broken.set_job_json("{ \"version\": 1, \"scene\": ");
+  v1::RenderTileResponse response;
+  grpc::Status status = render(*stub, tile_request(broken, {0, 0, 8, 8}), response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_NE(status.error_message().find("cornell.json"), std::string::npos) << status.error_message();
+
+  v1::JobSpec bad_width = test::cornell_job_spec("raster", 16, 16, 1);
+  bad_width.set_job_json(R"({"version": 1, "scene": {"objects": [{"file": "assets/cornell_box.obj"}]},
+                             "render": {"width": -5}})");
+  status = render(*stub, tile_request(bad_width, {0, 0, 8, 8}), response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(status.error_message().find("cornell.json: render.width"), std::string::npos)
+      << status.error_message();
+
+  v1::JobSpec escaping = test::cornell_job_spec("raster", 16, 16, 1);
+  escaping.mutable_assets(1)->set_path("../cornell_box.mtl");
+  status = render(*stub, tile_request(escaping, {0, 0, 8, 8}), response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+
+  const v1::JobSpec good = test::cornell_job_spec("raster", 16, 16, 1);
+  status = render(*stub, tile_request(good, {0, 0, 100, 100}), response);  // clipped to the image
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  expect_bit_identical(response.tile(), render_in_process(good, {0, 0, 16, 16}), "after errors");
+
+  status = render(*stub, tile_request(good, {16, 0, 20, 8}), response);  // nothing left after clipping
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  v1::RenderTileRequest wrong_hash = tile_request(good, {0, 0, 8, 8});
+  wrong_hash.set_scene_hash(std::string(64, '0'));
+  EXPECT_EQ(render(*stub, wrong_hash, response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+TEST_F(FarmWorkerTest, MissingAssetsWithoutSchedulerAreFailedPreconditionUntilCached) {
+  const fs::path cache = dir_ / "cache";
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", cache.string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  auto stub = worker_stub(worker.address());
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 16, 16, 1);
+  v1::RenderTileResponse response;
+  grpc::Status status = render(*stub, tile_request(spec, {0, 0, 16, 16}), response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(status.error_message().find("assets/cornell_box.obj"), std::string::npos)
+      << status.error_message();
+
+  // Blobs placed in the worker's cache (as a shared cache or an earlier fetch would) are used.
+  const AssetStore store(cache / "blobs");
+  for (const auto& [path, file] : test::cornell_assets()) store.add(test::read_file(file));
+  status = render(*stub, tile_request(spec, {0, 0, 16, 16}), response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  expect_bit_identical(response.tile(), render_in_process(spec, {0, 0, 16, 16}), "from cache");
+}
+
+TEST_F(FarmWorkerTest, HealthCheckReportsServing) {
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "cache").string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  // grpc.health.v1.Health/Check by hand (Debian ships no health.proto): the request
+  // HealthCheckRequest{service: ""} encodes as no bytes, the reply {status: SERVING (1)} as 08 01.
+  auto channel = grpc::CreateChannel(worker.address(), grpc::InsecureChannelCredentials());
+  grpc::GenericStub stub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 30s);
+  grpc::Slice empty;
+  const grpc::ByteBuffer request(&empty, 1);
+  grpc::CompletionQueue cq;
+  auto call = stub.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &cq);
+  call->StartCall();
+  grpc::ByteBuffer reply;
+  grpc::Status status;
+  call->Finish(&reply, &status, reinterpret_cast<void*>(1));
+  void* tag = nullptr;
+  bool ok = false;
+  ASSERT_TRUE(cq.Next(&tag, &ok));
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(reply.Dump(&slices).ok());
+  std::string bytes;
+  for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  EXPECT_EQ(bytes, std::string("\x08\x01", 2));
+  cq.Shutdown();
+  while (cq.Next(&tag, &ok)) {
+  }
+}
+
+TEST_F(FarmWorkerTest, ReflectionListsTheWorkerService) {
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "cache").string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  // What `grpcurl list` sends: ServerReflectionRequest{list_services: ""} (field 7, empty string:
+  // bytes 3a 00); the reply lists the service names as strings.
+  auto channel = grpc::CreateChannel(worker.address(), grpc::InsecureChannelCredentials());
+  grpc::GenericStub stub(channel);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 30s);
+  grpc::CompletionQueue cq;
+  const auto step = [&cq] {
+    void* tag = nullptr;
+    bool ok = false;
+    return cq.Next(&tag, &ok) && ok;
+  };
+  auto call = stub.PrepareCall(
+      &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
+  call->StartCall(nullptr);
+  ASSERT_TRUE(step());
+  grpc::Slice list_services(std::string("\x3a\x00", 2));
+  const grpc::ByteBuffer request(&list_services, 1);
+  call->Write(request, nullptr);
+  ASSERT_TRUE(step());
+  call->WritesDone(nullptr);
+  ASSERT_TRUE(step());
+  grpc::ByteBuffer reply;
+  call->Read(&reply, nullptr);
+  ASSERT_TRUE(step());
+  grpc::Status status;
+  call->Finish(&status, nullptr);
+  ASSERT_TRUE(step());
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(reply.Dump(&slices).ok());
+  std::string bytes;
+  for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  EXPECT_NE(bytes.find("farm.v1.Worker"), std::string::npos);
+  EXPECT_NE(bytes.find("grpc.health.v1.Health"), std::string::npos);
+  cq.Shutdown();
+  while (step()) {
+  }
+}
+
+TEST_F(FarmWorkerTest, DeadlineStopsTheRenderAndTheWorkerStaysResponsive) {
+  auto worker = start_worker_with_scheduler();
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  // Warm the scene first, so the deadline falls in the middle of rendering.
+  const v1::JobSpec slow = test::cornell_job_spec("path", 256, 256, 4096);
+  v1::RenderTileResponse response;
+  ASSERT_TRUE(render(*stub, tile_request(slow, {0, 0, 1, 1}), response, 60s).ok());
+
+  const auto start = std::chrono::steady_clock::now();
+  const grpc::Status status = render(*stub, tile_request(slow, {0, 0, 256, 256}), response, 500ms);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
+  // The abandoned tile's queued sub-tiles are skipped: a small tile right after comes back soon
+  // (the whole 256x256 at 4096 spp would take minutes).
+  const v1::JobSpec quick = test::cornell_job_spec("raster", 16, 16, 1);
+  const grpc::Status after = render(*stub, tile_request(quick, {0, 0, 16, 16}), response, 60s);
+  EXPECT_TRUE(after.ok()) << after.error_message();
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 30s);
+}
+
+TEST_F(FarmWorkerTest, SigtermShutsTheWorkerDownCleanly) {
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "cache").string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  worker.process().send_signal(SIGTERM);
+  const std::optional<int> code = worker.process().wait_exit(20s);
+  ASSERT_TRUE(code.has_value()) << "worker still running after SIGTERM";
+  EXPECT_EQ(*code, 0) << worker.process().output();
+}
+
+class FarmWorkerCliTest : public test::FarmCliFixture {};
+
+TEST_F(FarmWorkerCliTest, HelpExplainsTheOptions) {
+  const auto r = test::run_command(farm("worker --help"));
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* option : {"--listen", "--threads", "--scheduler", "--cache-dir", "--max-scenes",
+                             "--cache-memory"}) {
+    EXPECT_NE(r.output.find(option), std::string::npos) << option << "\n" << r.output;
+  }
+}
+
+TEST_F(FarmWorkerCliTest, UnusableListenAddressExitsWith2) {
+  const auto r = test::run_command(farm("worker --listen 256.1.1.1:99999 --cache-dir " +
+                                        test::shell_quote((dir_ / "c").string())));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot listen"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace farm

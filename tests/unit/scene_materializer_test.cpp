@@ -1,0 +1,127 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/scene_hash.h"
+#include "server/scene_materializer.h"
+#include "tests/support/job_specs.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+class SceneMaterializer : public ::testing::Test {
+ protected:
+  // Puts the Cornell box's files into the store.
+  void store_cornell_assets() {
+    for (const auto& [path, file] : test::cornell_assets()) store_.add(test::read_file(file));
+  }
+  MaterializedScene materialize(const v1::JobSpec& spec) {
+    return materialize_scene(spec, scene_hash(spec), store_, dir_ / "cache");
+  }
+
+  test::TempDir dir_;
+  AssetStore store_{dir_ / "blobs"};
+};
+
+TEST_F(SceneMaterializer, ObjWithMtlJobIsLaidOutAndLoads) {
+  store_cornell_assets();
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 32, 24, 1);
+  const MaterializedScene m = materialize(spec);
+  EXPECT_EQ(m.dir, fs::canonical(dir_ / "cache") / "scenes" / scene_hash(spec));
+  EXPECT_TRUE(fs::is_regular_file(m.dir / "assets/cornell_box.obj"));
+  EXPECT_TRUE(fs::is_regular_file(m.dir / "assets/cornell_box.mtl"));
+  EXPECT_EQ(test::read_file(m.dir / "cornell.json"), spec.job_json());
+  ASSERT_EQ(m.job.scene.objects.size(), 1u);
+  EXPECT_EQ(m.job.scene.objects[0].file, m.dir / "assets/cornell_box.obj");
+  EXPECT_EQ(m.job.render.width, 32);
+
+  // The MTL was found beside the OBJ: the walls have their own colours, not the default grey.
+  const Scene scene = build_scene(m.job);
+  ASSERT_EQ(scene.objects.size(), 1u);
+  bool red = false;
+  for (const Material& mat : scene.objects[0].materials) {
+    red = red || (mat.diffuse.x > 0.5f && mat.diffuse.y < 0.2f);
+  }
+  EXPECT_TRUE(red);
+
+  // Again: the published folder is reused.
+  EXPECT_EQ(materialize(spec).dir, m.dir);
+}
+
+TEST_F(SceneMaterializer, PathsThatCouldEscapeAreRejected) {
+  store_cornell_assets();
+  const std::vector<std::string> bad_paths{"../cornell_box.obj", "assets/../../x.obj",
+                                           "/etc/passwd", "", std::string("a\0b", 3)};
+  for (const std::string& bad : bad_paths) {
+    v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
+    spec.mutable_assets(0)->set_path(bad);
+    EXPECT_THROW(validate_asset_refs(spec), InputError) << bad;
+    EXPECT_THROW(materialize(spec), InputError) << bad;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "x.obj"));
+}
+
+TEST_F(SceneMaterializer, DuplicatePathsAndBadHashesAreRejected) {
+  v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
+  *spec.add_assets() = spec.assets(0);
+  EXPECT_THROW(validate_asset_refs(spec), InputError);
+  spec = test::cornell_job_spec("raster", 8, 8, 1);
+  spec.mutable_assets(0)->set_sha256("not-a-hash");
+  EXPECT_THROW(validate_asset_refs(spec), InputError);
+}
+
+TEST_F(SceneMaterializer, MissingBlobIsNamed) {
+  store_.add(test::read_file(test::cornell_assets()[0].second));  // the OBJ only
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
+  ASSERT_EQ(missing_assets(spec, store_).size(), 1u);
+  try {
+    materialize(spec);
+    FAIL() << "expected MissingAssetsError";
+  } catch (const MissingAssetsError& e) {
+    ASSERT_EQ(e.missing().size(), 1u);
+    EXPECT_EQ(e.missing()[0].path(), "assets/cornell_box.mtl");
+    EXPECT_NE(std::string(e.what()).find("assets/cornell_box.mtl"), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "cache/scenes" / scene_hash(spec)));
+}
+
+TEST_F(SceneMaterializer, BadJobMessageNamesTheSubmittedFileNotTheCache) {
+  store_cornell_assets();
+  v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
+  spec.set_job_json(R"({"version": 1, "scene": {"objects": [{"file": "assets/cornell_box.obj"}]},
+                        "render": {"width": -5}})");
+  try {
+    materialize(spec);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind("cornell.json: render.width", 0), 0u) << message;
+    EXPECT_EQ(message.find((dir_ / "cache").string()), std::string::npos) << message;
+  }
+}
+
+TEST(SceneHash, DependsOnJobAndAssetsButNotOnTheirOrder) {
+  const v1::JobSpec a = test::cornell_job_spec("raster", 8, 8, 1);
+  v1::JobSpec reordered = a;
+  reordered.mutable_assets()->SwapElements(0, 1);
+  reordered.set_file_name("other-name.json");
+  EXPECT_EQ(scene_hash(a), scene_hash(reordered));
+  EXPECT_NE(scene_hash(a), scene_hash(test::cornell_job_spec("raster", 8, 9, 1)));
+  v1::JobSpec other_bytes = a;
+  other_bytes.mutable_assets(1)->set_sha256(std::string(64, '0'));
+  EXPECT_NE(scene_hash(a), scene_hash(other_bytes));
+  v1::JobSpec renamed = a;
+  renamed.mutable_assets(1)->set_path("assets/other.mtl");
+  EXPECT_NE(scene_hash(a), scene_hash(renamed));
+  EXPECT_EQ(scene_hash(a).size(), 64u);
+}
+
+}  // namespace
+}  // namespace farm
