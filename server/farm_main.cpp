@@ -13,6 +13,8 @@
 #include "server/rt_bench_command.h"
 #include "server/render_command.h"
 #include "server/validate_command.h"
+#include "server/client_commands.h"
+#include "server/service_error.h"
 #include "server/worker_command.h"
 
 namespace {
@@ -92,7 +94,8 @@ int main(int argc, char** argv) {
                "  farm bench raster measure rasterizer speed and thread scaling\n"
                "  farm bench rt     compare our BVHs with Embree\n"
                "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
-               "  farm worker       serve tiles to a scheduler over gRPC"};
+               "  farm worker       serve tiles to a scheduler over gRPC\n"
+               "  farm submit JOB   send a job to a scheduler (status, watch, cancel, fetch follow it)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "farm 0.1.0");
 
@@ -199,6 +202,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   farm::WorkerOptions worker_options;
   CLI::App* worker = add_worker_command(app, worker_options);
+  farm::ClientCommands client_commands;
+  farm::add_client_commands(app, client_commands);
 
   try {
     app.parse(argc, argv);
@@ -229,10 +234,15 @@ int main(int argc, char** argv) {
       return farm::run_validate_command(validate_options);
     } else if (worker->parsed()) {
       return farm::run_worker_command(worker_options);
+    } else if (const int code = farm::run_client_command(client_commands); code >= 0) {
+      return code;
     }
   } catch (const farm::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitBadInput;
+  } catch (const farm::ServiceError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());  // e.g. the scheduler is not reachable
+    return kExitInternal;
   } catch (const std::exception& e) {
     fmt::print(stderr, "internal error: {}\n", e.what());
     return kExitInternal;
