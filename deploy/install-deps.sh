@@ -15,6 +15,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev python3 python3-venv
+  # the Python client test (stubs generated from proto/farm.proto by grpc_tools)
+  python3-grpcio python3-grpc-tools python3-protobuf
 )
 
 missing=()
