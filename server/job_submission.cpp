@@ -8,20 +8,13 @@
 
 #include "renderer/scene/input_error.h"
 #include "server/model_dependencies.h"
+#include "server/read_whole_file.h"
 #include "server/sha256.h"
 
 namespace farm {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read the job file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 bool any_override(const RenderOverrides& o) {
   return o.engine || o.width || o.height || o.spp || o.threads || o.tile_size || o.image || o.preview;
@@ -60,7 +53,7 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   JobSubmission out;
   out.job = load_job(job_file, load);
   apply_overrides(out.job, overrides);
-  const std::string text = read_text(job_file);
+  const std::string text = read_whole_file(job_file, "job file");
   const fs::path job_dir = fs::weakly_canonical(fs::absolute(job_file).parent_path());
   const fs::path root = load.asset_root.empty() ? job_dir : fs::weakly_canonical(fs::absolute(load.asset_root));
 

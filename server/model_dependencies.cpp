@@ -11,20 +11,12 @@
 #include <sstream>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "server/read_whole_file.h"
 
 namespace farm {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string read_all(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read the model file", file.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::string lower_extension(const fs::path& file) {
   std::string ext = file.extension().string();
@@ -67,7 +59,7 @@ void add_reference(const fs::path& model, std::string reference, std::vector<fs:
 
 // OBJ: `mtllib a.mtl [b.mtl ...]`; MTL: map_Kd, bump, disp, ... whose last word is the file.
 void obj_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  std::istringstream lines(read_all(model));
+  std::istringstream lines(read_whole_file(model, "model file"));
   std::string line;
   std::vector<fs::path> libraries;
   while (std::getline(lines, line)) {
@@ -80,7 +72,7 @@ void obj_dependencies(const fs::path& model, std::vector<fs::path>& out) {
   }
   for (const fs::path& library : libraries) {
     out.push_back(library);
-    std::istringstream mtl(read_all(library));
+    std::istringstream mtl(read_whole_file(library, "material library"));
     while (std::getline(mtl, line)) {
       std::istringstream words(line);
       std::string key, word, last;
@@ -108,7 +100,7 @@ void gltf_json_dependencies(const fs::path& model, const std::string& json_text,
 
 // GLB: a 12-byte header, then chunks; the first is the JSON.
 void glb_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  const std::string bytes = read_all(model);
+  const std::string bytes = read_whole_file(model, "model file");
   if (bytes.size() < 20) return;
   std::uint32_t length = 0, type = 0;
   std::memcpy(&length, bytes.data() + 12, 4);
@@ -119,7 +111,7 @@ void glb_dependencies(const fs::path& model, std::vector<fs::path>& out) {
 
 // COLLADA: <init_from>path</init_from> inside <image> elements.
 void collada_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  const std::string text = read_all(model);
+  const std::string text = read_whole_file(model, "model file");
   static const std::regex init_from(R"(<init_from>\s*([^<]+?)\s*</init_from>)");
   for (auto it = std::sregex_iterator(text.begin(), text.end(), init_from); it != std::sregex_iterator(); ++it) {
     add_reference(model, (*it)[1].str(), out);
@@ -134,7 +126,7 @@ std::vector<fs::path> model_dependencies(const fs::path& model) {
   if (ext == ".obj") {
     obj_dependencies(model, out);
   } else if (ext == ".gltf") {
-    gltf_json_dependencies(model, read_all(model), out);
+    gltf_json_dependencies(model, read_whole_file(model, "model file"), out);
   } else if (ext == ".glb") {
     glb_dependencies(model, out);
   } else if (ext == ".dae") {

@@ -20,6 +20,15 @@ constexpr std::size_t kChunkBytes = 1 << 20;  // well under gRPC's 4 MiB message
 
 }  // namespace
 
+template <typename Response, typename Request, typename Method>
+Response SchedulerClient::call(Method method, const Request& request, const char* what) {
+  Response response;
+  grpc::ClientContext context;
+  const grpc::Status status = (stub_.get()->*method)(&context, request, &response);
+  if (!status.ok()) throw_for_status(status, what, address_);
+  return response;
+}
+
 std::string resolve_scheduler_address(const std::string& flag) {
   if (!flag.empty()) return flag;
   if (const char* env = std::getenv("FARM_SCHEDULER"); env != nullptr && *env != '\0') return env;
@@ -67,12 +76,7 @@ SchedulerClient::SchedulerClient(std::string address)
 std::size_t SchedulerClient::upload_missing(const JobSubmission& submission) {
   v1::HasAssetsRequest ask;
   for (const auto& [sha, file] : submission.files) ask.add_sha256(sha);
-  v1::HasAssetsResponse missing;
-  {
-    grpc::ClientContext context;
-    const grpc::Status status = stub_->HasAssets(&context, ask, &missing);
-    if (!status.ok()) throw_for_status(status, "HasAssets", address_);
-  }
+  const auto missing = call<v1::HasAssetsResponse>(&v1::Scheduler::Stub::HasAssets, ask, "HasAssets");
   for (const std::string& sha : missing.missing()) {
     const auto it = submission.files.find(sha);
     if (it == submission.files.end()) continue;
@@ -105,21 +109,13 @@ v1::Job SchedulerClient::submit(const JobSubmission& submission, int priority) {
   v1::SubmitJobRequest request;
   *request.mutable_job() = submission.spec;
   request.set_priority(priority);
-  v1::SubmitJobResponse response;
-  grpc::ClientContext context;
-  const grpc::Status status = stub_->SubmitJob(&context, request, &response);
-  if (!status.ok()) throw_for_status(status, "SubmitJob", address_);
-  return response.job();
+  return call<v1::SubmitJobResponse>(&v1::Scheduler::Stub::SubmitJob, request, "SubmitJob").job();
 }
 
 v1::Job SchedulerClient::get(const std::string& job_id) {
   v1::GetJobRequest request;
   request.set_job_id(job_id);
-  v1::Job job;
-  grpc::ClientContext context;
-  const grpc::Status status = stub_->GetJob(&context, request, &job);
-  if (!status.ok()) throw_for_status(status, "GetJob", address_);
-  return job;
+  return call<v1::Job>(&v1::Scheduler::Stub::GetJob, request, "GetJob");
 }
 
 std::vector<v1::Job> SchedulerClient::list() {
@@ -128,10 +124,7 @@ std::vector<v1::Job> SchedulerClient::list() {
   do {
     v1::ListJobsRequest request;
     request.set_page_token(token);
-    v1::ListJobsResponse response;
-    grpc::ClientContext context;
-    const grpc::Status status = stub_->ListJobs(&context, request, &response);
-    if (!status.ok()) throw_for_status(status, "ListJobs", address_);
+    const auto response = call<v1::ListJobsResponse>(&v1::Scheduler::Stub::ListJobs, request, "ListJobs");
     jobs.insert(jobs.end(), response.jobs().begin(), response.jobs().end());
     token = response.next_page_token();
   } while (!token.empty());
@@ -164,11 +157,7 @@ v1::Job SchedulerClient::watch(const std::string& job_id,
 v1::Job SchedulerClient::cancel(const std::string& job_id) {
   v1::CancelJobRequest request;
   request.set_job_id(job_id);
-  v1::CancelJobResponse response;
-  grpc::ClientContext context;
-  const grpc::Status status = stub_->CancelJob(&context, request, &response);
-  if (!status.ok()) throw_for_status(status, "CancelJob", address_);
-  return response.job();
+  return call<v1::CancelJobResponse>(&v1::Scheduler::Stub::CancelJob, request, "CancelJob").job();
 }
 
 fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where) {

@@ -38,6 +38,10 @@ class SchedulerClient {
   std::filesystem::path fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where);
 
  private:
+  // One unary call; failures thrown as throw_for_status says.
+  template <typename Response, typename Request, typename Method>
+  Response call(Method method, const Request& request, const char* what);
+
   std::string address_;
   std::unique_ptr<v1::Scheduler::Stub> stub_;
 };
