@@ -11,6 +11,7 @@
 #include "server/info_command.h"
 #include "server/path_bench_command.h"
 #include "server/rt_bench_command.h"
+#include "server/scheduler_command.h"
 #include "server/render_command.h"
 #include "server/validate_command.h"
 #include "server/worker_command.h"
@@ -199,6 +200,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   farm::WorkerOptions worker_options;
   CLI::App* worker = add_worker_command(app, worker_options);
+  farm::SchedulerCommandOptions scheduler_options;
+  CLI::App* scheduler = farm::add_scheduler_command(app, scheduler_options);
 
   try {
     app.parse(argc, argv);
@@ -229,6 +232,8 @@ int main(int argc, char** argv) {
       return farm::run_validate_command(validate_options);
     } else if (worker->parsed()) {
       return farm::run_worker_command(worker_options);
+    } else if (scheduler->parsed()) {
+      return farm::run_scheduler_command(scheduler_options);
     }
   } catch (const farm::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
