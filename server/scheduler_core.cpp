@@ -86,6 +86,9 @@ struct SchedulerCore::WorkerEntry {
   // Under SchedulerCore::mutex_:
   bool removed = false;
   bool down = true;  // probed before the first tile
+  // A worker that just failed is left alone this long before it is probed: its channel may
+  // still look connected for a moment after the process died.
+  SteadyClock::time_point probe_after = SteadyClock::now();
   SteadyClock::time_point last_heartbeat = SteadyClock::now();
 };
 
@@ -336,6 +339,10 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
   std::unique_lock lock(mutex_);
   while (!stopping_ && !w->removed) {
     if (w->down) {
+      if (SteadyClock::now() < w->probe_after) {
+        work_.wait_until(lock, w->probe_after, [&] { return stopping_ || w->removed; });
+        continue;
+      }
       lock.unlock();
       const bool up = w->worker->probe(options_.probe_interval);
       lock.lock();
@@ -442,6 +449,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
     if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
       std::lock_guard lock(mutex_);
       w->down = true;
+      w->probe_after = SteadyClock::now() + options_.probe_interval;
     }
   }
   log_line("warn", "job {} tile {}: {}", claim.job_id, claim.index, why);

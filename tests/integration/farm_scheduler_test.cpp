@@ -14,6 +14,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
+#include "server/asset_store.h"
 #include "server/local_pipeline.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -66,10 +67,24 @@ int differing_pixels(const TileBuffer& a, const TileBuffer& b) {
 
 class FarmSchedulerTest : public ::testing::Test {
  protected:
-  std::unique_ptr<test::WorkerProcess> start_worker(const std::string& name, int threads = 1) {
-    auto worker = std::make_unique<test::WorkerProcess>(std::vector<std::string>{
-        "--threads", std::to_string(threads), "--cache-dir", (dir_ / name).string()});
+  // A worker whose cache already holds the Cornell box's files (so a static --worker needs no
+  // way to fetch them), or one that registers with `scheduler` and fetches from it.
+  std::unique_ptr<test::WorkerProcess> start_worker(const std::string& name, int threads = 1,
+                                                    const std::string& scheduler = "") {
+    std::vector<std::string> args{"--threads", std::to_string(threads), "--cache-dir",
+                                  (dir_ / name).string()};
+    if (scheduler.empty()) {
+      const AssetStore blobs(dir_ / name / "blobs");
+      for (const auto& [path, file] : test::cornell_assets()) blobs.add(test::read_file(file));
+    } else {
+      args.insert(args.end(), {"--scheduler", scheduler});
+    }
+    auto worker = std::make_unique<test::WorkerProcess>(args);
     EXPECT_FALSE(worker->address().empty()) << worker->process().output();
+    if (!scheduler.empty()) {
+      EXPECT_TRUE(worker->process().wait_for_line("registered with the scheduler", 20s))
+          << worker->process().output();
+    }
     return worker;
   }
 
@@ -145,15 +160,19 @@ TEST_F(FarmSchedulerTest, SubmitWatchFetchIsBitIdenticalToFarmRenderForEveryEngi
 }
 
 TEST_F(FarmSchedulerTest, KillingOneOfTwoWorkersMidJobStillFinishesWithIdenticalOutput) {
-  auto w1 = start_worker("w1");
-  auto w2 = start_worker("w2");
-  auto scheduler = start_scheduler({"--worker", w1->address(), "--worker", w2->address(), "--float"});
+  // Workers that register themselves and fetch the assets from the scheduler.
+  auto scheduler = start_scheduler({"--float", "--heartbeat-interval", "0.2"});
   ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  auto w1 = start_worker("w1", 1, scheduler->address());
+  auto w2 = start_worker("w2", 1, scheduler->address());
   const v1::JobSpec spec = cornell("path", 64, 48, 256, 8);  // 48 tiles, ~1 s on one thread
   const v1::Job job = submit_ok(spec);
-  ASSERT_TRUE(test::wait_for_job(*stub_, job.job_id(),
-                                 [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s));
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
+  ASSERT_TRUE(before);
   w1->process().send_signal(SIGKILL);
+  EXPECT_FALSE(done(*before)) << "the job finished before the kill";
   const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
