@@ -11,6 +11,7 @@
 #include "server/info_command.h"
 #include "server/path_bench_command.h"
 #include "server/rt_bench_command.h"
+#include "server/scheduler_command.h"
 #include "server/render_command.h"
 #include "server/validate_command.h"
 #include "server/client_commands.h"
@@ -94,6 +95,7 @@ int main(int argc, char** argv) {
                "  farm bench raster measure rasterizer speed and thread scaling\n"
                "  farm bench rt     compare our BVHs with Embree\n"
                "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
+               "  farm scheduler    serve jobs over gRPC: tiles to workers, merged EXR out\n"
                "  farm worker       serve tiles to a scheduler over gRPC\n"
                "  farm submit JOB   send a job to a scheduler (status, watch, cancel, fetch follow it)"};
   app.require_subcommand(1);
@@ -202,6 +204,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   farm::WorkerOptions worker_options;
   CLI::App* worker = add_worker_command(app, worker_options);
+  farm::SchedulerCommandOptions scheduler_options;
+  CLI::App* scheduler = farm::add_scheduler_command(app, scheduler_options);
   farm::ClientCommands client_commands;
   farm::add_client_commands(app, client_commands);
 
@@ -234,6 +238,8 @@ int main(int argc, char** argv) {
       return farm::run_validate_command(validate_options);
     } else if (worker->parsed()) {
       return farm::run_worker_command(worker_options);
+    } else if (scheduler->parsed()) {
+      return farm::run_scheduler_command(scheduler_options);
     } else if (const int code = farm::run_client_command(client_commands); code >= 0) {
       return code;
     }

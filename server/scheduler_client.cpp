@@ -65,10 +65,6 @@ std::string to_string(v1::JobState state) {
   }
 }
 
-bool is_final(v1::JobState state) {
-  return state == v1::JOB_STATE_SUCCEEDED || state == v1::JOB_STATE_FAILED || state == v1::JOB_STATE_CANCELLED;
-}
-
 SchedulerClient::SchedulerClient(std::string address)
     : address_(std::move(address)),
       stub_(v1::Scheduler::NewStub(grpc::CreateChannel(address_, grpc::InsecureChannelCredentials()))) {}

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "proto/farm.grpc.pb.h"
+#include "server/job_store.h"  // is_final
 #include "server/job_submission.h"
 
 namespace farm {
@@ -53,6 +54,5 @@ class SchedulerClient {
                                    const std::string& address);
 
 std::string to_string(v1::JobState state);  // "queued", "running", ...
-bool is_final(v1::JobState state);
 
 }  // namespace farm

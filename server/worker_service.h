@@ -12,10 +12,7 @@
 #include <string>
 
 #include "proto/farm.grpc.pb.h"
-#include "server/asset_fetcher.h"
-#include "server/asset_store.h"
-#include "server/scene_cache.h"
-#include "server/tile_executor.h"
+#include "server/tile_renderer.h"
 
 namespace farm {
 
@@ -35,17 +32,12 @@ class WorkerService final : public v1::Worker::Service {
   grpc::Status RenderTile(grpc::ServerContext* context, const v1::RenderTileRequest* request,
                           v1::RenderTileResponse* response) override;
 
-  int threads() const { return executor_.threads(); }
-  const SceneCache& scene_cache() const { return cache_; }
+  int threads() const { return renderer_.threads(); }
+  const SceneCache& scene_cache() const { return renderer_.scene_cache(); }
+  TileRenderer& renderer() { return renderer_; }
 
  private:
-  std::shared_ptr<const CachedScene> prepare(const v1::JobSpec& spec, const std::string& hash);
-
-  std::filesystem::path cache_dir_;
-  AssetStore store_;
-  std::unique_ptr<AssetFetcher> fetcher_;  // null without --scheduler
-  SceneCache cache_;
-  TileExecutor executor_;
+  TileRenderer renderer_;  // the handler's body, shared with the scheduler's in-process worker
 };
 
 }  // namespace farm

@@ -1,0 +1,79 @@
+#include "server/embedded_farm.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <fstream>
+#include <sstream>
+
+namespace farm {
+
+namespace fs = std::filesystem;
+
+EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data_dir) {
+  if (data_dir_.empty()) {
+    static std::atomic<int> counter{0};
+    data_dir_ = fs::temp_directory_path() / fmt::format("farm-embedded-{}-{}", ::getpid(), counter++);
+    remove_data_dir_ = true;
+  }
+  fs::create_directories(data_dir_);
+  SchedulerOptions s;
+  s.data_dir = data_dir_;
+  s.exr_type = options.exr_type;
+  // One worker in the same process: it cannot die on its own, so a generous deadline is only a
+  // guard; two tiles in flight keep its threads busy between tiles.
+  s.tiles_per_worker = 2;
+  core_ = std::make_unique<SchedulerCore>(s);
+  TileRendererOptions r;
+  r.blobs_dir = data_dir_ / "assets";  // the scheduler's own store: nothing to fetch
+  r.cache_dir = data_dir_;             // scenes/<hash>/ shared with the scheduler's validation
+  r.threads = options.threads;
+  worker_ = std::make_shared<InProcessTileWorker>(r);
+  core_->add_worker(worker_);
+}
+
+EmbeddedFarm::~EmbeddedFarm() {
+  core_->stop();
+  core_.reset();
+  if (remove_data_dir_) {
+    std::error_code ignored;
+    fs::remove_all(data_dir_, ignored);
+  }
+}
+
+std::string EmbeddedFarm::add_asset(std::string_view bytes) { return core_->assets().add(bytes); }
+
+std::string EmbeddedFarm::add_asset_file(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  std::ostringstream s;
+  s << in.rdbuf();
+  return add_asset(s.str());
+}
+
+EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec,
+                                 const std::function<void(const v1::Job&)>& progress) {
+  const v1::Job submitted = core_->submit(spec);
+  const std::shared_ptr<JobEventQueue> queue = core_->watch(submitted.job_id());
+  EmbeddedResult result;
+  // Polls the store as well as the queue: events before watch() began are not lost that way.
+  while (true) {
+    v1::JobEvent event;
+    const bool got = queue->pop(event, std::chrono::milliseconds(100));
+    const v1::Job job = got ? event.job() : *core_->get_job(submitted.job_id());
+    if (got && progress) progress(job);
+    if (is_final(job.state())) {
+      result.job = *core_->get_job(submitted.job_id());
+      break;
+    }
+  }
+  core_->unwatch(submitted.job_id(), queue);
+  if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
+    result.exr = core_->result_file(result.job.job_id(), false).value_or(fs::path());
+    result.preview = core_->result_file(result.job.job_id(), true).value_or(fs::path());
+  }
+  return result;
+}
+
+}  // namespace farm

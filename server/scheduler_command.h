@@ -1,0 +1,30 @@
+#pragma once
+// `farm scheduler`: serves farm.v1.Scheduler (SchedulerCore over gRPC), gRPC health and server
+// reflection until SIGINT/SIGTERM.
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace farm {
+
+struct SchedulerCommandOptions {
+  std::string listen = "0.0.0.0:50051";  // host:port; port 0 = any free port
+  std::filesystem::path data_dir;     // jobs.db, assets/, tiles/, results/
+  std::vector<std::string> workers;   // static `farm worker` addresses
+  double tile_deadline_s = 600;
+  int max_attempts = 3;
+  int tiles_per_worker = 2;
+  double heartbeat_interval_s = 1;
+  bool float_exr = false;
+};
+
+// Adds the `scheduler` subcommand to `app` (options into `options`).
+CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& options);
+
+// Prints "scheduler listening on HOST:PORT" once it accepts calls. InputError when the address
+// cannot be bound. Returns the exit code.
+int run_scheduler_command(const SchedulerCommandOptions& options);
+
+}  // namespace farm

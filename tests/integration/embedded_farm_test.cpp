@@ -1,0 +1,104 @@
+// The embedded farm (scheduler core + in-process worker, no sockets) renders a job to the same
+// pixels as render_frame, and the job merger pastes tile files back bit-exactly.
+#include "server/embedded_farm.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "renderer/engine.h"
+#include "renderer/image/exr_io.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/job_merger.h"
+#include "server/local_pipeline.h"
+#include "server/tile_codec.h"
+#include "tests/support/farm_cli_fixture.h"
+#include "tests/support/job_specs.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TileBuffer render_locally(const v1::JobSpec& spec) {
+  const Job job = parse_job(spec.job_json(), test::kSource / "jobs" / spec.file_name());
+  const PreparedScene scene(build_scene(job));
+  return render_frame(scene, job.render);
+}
+
+// Every channel of every pixel, compared as bits.
+void expect_same_pixels(const TileBuffer& a, const TileBuffer& b, const std::string& what) {
+  ASSERT_EQ(a.rect(), b.rect()) << what;
+  int differing = 0;
+  for (int y = a.rect().y0; y < a.rect().y1; ++y) {
+    for (int x = a.rect().x0; x < a.rect().x1; ++x) {
+      if (std::memcmp(&a.rgba(x, y), &b.rgba(x, y), sizeof(glm::vec4)) != 0) ++differing;
+      if (a.aovs().has(Aov::Depth) && !same_bits(a.depth(x, y), b.depth(x, y))) ++differing;
+      if (a.aovs().has(Aov::Normal) &&
+          std::memcmp(&a.normal(x, y), &b.normal(x, y), sizeof(glm::vec3)) != 0) ++differing;
+    }
+  }
+  EXPECT_EQ(differing, 0) << what;
+}
+
+TEST(EmbeddedFarmTest, CornellThroughTheEmbeddedFarmIsBitIdenticalToRenderFrame) {
+  test::TempDir dir;
+  EmbeddedFarmOptions options;
+  options.data_dir = dir / "farm";
+  options.threads = 2;
+  options.exr_type = ExrPixelType::Float;
+  EmbeddedFarm farm(options);
+  for (const auto& [path, file] : test::cornell_assets()) farm.add_asset_file(file);
+  for (const std::string engine : {"raster", "whitted", "path"}) {
+    const v1::JobSpec spec = test::cornell_job_spec(engine, 64, 48, engine == "path" ? 4 : 1);
+    int progress_calls = 0;
+    const EmbeddedResult result = farm.run(spec, [&](const v1::Job&) { ++progress_calls; });
+    ASSERT_EQ(result.job.state(), v1::JOB_STATE_SUCCEEDED) << result.job.failure_reason();
+    EXPECT_EQ(result.job.tiles_done(), result.job.tiles_total());
+    EXPECT_EQ(result.job.tiles_rendered(), result.job.tiles_total());
+    EXPECT_GT(progress_calls, 0);
+    EXPECT_TRUE(std::filesystem::exists(result.preview));
+    const TileBuffer local = render_locally(spec);
+    expect_same_pixels(read_exr(result.exr), local, engine);
+    if (engine == "path") {
+      EXPECT_EQ(result.job.stats().samples(), 64u * 48u * 4u);
+    }
+    if (engine != "raster") {
+      EXPECT_EQ(result.job.stats().rays(), local.stats().rays) << engine;
+    }
+  }
+}
+
+TEST(JobMergerTest, TilesWrittenAsFilesMergeIntoTheFrame) {
+  test::TempDir dir;
+  const v1::JobSpec spec = test::cornell_job_spec("whitted", 40, 30, 1);
+  const Job job = parse_job(spec.job_json(), test::kSource / "jobs" / spec.file_name());
+  const PreparedScene scene(build_scene(job));
+  TileResults results(dir / "tiles");
+  MergeRequest request{"job", Rect{0, 0, 40, 30}, job.render.aovs, {}};
+  const std::vector<Rect> tiles = split_into_tiles(40, 30, 13);
+  for (std::uint32_t i = 0; i < tiles.size(); ++i) {
+    TileBuffer tile;
+    render_tile(scene, job.render, tiles[i], tile);
+    v1::RenderTileResponse response;
+    encode_tile(tile, *response.mutable_tile());
+    encode_stats(tile.stats(), *response.mutable_stats());
+    results.write("job", i, response);
+    request.tiles.push_back(i);
+  }
+  const MergedFrame merged = merge_tiles(results, request);
+  const TileBuffer local = render_frame(scene, job.render);
+  expect_same_pixels(merged.film, local, "merged");
+  EXPECT_EQ(merged.film.stats().rays, local.stats().rays);
+  const MergedFiles files = write_merged(merged.film, dir / "out", "frame", ExrPixelType::Float);
+  expect_same_pixels(read_exr(files.exr), local, "written");
+
+  request.tiles.push_back(99);  // a tile whose file is missing
+  EXPECT_THROW(merge_tiles(results, request), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace farm

@@ -1,0 +1,291 @@
+// Starts the real `farm scheduler` and `farm worker` binaries on loopback and drives them through
+// the generated farm.v1.Scheduler stub: results bit-identical to `farm render`, workers and the
+// scheduler killed mid-job, cancellation, bad jobs. Every wait is bounded; nothing sleeps blind.
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "renderer/image/exr_io.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/asset_store.h"
+#include "server/local_pipeline.h"
+#include "tests/support/background_process.h"
+#include "tests/support/farm_cli_fixture.h"
+#include "tests/support/job_specs.h"
+#include "tests/support/run_command.h"
+#include "tests/support/scheduler_client.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+bool done(const v1::Job& job) {
+  return job.state() == v1::JOB_STATE_SUCCEEDED || job.state() == v1::JOB_STATE_FAILED ||
+         job.state() == v1::JOB_STATE_CANCELLED;
+}
+
+// The Cornell box with a render block of our choosing.
+v1::JobSpec cornell(const std::string& engine, int width, int height, int spp, int tile_size) {
+  nlohmann::json job = nlohmann::json::parse(test::cornell_job_json(engine, width, height, spp));
+  job["render"]["tile_size"] = tile_size;
+  return test::make_job_spec(job.dump(2), test::cornell_assets(), "cornell.json");
+}
+
+TileBuffer render_locally(const v1::JobSpec& spec) {
+  const Job job = parse_job(spec.job_json(), test::kSource / "jobs" / spec.file_name());
+  const PreparedScene scene(build_scene(job));
+  return render_frame(scene, job.render);
+}
+
+int differing_pixels(const TileBuffer& a, const TileBuffer& b) {
+  if (!(a.rect() == b.rect())) return -1;
+  int differing = 0;
+  for (int y = a.rect().y0; y < a.rect().y1; ++y) {
+    for (int x = a.rect().x0; x < a.rect().x1; ++x) {
+      if (std::memcmp(&a.rgba(x, y), &b.rgba(x, y), sizeof(glm::vec4)) != 0 ||
+          (a.aovs().has(Aov::Depth) && !same_bits(a.depth(x, y), b.depth(x, y))) ||
+          (a.aovs().has(Aov::Normal) &&
+           std::memcmp(&a.normal(x, y), &b.normal(x, y), sizeof(glm::vec3)) != 0)) {
+        ++differing;
+      }
+    }
+  }
+  return differing;
+}
+
+class FarmSchedulerTest : public ::testing::Test {
+ protected:
+  // A worker whose cache already holds the Cornell box's files (so a static --worker needs no
+  // way to fetch them), or one that registers with `scheduler` and fetches from it.
+  std::unique_ptr<test::WorkerProcess> start_worker(const std::string& name, int threads = 1,
+                                                    const std::string& scheduler = "") {
+    std::vector<std::string> args{"--threads", std::to_string(threads), "--cache-dir",
+                                  (dir_ / name).string()};
+    if (scheduler.empty()) {
+      const AssetStore blobs(dir_ / name / "blobs");
+      for (const auto& [path, file] : test::cornell_assets()) blobs.add(test::read_file(file));
+    } else {
+      args.insert(args.end(), {"--scheduler", scheduler});
+    }
+    auto worker = std::make_unique<test::WorkerProcess>(args);
+    EXPECT_FALSE(worker->address().empty()) << worker->process().output();
+    if (!scheduler.empty()) {
+      EXPECT_TRUE(worker->process().wait_for_line("registered with the scheduler", 20s))
+          << worker->process().output();
+    }
+    return worker;
+  }
+
+  std::unique_ptr<test::SchedulerProcess> start_scheduler(std::vector<std::string> args) {
+    auto scheduler = std::make_unique<test::SchedulerProcess>(dir_ / "data", args);
+    EXPECT_FALSE(scheduler->address().empty()) << scheduler->process().output();
+    if (!scheduler->address().empty()) stub_ = test::scheduler_stub(scheduler->address());
+    return scheduler;
+  }
+
+  v1::Job submit_ok(const v1::JobSpec& spec) {
+    EXPECT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+    v1::Job job;
+    const grpc::Status status = test::submit(*stub_, spec, job);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return job;
+  }
+
+  TileBuffer fetch_exr(const std::string& id) {
+    const fs::path file = dir_ / (id + ".exr");
+    const grpc::Status status = test::fetch_result(*stub_, id, v1::RESULT_KIND_EXR, file);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return status.ok() ? read_exr(file) : TileBuffer();
+  }
+
+  test::TempDir dir_;
+  std::unique_ptr<v1::Scheduler::Stub> stub_;
+};
+
+TEST_F(FarmSchedulerTest, SubmitWatchFetchIsBitIdenticalToFarmRenderForEveryEngine) {
+  auto worker = start_worker("w1", 2);
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  for (const std::string engine : {"raster", "whitted", "path"}) {
+    const v1::JobSpec spec = cornell(engine, 64, 48, engine == "path" ? 4 : 1, 16);
+    const v1::Job submitted = submit_ok(spec);
+    ASSERT_FALSE(submitted.job_id().empty());
+    EXPECT_EQ(submitted.tiles_total(), 12u);
+    EXPECT_EQ(submitted.engine(), engine);
+
+    grpc::Status watch_status;
+    const auto events = test::watch_job(*stub_, submitted.job_id(), 60s, &watch_status);
+    ASSERT_TRUE(watch_status.ok()) << watch_status.error_message();
+    ASSERT_FALSE(events.empty());
+    EXPECT_TRUE(events.front().has_snapshot());
+    EXPECT_TRUE(events.back().has_state_changed());
+    const v1::Job& final_job = events.back().job();
+    ASSERT_EQ(final_job.state(), v1::JOB_STATE_SUCCEEDED)
+        << final_job.failure_reason() << scheduler->process().output();
+    EXPECT_EQ(final_job.tiles_done(), 12u);
+    EXPECT_EQ(final_job.tiles_rendered(), 12u);
+    EXPECT_GT(final_job.render_seconds(), 0.0);
+    if (engine == "path") {
+      EXPECT_EQ(final_job.stats().samples(), 64u * 48u * 4u);
+    }
+
+    // `farm render` of the same job file, EXR in the same (default, half) format.
+    const fs::path job_dir = dir_ / ("job-" + engine);
+    fs::create_directories(job_dir / "assets");
+    for (const auto& [path, file] : test::cornell_assets()) fs::copy_file(file, job_dir / path);
+    std::ofstream(job_dir / "cornell.json") << spec.job_json();
+    const fs::path local = dir_ / (engine + "-local.exr");
+    const test::CommandResult r = test::run_command(test::farm_command(
+        "render " + test::shell_quote((job_dir / "cornell.json").string()) + " --quiet --out " +
+        test::shell_quote(local.string()) + " --preview none"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(differing_pixels(fetch_exr(submitted.job_id()), read_exr(local)), 0) << engine;
+
+    const fs::path png = dir_ / (engine + ".png");
+    EXPECT_TRUE(test::fetch_result(*stub_, submitted.job_id(), v1::RESULT_KIND_PREVIEW, png).ok());
+    EXPECT_GT(fs::file_size(png), 0u);
+  }
+}
+
+TEST_F(FarmSchedulerTest, KillingOneOfTwoWorkersMidJobStillFinishesWithIdenticalOutput) {
+  // Workers that register themselves and fetch the assets from the scheduler.
+  auto scheduler = start_scheduler({"--float", "--heartbeat-interval", "0.2"});
+  ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  auto w1 = start_worker("w1", 1, scheduler->address());
+  auto w2 = start_worker("w2", 1, scheduler->address());
+  const v1::JobSpec spec = cornell("path", 64, 48, 256, 8);  // 48 tiles, ~1 s on one thread
+  const v1::Job job = submit_ok(spec);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  w1->process().send_signal(SIGKILL);
+  EXPECT_FALSE(done(*before)) << "the job finished before the kill";
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+  EXPECT_LE(final_job->tile_failures(), 2u);  // at most the killed worker's tiles in flight
+  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+}
+
+TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTilesAgain) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address(), "--float"});
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("path", 64, 48, 512, 8);
+  const v1::Job job = submit_ok(spec);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 6 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  scheduler->process().send_signal(SIGKILL);
+  ASSERT_TRUE(scheduler->process().wait_exit(10s));
+  ASSERT_NE(before->state(), v1::JOB_STATE_SUCCEEDED) << "the job finished before the kill";
+
+  scheduler = start_scheduler({"--worker", worker->address(), "--float"});
+  ASSERT_TRUE(stub_);
+  const auto resumed = test::get_job(*stub_, job.job_id());
+  ASSERT_TRUE(resumed);
+  EXPECT_GE(resumed->tiles_done(), before->tiles_done());
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+  // Every tile result was accepted exactly once across both schedulers: none rendered again.
+  EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());
+  EXPECT_EQ(final_job->tile_failures(), 0u);
+  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+}
+
+TEST_F(FarmSchedulerTest, CancelStopsTheJobQuicklyAndTheWorkerServesTheNextJob) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  const v1::Job big = submit_ok(cornell("path", 256, 256, 256, 64));  // many seconds of work
+  ASSERT_TRUE(test::wait_for_job(*stub_, big.job_id(),
+                                 [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
+  const auto start = std::chrono::steady_clock::now();
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 10s);
+  v1::CancelJobRequest request;
+  request.set_job_id(big.job_id());
+  v1::CancelJobResponse response;
+  ASSERT_TRUE(stub_->CancelJob(&context, request, &response).ok());
+  EXPECT_EQ(response.job().state(), v1::JOB_STATE_CANCELLED);
+  const std::uint32_t done_at_cancel = response.job().tiles_done();
+
+  // The worker is free again within a second or two: a small job goes straight through.
+  const v1::Job small = submit_ok(cornell("raster", 32, 32, 1, 16));
+  const auto small_done = test::wait_for_job(*stub_, small.job_id(), done, 20s);
+  ASSERT_TRUE(small_done);
+  EXPECT_EQ(small_done->state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 5s);
+  const auto cancelled = test::get_job(*stub_, big.job_id());
+  EXPECT_EQ(cancelled->state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_EQ(cancelled->tiles_done(), done_at_cancel);
+
+  v1::GetResultRequest get;
+  get.set_job_id(big.job_id());
+  grpc::ClientContext result_context;
+  auto reader = stub_->GetResult(&result_context, get);
+  v1::FileChunk chunk;
+  while (reader->Read(&chunk)) {
+  }
+  EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+}
+
+TEST_F(FarmSchedulerTest, BadJobsAreRejectedAtSubmitAndTheFarmKeepsServing) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  const auto expect_rejected = [&](const v1::JobSpec& spec, grpc::StatusCode code,
+                                   const std::string& needle) {
+    v1::Job job;
+    const grpc::Status status = test::submit(*stub_, spec, job);
+    EXPECT_EQ(status.error_code(), code) << status.error_message();
+    EXPECT_NE(status.error_message().find(needle), std::string::npos) << status.error_message();
+  };
+
+  v1::JobSpec malformed = cornell("raster", 32, 32, 1, 16);
+  malformed.set_job_json("{ \"version\": 1, \"scene\": ");
+  expect_rejected(malformed, grpc::StatusCode::INVALID_ARGUMENT, "cornell.json");
+
+  nlohmann::json missing_model = nlohmann::json::parse(test::cornell_job_json("raster", 32, 32, 1));
+  missing_model["scene"]["objects"][0]["file"] = "assets/nowhere.obj";
+  expect_rejected(test::make_job_spec(missing_model.dump(), test::cornell_assets(), "cornell.json"),
+                  grpc::StatusCode::INVALID_ARGUMENT, "nowhere.obj");
+
+  nlohmann::json bad_camera = nlohmann::json::parse(test::cornell_job_json("whitted", 32, 32, 1));
+  bad_camera["scene"]["camera"]["target"] = {0, 0, 3.9};  // the camera's own position
+  expect_rejected(test::make_job_spec(bad_camera.dump(), test::cornell_assets(), "cornell.json"),
+                  grpc::StatusCode::INVALID_ARGUMENT, "scene.camera");
+
+  v1::JobSpec not_uploaded = cornell("raster", 32, 32, 1, 16);
+  not_uploaded.mutable_assets(0)->set_sha256(std::string(64, 'f'));
+  expect_rejected(not_uploaded, grpc::StatusCode::FAILED_PRECONDITION, "cornell_box.obj");
+
+  const v1::Job good = submit_ok(cornell("raster", 32, 32, 1, 16));
+  const auto final_job = test::wait_for_job(*stub_, good.job_id(), done, 30s);
+  ASSERT_TRUE(final_job);
+  EXPECT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+
+  v1::GetJobRequest unknown;
+  unknown.set_job_id("nope");
+  grpc::ClientContext context;
+  v1::Job job;
+  EXPECT_EQ(stub_->GetJob(&context, unknown, &job).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+}  // namespace
+}  // namespace farm
