@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "server/read_whole_file.h"
+
 namespace farm {
 
 namespace fs = std::filesystem;
@@ -21,6 +23,7 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   SchedulerOptions s;
   s.data_dir = data_dir_;
   s.exr_type = options.exr_type;
+  s.quiet = true;  // `farm render` shows a progress bar and a summary instead
   // One worker in the same process: it cannot die on its own, so a generous deadline is only a
   // guard; two tiles in flight keep its threads busy between tiles.
   s.tiles_per_worker = 2;
@@ -45,11 +48,7 @@ EmbeddedFarm::~EmbeddedFarm() {
 std::string EmbeddedFarm::add_asset(std::string_view bytes) { return core_->assets().add(bytes); }
 
 std::string EmbeddedFarm::add_asset_file(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
-  std::ostringstream s;
-  s << in.rdbuf();
-  return add_asset(s.str());
+  return add_asset(read_whole_file(file, "asset"));
 }
 
 EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec,

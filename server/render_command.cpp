@@ -15,6 +15,8 @@
 #include "renderer/scene/scene_builder.h"
 #include "server/local_pipeline.h"
 #include "server/progress_bar.h"
+#include "server/embedded_farm.h"
+#include "server/job_submission.h"
 #include "server/validate_command.h"
 
 namespace farm {
@@ -72,10 +74,23 @@ void apply_overrides(Job& job, const RenderOverrides& o) {
   if (o.preview) job.output.preview = *o.preview;
 }
 
+namespace {
+
+// Puts `from` at `to` as one step: a copy next to `to`, then a rename over it.
+void publish_file(const std::filesystem::path& from, const std::filesystem::path& to) {
+  if (to.has_parent_path()) std::filesystem::create_directories(to.parent_path());
+  std::filesystem::path temp = to;
+  temp += ".part";
+  std::filesystem::copy_file(from, temp, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::rename(temp, to);
+}
+
+}  // namespace
+
 void run_render_command(const RenderCommandOptions& options) {
   const Clock::time_point t_start = Clock::now();
-  Job job = load_job(options.job_file, options.load);
-  apply_overrides(job, options.overrides);
+  const JobSubmission submission = make_job_submission(options.job_file, options.load, options.overrides);
+  const Job& job = submission.job;
   if (options.overrides.show_bvh && job.output.preview.empty()) {
     throw InputError("--show-bvh draws over the preview, but this render writes none "
                      "(give --preview FILE.png)");
@@ -85,65 +100,66 @@ void run_render_command(const RenderCommandOptions& options) {
                                  options.job_file.string(), job.output.preview.extension().string()));
   }
 
-  const PreparedScene prepared(build_scene(job));
+  // The same scheduler and worker code a farm runs, in this process: the job is submitted,
+  // split into tiles, rendered by an in-process worker on all threads and merged.
+  EmbeddedFarmOptions farm_options;
+  farm_options.threads = job.render.threads;
+  farm_options.exr_type = options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
+  EmbeddedFarm farm(farm_options);
+  for (const auto& [sha256, file] : submission.files) farm.add_asset_file(file);
   const double load_ms = ms_since(t_start);
 
   const Clock::time_point t_render = Clock::now();
-  TileBuffer film;
+  EmbeddedResult result;
   {
     ProgressBar bar(fmt::format("rendering {}", job.name),
                     options.progress && ProgressBar::stderr_is_terminal());
-    film = render_frame(prepared, job.render,
-                        [&](const TileProgress& p) { bar.update(p.tiles_done, p.tiles_total); });
+    result = farm.run(submission.spec, [&](const v1::Job& j) { bar.update(j.tiles_done(), j.tiles_total()); });
   }
   const double render_ms = ms_since(t_render);
+  if (result.job.state() != v1::JOB_STATE_SUCCEEDED) {
+    throw std::runtime_error(fmt::format("{}: the render failed: {}", options.job_file.string(),
+                                         result.job.failure_reason()));
+  }
 
   const Clock::time_point t_write = Clock::now();
-  const ExrPixelType pixel_type =
-      options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
-  write_exr(film, job.output.image, pixel_type);
+  publish_file(result.exr, job.output.image);
   if (!job.output.preview.empty()) {
     if (options.overrides.show_bvh) {
-      write_preview(with_bvh_overlay(film, prepared, job.render.accel, *options.overrides.show_bvh),
+      const PreparedScene prepared(build_scene(job));
+      write_preview(with_bvh_overlay(read_exr(result.exr), prepared, job.render.accel, *options.overrides.show_bvh),
                     job.output.preview);
     } else {
-      write_preview(film, job.output.preview);
+      publish_file(result.preview, job.output.preview);
     }
   }
   const double write_ms = ms_since(t_write);
 
   const RenderSettings& r = job.render;
-  const std::size_t tiles = split_into_tiles(r.width, r.height, r.tile_size).size();
-  fmt::print("job '{}': {} engine, {}x{}, {} spp, {} triangles in {} object(s)\n", job.name,
-             to_string(r.engine), r.width, r.height, r.spp, prepared.triangle_count(),
-             prepared.objects().size());
+  const v1::TileStats& stats = result.job.stats();
+  fmt::print("job '{}': {} engine, {}x{}, {} spp, {} object(s)\n", job.name, to_string(r.engine), r.width,
+             r.height, r.spp, job.scene.objects.size());
   fmt::print("wrote {} ({}, {} EXR)\n", job.output.image.string(), aov_list(r.aovs),
-             pixel_type == ExrPixelType::Half ? "half" : "float");
+             farm_options.exr_type == ExrPixelType::Half ? "half" : "float");
   if (!job.output.preview.empty()) {
     fmt::print("wrote {} (sRGB preview{})\n", job.output.preview.string(),
                options.overrides.show_bvh
                    ? fmt::format(", BVH levels <= {} drawn over it", *options.overrides.show_bvh)
                    : std::string());
   }
-  if (film.stats().samples > 0) {
-    fmt::print("samples: {} traced, {} NaN/inf samples caught and dropped\n", film.stats().samples,
-               film.stats().invalid_samples);
+  if (stats.samples() > 0) {
+    fmt::print("samples: {} traced, {} NaN/inf samples caught and dropped\n", stats.samples(),
+               stats.invalid_samples());
   }
-  if (film.stats().rays > 0) {
-    fmt::print("rays: {} traced ({:.2f} Mrays/s)\n", film.stats().rays,
-               static_cast<double>(film.stats().rays) / (render_ms * 1e3));
+  if (stats.rays() > 0) {
+    fmt::print("rays: {} traced ({:.2f} Mrays/s)\n", stats.rays(),
+               static_cast<double>(stats.rays()) / (render_ms * 1e3));
   }
-  fmt::print("time: load+prepare {:.1f} ms, render {:.1f} ms ({} tiles of {} px, {} threads), "
+  fmt::print("time: load {:.1f} ms, prepare+render+merge {:.1f} ms ({} tiles of {} px, {} threads), "
              "write {:.1f} ms, total {:.1f} ms\n",
-             load_ms, render_ms, tiles, r.tile_size, resolve_thread_count(r.threads), write_ms,
-             ms_since(t_start));
-  if (job.embree_rays > 0) {
-    const AccelKind accel = accel_to_validate(r.accel);
-    const AccelValidation v = validate_against_embree(prepared, r, accel,
-                                                      static_cast<std::uint64_t>(job.embree_rays));
-    fmt::print("{} ({} vs embree{})\n", v.summary(), to_string(accel),
-               validation_passes(v) ? "" : "; more hit/miss disagreements than 0.001% of rays");
-  }
+             load_ms, render_ms, result.job.tiles_total(), r.tile_size, resolve_thread_count(r.threads),
+             write_ms, ms_since(t_start));
+  if (!result.job.validation().empty()) fmt::print("{}\n", result.job.validation());
 }
 
 }  // namespace farm

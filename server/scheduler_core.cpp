@@ -22,9 +22,11 @@ using SteadyClock = std::chrono::steady_clock;
 
 namespace {
 
-// One line on stderr: the scheduler's log (stdout carries only the "listening" line).
+// One line on stderr: the scheduler's log (stdout carries only the "listening" line). `quiet`
+// keeps the info lines back (warnings and errors always go out).
 template <typename... Args>
-void log_line(const char* level, fmt::format_string<Args...> format, Args&&... args) {
+void log_line(bool quiet, const char* level, fmt::format_string<Args...> format, Args&&... args) {
+  if (quiet && std::string_view(level) == "info") return;
   fmt::print(stderr, "scheduler {}: {}\n", level, fmt::format(format, std::forward<Args>(args)...));
 }
 
@@ -168,7 +170,7 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority) {
   job.priority = priority;
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
   v1::Job added = store_.add_job(job, unix_ms_now());
-  log_line("info", "job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
+  log_line(options_.quiet, "info", "job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
                added.engine(), added.width(), added.height(), added.tiles_total(), priority);
   work_.notify_all();
   return added;
@@ -194,7 +196,7 @@ v1::Job SchedulerCore::cancel(const std::string& job_id) {
     }
   }
   if (after.state() != before->state()) {
-    log_line("info", "job {} cancelled", job_id);
+    log_line(options_.quiet, "info", "job {} cancelled", job_id);
     publish_state(after, before->state());
     cleanup_job_files(job_id);
   }
@@ -280,7 +282,7 @@ std::string SchedulerCore::add_worker(std::shared_ptr<TileWorker> worker, bool r
       threads_.emplace_back([this, entry] { slot_loop(entry); });
     }
   }
-  log_line("info", "worker {} added{}", entry->id, registered ? " (registered)" : "");
+  log_line(options_.quiet, "info", "worker {} added{}", entry->id, registered ? " (registered)" : "");
   return entry->id;
 }
 
@@ -299,7 +301,7 @@ void SchedulerCore::remove_worker(const std::string& worker_id, const std::strin
     }
     workers_.erase(it);
   }
-  log_line("warn", "worker {} removed: {}", worker_id, reason);
+  log_line(options_.quiet, "warn", "worker {} removed: {}", worker_id, reason);
   work_.notify_all();
 }
 
@@ -350,7 +352,7 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
         work_.wait_for(lock, options_.probe_interval / 4, [&] { return stopping_ || w->removed; });
         continue;
       }
-      if (w->down) log_line("info", "worker {} is up", w->id);
+      if (w->down) log_line(options_.quiet, "info", "worker {} is up", w->id);
       w->down = false;
       continue;
     }
@@ -358,7 +360,7 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
     try {
       claim = store_.claim_next_tile(w->id, unix_ms_now());
     } catch (const std::exception& e) {
-      log_line("error", "claiming a tile: {}", e.what());
+      log_line(options_.quiet, "error", "claiming a tile: {}", e.what());
     }
     if (!claim) {
       work_.wait_for(lock, std::chrono::milliseconds(500));
@@ -421,7 +423,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
       }
       return;
     } catch (const std::exception& e) {
-      log_line("error", "job {} tile {}: keeping the result: {}", claim.job_id, claim.index, e.what());
+      log_line(options_.quiet, "error", "job {} tile {}: keeping the result: {}", claim.job_id, claim.index, e.what());
       store_.tile_requeue(claim.job_id, claim.index);
       work_.notify_all();
       return;
@@ -452,7 +454,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
       w->probe_after = SteadyClock::now() + options_.probe_interval;
     }
   }
-  log_line("warn", "job {} tile {}: {}", claim.job_id, claim.index, why);
+  log_line(options_.quiet, "warn", "job {} tile {}: {}", claim.job_id, claim.index, why);
   const v1::JobState before = store_.get_job(claim.job_id)->state();
   const TileFailure failure =
       store_.tile_failed(claim.job_id, claim.index, why, max_attempts, unix_ms_now());
@@ -465,7 +467,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
   f.set_will_retry(failure.will_retry);
   publish(event);
   if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
-    log_line("error", "job {} failed: {}", claim.job_id, failure.job.failure_reason());
+    log_line(options_.quiet, "error", "job {} failed: {}", claim.job_id, failure.job.failure_reason());
     {
       // Its other tiles in flight are of no use now.
       std::lock_guard lock(mutex_);
@@ -520,11 +522,11 @@ void SchedulerCore::merge(const std::string& job_id) {
                                validation_passes(v) ? "" : "; more hit/miss disagreements than 0.001% of rays");
     }
     after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
-    log_line("info", "job {} done: {} tiles merged", job_id, request.tiles.size());
+    log_line(options_.quiet, "info", "job {} done: {} tiles merged", job_id, request.tiles.size());
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED,
                               fmt::format("merging the tiles: {}", e.what()), "", unix_ms_now());
-    log_line("error", "job {} failed: {}", job_id, after.failure_reason());
+    log_line(options_.quiet, "error", "job {} failed: {}", job_id, after.failure_reason());
   }
   if (after.state() != before.state()) publish_state(after, before.state());
   cleanup_job_files(job_id);

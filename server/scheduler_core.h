@@ -42,6 +42,7 @@ struct SchedulerOptions {
   std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
+  bool quiet = false;              // no info lines on stderr (the embedded farm of `farm render`)
 };
 
 // A WatchJob subscription: events of one job, in order.
