@@ -1,44 +1,14 @@
 #pragma once
-// A child process running beside a test (a `farm worker`), its stdout and stderr read through a
-// pipe. Every wait is bounded by a timeout; the destructor kills and reaps a child still running.
-#include <sys/types.h>
-
-#include <chrono>
-#include <optional>
+// Processes beside a test: farm::ChildProcess (server/child_process.h) and the `farm worker`
+// binary under test on a free port.
 #include <string>
 #include <vector>
 
+#include "server/child_process.h"
+
 namespace farm::test {
 
-class BackgroundProcess {
- public:
-  explicit BackgroundProcess(const std::vector<std::string>& argv);
-  ~BackgroundProcess();
-  BackgroundProcess(const BackgroundProcess&) = delete;
-  BackgroundProcess& operator=(const BackgroundProcess&) = delete;
-
-  // Reads output until a line containing `needle` has arrived and returns that line; nullopt when
-  // the timeout passes or the process closes its output first.
-  std::optional<std::string> wait_for_line(const std::string& needle,
-                                           std::chrono::milliseconds timeout);
-  // Everything read so far.
-  const std::string& output() const { return output_; }
-
-  void send_signal(int signal);
-  // The exit code (128 + signal for a killed child), or nullopt if it is still running after
-  // `timeout`. Output keeps being drained meanwhile.
-  std::optional<int> wait_exit(std::chrono::milliseconds timeout);
-
- private:
-  // Appends what is available within `timeout`; false at end of output.
-  bool read_some(std::chrono::milliseconds timeout);
-
-  pid_t pid_ = -1;
-  int out_fd_ = -1;
-  bool eof_ = false;
-  std::optional<int> exit_code_;
-  std::string output_;
-};
+using BackgroundProcess = farm::ChildProcess;
 
 // The `farm worker` binary under test on a free port; waits for its "listening" line.
 class WorkerProcess {

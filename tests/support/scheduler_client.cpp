@@ -26,12 +26,8 @@ SchedulerProcess::SchedulerProcess(const std::filesystem::path& data_dir,
                                       "--data-dir", data_dir.string()};
         argv.insert(argv.end(), extra_args.begin(), extra_args.end());
         return argv;
-      }()) {
-  const std::string prefix = "scheduler listening on ";
-  if (auto line = process_.wait_for_line(prefix, kStartTimeout)) {
-    address_ = line->substr(line->find(prefix) + prefix.size());
-  }
-}
+      }()),
+      address_(wait_for_listening(process_, "scheduler", kStartTimeout)) {}
 
 std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address) {
   grpc::ChannelArguments args;
