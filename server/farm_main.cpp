@@ -9,6 +9,7 @@
 #include "renderer/scene/input_error.h"
 #include "server/bench_command.h"
 #include "server/info_command.h"
+#include "server/farm_bench_command.h"
 #include "server/path_bench_command.h"
 #include "server/rt_bench_command.h"
 #include "server/scheduler_command.h"
@@ -95,6 +96,7 @@ int main(int argc, char** argv) {
                "  farm bench raster measure rasterizer speed and thread scaling\n"
                "  farm bench rt     compare our BVHs with Embree\n"
                "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
+               "  farm bench farm   the farm's overhead over loopback, jobs per second\n"
                "  farm scheduler    serve jobs over gRPC: tiles to workers, merged EXR out\n"
                "  farm worker       serve tiles to a scheduler over gRPC\n"
                "  farm submit JOB   send a job to a scheduler (status, watch, cancel, fetch follow it)"};
@@ -204,6 +206,21 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   farm::WorkerOptions worker_options;
   CLI::App* worker = add_worker_command(app, worker_options);
+  farm::FarmBenchOptions farm_bench;
+  CLI::App* bench_farm = bench->add_subcommand(
+      "farm", "The farm's overhead: the Cornell box path traced through farm render, a scheduler with 1 "
+              "and with 2 workers over loopback; then tiny jobs for jobs/s and submit latency");
+  bench_farm->add_option("--job", farm_bench.job, "The job to render")->capture_default_str();
+  bench_farm->add_option("--spp", farm_bench.spp, "Samples per pixel")->check(CLI::Range(1, 65536))->capture_default_str();
+  bench_farm->add_option("--width", farm_bench.width, "Image width")->check(CLI::Range(1, 16384))->capture_default_str();
+  bench_farm->add_option("--height", farm_bench.height, "Image height")->check(CLI::Range(1, 16384))->capture_default_str();
+  bench_farm->add_option("--repeats", farm_bench.repeats, "Renders per configuration (median reported)")
+      ->check(CLI::Range(1, 100))->capture_default_str();
+  bench_farm->add_option("--tiles-per-worker", farm_bench.tiles_per_worker,
+                         "The scheduler's --tiles-per-worker for (b), (c) and the tiny jobs")
+      ->check(CLI::Range(1, 64))->capture_default_str();
+  bench_farm->add_option("--tiny-jobs", farm_bench.tiny_jobs, "Tiny jobs to submit")->check(CLI::Range(1, 100000))->capture_default_str();
+
   farm::SchedulerCommandOptions scheduler_options;
   CLI::App* scheduler = farm::add_scheduler_command(app, scheduler_options);
   farm::ClientCommands client_commands;
@@ -228,6 +245,8 @@ int main(int argc, char** argv) {
       farm::run_render_command(render_options);
     } else if (bench_rt->parsed()) {
       farm::run_rt_bench(rt_bench);
+    } else if (bench_farm->parsed()) {
+      farm::run_farm_bench(farm_bench);
     } else if (bench_path->parsed()) {
       farm::run_path_bench(path_bench);
     } else if (bench_raster->parsed()) {

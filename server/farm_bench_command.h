@@ -1,0 +1,21 @@
+#pragma once
+// `farm bench farm`: what the farm's machinery costs. The Cornell box path traced at 512x512
+// through (a) `farm render` (the embedded farm), (b) a `farm scheduler` and one `farm worker`
+// over loopback, (c) the scheduler and two workers; then many tiny jobs submitted back to back to
+// (b) for jobs/s and submit latency, checking that none is lost.
+#include <filesystem>
+
+namespace farm {
+
+struct FarmBenchOptions {
+  std::filesystem::path job = "jobs/cornell_path.json";
+  int width = 512, height = 512;
+  int spp = 16;
+  int repeats = 3;       // renders per configuration; the median is reported
+  int tiny_jobs = 200;
+  int tiles_per_worker = 2;  // the scheduler's --tiles-per-worker
+};
+
+void run_farm_bench(const FarmBenchOptions& options);
+
+}  // namespace farm
