@@ -287,5 +287,40 @@ TEST_F(FarmSchedulerTest, BadJobsAreRejectedAtSubmitAndTheFarmKeepsServing) {
   EXPECT_EQ(stub_->GetJob(&context, unknown, &job).error_code(), grpc::StatusCode::NOT_FOUND);
 }
 
+TEST_F(FarmSchedulerTest, PythonClientGeneratedFromTheProtoSubmitsAndFetches) {
+  // Another language speaking the wire contract: tests/python/farm_client.py generates its stubs
+  // from proto/farm.proto with grpc_tools (Debian's python3-grpc-tools) in a venv of this test,
+  // uploads, submits, watches and fetches; the EXR it gets equals the one the C++ client fetches.
+  // Debian's own python3 (not one on PATH from elsewhere) has the python3-grpc* packages.
+  auto worker = start_worker("w1", 2);
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("raster", 48, 32, 1, 16);
+  const fs::path job = dir_ / "job" / "cornell.json";
+  fs::create_directories(job.parent_path());
+  std::ofstream(job) << spec.job_json();
+  const fs::path venv = dir_ / "venv", out = dir_ / "python.exr";
+  const test::CommandResult made = test::run_command(
+      "/usr/bin/python3 -m venv --system-site-packages " + test::shell_quote(venv.string()));
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  std::string command = test::shell_quote((venv / "bin/python").string()) + " " +
+                        test::shell_quote((test::kSource / "tests/python/farm_client.py").string()) +
+                        " --proto " + test::shell_quote((test::kSource / "proto/farm.proto").string()) +
+                        " --gen-dir " + test::shell_quote((dir_ / "gen").string()) + " --scheduler " +
+                        scheduler->address() + " --job " + test::shell_quote(job.string()) + " --out " +
+                        test::shell_quote(out.string());
+  for (const auto& [path, file] : test::cornell_assets()) {
+    command += " --asset " + test::shell_quote(path + "=" + file.string());
+  }
+  const test::CommandResult r = test::run_command(command);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"state\": \"JOB_STATE_SUCCEEDED\""), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"sha256_ok\": true"), std::string::npos) << r.output;
+  const auto id_at = r.output.find("\"job_id\": \"");
+  ASSERT_NE(id_at, std::string::npos) << r.output;
+  const std::string id = r.output.substr(id_at + 11, r.output.find('"', id_at + 11) - id_at - 11);
+  EXPECT_EQ(differing_pixels(read_exr(out), fetch_exr(id)), 0);
+}
+
 }  // namespace
 }  // namespace farm
