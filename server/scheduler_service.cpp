@@ -23,16 +23,8 @@ template <typename F>
 grpc::Status guarded(F&& body) {
   try {
     return body();
-  } catch (const ServiceError& e) {
-    return e.status();
-  } catch (const MissingAssetsError& e) {
-    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
-  } catch (const InputError& e) {
-    return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
-  } catch (const std::bad_alloc&) {
-    return {grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory"};
-  } catch (const std::exception& e) {
-    return {grpc::StatusCode::INTERNAL, e.what()};
+  } catch (const std::exception&) {
+    return status_of_current_exception();
   }
 }
 

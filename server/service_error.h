@@ -19,3 +19,12 @@ class ServiceError : public std::runtime_error {
 };
 
 }  // namespace farm
+
+namespace farm {
+
+// The status a service answers for the exception being handled (call only inside a catch
+// block): ServiceError its own code, MissingAssetsError FAILED_PRECONDITION, InputError
+// INVALID_ARGUMENT, bad_alloc RESOURCE_EXHAUSTED, anything else INTERNAL.
+grpc::Status status_of_current_exception();
+
+}  // namespace farm

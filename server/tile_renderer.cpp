@@ -174,16 +174,8 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
     stats.set_threads(std::min<int>(executor_.threads(), static_cast<int>(subs.size())));
     ++tiles_rendered_;
     return grpc::Status::OK;
-  } catch (const ServiceError& e) {
-    return e.status();
-  } catch (const MissingAssetsError& e) {
-    return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
-  } catch (const InputError& e) {
-    return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
-  } catch (const std::bad_alloc&) {
-    return {grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory"};
-  } catch (const std::exception& e) {
-    return {grpc::StatusCode::INTERNAL, e.what()};
+  } catch (const std::exception&) {
+    return status_of_current_exception();
   }
 }
 
