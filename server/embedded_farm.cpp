@@ -27,6 +27,7 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   // One worker in the same process: it cannot die on its own, so a generous deadline is only a
   // guard; two tiles in flight keep its threads busy between tiles.
   s.tiles_per_worker = 2;
+  s.batch_target = options.batch_target;
   core_ = std::make_unique<SchedulerCore>(s);
   TileRendererOptions r;
   r.blobs_dir = data_dir_ / "assets";  // the scheduler's own store: nothing to fetch

@@ -17,6 +17,7 @@ struct EmbeddedFarmOptions {
   std::filesystem::path data_dir;  // empty: a fresh folder under the temp dir, removed at the end
   int threads = 0;                 // the in-process worker's render threads; 0 = all cores
   ExrPixelType exr_type = ExrPixelType::Half;
+  std::chrono::milliseconds batch_target = SchedulerOptions{}.batch_target;
 };
 
 struct EmbeddedResult {

@@ -41,18 +41,18 @@ std::string self_binary() {
 // A scheduler and `workers` workers on loopback, each in its own process, as a user runs them.
 class LoopbackFarm {
  public:
-  LoopbackFarm(const fs::path& dir, int workers, int tiles_per_worker) {
+  LoopbackFarm(const fs::path& dir, int workers, int tiles_per_worker, int batch_ms, int worker_threads) {
     const std::string farm = self_binary();
     scheduler_ = std::make_unique<ChildProcess>(std::vector<std::string>{
         farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir", (dir / "scheduler").string(),
-        "--tiles-per-worker", std::to_string(tiles_per_worker)});
+        "--tiles-per-worker", std::to_string(tiles_per_worker), "--batch-ms", std::to_string(batch_ms)});
     address_ = wait_for_listening(*scheduler_, "scheduler", kStartTimeout);
     if (address_.empty()) throw std::runtime_error("the scheduler did not start: " + scheduler_->output());
     for (int i = 0; i < workers; ++i) {
       // Registered workers fetch their assets from the scheduler, like a real deployment.
       auto worker = std::make_unique<ChildProcess>(std::vector<std::string>{
           farm, "worker", "--listen", "127.0.0.1:0", "--scheduler", address_, "--cache-dir",
-          (dir / fmt::format("worker{}", i)).string()});
+          (dir / fmt::format("worker{}", i)).string(), "--threads", std::to_string(worker_threads)});
       if (wait_for_listening(*worker, "worker", kStartTimeout).empty()) {
         throw std::runtime_error("a worker did not start: " + worker->output());
       }
@@ -108,37 +108,33 @@ void run_farm_bench(const FarmBenchOptions& o) {
                  ((o.height + submission.job.render.tile_size - 1) / submission.job.render.tile_size),
              submission.job.render.tile_size, o.repeats);
 
-  // (a) farm render: the embedded farm, as run_render_command drives it.
-  std::vector<double> embedded;
+  // The three set-ups take turns, (a) (b) (c) (a) (b) (c) ..., so that a change in the machine's
+  // load during the run (it is shared) falls on all three alike; the medians are compared.
+  LoopbackFarm one(dir / "loopback1", 1, o.tiles_per_worker, o.batch_ms, 0);
+  LoopbackFarm two(dir / "loopback2", 2, o.tiles_per_worker, o.batch_ms, o.two_worker_threads);
+  SchedulerClient client_one(one.address()), client_two(two.address());
+  std::vector<double> embedded, one_worker, two_workers;
   for (int i = 0; i < o.repeats; ++i) {
     const Clock::time_point start = Clock::now();
-    EmbeddedFarm farm;
+    EmbeddedFarmOptions embedded_options;
+    embedded_options.batch_target = std::chrono::milliseconds(o.batch_ms);
+    EmbeddedFarm farm(embedded_options);
     for (const auto& [sha, file] : submission.files) farm.add_asset_file(file);
     const EmbeddedResult r = farm.run(submission.spec);
     if (r.job.state() != v1::JOB_STATE_SUCCEEDED) throw std::runtime_error("embedded render failed: " + r.job.failure_reason());
     fs::copy_file(r.exr, dir / "embedded.exr", fs::copy_options::overwrite_existing);
     embedded.push_back(seconds_since(start));
+    one_worker.push_back(render_through(client_one, submission, dir / "loopback.exr"));
+    two_workers.push_back(render_through(client_two, submission, dir / "loopback.exr"));
   }
-  const double a = median(embedded);
+  const double a = median(embedded), b = median(one_worker), c = median(two_workers);
   fmt::print("{:<44} {:>8.3f} s\n", "(a) farm render (embedded farm)", a);
-
-  double one_worker = 0.0;
-  for (int workers : {1, 2}) {
-    LoopbackFarm farm(dir / fmt::format("loopback{}", workers), workers, o.tiles_per_worker);
-    SchedulerClient client(farm.address());
-    std::vector<double> times;
-    for (int i = 0; i < o.repeats; ++i) times.push_back(render_through(client, submission, dir / "loopback.exr"));
-    const double t = median(times);
-    if (workers == 1) one_worker = t;
-    fmt::print("{:<44} {:>8.3f} s   {:+.1f}% vs (a){}\n",
-               fmt::format("({}) scheduler + {} worker{} over loopback", workers == 1 ? 'b' : 'c', workers,
-                           workers == 1 ? "" : "s"),
-               t, 100.0 * (t - a) / a,
-               workers == 2 ? fmt::format(", {:.2f}x the speed of (b)", one_worker / t) : std::string());
-  }
+  fmt::print("{:<44} {:>8.3f} s   {:+.1f}% vs (a)\n", "(b) scheduler + 1 worker over loopback", b, 100.0 * (b - a) / a);
+  fmt::print("{:<44} {:>8.3f} s   {:+.1f}% vs (a), {:.2f}x the speed of (b)\n",
+             "(c) scheduler + 2 workers over loopback", c, 100.0 * (c - a) / a, b / c);
 
   // Tiny jobs: one 16x16 tile each, submitted back to back, then followed to the end.
-  LoopbackFarm farm(dir / "tiny", 1, o.tiles_per_worker);
+  LoopbackFarm farm(dir / "tiny", 1, o.tiles_per_worker, o.batch_ms, 0);
   SchedulerClient client(farm.address());
   RenderOverrides tiny;
   tiny.engine = "raster";

@@ -14,6 +14,8 @@ struct FarmBenchOptions {
   int repeats = 3;       // renders per configuration; the median is reported
   int tiny_jobs = 200;
   int tiles_per_worker = 2;  // the scheduler's --tiles-per-worker
+  int batch_ms = 200;        // the scheduler's --batch-ms, for all three set-ups
+  int two_worker_threads = 0;  // --threads of each worker in (c); 0 = all cores each
 };
 
 void run_farm_bench(const FarmBenchOptions& options);

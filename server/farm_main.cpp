@@ -219,6 +219,12 @@ int main(int argc, char** argv) {
   bench_farm->add_option("--tiles-per-worker", farm_bench.tiles_per_worker,
                          "The scheduler's --tiles-per-worker for (b), (c) and the tiny jobs")
       ->check(CLI::Range(1, 64))->capture_default_str();
+  bench_farm->add_option("--batch-ms", farm_bench.batch_ms,
+                         "The scheduler's --batch-ms for (a), (b), (c) and the tiny jobs (0: one tile a call)")
+      ->check(CLI::Range(0, 600000))->capture_default_str();
+  bench_farm->add_option("--two-worker-threads", farm_bench.two_worker_threads,
+                         "--threads of each worker in (c) (0: all cores each, as `farm worker` defaults)")
+      ->check(CLI::Range(0, 1024))->capture_default_str();
   bench_farm->add_option("--tiny-jobs", farm_bench.tiny_jobs, "Tiny jobs to submit")->check(CLI::Range(1, 100000))->capture_default_str();
 
   farm::SchedulerCommandOptions scheduler_options;

@@ -13,13 +13,14 @@ namespace fs = std::filesystem;
 
 MergedFrame merge_tiles(const TileResults& results, const MergeRequest& request) {
   MergedFrame merged;
-  // Tiles cover the image exactly (split_into_tiles), so the film need not be cleared first.
+  // The parts cover the image exactly (tiles of split_into_tiles, in batches), so the film need
+  // not be cleared first.
   merged.film.reset_for_overwrite(request.image, request.aovs);
-  for (std::uint32_t index : request.tiles) {
-    const v1::RenderTileResponse tile = results.read(request.job_id, index);
+  for (std::uint32_t part : request.parts) {
+    const v1::RenderTileResponse tile = results.read(request.job_id, part);
     const TileBuffer buffer = decode_tile(tile.tile());
     if (buffer.rect().intersect(request.image) != buffer.rect()) {
-      throw std::runtime_error(fmt::format("tile {} of job {} lies outside the image", index,
+      throw std::runtime_error(fmt::format("result {} of job {} lies outside the image", part,
                                            request.job_id));
     }
     merged.film.paste(buffer);

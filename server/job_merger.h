@@ -1,5 +1,5 @@
 #pragma once
-// A job's finished tiles -> its frame: every tile file pasted into one TileBuffer, written as the
+// A job's finished tiles -> its frame: every result file (one per batch of tiles) pasted into one TileBuffer, written as the
 // EXR (R G B A plus the job's AOV layers) and the sRGB PNG preview, as `farm render` writes them.
 #include <filesystem>
 #include <string>
@@ -15,14 +15,14 @@ struct MergeRequest {
   std::string job_id;
   Rect image;                     // {0, 0, width, height}
   AovSet aovs;
-  std::vector<std::uint32_t> tiles;  // indices of the job's tiles
+  std::vector<std::uint32_t> parts;  // the job's result files (TileResults), each once
 };
 
 struct MergedFrame {
   TileBuffer film;                // stats summed over the tiles
 };
 
-// Reads and pastes every tile; std::runtime_error when one is missing or does not fit the image.
+// Reads and pastes every part; std::runtime_error when one is missing or does not fit the image.
 MergedFrame merge_tiles(const TileResults& results, const MergeRequest& request);
 
 struct MergedFiles {

@@ -11,7 +11,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 1;
+constexpr int kSchemaVersion = 2;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
@@ -46,6 +46,7 @@ CREATE TABLE IF NOT EXISTS tiles (
   attempts INTEGER NOT NULL DEFAULT 0,
   last_error TEXT NOT NULL DEFAULT '',
   worker TEXT NOT NULL DEFAULT '',
+  part INTEGER NOT NULL DEFAULT 0,
   PRIMARY KEY (job_seq, idx)
 );
 CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
@@ -60,15 +61,15 @@ const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
                 static_cast<int>(v1::JOB_STATE_RUNNING));
 
-// One prepared statement, finalized at scope exit.
+// A prepared statement from the store's cache, reset (bindings cleared) at scope exit so the next
+// user finds it fresh. Preparing is most of the cost of the scheduler's small queries.
 class Stmt {
  public:
-  Stmt(sqlite3* db, const std::string& sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &s_, nullptr) != SQLITE_OK) {
-      throw std::runtime_error(fmt::format("job store: {}: {}", sqlite3_errmsg(db), sql));
-    }
+  Stmt(sqlite3* db, sqlite3_stmt* s) : db_(db), s_(s) {}
+  ~Stmt() {
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
   }
-  ~Stmt() { sqlite3_finalize(s_); }
   Stmt(const Stmt&) = delete;
   Stmt& operator=(const Stmt&) = delete;
 
@@ -207,20 +208,32 @@ JobStore::JobStore(const std::filesystem::path& file) {
   exec("PRAGMA synchronous=NORMAL");
   exec("PRAGMA foreign_keys=ON");
   exec(kSchema);
+  int version = 0;
   {
-    Stmt version(db_, "SELECT version FROM schema_version");
-    if (!version.step()) {
-      Stmt(db_, "INSERT INTO schema_version (version) VALUES (?)").bind(1, kSchemaVersion).run();
-    } else if (version.i32(0) != kSchemaVersion) {
-      throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}",
-                                           file.string(), version.i32(0), kSchemaVersion));
-    }
+    Stmt s(db_, prepared("SELECT version FROM schema_version"));
+    if (s.step()) version = s.i32(0);
+  }
+  if (version == 0) {
+    Stmt(db_, prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
+  } else if (version == 1) {
+    // Version 1 kept one file per tile: each done tile is its own part.
+    Transaction t(db_);
+    exec("ALTER TABLE tiles ADD COLUMN part INTEGER NOT NULL DEFAULT 0");
+    exec("UPDATE tiles SET part = idx");
+    exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
+    t.commit();
+  } else if (version != kSchemaVersion) {
+    throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}",
+                                         file.string(), version, kSchemaVersion));
   }
   // Tiles in flight when the last scheduler stopped: their results died with it.
   exec("UPDATE tiles SET state = 0, worker = '' WHERE state = 1");
 }
 
-JobStore::~JobStore() { sqlite3_close(db_); }
+JobStore::~JobStore() {
+  for (auto& [sql, statement] : statements_) sqlite3_finalize(statement);
+  sqlite3_close(db_);
+}
 
 void JobStore::exec(const char* sql) const {
   char* error = nullptr;
@@ -231,19 +244,28 @@ void JobStore::exec(const char* sql) const {
   }
 }
 
+sqlite3_stmt* JobStore::prepared(const std::string& sql) const {
+  if (auto it = statements_.find(sql); it != statements_.end()) return it->second;
+  sqlite3_stmt* statement = nullptr;
+  if (sqlite3_prepare_v3(db_, sql.c_str(), -1, SQLITE_PREPARE_PERSISTENT, &statement, nullptr) != SQLITE_OK) {
+    throw std::runtime_error(fmt::format("job store: {}: {}", sqlite3_errmsg(db_), sql));
+  }
+  statements_.emplace(sql, statement);
+  return statement;
+}
+
 v1::Job JobStore::add_job(const NewJob& j, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
-  Stmt insert(db_,
-              "INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, "
-              "state, submitted_ms, tiles_total) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
-  insert.bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
+  Stmt(db_, prepared("INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, "
+                     "state, submitted_ms, tiles_total) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
+      .bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
       .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
       .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
-      .bind(11, static_cast<std::int64_t>(j.tiles.size()));
-  insert.run();
+      .bind(11, static_cast<std::int64_t>(j.tiles.size()))
+      .run();
   const std::int64_t seq = sqlite3_last_insert_rowid(db_);
-  Stmt tile(db_, "INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1) VALUES (?, ?, ?, ?, ?, ?)");
+  Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1) VALUES (?, ?, ?, ?, ?, ?)"));
   for (std::size_t i = 0; i < j.tiles.size(); ++i) {
     const Rect& r = j.tiles[i];
     tile.reset();
@@ -256,23 +278,26 @@ v1::Job JobStore::add_job(const NewJob& j, std::int64_t now_ms) {
 }
 
 v1::Job JobStore::load_job_locked(const std::string& id) const {
-  Stmt s(db_, fmt::format("SELECT {} FROM jobs WHERE id = ?", kJobColumns));
-  s.bind(1, id);
-  if (!s.step()) throw std::runtime_error("job store: no job " + id);
-  return job_from_row(s);
+  std::optional<v1::Job> job = find_job_locked(id);
+  if (!job) throw std::runtime_error("job store: no job " + id);
+  return *job;
 }
 
-std::optional<v1::Job> JobStore::get_job(const std::string& id) const {
-  std::lock_guard lock(mutex_);
-  Stmt s(db_, fmt::format("SELECT {} FROM jobs WHERE id = ?", kJobColumns));
+std::optional<v1::Job> JobStore::find_job_locked(const std::string& id) const {
+  Stmt s(db_, prepared(fmt::format("SELECT {} FROM jobs WHERE id = ?", kJobColumns)));
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   return job_from_row(s);
 }
 
+std::optional<v1::Job> JobStore::get_job(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  return find_job_locked(id);
+}
+
 std::optional<v1::JobSpec> JobStore::get_spec(const std::string& id) const {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, "SELECT spec FROM jobs WHERE id = ?");
+  Stmt s(db_, prepared("SELECT spec FROM jobs WHERE id = ?"));
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   v1::JobSpec spec;
@@ -289,7 +314,17 @@ std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
     where += fmt::format(" AND state IN ({})", in);
   }
   std::lock_guard lock(mutex_);
-  Stmt s(db_, fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?", kJobColumns, where));
+  // Not cached: the text varies with the filter and the page.
+  sqlite3_stmt* statement = nullptr;
+  const std::string sql = fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?", kJobColumns, where);
+  if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &statement, nullptr) != SQLITE_OK) {
+    throw std::runtime_error(fmt::format("job store: {}: {}", sqlite3_errmsg(db_), sql));
+  }
+  struct Finalize {
+    sqlite3_stmt* s;
+    ~Finalize() { sqlite3_finalize(s); }
+  } finalize{statement};
+  Stmt s(db_, statement);
   s.bind(1, limit + 1);
   std::vector<v1::Job> jobs;
   std::int64_t last_seq = 0, next = 0;
@@ -306,9 +341,8 @@ std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
 
 std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
   std::lock_guard lock(mutex_);
-  Stmt s(db_,
-         "SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker "
-         "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx");
+  Stmt s(db_, prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part "
+                       "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx"));
   s.bind(1, id);
   std::vector<TileRecord> out;
   while (s.step()) {
@@ -320,6 +354,7 @@ std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
     t.attempts = s.i32(6);
     t.last_error = s.text(7);
     t.worker = s.text(8);
+    t.part = static_cast<std::uint32_t>(s.i64(9));
     out.push_back(std::move(t));
   }
   return out;
@@ -327,104 +362,147 @@ std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
 
 std::vector<std::string> JobStore::active_jobs() const {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, fmt::format("SELECT id FROM jobs WHERE state IN {} ORDER BY seq", kActiveSql));
+  Stmt s(db_, prepared(fmt::format("SELECT id FROM jobs WHERE state IN {} ORDER BY seq", kActiveSql)));
   std::vector<std::string> ids;
   while (s.step()) ids.push_back(s.text(0));
   return ids;
 }
 
-std::optional<TileClaim> JobStore::claim_next_tile(const std::string& worker, std::int64_t now_ms) {
+std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, std::int64_t now_ms,
+                                                    const BatchSize& batch_size) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
-  Stmt pick(db_, fmt::format(
-                     "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts FROM jobs j "
-                     "JOIN tiles t ON t.job_seq = j.seq WHERE j.state IN {} AND t.state = 0 "
-                     "ORDER BY j.priority DESC, j.seq ASC, t.idx ASC LIMIT 1",
-                     kActiveSql));
-  if (!pick.step()) return std::nullopt;
-  TileClaim claim;
-  const std::int64_t seq = pick.i64(0);
-  claim.job_id = pick.text(1);
-  claim.index = static_cast<std::uint32_t>(pick.i64(2));
-  claim.rect = {pick.i32(3), pick.i32(4), pick.i32(5), pick.i32(6)};
-  claim.attempts = pick.i32(7);
-  Stmt(db_, "UPDATE tiles SET state = 1, worker = ? WHERE job_seq = ? AND idx = ?")
-      .bind(1, worker).bind(2, seq).bind(3, claim.index).run();
-  Stmt(db_, "UPDATE jobs SET state = ?, started_ms = CASE WHEN started_ms = 0 THEN ? ELSE "
-            "started_ms END WHERE seq = ?")
+  TileBatch batch;
+  std::int64_t seq = 0;
+  {
+    Stmt pick(db_, prepared(fmt::format(
+                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts FROM jobs j "
+                       "JOIN tiles t ON t.job_seq = j.seq WHERE j.state IN {} AND t.state = 0 "
+                       "ORDER BY j.priority DESC, j.seq ASC, t.idx ASC LIMIT 1",
+                       kActiveSql)));
+    if (!pick.step()) return std::nullopt;
+    seq = pick.i64(0);
+    batch.job_id = pick.text(1);
+    batch.first = static_cast<std::uint32_t>(pick.i64(2));
+    batch.rect = {pick.i32(3), pick.i32(4), pick.i32(5), pick.i32(6)};
+    batch.attempts = pick.i32(7);
+  }
+  // A tile that failed before goes alone, so it cannot take fresh neighbours down with it.
+  if (batch_size && batch.attempts == 0) {
+    int queued = 0;
+    {
+      Stmt count(db_, prepared("SELECT COUNT(*) FROM tiles WHERE state = 0 AND job_seq = ?"));
+      count.bind(1, seq);
+      if (count.step()) queued = count.i32(0);
+    }
+    const int wanted = batch_size(batch.job_id, queued);
+    if (wanted > 1) {
+      // The following tiles while they continue the same row of the grid: the batch's union is
+      // then one rectangle, rendered in one call.
+      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts FROM tiles "
+                              "WHERE job_seq = ? AND idx > ? AND idx < ? ORDER BY idx"));
+      next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
+      while (next.step()) {
+        const Rect r{next.i32(1), next.i32(2), next.i32(3), next.i32(4)};
+        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 ||
+            r.y0 != batch.rect.y0 || r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
+          break;
+        }
+        batch.rect.x1 = r.x1;
+        ++batch.count;
+      }
+    }
+  }
+  Stmt(db_, prepared("UPDATE tiles SET state = 1, worker = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+      .bind(1, worker).bind(2, seq).bind(3, batch.first).bind(4, batch.first + batch.count).run();
+  Stmt(db_, prepared("UPDATE jobs SET state = ?, started_ms = CASE WHEN started_ms = 0 THEN ? ELSE "
+                     "started_ms END WHERE seq = ?"))
       .bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, now_ms).bind(3, seq).run();
   t.commit();
-  return claim;
+  return batch;
 }
 
-bool JobStore::tile_done(const std::string& job_id, std::uint32_t index,
-                         const v1::TileStats& stats) {
+std::optional<std::int64_t> JobStore::running_batch_locked(const std::string& job_id, std::uint32_t first,
+                                                           std::uint32_t count) const {
+  Stmt find(db_, prepared(fmt::format(
+                     "SELECT j.seq, COUNT(*) FROM jobs j JOIN tiles t ON t.job_seq = j.seq WHERE j.id = ? "
+                     "AND j.state IN {} AND t.idx >= ? AND t.idx < ? AND t.state = 1 GROUP BY j.seq",
+                     kActiveSql)));
+  find.bind(1, job_id).bind(2, first).bind(3, static_cast<std::int64_t>(first) + count);
+  if (!find.step() || find.i64(1) != count) return std::nullopt;
+  return find.i64(0);
+}
+
+bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                          const v1::TileStats& stats) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
-  Stmt find(db_, fmt::format("SELECT j.seq, j.stats FROM jobs j JOIN tiles t ON t.job_seq = j.seq "
-                             "WHERE j.id = ? AND j.state IN {} AND t.idx = ? AND t.state = 1",
-                             kActiveSql));
-  find.bind(1, job_id).bind(2, index);
-  if (!find.step()) return false;
-  const std::int64_t seq = find.i64(0);
+  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count);
+  if (!seq) return false;
   v1::TileStats sum;
-  sum.ParseFromString(find.blob(1));
+  {
+    Stmt s(db_, prepared("SELECT stats FROM jobs WHERE seq = ?"));
+    s.bind(1, *seq);
+    if (s.step()) sum.ParseFromString(s.blob(0));
+  }
   add_stats(sum, stats);
-  Stmt(db_, "UPDATE tiles SET state = 2 WHERE job_seq = ? AND idx = ?").bind(1, seq).bind(2, index).run();
-  Stmt(db_, "UPDATE jobs SET tiles_done = tiles_done + 1, tiles_rendered = tiles_rendered + 1, "
-            "stats = ? WHERE seq = ?")
-      .bind_blob(1, sum.SerializeAsString()).bind(2, seq).run();
+  Stmt(db_, prepared("UPDATE tiles SET state = 2, part = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+      .bind(1, first).bind(2, *seq).bind(3, first).bind(4, first + count).run();
+  Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done + ?, tiles_rendered = tiles_rendered + ?, "
+                     "stats = ? WHERE seq = ?"))
+      .bind(1, count).bind(2, count).bind_blob(3, sum.SerializeAsString()).bind(4, *seq).run();
   t.commit();
   return true;
 }
 
-TileFailure JobStore::tile_failed(const std::string& job_id, std::uint32_t index,
-                                  const std::string& reason, int max_attempts,
-                                  std::int64_t now_ms) {
+TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                                   const std::string& reason, int max_attempts, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   TileFailure result;
-  Stmt find(db_, fmt::format("SELECT j.seq, t.attempts FROM jobs j JOIN tiles t ON t.job_seq = j.seq "
-                             "WHERE j.id = ? AND j.state IN {} AND t.idx = ? AND t.state = 1",
-                             kActiveSql));
-  find.bind(1, job_id).bind(2, index);
-  if (!find.step()) {
+  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count);
+  if (!seq) {
     result.job = load_job_locked(job_id);
     return result;
   }
-  const std::int64_t seq = find.i64(0);
-  const int attempts = find.i32(1) + 1;
+  int attempts = 0;
+  {
+    Stmt s(db_, prepared("SELECT MAX(attempts) FROM tiles WHERE job_seq = ? AND idx >= ? AND idx < ?"));
+    s.bind(1, *seq).bind(2, first).bind(3, first + count);
+    if (s.step()) attempts = s.i32(0) + 1;
+  }
   result.will_retry = attempts < max_attempts;
-  Stmt(db_, "UPDATE tiles SET state = ?, attempts = ?, last_error = ?, worker = '' "
-            "WHERE job_seq = ? AND idx = ?")
+  Stmt(db_, prepared("UPDATE tiles SET state = ?, attempts = attempts + 1, last_error = ?, worker = '' "
+                     "WHERE job_seq = ? AND idx >= ? AND idx < ?"))
       .bind(1, static_cast<int>(result.will_retry ? TileState::Queued : TileState::Failed))
-      .bind(2, attempts).bind(3, reason).bind(4, seq).bind(5, index).run();
-  Stmt(db_, "UPDATE jobs SET tile_failures = tile_failures + 1 WHERE seq = ?").bind(1, seq).run();
+      .bind(2, reason).bind(3, *seq).bind(4, first).bind(5, first + count).run();
+  Stmt(db_, prepared("UPDATE jobs SET tile_failures = tile_failures + ? WHERE seq = ?")).bind(1, count).bind(2, *seq).run();
   if (!result.will_retry) {
-    Stmt(db_, "UPDATE jobs SET state = ?, failure_reason = ?, finished_ms = ? WHERE seq = ?")
+    const std::string tiles = count == 1 ? fmt::format("tile {}", first)
+                                         : fmt::format("tiles {}-{}", first, first + count - 1);
+    Stmt(db_, prepared("UPDATE jobs SET state = ?, failure_reason = ?, finished_ms = ? WHERE seq = ?"))
         .bind(1, static_cast<int>(v1::JOB_STATE_FAILED))
-        .bind(2, fmt::format("tile {} failed {} time{}; last error: {}", index, attempts,
-                             attempts == 1 ? "" : "s", reason))
-        .bind(3, now_ms).bind(4, seq).run();
+        .bind(2, fmt::format("{} failed {} time{}; last error: {}", tiles, attempts, attempts == 1 ? "" : "s", reason))
+        .bind(3, now_ms).bind(4, *seq).run();
   }
   t.commit();
   result.job = load_job_locked(job_id);
   return result;
 }
 
-void JobStore::tile_requeue(const std::string& job_id, std::uint32_t index) {
+void JobStore::batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count) {
   std::lock_guard lock(mutex_);
-  Stmt(db_, "UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND idx = ? AND job_seq = "
-            "(SELECT seq FROM jobs WHERE id = ?)")
-      .bind(1, index).bind(2, job_id).run();
+  Stmt(db_, prepared("UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND idx >= ? AND idx < ? "
+                     "AND job_seq = (SELECT seq FROM jobs WHERE id = ?)"))
+      .bind(1, first).bind(2, static_cast<std::int64_t>(first) + count).bind(3, job_id).run();
 }
 
 v1::Job JobStore::finish_job(const std::string& id, v1::JobState state, const std::string& reason,
                              const std::string& validation, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
-  Stmt(db_, fmt::format("UPDATE jobs SET state = ?, failure_reason = ?, validation = ?, "
-                        "finished_ms = ? WHERE id = ? AND state IN {}",
-                        kActiveSql))
+  Stmt(db_, prepared(fmt::format("UPDATE jobs SET state = ?, failure_reason = ?, validation = ?, "
+                                 "finished_ms = ? WHERE id = ? AND state IN {}",
+                                 kActiveSql)))
       .bind(1, static_cast<int>(state)).bind(2, reason).bind(3, validation).bind(4, now_ms)
       .bind(5, id).run();
   return load_job_locked(id);
@@ -432,11 +510,9 @@ v1::Job JobStore::finish_job(const std::string& id, v1::JobState state, const st
 
 v1::Job JobStore::cancel_job(const std::string& id, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
-  Transaction t(db_);
-  Stmt(db_, fmt::format("UPDATE jobs SET state = ?, finished_ms = ? WHERE id = ? AND state IN {}",
-                        kActiveSql))
+  Stmt(db_, prepared(fmt::format("UPDATE jobs SET state = ?, finished_ms = ? WHERE id = ? AND state IN {}",
+                                 kActiveSql)))
       .bind(1, static_cast<int>(v1::JOB_STATE_CANCELLED)).bind(2, now_ms).bind(3, id).run();
-  t.commit();
   return load_job_locked(id);
 }
 

@@ -4,7 +4,7 @@
 // store; open() puts tiles that were running back in the queue (their results were lost with the
 // process) and keeps done tiles done (their data is on disk, written before they were marked).
 //
-// Schema (version 1):
+// Schema (version 2; a version 1 store is upgraded in place):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
@@ -12,10 +12,15 @@
 //        not yet), failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered,
 //        stats BLOB (farm.v1.TileStats, summed over done tiles), validation, render_seconds)
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
-//         last_error, worker; PRIMARY KEY (job_seq, idx))
-// The store is one connection behind a mutex: the scheduler's writes are a few per tile.
+//         last_error, worker, part (done tiles: the first tile of the batch whose result file
+//         holds them); PRIMARY KEY (job_seq, idx))
+// Tiles go out in batches: consecutive tiles of one row of the job's grid, rendered by one call
+// as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
+// The store is one connection behind a mutex, its statements prepared once.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -25,6 +30,7 @@
 #include "renderer/image/tile_buffer.h"
 
 struct sqlite3;
+struct sqlite3_stmt;
 
 namespace farm {
 
@@ -49,15 +55,21 @@ struct TileRecord {
   int attempts = 0;
   std::string last_error;
   std::string worker;
+  std::uint32_t part = 0;  // done tiles: the result file that holds them (TileResults)
 };
 
-// A tile handed to a worker by claim_next_tile (now `running`).
-struct TileClaim {
+// Tiles first .. first + count - 1 of a job, handed to a worker by claim_next_batch (now
+// `running`): one row segment of the job's grid, `rect` their union.
+struct TileBatch {
   std::string job_id;
-  std::uint32_t index = 0;
+  std::uint32_t first = 0;
+  std::uint32_t count = 1;
   Rect rect;
-  int attempts = 0;  // failed attempts before this one
+  int attempts = 0;  // failed attempts before this one (a batch of more than one: 0)
 };
+
+// How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued.
+using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
 
 // What tile_failed did.
 struct TileFailure {
@@ -86,20 +98,26 @@ class JobStore {
   // Jobs QUEUED or RUNNING, in submission order.
   std::vector<std::string> active_jobs() const;
 
-  // The next queued tile of an active job: highest priority, then earliest submission, then tile
-  // index. Marks it running on `worker` and the job RUNNING (started_at set on the first claim).
-  std::optional<TileClaim> claim_next_tile(const std::string& worker, std::int64_t now_ms);
+  // The next queued tile of an active job (highest priority, then earliest submission, then tile
+  // index) and, when `batch_size` allows more than one, the queued tiles that follow it in the
+  // same grid row, never one that failed before (a tile that failed goes alone). Without
+  // `batch_size`, one tile. Marks them running on `worker` and the job RUNNING (started_at set
+  // on the first claim).
+  std::optional<TileBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
+                                            const BatchSize& batch_size = {});
 
-  // The tile's data is on disk: marks it done and adds its stats, if it is still running on an
-  // active job (false otherwise: the job was cancelled or failed, or the tile was requeued).
-  bool tile_done(const std::string& job_id, std::uint32_t index, const v1::TileStats& stats);
-  // Counts a failed attempt. Below max_attempts the tile is queued again; at max_attempts the job
-  // FAILS with `reason`. Nothing happens (will_retry false, job as it is) unless the tile is
-  // running on an active job.
-  TileFailure tile_failed(const std::string& job_id, std::uint32_t index, const std::string& reason,
-                          int max_attempts, std::int64_t now_ms);
-  // Puts a running tile back in the queue without counting an attempt (a shutdown, not a failure).
-  void tile_requeue(const std::string& job_id, std::uint32_t index);
+  // The batch's data is on disk (TileResults part `first`): marks its tiles done and adds its
+  // stats, if they are all still running on an active job (false otherwise: the job was
+  // cancelled or failed, or the tiles were requeued).
+  bool batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                  const v1::TileStats& stats);
+  // Counts a failed attempt on each of the batch's tiles. Below max_attempts they are queued
+  // again; at max_attempts the job FAILS with `reason`. Nothing happens (will_retry false, job as
+  // it is) unless the batch is running on an active job.
+  TileFailure batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                           const std::string& reason, int max_attempts, std::int64_t now_ms);
+  // Puts a running batch back in the queue without counting an attempt (a shutdown, not a failure).
+  void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count);
 
   // Final states. Each is a no-op (returns the job as it is) when the job is already final.
   v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
@@ -108,10 +126,16 @@ class JobStore {
 
  private:
   void exec(const char* sql) const;
+  sqlite3_stmt* prepared(const std::string& sql) const;  // cached; under mutex_
   v1::Job load_job_locked(const std::string& id) const;
+  std::optional<v1::Job> find_job_locked(const std::string& id) const;
+  // The job's seq when the batch's tiles are all running on an active job.
+  std::optional<std::int64_t> running_batch_locked(const std::string& job_id, std::uint32_t first,
+                                                   std::uint32_t count) const;
 
   mutable std::mutex mutex_;
   sqlite3* db_ = nullptr;
+  mutable std::map<std::string, sqlite3_stmt*> statements_;
 };
 
 bool is_final(v1::JobState state);

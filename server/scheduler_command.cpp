@@ -54,8 +54,14 @@ CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& o) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   s->add_option("--tiles-per-worker", o.tiles_per_worker,
-                "Tiles in flight per worker, so that none idles between tiles")
+                "Calls in flight per worker, so that none idles between calls")
       ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  s->add_option("--batch-ms", o.batch_ms,
+                "Rendering time one call aims at: once a job's first tiles are timed, consecutive "
+                "tiles of a row go out together in batches about this long (smaller near the end "
+                "of a job; a tile that failed goes alone); 0 sends one tile per call")
+      ->check(CLI::Range(0, 600000))
       ->capture_default_str();
   s->add_option("--heartbeat-interval", o.heartbeat_interval_s,
                 "Seconds between registered workers' heartbeats; one silent for 3 is dropped")
@@ -81,6 +87,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.tile_deadline = ms(o.tile_deadline_s);
   options.max_attempts = o.max_attempts;
   options.tiles_per_worker = o.tiles_per_worker;
+  options.batch_target = std::chrono::milliseconds(o.batch_ms);
   options.heartbeat_interval = ms(o.heartbeat_interval_s);
   options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
   SchedulerCore core(options);

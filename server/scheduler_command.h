@@ -16,6 +16,7 @@ struct SchedulerCommandOptions {
   double tile_deadline_s = 600;
   int max_attempts = 3;
   int tiles_per_worker = 2;
+  int batch_ms = 200;
   double heartbeat_interval_s = 1;
   bool float_exr = false;
 };

@@ -71,10 +71,18 @@ v1::TileRect to_proto(const Rect& r) {
   return t;
 }
 
+std::string describe(const TileBatch& batch) {
+  return batch.count == 1 ? fmt::format("tile {}", batch.first)
+                          : fmt::format("tiles {}-{}", batch.first, batch.first + batch.count - 1);
+}
+
+// A batch never holds more tiles than this, whatever the estimate says.
+constexpr int kMaxBatch = 64;
+
 }  // namespace
 
 struct SchedulerCore::InFlight {
-  TileClaim claim;
+  TileBatch batch;
   std::string worker_id;
   std::shared_ptr<TileCancel> cancel = std::make_shared<TileCancel>();
   CancelReason reason = CancelReason::None;  // under SchedulerCore::mutex_
@@ -189,7 +197,7 @@ v1::Job SchedulerCore::cancel(const std::string& job_id) {
     std::lock_guard lock(mutex_);
     after = store_.cancel_job(job_id, unix_ms_now());
     for (const auto& call : in_flight_) {
-      if (call->claim.job_id == job_id) {
+      if (call->batch.job_id == job_id) {
         call->reason = CancelReason::JobCancelled;
         call->cancel->cancel();
       }
@@ -266,6 +274,7 @@ void SchedulerCore::cleanup_job_files(const std::string& job_id) {
   results_.remove_job(job_id);
   std::lock_guard lock(mutex_);
   specs_.erase(job_id);
+  ms_per_tile_.erase(job_id);
 }
 
 // ---- Workers -------------------------------------------------------------------------------------
@@ -356,18 +365,20 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
       w->down = false;
       continue;
     }
-    std::optional<TileClaim> claim;
+    std::optional<TileBatch> batch;
     try {
-      claim = store_.claim_next_tile(w->id, unix_ms_now());
+      batch = store_.claim_next_batch(w->id, unix_ms_now(), [this](const std::string& job_id, int queued) {
+        return batch_size_locked(job_id, queued);
+      });
     } catch (const std::exception& e) {
-      log_line(options_.quiet, "error", "claiming a tile: {}", e.what());
+      log_line(options_.quiet, "error", "claiming tiles: {}", e.what());
     }
-    if (!claim) {
+    if (!batch) {
       work_.wait_for(lock, std::chrono::milliseconds(500));
       continue;
     }
     auto call = std::make_shared<InFlight>();
-    call->claim = *claim;
+    call->batch = *batch;
     call->worker_id = w->id;
     in_flight_.insert(call);
     lock.unlock();
@@ -376,14 +387,15 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
     v1::RenderTileResponse response;
     grpc::Status status;
     try {
-      const std::shared_ptr<const v1::JobSpec> spec = spec_of(claim->job_id);
+      const std::shared_ptr<const v1::JobSpec> spec = spec_of(batch->job_id);
       *request.mutable_job() = *spec;
-      request.set_scene_hash(store_.get_job(claim->job_id)->scene_hash());
-      *request.mutable_rect() = to_proto(claim->rect);
-      request.set_job_id(claim->job_id);
-      request.set_tile_index(claim->index);
+      request.set_scene_hash(store_.get_job(batch->job_id)->scene_hash());
+      *request.mutable_rect() = to_proto(batch->rect);
+      request.set_job_id(batch->job_id);
+      request.set_tile_index(batch->first);
+      // Each tile of the batch has its deadline.
       status = w->worker->render(request, response,
-                                 std::chrono::system_clock::now() + options_.tile_deadline,
+                                 std::chrono::system_clock::now() + options_.tile_deadline * batch->count,
                                  *call->cancel);
     } catch (const std::exception& e) {
       status = grpc::Status(grpc::StatusCode::INTERNAL, e.what());
@@ -395,10 +407,30 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
   }
 }
 
+int SchedulerCore::batch_size_locked(const std::string& job_id, int queued_tiles) const {
+  if (options_.batch_target.count() <= 0) return 1;
+  const auto it = ms_per_tile_.find(job_id);
+  if (it == ms_per_tile_.end()) return 1;  // nothing measured yet: the first tiles tell
+  int slots = 0;
+  for (const auto& [id, w] : workers_) slots += w->down ? 0 : std::max(1, options_.tiles_per_worker);
+  // The tail goes out in small pieces, so that no worker is left with a long batch while the
+  // others have nothing: at most half of each slot's share of what is queued.
+  const int share = queued_tiles / (2 * std::max(1, slots));
+  const double by_time = static_cast<double>(options_.batch_target.count()) / std::max(it->second, 1e-3);
+  return std::clamp(std::min(static_cast<int>(by_time), share), 1, kMaxBatch);
+}
+
+void SchedulerCore::measured(const TileBatch& batch, const v1::TileStats& stats) {
+  const double ms = stats.render_ms() / std::max<std::uint32_t>(1, batch.count);
+  std::lock_guard lock(mutex_);
+  auto [it, added] = ms_per_tile_.emplace(batch.job_id, ms);
+  if (!added) it->second = 0.5 * (it->second + ms);  // tiles differ: follow the recent ones
+}
+
 void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const InFlight& call,
                                   const grpc::Status& status,
                                   const v1::RenderTileResponse& response) {
-  const TileClaim& claim = call.claim;
+  const TileBatch& batch = call.batch;
   CancelReason reason;
   std::string reason_text;
   {
@@ -409,29 +441,31 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
   if (status.ok() && reason != CancelReason::JobCancelled) {
     try {
       // The file first, then the mark: a done tile always has its data.
-      results_.write(claim.job_id, claim.index, response);
-      if (store_.tile_done(claim.job_id, claim.index, response.stats())) {
+      results_.write(batch.job_id, batch.first, response);
+      if (store_.batch_done(batch.job_id, batch.first, batch.count, response.stats())) {
+        measured(batch, response.stats());
         v1::JobEvent event;
-        *event.mutable_job() = *store_.get_job(claim.job_id);
+        *event.mutable_job() = *store_.get_job(batch.job_id);
         v1::TileFinished& f = *event.mutable_tile_finished();
-        f.set_tile_index(claim.index);
-        *f.mutable_rect() = to_proto(claim.rect);
+        f.set_tile_index(batch.first);
+        f.set_tile_count(batch.count);
+        *f.mutable_rect() = to_proto(batch.rect);
         f.set_worker(w->worker->describe());
         *f.mutable_stats() = response.stats();
         publish(event);
-        finish_if_complete(claim.job_id);
+        finish_if_complete(batch.job_id);
       }
       return;
     } catch (const std::exception& e) {
-      log_line(options_.quiet, "error", "job {} tile {}: keeping the result: {}", claim.job_id, claim.index, e.what());
-      store_.tile_requeue(claim.job_id, claim.index);
+      log_line(options_.quiet, "error", "job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
+      store_.batch_requeue(batch.job_id, batch.first, batch.count);
       work_.notify_all();
       return;
     }
   }
-  if (reason == CancelReason::JobCancelled) return;  // the job is final; its tile stays as it was
+  if (reason == CancelReason::JobCancelled) return;  // the job is final; its tiles stay as they were
   if (reason == CancelReason::Stopping) {
-    store_.tile_requeue(claim.job_id, claim.index);
+    store_.batch_requeue(batch.job_id, batch.first, batch.count);
     return;
   }
 
@@ -443,8 +477,9 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
     why = fmt::format("worker {}: {}: {}", w->worker->describe(), code_name(status.error_code()),
                       status.error_message());
     if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
-      why = fmt::format("worker {}: no result within the tile deadline of {} ms",
-                        w->worker->describe(), options_.tile_deadline.count());
+      why = fmt::format("worker {}: no result within the tile deadline of {} ms{}",
+                        w->worker->describe(), options_.tile_deadline.count(),
+                        batch.count > 1 ? fmt::format(" (x {} tiles)", batch.count) : std::string());
     }
     // A job every worker must refuse: retrying only wastes the farm's time.
     if (status.error_code() == grpc::StatusCode::INVALID_ARGUMENT) max_attempts = 1;
@@ -454,32 +489,33 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
       w->probe_after = SteadyClock::now() + options_.probe_interval;
     }
   }
-  log_line(options_.quiet, "warn", "job {} tile {}: {}", claim.job_id, claim.index, why);
-  const v1::JobState before = store_.get_job(claim.job_id)->state();
+  log_line(options_.quiet, "warn", "job {} {}: {}", batch.job_id, describe(batch), why);
+  const v1::JobState before = store_.get_job(batch.job_id)->state();
   const TileFailure failure =
-      store_.tile_failed(claim.job_id, claim.index, why, max_attempts, unix_ms_now());
+      store_.batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now());
   v1::JobEvent event;
   *event.mutable_job() = failure.job;
   v1::TileFailed& f = *event.mutable_tile_failed();
-  f.set_tile_index(claim.index);
+  f.set_tile_index(batch.first);
+  f.set_tile_count(batch.count);
   f.set_worker(w->worker->describe());
   f.set_reason(why);
   f.set_will_retry(failure.will_retry);
   publish(event);
   if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
-    log_line(options_.quiet, "error", "job {} failed: {}", claim.job_id, failure.job.failure_reason());
+    log_line(options_.quiet, "error", "job {} failed: {}", batch.job_id, failure.job.failure_reason());
     {
       // Its other tiles in flight are of no use now.
       std::lock_guard lock(mutex_);
       for (const auto& other : in_flight_) {
-        if (other->claim.job_id == claim.job_id && other.get() != &call) {
+        if (other->batch.job_id == batch.job_id && other.get() != &call) {
           other->reason = CancelReason::JobCancelled;
           other->cancel->cancel();
         }
       }
     }
     publish_state(failure.job, before);
-    cleanup_job_files(claim.job_id);
+    cleanup_job_files(batch.job_id);
   }
   work_.notify_all();
 }
@@ -506,7 +542,9 @@ void SchedulerCore::merge(const std::string& job_id) {
     request.job_id = job_id;
     request.image = Rect{0, 0, m.job.render.width, m.job.render.height};
     request.aovs = m.job.render.aovs;
-    for (const TileRecord& t : store_.tiles(job_id)) request.tiles.push_back(t.index);
+    std::set<std::uint32_t> parts;
+    for (const TileRecord& t : store_.tiles(job_id)) parts.insert(t.part);
+    request.parts.assign(parts.begin(), parts.end());
     const MergedFrame merged = merge_tiles(results_, request);
     std::string stem = m.job.output.image.stem().string();
     if (stem.empty() || stem.starts_with(".")) stem = "image";
@@ -522,7 +560,8 @@ void SchedulerCore::merge(const std::string& job_id) {
                                validation_passes(v) ? "" : "; more hit/miss disagreements than 0.001% of rays");
     }
     after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
-    log_line(options_.quiet, "info", "job {} done: {} tiles merged", job_id, request.tiles.size());
+    log_line(options_.quiet, "info", "job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(),
+             request.parts.size());
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED,
                               fmt::format("merging the tiles: {}", e.what()), "", unix_ms_now());

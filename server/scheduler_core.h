@@ -4,10 +4,13 @@
 // runs it in-process with one InProcessTileWorker (EmbeddedFarm). One pipeline, two front ends.
 //
 // Dispatch: every worker gets `tiles_per_worker` slots, each a thread that claims the next queued
-// tile (JobStore::claim_next_tile: priority, then submission order, then tile index), renders it
-// on its worker with a deadline, writes the result file, then marks the tile done. A failed or
-// late tile goes back to the queue with attempts + 1 and the reason; at max_attempts the job
-// fails with it. A worker that cannot be reached is marked down and probed every probe_interval
+// batch of tiles (JobStore::claim_next_batch: priority, then submission order, then tile index),
+// renders it on its worker in one call with a deadline per tile, writes the result file, then
+// marks the tiles done. A batch holds as many consecutive tiles of a grid row as make about
+// `batch_target` of rendering by the job's measured tile times (one tile until a time is known,
+// and smaller batches toward the end of a job), so cheap tiles do not drown in per-call costs.
+// A failed or late batch goes back to the queue with attempts + 1 and the reason (a tile that
+// failed goes out alone from then on); at max_attempts the job fails with it. A worker that cannot be reached is marked down and probed every probe_interval
 // before it gets tiles again. A job whose tiles are all done is merged into its EXR and preview.
 #include <chrono>
 #include <condition_variable>
@@ -37,7 +40,9 @@ struct SchedulerOptions {
   std::filesystem::path data_dir;  // jobs.db, assets/, scenes/, tiles/, results/
   std::chrono::milliseconds tile_deadline = std::chrono::minutes(10);
   int max_attempts = 3;            // failed attempts of one tile before its job fails
-  int tiles_per_worker = 2;        // calls in flight per worker, so it never idles between tiles
+  int tiles_per_worker = 2;        // calls in flight per worker, so it never idles between calls
+  // Rendering time a call aims at; 0 sends one tile per call.
+  std::chrono::milliseconds batch_target = std::chrono::milliseconds(200);
   std::chrono::milliseconds probe_interval = std::chrono::seconds(1);
   std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
@@ -103,6 +108,8 @@ class SchedulerCore {
   void slot_loop(const std::shared_ptr<WorkerEntry>& w);
   void handle_result(const std::shared_ptr<WorkerEntry>& w, const InFlight& call,
                      const grpc::Status& status, const v1::RenderTileResponse& response);
+  int batch_size_locked(const std::string& job_id, int queued_tiles) const;  // under mutex_
+  void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's render time
   void finish_if_complete(const std::string& job_id);
   void merge(const std::string& job_id);
   void monitor_loop();
@@ -125,6 +132,7 @@ class SchedulerCore {
   std::set<std::shared_ptr<InFlight>> in_flight_;
   std::map<std::string, std::shared_ptr<const v1::JobSpec>> specs_;
   std::set<std::string> merging_;
+  std::map<std::string, double> ms_per_tile_;  // per job: recent render ms per tile of a call
 
   std::mutex watch_mutex_;
   std::multimap<std::string, std::shared_ptr<JobEventQueue>> watchers_;

@@ -16,17 +16,17 @@ namespace fs = std::filesystem;
 
 TileResults::TileResults(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
 
-fs::path TileResults::path_of(const std::string& job_id, std::uint32_t index) const {
-  return dir_ / job_id / std::to_string(index);
+fs::path TileResults::path_of(const std::string& job_id, std::uint32_t part) const {
+  return dir_ / job_id / std::to_string(part);
 }
 
-void TileResults::write(const std::string& job_id, std::uint32_t index,
+void TileResults::write(const std::string& job_id, std::uint32_t part,
                         const v1::RenderTileResponse& tile) const {
   static std::atomic<std::uint64_t> counter{0};
-  const fs::path final_path = path_of(job_id, index);
+  const fs::path final_path = path_of(job_id, part);
   fs::create_directories(final_path.parent_path());
   const fs::path temp = final_path.parent_path() /
-                        fmt::format(".tmp-{}-{}-{}", index, ::getpid(), counter++);
+                        fmt::format(".tmp-{}-{}-{}", part, ::getpid(), counter++);
   const std::string bytes = tile.SerializeAsString();
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw std::system_error(errno, std::generic_category(), "cannot write " + temp.string());
@@ -46,21 +46,17 @@ void TileResults::write(const std::string& job_id, std::uint32_t index,
   fs::rename(temp, final_path);
 }
 
-v1::RenderTileResponse TileResults::read(const std::string& job_id, std::uint32_t index) const {
-  const fs::path file = path_of(job_id, index);
+v1::RenderTileResponse TileResults::read(const std::string& job_id, std::uint32_t part) const {
+  const fs::path file = path_of(job_id, part);
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("tile {} of job {}: {} is missing", index, job_id, file.string()));
+  if (!in) throw std::runtime_error(fmt::format("result {} of job {}: {} is missing", part, job_id, file.string()));
   std::ostringstream s;
   s << in.rdbuf();
   v1::RenderTileResponse tile;
   if (!tile.ParseFromString(s.str())) {
-    throw std::runtime_error(fmt::format("tile {} of job {}: {} is corrupt", index, job_id, file.string()));
+    throw std::runtime_error(fmt::format("result {} of job {}: {} is corrupt", part, job_id, file.string()));
   }
   return tile;
-}
-
-bool TileResults::has(const std::string& job_id, std::uint32_t index) const {
-  return fs::is_regular_file(path_of(job_id, index));
 }
 
 void TileResults::remove_job(const std::string& job_id) const {

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <map>
+#include <nlohmann/json.hpp>
 
 #include "renderer/engine.h"
 #include "renderer/image/exr_io.h"
@@ -12,6 +14,7 @@
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/job_merger.h"
+#include "server/job_store.h"
 #include "server/local_pipeline.h"
 #include "server/tile_codec.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -72,6 +75,52 @@ TEST(EmbeddedFarmTest, CornellThroughTheEmbeddedFarmIsBitIdenticalToRenderFrame)
   }
 }
 
+// Tiles that take a fraction of a millisecond go out in row batches once the first are timed;
+// with batch_target 0, one tile a call. The job store's `part` of each tile says which call
+// rendered it; pixels are the same bits either way.
+TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
+  nlohmann::json job = nlohmann::json::parse(test::cornell_job_json("path", 96, 64, 2));
+  job["render"]["tile_size"] = 8;  // a grid of 12 x 8 tiles
+  const v1::JobSpec spec = test::make_job_spec(job.dump(), test::cornell_assets(), "cornell.json");
+  const TileBuffer local = render_locally(spec);
+  for (const int batch_ms : {0, 200}) {
+    SCOPED_TRACE(batch_ms);
+    test::TempDir dir;
+    std::string id;
+    {
+      EmbeddedFarmOptions options;
+      options.data_dir = dir / "farm";
+      options.threads = 2;
+      options.exr_type = ExrPixelType::Float;
+      options.batch_target = std::chrono::milliseconds(batch_ms);
+      EmbeddedFarm farm(options);
+      for (const auto& [path, file] : test::cornell_assets()) farm.add_asset_file(file);
+      const EmbeddedResult result = farm.run(spec);
+      ASSERT_EQ(result.job.state(), v1::JOB_STATE_SUCCEEDED) << result.job.failure_reason();
+      EXPECT_EQ(result.job.tiles_rendered(), 96u);
+      expect_same_pixels(read_exr(result.exr), local, "merged");
+      id = result.job.job_id();
+    }
+    const std::vector<TileRecord> tiles = JobStore(dir / "farm" / "jobs.db").tiles(id);
+    ASSERT_EQ(tiles.size(), 96u);
+    std::map<std::uint32_t, std::vector<const TileRecord*>> calls;
+    for (const TileRecord& t : tiles) calls[t.part].push_back(&t);
+    for (const auto& [part, members] : calls) {
+      // A batch: consecutive tiles from its first on, all in one row of the grid.
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        EXPECT_EQ(members[i]->index, part + i);
+        EXPECT_EQ(members[i]->rect.y0, members[0]->rect.y0);
+      }
+    }
+    if (batch_ms == 0) {
+      EXPECT_EQ(calls.size(), 96u);
+    } else {
+      EXPECT_LT(calls.size(), 48u) << "cheap tiles were not batched";
+      EXPECT_GT(calls.size(), 8u) << "batches are at most one row";
+    }
+  }
+}
+
 TEST(JobMergerTest, TilesWrittenAsFilesMergeIntoTheFrame) {
   test::TempDir dir;
   const v1::JobSpec spec = test::cornell_job_spec("whitted", 40, 30, 1);
@@ -87,7 +136,7 @@ TEST(JobMergerTest, TilesWrittenAsFilesMergeIntoTheFrame) {
     encode_tile(tile, *response.mutable_tile());
     encode_stats(tile.stats(), *response.mutable_stats());
     results.write("job", i, response);
-    request.tiles.push_back(i);
+    request.parts.push_back(i);
   }
   const MergedFrame merged = merge_tiles(results, request);
   const TileBuffer local = render_frame(scene, job.render);
@@ -96,7 +145,7 @@ TEST(JobMergerTest, TilesWrittenAsFilesMergeIntoTheFrame) {
   const MergedFiles files = write_merged(merged.film, dir / "out", "frame", ExrPixelType::Float);
   expect_same_pixels(read_exr(files.exr), local, "written");
 
-  request.tiles.push_back(99);  // a tile whose file is missing
+  request.parts.push_back(99);  // a part whose file is missing
   EXPECT_THROW(merge_tiles(results, request), std::runtime_error);
 }
 

@@ -176,7 +176,8 @@ TEST_F(FarmSchedulerTest, KillingOneOfTwoWorkersMidJobStillFinishesWithIdentical
   const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
-  EXPECT_LE(final_job->tile_failures(), 2u);  // at most the killed worker's tiles in flight
+  // At most the killed worker's tiles in flight: two calls, each at most one row of 8 tiles.
+  EXPECT_LE(final_job->tile_failures(), 16u);
   EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
 }
 

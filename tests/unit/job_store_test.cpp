@@ -3,6 +3,7 @@
 #include "server/job_store.h"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include "tests/support/temp_dir.h"
 
@@ -30,13 +31,13 @@ TEST(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
     const v1::Job job = store.add_job(make_job("a", 0, 3), 1000);
     EXPECT_EQ(job.state(), v1::JOB_STATE_QUEUED);
     EXPECT_EQ(job.tiles_total(), 3u);
-    auto t0 = store.claim_next_tile("w1", 2000);
-    auto t1 = store.claim_next_tile("w1", 2000);
+    auto t0 = store.claim_next_batch("w1", 2000);
+    auto t1 = store.claim_next_batch("w1", 2000);
     ASSERT_TRUE(t0 && t1);
     v1::TileStats stats;
     stats.set_samples(7);
-    EXPECT_TRUE(store.tile_done("a", t0->index, stats));
-    EXPECT_FALSE(store.tile_done("a", t0->index, stats));  // not running any more
+    EXPECT_TRUE(store.batch_done("a", t0->first, 1, stats));
+    EXPECT_FALSE(store.batch_done("a", t0->first, 1, stats));  // not running any more
     EXPECT_EQ(store.get_job("a")->state(), v1::JOB_STATE_RUNNING);
   }  // t1 was running when the "scheduler" went away
   JobStore store(dir / "jobs.db");
@@ -50,9 +51,9 @@ TEST(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
   EXPECT_EQ(tiles[0].state, TileState::Done);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
   EXPECT_EQ(tiles[1].attempts, 0);  // a restart is not the tile's fault
-  EXPECT_EQ(store.claim_next_tile("w2", 3000)->index, 1u);
-  EXPECT_EQ(store.claim_next_tile("w2", 3000)->index, 2u);
-  EXPECT_FALSE(store.claim_next_tile("w2", 3000));
+  EXPECT_EQ(store.claim_next_batch("w2", 3000)->first, 1u);
+  EXPECT_EQ(store.claim_next_batch("w2", 3000)->first, 2u);
+  EXPECT_FALSE(store.claim_next_batch("w2", 3000));
   EXPECT_EQ(store.get_spec("a")->job_json(), "{}");
 }
 
@@ -63,8 +64,8 @@ TEST(JobStoreTest, TilesGoOutByPriorityThenSubmissionThenIndex) {
   store.add_job(make_job("second", 0, 1), 2);
   store.add_job(make_job("urgent", 5, 2), 3);
   std::vector<std::string> order;
-  while (auto claim = store.claim_next_tile("w", 4)) {
-    order.push_back(claim->job_id + ":" + std::to_string(claim->index));
+  while (auto claim = store.claim_next_batch("w", 4)) {
+    order.push_back(claim->job_id + ":" + std::to_string(claim->first));
   }
   EXPECT_EQ(order, (std::vector<std::string>{"urgent:0", "urgent:1", "first:0", "first:1",
                                              "second:0"}));
@@ -75,22 +76,22 @@ TEST(JobStoreTest, FailedAttemptsRequeueUntilTheLimitThenFailTheJobWithTheReason
   JobStore store(dir / "jobs.db");
   store.add_job(make_job("a", 0, 2), 1);
   for (int attempt = 1; attempt <= 2; ++attempt) {
-    auto claim = store.claim_next_tile("w", 2);
+    auto claim = store.claim_next_batch("w", 2);
     ASSERT_TRUE(claim);
-    EXPECT_EQ(claim->index, 0u);
+    EXPECT_EQ(claim->first, 0u);
     EXPECT_EQ(claim->attempts, attempt - 1);
-    const TileFailure f = store.tile_failed("a", 0, "worker died", 3, 3);
+    const TileFailure f = store.batch_failed("a", 0, 1, "worker died", 3, 3);
     EXPECT_TRUE(f.will_retry);
     EXPECT_EQ(f.job.tile_failures(), static_cast<unsigned>(attempt));
     EXPECT_EQ(store.tiles("a")[0].last_error, "worker died");
   }
-  ASSERT_EQ(store.claim_next_tile("w", 2)->index, 0u);
-  const TileFailure f = store.tile_failed("a", 0, "deadline exceeded", 3, 4);
+  ASSERT_EQ(store.claim_next_batch("w", 2)->first, 0u);
+  const TileFailure f = store.batch_failed("a", 0, 1, "deadline exceeded", 3, 4);
   EXPECT_FALSE(f.will_retry);
   EXPECT_EQ(f.job.state(), v1::JOB_STATE_FAILED);
   EXPECT_NE(f.job.failure_reason().find("deadline exceeded"), std::string::npos);
   EXPECT_NE(f.job.failure_reason().find("3 times"), std::string::npos);
-  EXPECT_FALSE(store.claim_next_tile("w", 5));  // a failed job hands out nothing
+  EXPECT_FALSE(store.claim_next_batch("w", 5));  // a failed job hands out nothing
   // Final states stay final.
   EXPECT_EQ(store.cancel_job("a", 6).state(), v1::JOB_STATE_FAILED);
 }
@@ -99,12 +100,121 @@ TEST(JobStoreTest, CancelledJobHandsOutNoTilesAndIgnoresLateResults) {
   test::TempDir dir;
   JobStore store(dir / "jobs.db");
   store.add_job(make_job("a", 0, 3), 1);
-  auto claim = store.claim_next_tile("w", 2);
+  auto claim = store.claim_next_batch("w", 2);
   ASSERT_TRUE(claim);
   EXPECT_EQ(store.cancel_job("a", 3).state(), v1::JOB_STATE_CANCELLED);
-  EXPECT_FALSE(store.claim_next_tile("w", 4));
-  EXPECT_FALSE(store.tile_done("a", claim->index, {}));
+  EXPECT_FALSE(store.claim_next_batch("w", 4));
+  EXPECT_FALSE(store.batch_done("a", claim->first, 1, {}));
   EXPECT_EQ(store.get_job("a")->tiles_done(), 0u);
+}
+
+// A 4 x 2 grid of 16 px tiles.
+NewJob grid_job(const std::string& id) {
+  NewJob j = make_job(id, 0, 0);
+  j.width = 64;
+  j.height = 32;
+  for (int y = 0; y < 2; ++y) {
+    for (int x = 0; x < 4; ++x) j.tiles.push_back({16 * x, 16 * y, 16 * x + 16, 16 * y + 16});
+  }
+  return j;
+}
+
+TEST(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlone) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  store.add_job(grid_job("a"), 1);
+  int asked_queued = -1;
+  const BatchSize three = [&](const std::string& job_id, int queued) {
+    EXPECT_EQ(job_id, "a");
+    asked_queued = queued;
+    return 3;
+  };
+  auto b0 = store.claim_next_batch("w", 2, three);
+  ASSERT_TRUE(b0);
+  EXPECT_EQ(asked_queued, 8);
+  EXPECT_EQ(b0->first, 0u);
+  EXPECT_EQ(b0->count, 3u);
+  EXPECT_EQ(b0->rect, (Rect{0, 0, 48, 16}));
+  // The row ends after one more tile: a batch never wraps to the next row.
+  auto b1 = store.claim_next_batch("w", 2, three);
+  ASSERT_TRUE(b1);
+  EXPECT_EQ(asked_queued, 5);
+  EXPECT_EQ(b1->first, 3u);
+  EXPECT_EQ(b1->count, 1u);
+  EXPECT_EQ(b1->rect, (Rect{48, 0, 64, 16}));
+  // The first batch fails: its three tiles are queued again with an attempt each.
+  const TileFailure f = store.batch_failed("a", 0, 3, "worker died", 3, 3);
+  EXPECT_TRUE(f.will_retry);
+  EXPECT_EQ(f.job.tile_failures(), 3u);
+  // ... and now go out one by one, however many the policy allows.
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    auto retry = store.claim_next_batch("w", 4, three);
+    ASSERT_TRUE(retry);
+    EXPECT_EQ(retry->first, i);
+    EXPECT_EQ(retry->count, 1u);
+    EXPECT_EQ(retry->attempts, 1);
+    EXPECT_TRUE(store.batch_done("a", i, 1, {}));
+  }
+  // A batch stops before a tile that is not queued.
+  EXPECT_TRUE(store.batch_done("a", 3, 1, {}));
+  auto b2 = store.claim_next_batch("w", 5, [](const std::string&, int) { return 64; });
+  ASSERT_TRUE(b2);
+  EXPECT_EQ(b2->first, 4u);
+  EXPECT_EQ(b2->count, 4u);
+  v1::TileStats stats;
+  stats.set_samples(4);
+  EXPECT_FALSE(store.batch_done("a", 4, 5, stats));  // tile 8 does not exist: not all running
+  EXPECT_TRUE(store.batch_done("a", 4, 4, stats));
+  const v1::Job job = *store.get_job("a");
+  EXPECT_EQ(job.tiles_done(), 8u);
+  EXPECT_EQ(job.tiles_rendered(), 8u);
+  EXPECT_EQ(job.stats().samples(), 4u);
+  // Which result file holds each tile.
+  std::vector<std::uint32_t> parts;
+  for (const TileRecord& t : store.tiles("a")) parts.push_back(t.part);
+  EXPECT_EQ(parts, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 4, 4, 4}));
+}
+
+TEST(JobStoreTest, ARequeuedBatchIsQueuedAgainWithoutAnAttempt) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  store.add_job(grid_job("a"), 1);
+  const BatchSize two = [](const std::string&, int) { return 2; };
+  auto b = store.claim_next_batch("w", 2, two);
+  ASSERT_TRUE(b);
+  store.batch_requeue("a", b->first, b->count);
+  auto again = store.claim_next_batch("w", 3, two);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->first, 0u);
+  EXPECT_EQ(again->count, 2u);
+  EXPECT_EQ(again->attempts, 0);
+}
+
+// A data dir written by the scheduler before batches (schema 1, one file per tile) opens as is.
+TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
+  test::TempDir dir;
+  {
+    JobStore store(dir / "jobs.db");
+    store.add_job(make_job("a", 0, 3), 1);
+    ASSERT_TRUE(store.claim_next_batch("w", 2));
+    ASSERT_TRUE(store.claim_next_batch("w", 2));
+    ASSERT_TRUE(store.batch_done("a", 1, 1, {}));
+  }
+  {
+    // Back to what version 1 had: no part column.
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN part", "UPDATE schema_version SET version = 1"}) {
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    }
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "jobs.db");
+  const std::vector<TileRecord> tiles = store.tiles("a");
+  ASSERT_EQ(tiles.size(), 3u);
+  EXPECT_EQ(tiles[1].state, TileState::Done);
+  EXPECT_EQ(tiles[1].part, 1u);  // its own file, as version 1 wrote it
+  EXPECT_EQ(tiles[0].state, TileState::Queued);  // was running
 }
 
 TEST(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {
