@@ -480,6 +480,11 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
       why = fmt::format("worker {}: no result within the tile deadline of {} ms{}",
                         w->worker->describe(), options_.tile_deadline.count(),
                         batch.count > 1 ? fmt::format(" (x {} tiles)", batch.count) : std::string());
+      // Slow or hung? It gets no more tiles until it answers a health check: a hung one would
+      // otherwise take tile after tile to its deadline.
+      std::lock_guard lock(mutex_);
+      w->down = true;
+      w->probe_after = SteadyClock::now();
     }
     // A job every worker must refuse: retrying only wastes the farm's time.
     if (status.error_code() == grpc::StatusCode::INVALID_ARGUMENT) max_attempts = 1;

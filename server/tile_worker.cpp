@@ -1,5 +1,7 @@
 #include "server/tile_worker.h"
 
+#include "server/health_check.h"
+
 namespace farm {
 
 void TileCancel::cancel() {
@@ -42,7 +44,9 @@ grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request,
 }
 
 bool RemoteTileWorker::probe(std::chrono::milliseconds timeout) {
-  return channel_->WaitForConnected(std::chrono::system_clock::now() + timeout);
+  // Connected is not enough: a stopped or hung process still accepts connections. It must answer.
+  const auto deadline = std::chrono::system_clock::now() + timeout;
+  return channel_->WaitForConnected(deadline) && check_health(channel_, deadline).serving();
 }
 
 grpc::Status InProcessTileWorker::render(const v1::RenderTileRequest& request,

@@ -38,7 +38,8 @@ class TileWorker {
                               v1::RenderTileResponse& response,
                               std::chrono::system_clock::time_point deadline,
                               TileCancel& cancel) = 0;
-  // Waits up to `timeout` for the worker to be reachable (a down worker is probed with this).
+  // Waits up to `timeout` for the worker to answer: a down or suspect worker is probed with this
+  // before it gets tiles again.
   virtual bool probe(std::chrono::milliseconds timeout) = 0;
   virtual std::string describe() const = 0;  // for messages: the address, or "in-process"
 };

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "renderer/image/exr_io.h"
@@ -179,6 +180,107 @@ TEST_F(FarmSchedulerTest, KillingOneOfTwoWorkersMidJobStillFinishesWithIdentical
   // At most the killed worker's tiles in flight: two calls, each at most one row of 8 tiles.
   EXPECT_LE(final_job->tile_failures(), 16u);
   EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+}
+
+// A worker that stops answering (SIGSTOP: its socket still accepts connections) holds tiles until
+// their deadline; they go to the other worker, and the hung one gets no more tiles, since it
+// fails the health check it is probed with.
+TEST_F(FarmSchedulerTest, AHungWorkersTilesMissTheirDeadlineAndFinishOnTheOther) {
+  auto w1 = start_worker("w1");
+  auto w2 = start_worker("w2");
+  auto scheduler = start_scheduler(
+      {"--worker", w1->address(), "--worker", w2->address(), "--tile-deadline", "1.5", "--float"});
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);  // 48 tiles, ~2 s on two threads
+  const v1::Job job = submit_ok(spec);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  w1->process().send_signal(SIGSTOP);
+  EXPECT_FALSE(done(*before)) << "the job finished before the worker hung";
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  w1->process().send_signal(SIGCONT);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+  EXPECT_GE(final_job->tile_failures(), 1u);
+  EXPECT_TRUE(scheduler->process().wait_for_line("no result within the tile deadline of 1500 ms", 5s))
+      << scheduler->process().output();
+  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+}
+
+// A registered worker that stops heartbeating is dropped long before any tile deadline, its
+// tiles go to the other worker; when it comes back it registers again.
+TEST_F(FarmSchedulerTest, AWorkerThatStopsHeartbeatingIsDroppedAndRegistersAgainLater) {
+  auto scheduler = start_scheduler({"--float", "--heartbeat-interval", "0.2"});  // deadline 600 s
+  ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  auto w1 = start_worker("w1", 1, scheduler->address());
+  auto w2 = start_worker("w2", 1, scheduler->address());
+  const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);
+  const v1::Job job = submit_ok(spec);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  w1->process().send_signal(SIGSTOP);
+  EXPECT_FALSE(done(*before)) << "the job finished before the worker stopped";
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 60s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+  EXPECT_GE(final_job->tile_failures(), 1u);  // the stopped worker's calls in flight
+  EXPECT_TRUE(scheduler->process().wait_for_line("removed: no heartbeat for 600 ms", 5s))
+      << scheduler->process().output();
+  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+
+  w1->process().send_signal(SIGCONT);
+  EXPECT_TRUE(scheduler->process().wait_for_line("worker w3-", 20s)) << scheduler->process().output();
+}
+
+// Priority beats submission order, tile by tile: an urgent job submitted last overtakes the one
+// running and the one queued. ListJobs pages through them newest first.
+TEST_F(FarmSchedulerTest, AnUrgentJobOvertakesAndListJobsPagesNewestFirst) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address(), "--tiles-per-worker", "1"});
+  ASSERT_TRUE(stub_);
+  const v1::Job first = submit_ok(cornell("path", 64, 48, 256, 8));
+  ASSERT_TRUE(test::wait_for_job(*stub_, first.job_id(),
+                                 [](const v1::Job& j) { return j.tiles_done() >= 1 || done(j); }, 30s));
+  const v1::Job second = submit_ok(cornell("path", 32, 32, 16, 16));
+  v1::Job urgent;
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  ASSERT_TRUE(test::submit(*stub_, cornell("path", 32, 32, 16, 16), urgent, 5).ok());
+  EXPECT_EQ(urgent.priority(), 5);
+  std::map<std::string, v1::Job> final_jobs;
+  for (const v1::Job& j : {first, second, urgent}) {
+    const auto f = test::wait_for_job(*stub_, j.job_id(), done, 60s);
+    ASSERT_TRUE(f);
+    ASSERT_EQ(f->state(), v1::JOB_STATE_SUCCEEDED) << f->failure_reason();
+    final_jobs[j.job_id()] = *f;
+  }
+  const auto finished_ms = [&](const v1::Job& j) {
+    const auto& t = final_jobs[j.job_id()].finished_at();
+    return t.seconds() * 1000 + t.nanos() / 1000000;
+  };
+  EXPECT_LT(finished_ms(urgent), finished_ms(first)) << "the urgent job did not overtake the running one";
+  EXPECT_LT(finished_ms(first), finished_ms(second));  // same priority: submission order
+
+  std::vector<std::string> listed;
+  std::string token;
+  int pages = 0;
+  do {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + 10s);
+    v1::ListJobsRequest request;
+    request.set_page_size(2);
+    request.set_page_token(token);
+    request.add_states(v1::JOB_STATE_SUCCEEDED);
+    v1::ListJobsResponse response;
+    ASSERT_TRUE(stub_->ListJobs(&context, request, &response).ok());
+    for (const v1::Job& j : response.jobs()) listed.push_back(j.job_id());
+    token = response.next_page_token();
+    ++pages;
+  } while (!token.empty() && pages < 5);
+  EXPECT_EQ(pages, 2);
+  EXPECT_EQ(listed, (std::vector<std::string>{urgent.job_id(), second.job_id(), first.job_id()}));
 }
 
 TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTilesAgain) {

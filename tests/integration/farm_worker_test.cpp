@@ -18,6 +18,7 @@
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/asset_store.h"
+#include "server/health_check.h"
 #include "server/scene_hash.h"
 #include "server/tile_codec.h"
 #include "tests/support/background_process.h"
@@ -215,32 +216,12 @@ TEST_F(FarmWorkerTest, MissingAssetsWithoutSchedulerAreFailedPreconditionUntilCa
 TEST_F(FarmWorkerTest, HealthCheckReportsServing) {
   test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "cache").string()});
   ASSERT_FALSE(worker.address().empty()) << worker.process().output();
-  // grpc.health.v1.Health/Check by hand (Debian ships no health.proto): the request
-  // HealthCheckRequest{service: ""} encodes as no bytes, the reply {status: SERVING (1)} as 08 01.
-  auto channel = grpc::CreateChannel(worker.address(), grpc::InsecureChannelCredentials());
-  grpc::GenericStub stub(channel);
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + 30s);
-  grpc::Slice empty;
-  const grpc::ByteBuffer request(&empty, 1);
-  grpc::CompletionQueue cq;
-  auto call = stub.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &cq);
-  call->StartCall();
-  grpc::ByteBuffer reply;
-  grpc::Status status;
-  call->Finish(&reply, &status, reinterpret_cast<void*>(1));
-  void* tag = nullptr;
-  bool ok = false;
-  ASSERT_TRUE(cq.Next(&tag, &ok));
-  ASSERT_TRUE(status.ok()) << status.error_message();
-  std::vector<grpc::Slice> slices;
-  ASSERT_TRUE(reply.Dump(&slices).ok());
-  std::string bytes;
-  for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
-  EXPECT_EQ(bytes, std::string("\x08\x01", 2));
-  cq.Shutdown();
-  while (cq.Next(&tag, &ok)) {
-  }
+  const HealthCheck health = check_health(
+      grpc::CreateChannel(worker.address(), grpc::InsecureChannelCredentials()),
+      std::chrono::system_clock::now() + 30s);
+  ASSERT_TRUE(health.status.ok()) << health.status.error_message();
+  EXPECT_EQ(health.serving_status, 1);  // SERVING
+  EXPECT_TRUE(health.serving());
 }
 
 TEST_F(FarmWorkerTest, ReflectionListsTheWorkerService) {
