@@ -10,6 +10,7 @@
 #include "renderer/scene/scene_builder.h"
 #include "server/job_merger.h"
 #include "server/local_pipeline.h"
+#include "server/read_whole_file.h"
 #include "server/scene_hash.h"
 #include "server/scene_materializer.h"
 #include "server/service_error.h"
@@ -394,9 +395,18 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
       request.set_job_id(batch->job_id);
       request.set_tile_index(batch->first);
       // Each tile of the batch has its deadline.
-      status = w->worker->render(request, response,
-                                 std::chrono::system_clock::now() + options_.tile_deadline * batch->count,
-                                 *call->cancel);
+      const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch->count;
+      status = w->worker->render(request, response, deadline, *call->cancel);
+      if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION && !call->cancel->cancelled()) {
+        // A worker that cannot fetch the job's files (no --scheduler): once more, files inline.
+        for (const v1::AssetRef& ref : spec->assets()) {
+          v1::InlineAsset& asset = *request.add_assets();
+          asset.set_sha256(ref.sha256());
+          asset.set_data(read_whole_file(assets_.path_of(ref.sha256()), "asset"));
+        }
+        response.Clear();
+        status = w->worker->render(request, response, deadline, *call->cancel);
+      }
     } catch (const std::exception& e) {
       status = grpc::Status(grpc::StatusCode::INTERNAL, e.what());
     }

@@ -123,6 +123,11 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
                           request->scene_hash().substr(0, 64), hash)};
     }
 
+    // Files sent along by a scheduler we cannot fetch from: verified, then kept like fetched ones.
+    for (const v1::InlineAsset& asset : request->assets()) {
+      if (!store_.has(asset.sha256())) store_.put(asset.sha256(), asset.data());
+    }
+
     const SceneCache::Lookup lookup = cache_.get(
         hash, [&] { return prepare(spec, hash); }, is_stopped);
     if (!lookup.scene || is_stopped()) return stopped(control);

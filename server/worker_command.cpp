@@ -26,8 +26,9 @@ namespace {
 
 // Calls in flight get this long to finish after SIGINT/SIGTERM before they are cancelled.
 constexpr auto kShutdownGrace = std::chrono::seconds(2);
-// Job files are at most 16 MiB; the rest of a request is small.
-constexpr int kMaxRequestBytes = 32 << 20;
+// A request carries the job file (at most 16 MiB) and, for a worker without --scheduler, the
+// job's files inline (RenderTileRequest.assets).
+constexpr int kMaxRequestBytes = 1 << 30;
 
 std::string host_of(const std::string& address) {
   const std::size_t colon = address.rfind(':');

@@ -283,6 +283,24 @@ TEST_F(FarmSchedulerTest, AnUrgentJobOvertakesAndListJobsPagesNewestFirst) {
   EXPECT_EQ(listed, (std::vector<std::string>{urgent.job_id(), second.job_id(), first.job_id()}));
 }
 
+// `farm scheduler --worker ADDR` with a worker started without --scheduler and an empty cache:
+// the worker cannot fetch, so the scheduler sends the job's files with the call.
+TEST_F(FarmSchedulerTest, AStaticWorkerWithAnEmptyCacheGetsTheJobsFilesInline) {
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "empty").string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  auto scheduler = start_scheduler({"--worker", worker.address(), "--float"});
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("whitted", 48, 32, 1, 16);
+  const v1::Job job = submit_ok(spec);
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 60s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+  EXPECT_EQ(final_job->tile_failures(), 0u);
+  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  const AssetStore kept(dir_ / "empty" / "blobs");
+  for (const v1::AssetRef& ref : spec.assets()) EXPECT_TRUE(kept.has(ref.sha256())) << ref.path();
+}
+
 TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTilesAgain) {
   auto worker = start_worker("w1");
   auto scheduler = start_scheduler({"--worker", worker->address(), "--float"});

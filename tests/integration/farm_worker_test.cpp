@@ -20,6 +20,7 @@
 #include "server/asset_store.h"
 #include "server/health_check.h"
 #include "server/scene_hash.h"
+#include "server/sha256.h"
 #include "server/tile_codec.h"
 #include "tests/support/background_process.h"
 #include "tests/support/fake_scheduler.h"
@@ -191,6 +192,34 @@ TEST_F(FarmWorkerTest, MalformedJobIsInvalidArgumentAndTheWorkerKeepsServing) {
   v1::RenderTileRequest wrong_hash = tile_request(good, {0, 0, 8, 8});
   wrong_hash.set_scene_hash(std::string(64, '0'));
   EXPECT_EQ(render(*stub, wrong_hash, response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
+// What a scheduler sends a worker it cannot expect to fetch: the files inline, verified by hash.
+TEST_F(FarmWorkerTest, InlineAssetsAreVerifiedAndKept) {
+  const fs::path cache = dir_ / "cache";
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", cache.string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  auto stub = worker_stub(worker.address());
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 16, 16, 1);
+  v1::RenderTileRequest request = tile_request(spec, {0, 0, 16, 16});
+  for (const auto& [path, file] : test::cornell_assets()) {
+    v1::InlineAsset& asset = *request.add_assets();
+    asset.set_data(test::read_file(file));
+    asset.set_sha256(sha256_hex(asset.data()));
+  }
+  v1::RenderTileRequest lying = request;
+  lying.mutable_assets(0)->mutable_data()->append(" ");  // bytes that do not match their hash
+  v1::RenderTileResponse response;
+  grpc::Status status = render(*stub, lying, response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+
+  status = render(*stub, request, response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  expect_bit_identical(response.tile(), render_in_process(spec, {0, 0, 16, 16}), "inline assets");
+  // Kept: the next call needs no files.
+  status = render(*stub, tile_request(spec, {0, 0, 8, 8}), response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_TRUE(AssetStore(cache / "blobs").has(request.assets(0).sha256()));
 }
 
 TEST_F(FarmWorkerTest, MissingAssetsWithoutSchedulerAreFailedPreconditionUntilCached) {
