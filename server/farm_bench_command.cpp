@@ -128,10 +128,14 @@ void run_farm_bench(const FarmBenchOptions& o) {
     two_workers.push_back(render_through(client_two, submission, dir / "loopback.exr"));
   }
   const double a = median(embedded), b = median(one_worker), c = median(two_workers);
-  fmt::print("{:<44} {:>8.3f} s\n", "(a) farm render (embedded farm)", a);
-  fmt::print("{:<44} {:>8.3f} s   {:+.1f}% vs (a)\n", "(b) scheduler + 1 worker over loopback", b, 100.0 * (b - a) / a);
-  fmt::print("{:<44} {:>8.3f} s   {:+.1f}% vs (a), {:.2f}x the speed of (b)\n",
-             "(c) scheduler + 2 workers over loopback", c, 100.0 * (c - a) / a, b / c);
+  const auto best = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  fmt::print("{:<44} {:>8} {:>8}\n", "", "median", "best");
+  fmt::print("{:<44} {:>8.3f} {:>8.3f} s\n", "(a) farm render (embedded farm)", a, best(embedded));
+  fmt::print("{:<44} {:>8.3f} {:>8.3f} s   {:+.1f}% vs (a) (best: {:+.1f}%)\n", "(b) scheduler + 1 worker over loopback",
+             b, best(one_worker), 100.0 * (b - a) / a, 100.0 * (best(one_worker) - best(embedded)) / best(embedded));
+  fmt::print("{:<44} {:>8.3f} {:>8.3f} s   {:+.1f}% vs (a), {:.2f}x the speed of (b) (best: {:.2f}x)\n",
+             "(c) scheduler + 2 workers over loopback", c, best(two_workers), 100.0 * (c - a) / a, b / c,
+             best(one_worker) / best(two_workers));
 
   // Tiny jobs: one 16x16 tile each, submitted back to back, then followed to the end.
   LoopbackFarm farm(dir / "tiny", 1, o.tiles_per_worker, o.batch_ms, 0);

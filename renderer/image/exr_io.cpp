@@ -5,13 +5,16 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
 #include <Iex.h>
 #include <fmt/format.h>
 
 #include <Imath/half.h>
 #include <functional>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "renderer/image/output_file.h"
@@ -74,6 +77,7 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
   Imf::Header header(Imath::Box2i({r.x0, r.y0}, {r.x1 - 1, r.y1 - 1}),
                      Imath::Box2i({r.x0, r.y0}, {r.x1 - 1, r.y1 - 1}));
   header.compression() = Imf::ZIP_COMPRESSION;
+  header.zipCompressionLevel() = 1;
   Imf::FrameBuffer frame;
 
   // Planar copies of each channel in the pixel type it is stored as.
@@ -105,9 +109,13 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
     }
   }
 
+  // A frame's line blocks are compressed on OpenEXR's pool, one thread a core: compression is most
+  // of a merge, which runs after the last tile while the farm waits for it.
+  static std::once_flag pool;
+  std::call_once(pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
   write_file_atomically(file, [&](const std::filesystem::path& temp) {
     try {
-      Imf::OutputFile out(temp.c_str(), header);
+      Imf::OutputFile out(temp.c_str(), header, Imf::globalThreadCount());
       out.setFrameBuffer(frame);
       out.writePixels(height);
     } catch (const std::exception& e) {
