@@ -62,9 +62,12 @@ v1::Job follow(SchedulerClient& client, const std::string& job_id) {
       shown = job.state();
     }
     if (event.has_tile_failed()) {
-      fmt::print(stderr, "job {}: tile {} failed on {}: {}{}\n", job_id, event.tile_failed().tile_index(),
-                 event.tile_failed().worker(), event.tile_failed().reason(),
-                 event.tile_failed().will_retry() ? " (will retry)" : "");
+      const v1::TileFailed& f = event.tile_failed();
+      const std::string tiles = f.tile_count() > 1
+                                    ? fmt::format("tiles {}-{}", f.tile_index(), f.tile_index() + f.tile_count() - 1)
+                                    : fmt::format("tile {}", f.tile_index());
+      fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, tiles, f.worker(), f.reason(),
+                 f.will_retry() ? " (will retry)" : "");
     }
   });
   return last;

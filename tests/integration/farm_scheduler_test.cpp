@@ -104,6 +104,19 @@ class FarmSchedulerTest : public ::testing::Test {
     return job;
   }
 
+  // Submits `spec`, sends `signal` to `victim` once a few tiles are done, and returns the job
+  // once it is final (nullopt when it never gets there).
+  std::optional<v1::Job> signal_worker_mid_job(const v1::JobSpec& spec, test::WorkerProcess& victim,
+                                               int signal) {
+    const v1::Job job = submit_ok(spec);
+    const auto before = test::wait_for_job(
+        *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
+    if (!before) return std::nullopt;
+    victim.process().send_signal(signal);
+    EXPECT_FALSE(done(*before)) << "the job finished before the worker got signal " << signal;
+    return test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  }
+
   TileBuffer fetch_exr(const std::string& id) {
     const fs::path file = dir_ / (id + ".exr");
     const grpc::Status status = test::fetch_result(*stub_, id, v1::RESULT_KIND_EXR, file);
@@ -168,18 +181,12 @@ TEST_F(FarmSchedulerTest, KillingOneOfTwoWorkersMidJobStillFinishesWithIdentical
   auto w1 = start_worker("w1", 1, scheduler->address());
   auto w2 = start_worker("w2", 1, scheduler->address());
   const v1::JobSpec spec = cornell("path", 64, 48, 256, 8);  // 48 tiles, ~1 s on one thread
-  const v1::Job job = submit_ok(spec);
-  const auto before = test::wait_for_job(
-      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
-  ASSERT_TRUE(before);
-  w1->process().send_signal(SIGKILL);
-  EXPECT_FALSE(done(*before)) << "the job finished before the kill";
-  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  const auto final_job = signal_worker_mid_job(spec, *w1, SIGKILL);
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
   // At most the killed worker's tiles in flight: two calls, each at most one row of 8 tiles.
   EXPECT_LE(final_job->tile_failures(), 16u);
-  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 }
 
 // A worker that stops answering (SIGSTOP: its socket still accepts connections) holds tiles until
@@ -192,20 +199,14 @@ TEST_F(FarmSchedulerTest, AHungWorkersTilesMissTheirDeadlineAndFinishOnTheOther)
       {"--worker", w1->address(), "--worker", w2->address(), "--tile-deadline", "1.5", "--float"});
   ASSERT_TRUE(stub_);
   const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);  // 48 tiles, ~2 s on two threads
-  const v1::Job job = submit_ok(spec);
-  const auto before = test::wait_for_job(
-      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
-  ASSERT_TRUE(before);
-  w1->process().send_signal(SIGSTOP);
-  EXPECT_FALSE(done(*before)) << "the job finished before the worker hung";
-  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  const auto final_job = signal_worker_mid_job(spec, *w1, SIGSTOP);
   w1->process().send_signal(SIGCONT);
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
   EXPECT_GE(final_job->tile_failures(), 1u);
   EXPECT_TRUE(scheduler->process().wait_for_line("no result within the tile deadline of 1500 ms", 5s))
       << scheduler->process().output();
-  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 }
 
 // A registered worker that stops heartbeating is dropped long before any tile deadline, its
@@ -217,19 +218,13 @@ TEST_F(FarmSchedulerTest, AWorkerThatStopsHeartbeatingIsDroppedAndRegistersAgain
   auto w1 = start_worker("w1", 1, scheduler->address());
   auto w2 = start_worker("w2", 1, scheduler->address());
   const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);
-  const v1::Job job = submit_ok(spec);
-  const auto before = test::wait_for_job(
-      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 4 || done(j); }, 60s);
-  ASSERT_TRUE(before);
-  w1->process().send_signal(SIGSTOP);
-  EXPECT_FALSE(done(*before)) << "the job finished before the worker stopped";
-  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 60s);
+  const auto final_job = signal_worker_mid_job(spec, *w1, SIGSTOP);
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
   EXPECT_GE(final_job->tile_failures(), 1u);  // the stopped worker's calls in flight
   EXPECT_TRUE(scheduler->process().wait_for_line("removed: no heartbeat for 600 ms", 5s))
       << scheduler->process().output();
-  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 
   w1->process().send_signal(SIGCONT);
   EXPECT_TRUE(scheduler->process().wait_for_line("worker w3-", 20s)) << scheduler->process().output();
@@ -296,7 +291,7 @@ TEST_F(FarmSchedulerTest, AStaticWorkerWithAnEmptyCacheGetsTheJobsFilesInline) {
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
   EXPECT_EQ(final_job->tile_failures(), 0u);
-  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
   const AssetStore kept(dir_ / "empty" / "blobs");
   for (const v1::AssetRef& ref : spec.assets()) EXPECT_TRUE(kept.has(ref.sha256())) << ref.path();
 }
@@ -325,7 +320,7 @@ TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTiles
   // Every tile result was accepted exactly once across both schedulers: none rendered again.
   EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());
   EXPECT_EQ(final_job->tile_failures(), 0u);
-  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 }
 
 TEST_F(FarmSchedulerTest, CancelStopsTheJobQuicklyAndTheWorkerServesTheNextJob) {
