@@ -28,12 +28,16 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   // guard; two tiles in flight keep its threads busy between tiles.
   s.tiles_per_worker = 2;
   s.batch_target = options.batch_target;
-  core_ = std::make_unique<SchedulerCore>(s);
   TileRendererOptions r;
   r.blobs_dir = data_dir_ / "assets";  // the scheduler's own store: nothing to fetch
   r.cache_dir = data_dir_;             // scenes/<hash>/ shared with the scheduler's validation
   r.threads = options.threads;
   worker_ = std::make_shared<InProcessTileWorker>(r);
+  // The scene validation built is the one the worker renders: the models load once.
+  s.validated_scene = [worker = worker_](const std::string& hash, const Job& job, Scene scene) {
+    worker->renderer().adopt(hash, job, std::move(scene));
+  };
+  core_ = std::make_unique<SchedulerCore>(s);
   core_->add_worker(worker_);
 }
 

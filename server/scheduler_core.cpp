@@ -158,9 +158,10 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority) {
   }
   const std::string hash = scene_hash(spec);
   MaterializedScene m = materialize_scene(spec, hash, assets_, options_.data_dir);
+  Scene scene;
   try {
     // What `farm render` does before rendering: models load, the scene builds.
-    (void)build_scene(m.job);
+    scene = build_scene(m.job);
   } catch (const InputError& e) {
     std::string message = e.what();
     replace_all(message, m.dir.string() + "/", "");
@@ -178,6 +179,7 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority) {
   job.height = r.height;
   job.priority = priority;
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
+  if (options_.validated_scene) options_.validated_scene(hash, m.job, std::move(scene));
   v1::Job added = store_.add_job(job, unix_ms_now());
   log_line(options_.quiet, "info", "job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
                added.engine(), added.width(), added.height(), added.tiles_total(), priority);

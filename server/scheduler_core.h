@@ -29,6 +29,8 @@
 
 #include "proto/farm.pb.h"
 #include "renderer/image/exr_io.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene.h"
 #include "server/asset_store.h"
 #include "server/job_store.h"
 #include "server/tile_results.h"
@@ -48,6 +50,9 @@ struct SchedulerOptions {
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
   bool quiet = false;              // no info lines on stderr (the embedded farm of `farm render`)
+  // Given each job's scene as submit() built it to validate the job: the embedded farm hands it
+  // to its in-process worker, so that `farm render` loads the models once, not twice.
+  std::function<void(const std::string& scene_hash, const Job& job, Scene scene)> validated_scene;
 };
 
 // A WatchJob subscription: events of one job, in order.

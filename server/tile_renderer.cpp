@@ -105,6 +105,10 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
   return std::make_shared<const CachedScene>(std::move(m.job), std::move(scene));
 }
 
+void TileRenderer::adopt(const std::string& scene_hash, const Job& job, Scene scene) {
+  cache_.get(scene_hash, [&] { return std::make_shared<const CachedScene>(job, std::move(scene)); }, nullptr);
+}
+
 grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
                                   v1::RenderTileResponse& resp, const RenderControl& control) {
   const Clock::time_point start = Clock::now();

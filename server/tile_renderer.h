@@ -46,6 +46,10 @@ class TileRenderer {
   grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
                       const RenderControl& control);
 
+  // Caches a scene prepared elsewhere in this process (from `job`, laid out under the cache dir)
+  // as if a call had prepared it; a no-op when the hash is cached already.
+  void adopt(const std::string& scene_hash, const Job& job, Scene scene);
+
   int threads() const { return executor_.threads(); }
   const SceneCache& scene_cache() const { return cache_; }
   const AssetStore& asset_store() const { return store_; }

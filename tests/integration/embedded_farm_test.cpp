@@ -63,6 +63,8 @@ TEST(EmbeddedFarmTest, CornellThroughTheEmbeddedFarmIsBitIdenticalToRenderFrame)
     EXPECT_EQ(result.job.tiles_done(), result.job.tiles_total());
     EXPECT_EQ(result.job.tiles_rendered(), result.job.tiles_total());
     EXPECT_GT(progress_calls, 0);
+    // The scene submit built to validate the job is the one rendered: no call prepared it again.
+    EXPECT_EQ(result.job.stats().prepare_ms(), 0.0);
     EXPECT_TRUE(std::filesystem::exists(result.preview));
     const TileBuffer local = render_locally(spec);
     expect_same_pixels(read_exr(result.exr), local, engine);
