@@ -9,6 +9,7 @@
 
 #include <array>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 
 extern char** environ;
@@ -37,6 +38,7 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
     close(out_fd_);
     throw std::runtime_error("cannot start " + argv.front());
   }
+  reader_ = std::thread([this] { read_output(); });
 }
 
 ChildProcess::~ChildProcess() {
@@ -45,34 +47,53 @@ ChildProcess::~ChildProcess() {
     int status = 0;
     waitpid(pid_, &status, 0);
   }
+  // The reader polls, so it stops even if a grandchild still holds the pipe open.
+  stop_reading_ = true;
+  reader_.join();
   close(out_fd_);
 }
 
-bool ChildProcess::read_some(std::chrono::milliseconds timeout) {
-  if (eof_) return false;
-  pollfd p{out_fd_, POLLIN, 0};
-  if (poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return true;
+void ChildProcess::read_output() {
   std::array<char, 4096> buffer;
-  const ssize_t n = read(out_fd_, buffer.data(), buffer.size());
-  if (n <= 0) {
-    eof_ = true;
-    return false;
+  while (!stop_reading_) {
+    pollfd p{out_fd_, POLLIN, 0};
+    if (poll(&p, 1, 50) <= 0) continue;
+    const ssize_t n = read(out_fd_, buffer.data(), buffer.size());
+    std::lock_guard lock(mutex_);
+    if (n <= 0) {
+      eof_ = true;
+      output_changed_.notify_all();
+      return;
+    }
+    output_.append(buffer.data(), static_cast<std::size_t>(n));
+    if (output_.size() > kMaxOutputBytes) {
+      // Keep the tail, from a line start.
+      const std::size_t cut = output_.find('\n', output_.size() - kMaxOutputBytes);
+      output_.erase(0, cut == std::string::npos ? output_.size() - kMaxOutputBytes : cut + 1);
+    }
+    output_changed_.notify_all();
   }
-  output_.append(buffer.data(), static_cast<std::size_t>(n));
-  return true;
+}
+
+std::string ChildProcess::output() const {
+  std::lock_guard lock(mutex_);
+  return output_;
 }
 
 std::optional<std::string> ChildProcess::wait_for_line(const std::string& needle,
                                                             std::chrono::milliseconds timeout) {
   const auto end = Clock::now() + timeout;
+  std::unique_lock lock(mutex_);
   for (;;) {
     for (std::size_t begin = 0, nl; (nl = output_.find('\n', begin)) != std::string::npos;
          begin = nl + 1) {
-      const std::string line = output_.substr(begin, nl - begin);
-      if (line.find(needle) != std::string::npos) return line;
+      const std::string_view line = std::string_view(output_).substr(begin, nl - begin);
+      if (line.find(needle) != std::string_view::npos) return std::string(line);
     }
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now());
-    if (left.count() <= 0 || !read_some(left)) return std::nullopt;
+    if (eof_) return std::nullopt;
+    if (output_changed_.wait_until(lock, end) == std::cv_status::timeout) {
+      if (Clock::now() >= end) return std::nullopt;
+    }
   }
 }
 
@@ -89,10 +110,7 @@ std::optional<int> ChildProcess::wait_exit(std::chrono::milliseconds timeout) {
       break;
     }
     if (Clock::now() >= end) return std::nullopt;
-    // Drains output (so the child never blocks on a full pipe) and paces the loop.
-    if (!read_some(std::chrono::milliseconds(10))) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return exit_code_;
 }

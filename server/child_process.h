@@ -1,12 +1,17 @@
 #pragma once
 // A child process (a `farm worker` or `farm scheduler` started by a test or by `farm bench farm`),
-// its stdout and stderr read through a pipe. Every wait is bounded by a timeout; the destructor
-// kills and reaps a child still running.
+// its stdout and stderr read through a pipe by a thread of its own, all the time: a chatty child
+// (a scheduler logs every job) must never block on a full pipe while nobody waits for a line.
+// Every wait is bounded by a timeout; the destructor kills and reaps a child still running.
 #include <sys/types.h>
 
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace farm {
@@ -22,8 +27,8 @@ class ChildProcess {
   // the timeout passes or the process closes its output first.
   std::optional<std::string> wait_for_line(const std::string& needle,
                                            std::chrono::milliseconds timeout);
-  // Everything read so far.
-  const std::string& output() const { return output_; }
+  // Everything read so far (the last kMaxOutputBytes of it).
+  std::string output() const;
 
   void send_signal(int signal);
   // The exit code (128 + signal for a killed child), or nullopt if it is still running after
@@ -31,14 +36,18 @@ class ChildProcess {
   std::optional<int> wait_exit(std::chrono::milliseconds timeout);
 
  private:
-  // Appends what is available within `timeout`; false at end of output.
-  bool read_some(std::chrono::milliseconds timeout);
+  static constexpr std::size_t kMaxOutputBytes = std::size_t{8} << 20;
+  void read_output();  // the reader thread
 
   pid_t pid_ = -1;
   int out_fd_ = -1;
-  bool eof_ = false;
   std::optional<int> exit_code_;
+  std::atomic<bool> stop_reading_{false};
+  mutable std::mutex mutex_;  // guards the two below
+  std::condition_variable output_changed_;
   std::string output_;
+  bool eof_ = false;
+  std::thread reader_;
 };
 
 // Starts `argv` and waits for its line "<what> listening on HOST:PORT" (what `farm worker` and
