@@ -6,6 +6,7 @@
 #include <ctime>
 
 #include "renderer/scene/input_error.h"
+#include "server/job_store.h"
 #include "server/job_submission.h"
 #include "server/progress_bar.h"
 #include "server/scheduler_client.h"
@@ -63,11 +64,8 @@ v1::Job follow(SchedulerClient& client, const std::string& job_id) {
     }
     if (event.has_tile_failed()) {
       const v1::TileFailed& f = event.tile_failed();
-      const std::string tiles = f.tile_count() > 1
-                                    ? fmt::format("tiles {}-{}", f.tile_index(), f.tile_index() + f.tile_count() - 1)
-                                    : fmt::format("tile {}", f.tile_index());
-      fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, tiles, f.worker(), f.reason(),
-                 f.will_retry() ? " (will retry)" : "");
+      fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, describe_tiles(f.tile_index(), f.tile_count()),
+                 f.worker(), f.reason(), f.will_retry() ? " (will retry)" : "");
     }
   });
   return last;

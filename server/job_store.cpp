@@ -188,6 +188,10 @@ bool is_final(v1::JobState state) {
          state == v1::JOB_STATE_CANCELLED;
 }
 
+std::string describe_tiles(std::uint32_t first, std::uint32_t count) {
+  return count > 1 ? fmt::format("tiles {}-{}", first, first + count - 1) : fmt::format("tile {}", first);
+}
+
 std::int64_t unix_ms_now() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
              std::chrono::system_clock::now().time_since_epoch())
@@ -478,8 +482,7 @@ TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t firs
       .bind(2, reason).bind(3, *seq).bind(4, first).bind(5, first + count).run();
   Stmt(db_, prepared("UPDATE jobs SET tile_failures = tile_failures + ? WHERE seq = ?")).bind(1, count).bind(2, *seq).run();
   if (!result.will_retry) {
-    const std::string tiles = count == 1 ? fmt::format("tile {}", first)
-                                         : fmt::format("tiles {}-{}", first, first + count - 1);
+    const std::string tiles = describe_tiles(first, count);
     Stmt(db_, prepared("UPDATE jobs SET state = ?, failure_reason = ?, finished_ms = ? WHERE seq = ?"))
         .bind(1, static_cast<int>(v1::JOB_STATE_FAILED))
         .bind(2, fmt::format("{} failed {} time{}; last error: {}", tiles, attempts, attempts == 1 ? "" : "s", reason))

@@ -139,6 +139,8 @@ class JobStore {
 };
 
 bool is_final(v1::JobState state);
+// "tile 7" or "tiles 7-9", for messages about a batch.
+std::string describe_tiles(std::uint32_t first, std::uint32_t count);
 std::int64_t unix_ms_now();
 
 }  // namespace farm

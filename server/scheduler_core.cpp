@@ -72,10 +72,7 @@ v1::TileRect to_proto(const Rect& r) {
   return t;
 }
 
-std::string describe(const TileBatch& batch) {
-  return batch.count == 1 ? fmt::format("tile {}", batch.first)
-                          : fmt::format("tiles {}-{}", batch.first, batch.first + batch.count - 1);
-}
+std::string describe(const TileBatch& batch) { return describe_tiles(batch.first, batch.count); }
 
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
