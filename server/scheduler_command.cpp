@@ -46,7 +46,8 @@ CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& o) {
                 "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
                 "register themselves (farm worker --scheduler)");
   s->add_option("--tile-deadline", o.tile_deadline_s,
-                "Seconds a worker gets for one tile before it is given to another")
+                "Seconds a worker gets per tile of a call before the call's tiles are given to "
+                "another; a worker that misses it gets no more tiles until it answers a health check")
       ->check(CLI::Range(0.05, 86400.0))
       ->capture_default_str();
   s->add_option("--max-attempts", o.max_attempts,
