@@ -11,7 +11,7 @@ struct FarmBenchOptions {
   std::filesystem::path job = "jobs/cornell_path.json";
   int width = 512, height = 512;
   int spp = 16;
-  int repeats = 5;       // renders per configuration; the median is reported
+  int repeats = 7;       // renders per configuration; the median is reported
   int tiny_jobs = 200;
   int tiles_per_worker = 2;  // the scheduler's --tiles-per-worker
   int batch_ms = 200;        // the scheduler's --batch-ms, for all three set-ups
