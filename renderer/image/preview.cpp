@@ -2,13 +2,13 @@
 
 #include <fmt/format.h>
 
-#include <OpenImageIO/imageio.h>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
 
 #include "renderer/image/output_file.h"
+#include "renderer/image/preview_writer.h"
 
 namespace farm {
 
@@ -23,8 +23,7 @@ std::uint8_t to_srgb8(float linear) {
 }
 
 bool preview_format_supported(const std::filesystem::path& file) {
-  auto out = OIIO::ImageOutput::create(file.string());
-  return out != nullptr;
+  return preview_writer().can_write(file.c_str()) != 0;
 }
 
 void write_preview(const TileBuffer& image, const std::filesystem::path& file) {
@@ -41,17 +40,11 @@ void write_preview(const TileBuffer& image, const std::filesystem::path& file) {
       pixels[i++] = to_srgb8(c.z);
     }
   }
+  const PreviewWriter& writer = preview_writer();
   write_file_atomically(file, [&](const std::filesystem::path& temp) {
-    auto out = OIIO::ImageOutput::create(temp.string());
-    if (!out) {
-      throw std::runtime_error(fmt::format("{}: no image writer for this extension ({})", file.string(),
-                                           OIIO::geterror()));
-    }
-    OIIO::ImageSpec spec(r.width(), r.height(), 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    if (!out->open(temp.string(), spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) ||
-        !out->close()) {
-      throw std::runtime_error(fmt::format("{}: cannot write preview: {}", file.string(), out->geterror()));
+    char error[512] = "";
+    if (writer.write_rgb8(temp.c_str(), r.width(), r.height(), pixels.data(), error, sizeof error) == 0) {
+      throw std::runtime_error(fmt::format("{}: cannot write preview: {}", file.string(), error));
     }
   });
 }

@@ -4,7 +4,6 @@
 #include <ImfHeader.h>
 #include <glm/geometric.hpp>
 #include <ImfInputFile.h>
-#include <OpenImageIO/imageio.h>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -98,23 +97,6 @@ TEST(Srgb, TransferFunctionMatchesTheStandardAndClamps) {
   EXPECT_EQ(to_srgb8(7.0f), 255);
   EXPECT_EQ(to_srgb8(-1.0f), 0);
   EXPECT_EQ(to_srgb8(std::nanf("")), 0);
-}
-
-TEST_F(ImageIoTest, PngPreviewIsSrgbEncodedAndClamped) {
-  TileBuffer film(Rect{0, 0, 4, 2}, AovSet{});
-  film.rgba(0, 0) = {0.5f, 0.0f, 3.0f, 1.0f};
-  const fs::path file = dir_ / "preview.png";
-  write_preview(film, file);
-  auto in = OIIO::ImageInput::open(file.string());
-  ASSERT_TRUE(in);
-  EXPECT_EQ(in->spec().width, 4);
-  EXPECT_EQ(in->spec().height, 2);
-  ASSERT_EQ(in->spec().nchannels, 3);
-  std::vector<unsigned char> pixels(4 * 2 * 3);
-  ASSERT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, pixels.data()));
-  EXPECT_EQ(pixels[0], 188);  // 0.5 linear -> 0.7354 sRGB
-  EXPECT_EQ(pixels[1], 0);
-  EXPECT_EQ(pixels[2], 255);  // 3.0 clamps
 }
 
 TEST_F(ImageIoTest, FailedWriteLeavesNeitherTargetNorTemporaryFile) {
