@@ -47,6 +47,7 @@ void print_job(const v1::Job& job) {
   if (s.samples() > 0) fmt::print("  samples: {} traced, {} NaN/inf dropped\n", s.samples(), s.invalid_samples());
   if (s.rays() > 0) fmt::print("  rays: {}\n", s.rays());
   if (s.render_ms() > 0) fmt::print("  render time summed over tiles: {:.1f} ms\n", s.render_ms());
+  if (s.cpu_ms() > 0) fmt::print("  CPU time of the render threads: {:.1f} ms\n", s.cpu_ms());
   if (job.render_seconds() > 0) {
     fmt::print("  wall time from the first tile handed out to the merged image: {:.3f} s\n", job.render_seconds());
   }

@@ -177,6 +177,7 @@ void add_stats(v1::TileStats& sum, const v1::TileStats& t) {
   sum.set_fragments(sum.fragments() + t.fragments());
   sum.set_rays(sum.rays() + t.rays());
   sum.set_render_ms(sum.render_ms() + t.render_ms());
+  sum.set_cpu_ms(sum.cpu_ms() + t.cpu_ms());
   sum.set_prepare_ms(sum.prepare_ms() + t.prepare_ms());
   sum.set_threads(std::max(sum.threads(), t.threads()));
 }

@@ -60,8 +60,9 @@ CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& o) {
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   s->add_option("--batch-ms", o.batch_ms,
-                "Rendering time one call aims at: once a job's first tiles are timed, consecutive "
-                "tiles of a row go out together in batches about this long (smaller near the end "
+                "Rendering time one call aims at: once a job's first tiles are timed (the worker's "
+                "CPU time per tile over its threads), consecutive tiles of a row go out together "
+                "in batches about this long (smaller near the end "
                 "of a job; a tile that failed goes alone); 0 sends one tile per call")
       ->check(CLI::Range(0, 600000))
       ->capture_default_str();

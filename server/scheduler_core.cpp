@@ -430,7 +430,12 @@ int SchedulerCore::batch_size_locked(const std::string& job_id, int queued_tiles
 }
 
 void SchedulerCore::measured(const TileBatch& batch, const v1::TileStats& stats) {
-  const double ms = stats.render_ms() / std::max<std::uint32_t>(1, batch.count);
+  // What a tile costs a worker running at full speed: its threads' CPU time shared by them. The
+  // call's wall time would also count the time its threads waited for a core (two workers on
+  // one machine, or two calls in flight on one worker), and halve the batches for nothing.
+  const double per_call = stats.cpu_ms() > 0 && stats.threads() > 0 ? stats.cpu_ms() / stats.threads()
+                                                                      : stats.render_ms();
+  const double ms = per_call / std::max<std::uint32_t>(1, batch.count);
   std::lock_guard lock(mutex_);
   auto [it, added] = ms_per_tile_.emplace(batch.job_id, ms);
   if (!added) it->second = 0.5 * (it->second + ms);  // tiles differ: follow the recent ones

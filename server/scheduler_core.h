@@ -7,8 +7,9 @@
 // batch of tiles (JobStore::claim_next_batch: priority, then submission order, then tile index),
 // renders it on its worker in one call with a deadline per tile, writes the result file, then
 // marks the tiles done. A batch holds as many consecutive tiles of a grid row as make about
-// `batch_target` of rendering by the job's measured tile times (one tile until a time is known,
-// and smaller batches toward the end of a job), so cheap tiles do not drown in per-call costs.
+// `batch_target` of rendering by the job's measured tile costs (the worker threads' CPU time per
+// tile, divided by the threads; one tile until a cost is known, and smaller batches toward the
+// end of a job), so cheap tiles do not drown in per-call costs.
 // A failed or late batch goes back to the queue with attempts + 1 and the reason (a tile that
 // failed goes out alone from then on); at max_attempts the job fails with it. A worker that cannot be reached is marked down and probed every probe_interval
 // before it gets tiles again. A job whose tiles are all done is merged into its EXR and preview.

@@ -1,6 +1,7 @@
 #include "server/tile_renderer.h"
 
 #include <fmt/format.h>
+#include <time.h>
 
 #include <algorithm>
 #include <atomic>
@@ -55,12 +56,20 @@ struct RectRender {
   std::condition_variable done;
   std::size_t remaining = 0;
   RenderStats stats;
+  double cpu_ms = 0.0;
   std::exception_ptr failure;
 };
+
+double thread_cpu_ms() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
 
 void render_sub_tile(RectRender& r, const Rect& sub) {
   RenderStats stats;
   std::exception_ptr failure;
+  const double cpu_start = thread_cpu_ms();
   if (!r.stop.load(std::memory_order_relaxed)) {
     try {
       TileBuffer tile;
@@ -72,8 +81,10 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
       r.stop = true;
     }
   }
+  const double cpu_ms = thread_cpu_ms() - cpu_start;
   std::lock_guard lock(r.mutex);
   r.stats += stats;
+  r.cpu_ms += cpu_ms;
   if (failure && !r.failure) r.failure = failure;
   if (--r.remaining == 0) r.done.notify_all();
 }
@@ -178,6 +189,10 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
     v1::TileStats& stats = *response->mutable_stats();
     encode_stats(r->stats, stats);
     stats.set_render_ms(ms_since(render_start));
+    {
+      const std::lock_guard lock(r->mutex);
+      stats.set_cpu_ms(r->cpu_ms);
+    }
     stats.set_prepare_ms(prepare_ms);
     stats.set_scene_cache_hit(lookup.hit);
     stats.set_threads(std::min<int>(executor_.threads(), static_cast<int>(subs.size())));

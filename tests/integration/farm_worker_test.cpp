@@ -122,6 +122,9 @@ TEST_F(FarmWorkerTest, RenderTileIsBitIdenticalToInProcessRenderTileForEveryEngi
     if (engine == "path") {
       EXPECT_EQ(response.stats().samples(), 40u * 34u * 4u);
     }
+    // The render threads' CPU time: some, and no more than all its threads busy all along.
+    EXPECT_GT(response.stats().cpu_ms(), 0.0) << engine;
+    EXPECT_LE(response.stats().cpu_ms(), response.stats().render_ms() * response.stats().threads() + 1.0) << engine;
 
     // The second tile of the same job reuses the prepared scene.
     v1::RenderTileResponse again;
