@@ -1,6 +1,7 @@
 #pragma once
-// A job's finished tiles -> its frame: every result file (one per batch of tiles) pasted into one TileBuffer, written as the
-// EXR (R G B A plus the job's AOV layers) and the sRGB PNG preview, as `farm render` writes them.
+// A job's finished tiles -> its frame: every result file (one per batch of tiles) pasted into one
+// TileBuffer, written as the EXR (R G B A plus the job's AOV layers) and the sRGB PNG preview, as
+// `farm render` writes them.
 #include <filesystem>
 #include <string>
 #include <vector>

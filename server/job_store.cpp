@@ -249,12 +249,17 @@ void JobStore::exec(const char* sql) const {
   }
 }
 
-sqlite3_stmt* JobStore::prepared(const std::string& sql) const {
-  if (auto it = statements_.find(sql); it != statements_.end()) return it->second;
+sqlite3_stmt* JobStore::prepare(const std::string& sql, unsigned flags) const {
   sqlite3_stmt* statement = nullptr;
-  if (sqlite3_prepare_v3(db_, sql.c_str(), -1, SQLITE_PREPARE_PERSISTENT, &statement, nullptr) != SQLITE_OK) {
+  if (sqlite3_prepare_v3(db_, sql.c_str(), -1, flags, &statement, nullptr) != SQLITE_OK) {
     throw std::runtime_error(fmt::format("job store: {}: {}", sqlite3_errmsg(db_), sql));
   }
+  return statement;
+}
+
+sqlite3_stmt* JobStore::prepared(const std::string& sql) const {
+  if (auto it = statements_.find(sql); it != statements_.end()) return it->second;
+  sqlite3_stmt* statement = prepare(sql, SQLITE_PREPARE_PERSISTENT);
   statements_.emplace(sql, statement);
   return statement;
 }
@@ -320,11 +325,8 @@ std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
   }
   std::lock_guard lock(mutex_);
   // Not cached: the text varies with the filter and the page.
-  sqlite3_stmt* statement = nullptr;
-  const std::string sql = fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?", kJobColumns, where);
-  if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &statement, nullptr) != SQLITE_OK) {
-    throw std::runtime_error(fmt::format("job store: {}: {}", sqlite3_errmsg(db_), sql));
-  }
+  sqlite3_stmt* statement =
+      prepare(fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?", kJobColumns, where), 0);
   struct Finalize {
     sqlite3_stmt* s;
     ~Finalize() { sqlite3_finalize(s); }

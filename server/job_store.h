@@ -71,7 +71,7 @@ struct TileBatch {
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued.
 using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
 
-// What tile_failed did.
+// What batch_failed did.
 struct TileFailure {
   bool will_retry = false;  // false: the job is now FAILED with the reason
   v1::Job job;
@@ -126,6 +126,7 @@ class JobStore {
 
  private:
   void exec(const char* sql) const;
+  sqlite3_stmt* prepare(const std::string& sql, unsigned flags) const;  // the caller finalizes it
   sqlite3_stmt* prepared(const std::string& sql) const;  // cached; under mutex_
   v1::Job load_job_locked(const std::string& id) const;
   std::optional<v1::Job> find_job_locked(const std::string& id) const;

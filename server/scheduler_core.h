@@ -11,8 +11,9 @@
 // tile, divided by the threads; one tile until a cost is known, and smaller batches toward the
 // end of a job), so cheap tiles do not drown in per-call costs.
 // A failed or late batch goes back to the queue with attempts + 1 and the reason (a tile that
-// failed goes out alone from then on); at max_attempts the job fails with it. A worker that cannot be reached is marked down and probed every probe_interval
-// before it gets tiles again. A job whose tiles are all done is merged into its EXR and preview.
+// failed goes out alone from then on); at max_attempts the job fails with it. A worker that
+// cannot be reached is marked down and probed every probe_interval before it gets tiles again.
+// A job whose tiles are all done is merged into its EXR and preview.
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -115,7 +116,7 @@ class SchedulerCore {
   void handle_result(const std::shared_ptr<WorkerEntry>& w, const InFlight& call,
                      const grpc::Status& status, const v1::RenderTileResponse& response);
   int batch_size_locked(const std::string& job_id, int queued_tiles) const;  // under mutex_
-  void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's render time
+  void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void finish_if_complete(const std::string& job_id);
   void merge(const std::string& job_id);
   void monitor_loop();
@@ -138,7 +139,7 @@ class SchedulerCore {
   std::set<std::shared_ptr<InFlight>> in_flight_;
   std::map<std::string, std::shared_ptr<const v1::JobSpec>> specs_;
   std::set<std::string> merging_;
-  std::map<std::string, double> ms_per_tile_;  // per job: recent render ms per tile of a call
+  std::map<std::string, double> ms_per_tile_;  // per job: recent cost of a tile (measured())
 
   std::mutex watch_mutex_;
   std::multimap<std::string, std::shared_ptr<JobEventQueue>> watchers_;

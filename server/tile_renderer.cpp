@@ -185,14 +185,12 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
       if (r->failure) std::rethrow_exception(r->failure);
     }
 
+    // Every sub-tile has finished (remaining reached 0 under the mutex): r is ours alone now.
     encode_tile(r->out, *response->mutable_tile());
     v1::TileStats& stats = *response->mutable_stats();
     encode_stats(r->stats, stats);
     stats.set_render_ms(ms_since(render_start));
-    {
-      const std::lock_guard lock(r->mutex);
-      stats.set_cpu_ms(r->cpu_ms);
-    }
+    stats.set_cpu_ms(r->cpu_ms);
     stats.set_prepare_ms(prepare_ms);
     stats.set_scene_cache_hit(lookup.hit);
     stats.set_threads(std::min<int>(executor_.threads(), static_cast<int>(subs.size())));
