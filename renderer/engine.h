@@ -5,7 +5,7 @@
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
-#include "renderer/thread_pool.h"
+#include "renderer/util/thread_pool.h"
 
 namespace farm {
 

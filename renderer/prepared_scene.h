@@ -8,9 +8,9 @@
 
 #include <memory>
 
-#include "renderer/frame_cache.h"
 #include "renderer/geometry/model_triangles.h"
 #include "renderer/scene/scene.h"
+#include "renderer/util/frame_cache.h"
 
 namespace farm {
 

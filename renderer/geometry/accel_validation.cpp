@@ -10,9 +10,11 @@
 #include <numbers>
 #include <vector>
 
+#include "renderer/geometry/embree_intersector.h"
+
 #include "renderer/geometry/aabb.h"
 #include "renderer/prepared_scene.h"
-#include "renderer/thread_pool.h"
+#include "renderer/util/thread_pool.h"
 
 namespace farm {
 namespace {
@@ -153,6 +155,22 @@ AccelValidation validate_accel(const PreparedScene& scene, const RenderSettings&
   }
   result.mean_relative_t_difference = compared > 0 ? sum / static_cast<double>(compared) : 0.0;
   return result;
+}
+
+AccelKind accel_to_validate(AccelKind accel) {
+  return accel == AccelKind::Embree ? AccelKind::Bvh : accel;
+}
+
+AccelValidation validate_against_embree(const PreparedScene& scene, const RenderSettings& settings,
+                                        AccelKind accel, std::uint64_t rays) {
+  const auto ours = cached_scene_intersector(scene, accel);
+  const std::unique_ptr<SceneIntersector> embree = build_embree_intersector(scene);
+  return validate_accel(scene, settings, *ours, *embree, rays);
+}
+
+bool validation_passes(const AccelValidation& v) {
+  return static_cast<double>(v.hit_miss_disagreements) <=
+         kHitMissTolerance * static_cast<double>(v.rays);
 }
 
 }  // namespace farm

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "renderer/geometry/scene_intersector.h"
+#include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
 
 namespace farm {
@@ -31,5 +32,20 @@ struct AccelValidation {
 AccelValidation validate_accel(const PreparedScene& scene, const RenderSettings& settings,
                                const SceneIntersector& ours, const SceneIntersector& reference,
                                std::uint64_t rays);
+
+// What a job's validate.embree_rays and `farm validate` run.
+inline constexpr std::uint64_t kDefaultValidationRays = 100000;
+// Hit/miss disagreements tolerated before validation fails: 0.001% of the rays.
+inline constexpr double kHitMissTolerance = 1e-5;
+
+// The accel compared with Embree when the job's own is `accel`: Embree is compared with `bvh`.
+AccelKind accel_to_validate(AccelKind accel);
+
+// Compares `accel` (the scene's cached intersector, so a render's BVHs are reused) with Embree
+// on `rays` rays.
+AccelValidation validate_against_embree(const PreparedScene& scene, const RenderSettings& settings,
+                                        AccelKind accel, std::uint64_t rays);
+
+bool validation_passes(const AccelValidation& v);
 
 }  // namespace farm

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "renderer/image/output_file.h"
+#include "renderer/util/thread_pool.h"
 
 namespace farm {
 namespace {
@@ -112,7 +113,7 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
   // A frame's line blocks are compressed on OpenEXR's pool, one thread a core: compression is most
   // of a merge, which runs after the last tile while the farm waits for it.
   static std::once_flag pool;
-  std::call_once(pool, [] { Imf::setGlobalThreadCount(static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))); });
+  std::call_once(pool, [] { Imf::setGlobalThreadCount(resolve_thread_count(0)); });
   write_file_atomically(file, [&](const std::filesystem::path& temp) {
     try {
       Imf::OutputFile out(temp.c_str(), header, Imf::globalThreadCount());

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "renderer/image/aov.h"
-#include "renderer/uninitialized_array.h"
+#include "renderer/util/uninitialized_array.h"
 
 namespace farm {
 

@@ -10,7 +10,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/raster/raster_frame.h"
 #include "renderer/render_settings.h"
-#include "renderer/thread_pool.h"
+#include "renderer/util/thread_pool.h"
 
 namespace farm::raster {
 

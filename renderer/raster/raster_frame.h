@@ -15,8 +15,8 @@
 #include "renderer/raster/clip_polygon.h"
 #include "renderer/raster/edge_function.h"
 #include "renderer/render_settings.h"
-#include "renderer/thread_pool.h"
-#include "renderer/uninitialized_array.h"
+#include "renderer/util/thread_pool.h"
+#include "renderer/util/uninitialized_array.h"
 
 namespace farm::raster {
 

@@ -8,9 +8,9 @@
 #include <memory>
 #include <thread>
 
+#include "renderer/render_frame.h"
 #include "renderer/scene/model.h"
-#include "server/bench_scenes.h"
-#include "server/local_pipeline.h"
+#include "server/bench/bench_scenes.h"
 
 namespace {
 
@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   const auto cow = std::make_shared<const Model>(load_model(cow_path));
   static const Scene single = bench::single_cow(cow);
   static const Scene grid = bench::cow_grid(cow, 10);
-  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int cores = farm::resolve_thread_count(0);
   for (const auto& [name, scene] : {std::pair{"raster/cow", &single}, std::pair{"raster/cow-grid-100", &grid}}) {
     auto* b = benchmark::RegisterBenchmark(name, raster_frame, scene);
     for (int threads : {1, 2, 4, 8, 16}) {

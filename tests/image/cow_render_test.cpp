@@ -12,9 +12,9 @@
 
 #include "renderer/geometry/triangle_intersect.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
-#include "server/local_pipeline.h"
 
 namespace farm {
 namespace {

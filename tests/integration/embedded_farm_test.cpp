@@ -1,6 +1,6 @@
 // The embedded farm (scheduler core + in-process worker, no sockets) renders a job to the same
 // pixels as render_frame, and the job merger pastes tile files back bit-exactly.
-#include "server/embedded_farm.h"
+#include "server/embedded/embedded_farm.h"
 
 #include <gtest/gtest.h>
 
@@ -11,12 +11,12 @@
 #include "renderer/engine.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
-#include "server/job_merger.h"
-#include "server/job_store.h"
-#include "server/local_pipeline.h"
-#include "server/tile_codec.h"
+#include "server/common/tile_codec.h"
+#include "server/scheduler/job_merger.h"
+#include "server/scheduler/store/job_store.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
@@ -57,12 +57,22 @@ TEST(EmbeddedFarmTest, CornellThroughTheEmbeddedFarmIsBitIdenticalToRenderFrame)
   for (const auto& [path, file] : test::cornell_assets()) farm.add_asset_file(file);
   for (const std::string engine : {"raster", "whitted", "path"}) {
     const v1::JobSpec spec = test::cornell_job_spec(engine, 64, 48, engine == "path" ? 4 : 1);
+    // The job's every event reaches `progress`, however fast it renders: the last one is final
+    // and counts every tile, and tiles_done never goes back.
     int progress_calls = 0;
-    const EmbeddedResult result = farm.run(spec, [&](const v1::Job&) { ++progress_calls; });
+    v1::Job last;
+    bool monotonic = true;
+    const EmbeddedResult result = farm.run(spec, [&](const v1::Job& j) {
+      if (progress_calls++ > 0 && j.tiles_done() < last.tiles_done()) monotonic = false;
+      last = j;
+    });
     ASSERT_EQ(result.job.state(), v1::JOB_STATE_SUCCEEDED) << result.job.failure_reason();
     EXPECT_EQ(result.job.tiles_done(), result.job.tiles_total());
     EXPECT_EQ(result.job.tiles_rendered(), result.job.tiles_total());
     EXPECT_GT(progress_calls, 0);
+    EXPECT_EQ(last.state(), v1::JOB_STATE_SUCCEEDED) << engine;
+    EXPECT_EQ(last.tiles_done(), result.job.tiles_total()) << engine;
+    EXPECT_TRUE(monotonic) << engine;
     // The scene submit built to validate the job is the one rendered: no call prepared it again.
     EXPECT_EQ(result.job.stats().prepare_ms(), 0.0);
     EXPECT_TRUE(std::filesystem::exists(result.preview));

@@ -13,10 +13,10 @@
 
 #include "renderer/image/exr_io.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
-#include "server/asset_store.h"
-#include "server/local_pipeline.h"
+#include "server/common/asset_store.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"

@@ -8,10 +8,11 @@
 #include <set>
 #include <thread>
 
-#include "server/job_store.h"
-#include "server/read_whole_file.h"
-#include "server/scheduler_core.h"
-#include "server/tile_worker.h"
+#include "server/common/read_whole_file.h"
+#include "server/embedded/in_process_tile_worker.h"
+#include "server/scheduler/scheduler_core.h"
+#include "server/scheduler/store/job_store.h"
+#include "server/scheduler/tile_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 

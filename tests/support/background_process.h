@@ -1,10 +1,10 @@
 #pragma once
-// Processes beside a test: farm::ChildProcess (server/child_process.h) and the `farm worker`
+// Processes beside a test: farm::ChildProcess (server/common/child_process.h) and the `farm worker`
 // binary under test on a free port.
 #include <string>
 #include <vector>
 
-#include "server/child_process.h"
+#include "server/common/child_process.h"
 
 namespace farm::test {
 

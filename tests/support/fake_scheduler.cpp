@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <chrono>
 
-#include "server/sha256.h"
+#include "server/common/sha256.h"
 
 namespace farm::test {
 

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "server/sha256.h"
+#include "server/common/sha256.h"
 
 namespace farm::test {
 

@@ -5,8 +5,8 @@
 #include <fstream>
 #include <thread>
 
+#include "server/common/sha256.h"
 #include "tests/support/job_specs.h"
-#include "server/sha256.h"
 
 namespace farm::test {
 

@@ -4,8 +4,8 @@
 #include <string>
 
 #include "renderer/scene/input_error.h"
-#include "server/asset_store.h"
-#include "server/sha256.h"
+#include "server/common/asset_store.h"
+#include "server/common/sha256.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 

@@ -1,6 +1,6 @@
 // The scheduler's job store: what survives a restart, the order tiles are handed out in, and how
 // failed attempts end a job.
-#include "server/job_store.h"
+#include "server/scheduler/store/job_store.h"
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>

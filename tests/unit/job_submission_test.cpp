@@ -1,5 +1,5 @@
 // What `farm submit` (and the embedded farm) send: the job text and every file it reads.
-#include "server/job_submission.h"
+#include "server/client/job_submission.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "renderer/scene/input_error.h"
-#include "server/model_dependencies.h"
-#include "server/sha256.h"
+#include "server/client/model_dependencies.h"
+#include "server/common/sha256.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 

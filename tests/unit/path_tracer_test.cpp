@@ -6,7 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "renderer/engine.h"
-#include "server/local_pipeline.h"
+#include "renderer/render_frame.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {

@@ -6,8 +6,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "renderer/engine.h"
+#include "renderer/render_frame.h"
 #include "renderer/scene/transform.h"
-#include "server/local_pipeline.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {

@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "server/scene_cache.h"
+#include "server/worker/scene_cache.h"
 
 namespace farm {
 namespace {

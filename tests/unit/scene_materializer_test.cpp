@@ -6,8 +6,8 @@
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/scene_builder.h"
-#include "server/scene_hash.h"
-#include "server/scene_materializer.h"
+#include "server/common/scene_hash.h"
+#include "server/common/scene_materializer.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 

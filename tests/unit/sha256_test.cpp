@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "server/sha256.h"
+#include "server/common/sha256.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "renderer/scene/input_error.h"
-#include "server/tile_codec.h"
+#include "server/common/tile_codec.h"
 
 namespace farm {
 namespace {

@@ -6,10 +6,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "renderer/engine.h"
+#include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
 #include "renderer/trace/fresnel.h"
-#include "server/local_pipeline.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {

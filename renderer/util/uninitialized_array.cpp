@@ -1,0 +1,91 @@
+#include "renderer/util/uninitialized_array.h"
+
+#include <sys/mman.h>
+
+#include <mutex>
+#include <vector>
+
+namespace farm::detail {
+namespace {
+
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+constexpr std::size_t kPage = 4096;
+constexpr std::size_t kRecycled = 64 * 1024;               // below this, plain malloc
+constexpr std::size_t kRecycledBytesLimit = std::size_t{1} << 30;
+
+// Blocks freed by one frame, kept for the next: a fresh block costs a page fault and a
+// kernel-zeroed page for every 4 KiB (or 2 MiB) on first touch, which for a big scene is a
+// sizeable part of the frame set-up, and faults from several threads contend in the kernel.
+class BlockRecycler {
+ public:
+  void* take(std::size_t bytes) {
+    std::lock_guard lock(mutex_);
+    // The smallest kept block that fits and is not more than twice too big.
+    std::size_t best = blocks_.size();
+    for (std::size_t i = 0; i < blocks_.size(); ++i) {
+      const std::size_t size = blocks_[i].size;
+      if (size >= bytes && size <= 2 * bytes && (best == blocks_.size() || size < blocks_[best].size))
+        best = i;
+    }
+    if (best == blocks_.size()) return nullptr;
+    void* p = blocks_[best].memory;
+    kept_bytes_ -= blocks_[best].size;
+    blocks_.erase(blocks_.begin() + static_cast<std::ptrdiff_t>(best));
+    return p;
+  }
+
+  bool keep(void* p, std::size_t size) {
+    std::lock_guard lock(mutex_);
+    if (kept_bytes_ + size > kRecycledBytesLimit) return false;
+    blocks_.push_back({p, size});
+    kept_bytes_ += size;
+    return true;
+  }
+
+ private:
+  struct Block {
+    void* memory;
+    std::size_t size;
+  };
+  std::mutex mutex_;
+  std::vector<Block> blocks_;
+  std::size_t kept_bytes_ = 0;
+};
+
+BlockRecycler& recycler() {
+  static BlockRecycler instance;
+  return instance;
+}
+
+// Huge pages only pay off for big blocks; smaller ones are page-aligned.
+std::size_t alignment_for(std::size_t bytes) { return bytes >= 2 * kHugePage ? kHugePage : kPage; }
+std::size_t rounded_size(std::size_t bytes) {
+  const std::size_t a = alignment_for(bytes);
+  return (bytes + a - 1) / a * a;
+}
+
+}  // namespace
+
+void* allocate_frame_memory(std::size_t bytes) {
+  if (bytes == 0) bytes = 1;
+  if (bytes < kRecycled) {
+    void* p = std::malloc(bytes);
+    if (!p) throw std::bad_alloc();
+    return p;
+  }
+  const std::size_t rounded = rounded_size(bytes);
+  if (void* p = recycler().take(rounded)) return p;
+  void* p = std::aligned_alloc(alignment_for(bytes), rounded);
+  if (!p) throw std::bad_alloc();
+  // A hint: without huge pages this is plain memory.
+  if (alignment_for(bytes) == kHugePage) madvise(p, rounded, MADV_HUGEPAGE);
+  return p;
+}
+
+void free_frame_memory(void* p, std::size_t bytes) {
+  if (!p) return;
+  if (bytes >= kRecycled && recycler().keep(p, rounded_size(bytes))) return;
+  std::free(p);
+}
+
+}  // namespace farm::detail

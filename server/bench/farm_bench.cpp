@@ -1,0 +1,190 @@
+#include "server/bench/farm_bench.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "renderer/scene/input_error.h"
+#include "server/client/job_submission.h"
+#include "server/client/scheduler_client.h"
+#include "server/common/child_process.h"
+#include "server/embedded/embedded_farm.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+constexpr auto kStartTimeout = std::chrono::seconds(30);
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+std::string self_binary() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot find the farm binary (/proc/self/exe)");
+  return self.string();
+}
+
+// A scheduler and `workers` workers on loopback, each in its own process, as a user runs them.
+class LoopbackFarm {
+ public:
+  LoopbackFarm(const fs::path& dir, int workers, int tiles_per_worker, int batch_ms, int worker_threads) {
+    const std::string farm = self_binary();
+    scheduler_ = std::make_unique<ChildProcess>(std::vector<std::string>{
+        farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir", (dir / "scheduler").string(),
+        "--tiles-per-worker", std::to_string(tiles_per_worker), "--batch-ms", std::to_string(batch_ms)});
+    address_ = wait_for_listening(*scheduler_, "scheduler", kStartTimeout);
+    if (address_.empty()) throw std::runtime_error("the scheduler did not start: " + scheduler_->output());
+    for (int i = 0; i < workers; ++i) {
+      // Registered workers fetch their assets from the scheduler, like a real deployment.
+      auto worker = std::make_unique<ChildProcess>(std::vector<std::string>{
+          farm, "worker", "--listen", "127.0.0.1:0", "--scheduler", address_, "--cache-dir",
+          (dir / fmt::format("worker{}", i)).string(), "--threads", std::to_string(worker_threads)});
+      if (wait_for_listening(*worker, "worker", kStartTimeout).empty()) {
+        throw std::runtime_error("a worker did not start: " + worker->output());
+      }
+      workers_.push_back(std::move(worker));
+    }
+    // Wait until every worker has registered: a job then sees all of them from its first tile.
+    if (!scheduler_->wait_for_line(fmt::format("worker w{}-", workers), kStartTimeout)) {
+      throw std::runtime_error("the workers did not register: " + scheduler_->output());
+    }
+  }
+  const std::string& address() const { return address_; }
+
+ private:
+  std::unique_ptr<ChildProcess> scheduler_;
+  std::vector<std::unique_ptr<ChildProcess>> workers_;
+  std::string address_;
+};
+
+// Submit, follow to the end, fetch the EXR: what `farm submit --wait` does.
+double render_through(SchedulerClient& client, const JobSubmission& submission, const fs::path& out) {
+  const Clock::time_point start = Clock::now();
+  client.upload_missing(submission);
+  const v1::Job job = client.submit(submission, 0);
+  const v1::Job last = client.watch(job.job_id(), {});
+  if (last.state() != v1::JOB_STATE_SUCCEEDED) {
+    throw std::runtime_error(fmt::format("job {} {}: {}", job.job_id(), to_string(last.state()), last.failure_reason()));
+  }
+  client.fetch(job.job_id(), v1::RESULT_KIND_EXR, [&](const std::string&) { return out; });
+  return seconds_since(start);
+}
+
+// (a), (b) and (c) on the same job; the farms of (b) and (c) are stopped on return.
+void compare_setups(const FarmBenchOptions& o, const fs::path& dir, const JobSubmission& submission) {
+  // The three set-ups take turns, (a) (b) (c) (a) (b) (c) ..., so that a change in the machine's
+  // load during the run (it is shared) falls on all three alike; the medians are compared.
+  LoopbackFarm one(dir / "loopback1", 1, o.tiles_per_worker, o.batch_ms, 0);
+  LoopbackFarm two(dir / "loopback2", 2, o.tiles_per_worker, o.batch_ms, o.two_worker_threads);
+  SchedulerClient client_one(one.address()), client_two(two.address());
+  std::vector<double> embedded, one_worker, two_workers;
+  for (int i = 0; i < o.repeats; ++i) {
+    const Clock::time_point start = Clock::now();
+    EmbeddedFarmOptions embedded_options;
+    embedded_options.batch_target = std::chrono::milliseconds(o.batch_ms);
+    EmbeddedFarm farm(embedded_options);
+    for (const auto& [sha, file] : submission.files) farm.add_asset_file(file);
+    const EmbeddedResult r = farm.run(submission.spec);
+    if (r.job.state() != v1::JOB_STATE_SUCCEEDED) throw std::runtime_error("embedded render failed: " + r.job.failure_reason());
+    fs::copy_file(r.exr, dir / "embedded.exr", fs::copy_options::overwrite_existing);
+    embedded.push_back(seconds_since(start));
+    one_worker.push_back(render_through(client_one, submission, dir / "loopback.exr"));
+    two_workers.push_back(render_through(client_two, submission, dir / "loopback.exr"));
+  }
+  const double a = median(embedded), b = median(one_worker), c = median(two_workers);
+  // Paired by round: the three runs of a round are seconds apart, so their ratio sees the same
+  // machine; the median of those ratios is the steadiest figure on a shared machine.
+  std::vector<double> b_over_a, b_over_c;
+  for (int i = 0; i < o.repeats; ++i) {
+    b_over_a.push_back(one_worker[i] / embedded[i]);
+    b_over_c.push_back(one_worker[i] / two_workers[i]);
+  }
+  const auto best = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  fmt::print("{:<44} {:>8} {:>8}\n", "", "median", "best");
+  fmt::print("{:<44} {:>8.3f} {:>8.3f} s\n", "(a) farm render (embedded farm)", a, best(embedded));
+  fmt::print("{:<44} {:>8.3f} {:>8.3f} s   {:+.1f}% vs (a) (best: {:+.1f}%)\n", "(b) scheduler + 1 worker over loopback",
+             b, best(one_worker), 100.0 * (b - a) / a, 100.0 * (best(one_worker) - best(embedded)) / best(embedded));
+  fmt::print("{:<44} {:>8.3f} {:>8.3f} s   {:+.1f}% vs (a), {:.2f}x the speed of (b) (best: {:.2f}x)\n",
+             "(c) scheduler + 2 workers over loopback", c, best(two_workers), 100.0 * (c - a) / a, b / c,
+             best(one_worker) / best(two_workers));
+  fmt::print("paired by round (median of {} rounds): (b) {:+.1f}% vs (a); (c) {:.2f}x the speed of (b)\n", o.repeats,
+             100.0 * (median(b_over_a) - 1.0), median(b_over_c));
+}
+
+}  // namespace
+
+void run_farm_bench(const FarmBenchOptions& o) {
+  const fs::path dir = fs::temp_directory_path() / fmt::format("farm-bench-{}", ::getpid());
+  fs::create_directories(dir);
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } cleanup{dir};
+
+  RenderOverrides overrides;
+  overrides.width = o.width;
+  overrides.height = o.height;
+  overrides.spp = o.spp;
+  const JobSubmission submission = make_job_submission(o.job, {}, overrides);
+  fmt::print("farm bench farm ({} build, {} hardware threads): {} at {}x{}, {} spp, {} tiles of {} px, "
+             "median of {}\n", FARM_BUILD_TYPE, std::thread::hardware_concurrency(), o.job.string(), o.width,
+             o.height, o.spp, (o.width + submission.job.render.tile_size - 1) / submission.job.render.tile_size *
+                 ((o.height + submission.job.render.tile_size - 1) / submission.job.render.tile_size),
+             submission.job.render.tile_size, o.repeats);
+
+  compare_setups(o, dir, submission);
+  // The files the renders wrote are flushed first, so that their write-back does not stall the
+  // tiny jobs' database commits.
+  ::sync();
+
+  // Tiny jobs: one 16x16 tile each, submitted back to back, then followed to the end.
+  LoopbackFarm farm(dir / "tiny", 1, o.tiles_per_worker, o.batch_ms, 0);
+  SchedulerClient client(farm.address());
+  RenderOverrides tiny;
+  tiny.engine = "raster";
+  tiny.width = 16;
+  tiny.height = 16;
+  tiny.spp = 1;
+  tiny.preview = fs::path();
+  const JobSubmission small = make_job_submission(o.job, {}, tiny);
+  client.upload_missing(small);
+  std::vector<std::string> ids;
+  std::vector<double> latency_ms;
+  const Clock::time_point start = Clock::now();
+  for (int i = 0; i < o.tiny_jobs; ++i) {
+    const Clock::time_point t = Clock::now();
+    client.upload_missing(small);  // as `farm submit` does: one HasAssets, nothing to upload
+    ids.push_back(client.submit(small, 0).job_id());
+    latency_ms.push_back(1e3 * seconds_since(t));
+  }
+  const double submitted_s = seconds_since(start);
+  int succeeded = 0;
+  for (const std::string& id : ids) succeeded += client.watch(id, {}).state() == v1::JOB_STATE_SUCCEEDED ? 1 : 0;
+  const double total_s = seconds_since(start);
+  std::sort(latency_ms.begin(), latency_ms.end());
+  fmt::print("{} tiny jobs (16x16 raster): submitted in {:.3f} s, all finished after {:.3f} s: {:.0f} jobs/s; "
+             "{} succeeded, {} lost or failed\n",
+             o.tiny_jobs, submitted_s, total_s, o.tiny_jobs / total_s, succeeded, o.tiny_jobs - succeeded);
+  fmt::print("submit latency: median {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms\n", latency_ms[latency_ms.size() / 2],
+             latency_ms[std::min(latency_ms.size() - 1, latency_ms.size() * 99 / 100)], latency_ms.back());
+  if (succeeded != o.tiny_jobs) throw std::runtime_error(fmt::format("{} tiny jobs did not succeed", o.tiny_jobs - succeeded));
+}
+
+}  // namespace farm

@@ -1,0 +1,133 @@
+#include "server/bench/path_bench.h"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <thread>
+
+#include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/model.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/bench/bench_scenes.h"
+
+namespace farm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Throughput {
+  double seconds = 0.0;
+  double samples = 0.0;
+  double rays = 0.0;
+  double msamples_per_s() const { return samples / seconds / 1e6; }
+  double mrays_per_s() const { return rays / seconds / 1e6; }
+};
+
+// One untimed frame at 1 spp first, so the BVH and emitter table are built outside the timing.
+Throughput measure(const PreparedScene& scene, RenderSettings settings, int threads) {
+  settings.threads = threads;
+  ThreadPool pool(threads);
+  TileBuffer film;
+  RenderSettings warm = settings;
+  warm.spp = 1;
+  render_frame(scene, warm, pool, film);
+  const Clock::time_point start = Clock::now();
+  render_frame(scene, settings, pool, film);
+  Throughput t;
+  t.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  t.samples = static_cast<double>(film.stats().samples);
+  t.rays = static_cast<double>(film.stats().rays);
+  return t;
+}
+
+// Runs tools/mitsuba_reference.py --bench and reads its one JSON line.
+std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, int threads, std::string& renderer) {
+  const std::string command =
+      fmt::format("'{}' '{}' '{}' --width {} --height {} --spp {} --threads {} --bench 2>&1", o.mitsuba_python,
+                  o.mitsuba_script.string(), o.cornell_job.string(), o.width, o.height, o.spp, threads);
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  if (!pipe) return std::nullopt;
+  std::string output;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe.get()) != nullptr) output += buffer.data();
+  const auto brace = output.rfind('{');
+  const auto parsed = brace == std::string::npos ? nlohmann::json() : nlohmann::json::parse(output.substr(brace), nullptr, false);
+  if (!parsed.is_object() || !parsed.contains("seconds")) {
+    fmt::print("  mitsuba did not run: {}\n", output.substr(0, 400));
+    return std::nullopt;
+  }
+  renderer = parsed.value("renderer", "mitsuba");
+  Throughput t;
+  t.seconds = parsed["seconds"].get<double>();
+  t.samples = static_cast<double>(o.width) * o.height * o.spp;
+  return t;
+}
+
+void bench_scene(const std::string& name, const PreparedScene& scene, RenderSettings settings,
+                 const PathBenchOptions& o, bool with_mitsuba) {
+  settings.engine = EngineKind::Path;
+  settings.width = o.width;
+  settings.height = o.height;
+  settings.spp = o.spp;
+  settings.aovs = {};
+  fmt::print("\nscene {}: {} triangles, {}x{}, {} spp, max_depth {}\n", name, scene.triangle_count(),
+             o.width, o.height, o.spp, settings.max_depth);
+  fmt::print("{:<28} {:>7} {:>9} {:>11} {:>9} {:>11} {:>8}\n", "renderer", "threads", "seconds",
+             "Msamples/s", "Mrays/s", "rays/sample", "speedup");
+  double single = 0.0;
+  for (int threads : o.threads) {
+    const Throughput t = measure(scene, settings, threads);
+    if (threads == 1) single = t.msamples_per_s();
+    fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9.2f} {:>11.2f} {:>7.2f}x\n", "farm path", threads,
+               t.seconds, t.msamples_per_s(), t.mrays_per_s(), t.rays / t.samples,
+               single > 0.0 ? t.msamples_per_s() / single : 0.0);
+    if (!with_mitsuba) continue;
+    std::string renderer;
+    if (const auto m = measure_mitsuba(o, threads, renderer)) {
+      fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9} {:>11} {:>8}   farm/mitsuba {:.2f}x\n", renderer,
+                 threads, m->seconds, m->msamples_per_s(), "-", "-", "-",
+                 t.msamples_per_s() / m->msamples_per_s());
+    }
+  }
+}
+
+}  // namespace
+
+void run_path_bench(const PathBenchOptions& options) {
+  PathBenchOptions o = options;
+  if (o.threads.empty()) {
+    o.threads = {1};
+    const int all = resolve_thread_count(0);
+    if (all > 1) o.threads.push_back(all);
+  }
+  if (o.assets.empty()) o.assets = "../shared/assets";
+  fmt::print("farm bench path ({} build, {} hardware threads)\n", FARM_BUILD_TYPE,
+             std::thread::hardware_concurrency());
+
+  if (o.scene == "all" || o.scene == "cornell") {
+    const Job job = load_job(o.cornell_job);
+    const PreparedScene scene(build_scene(job));
+    bench_scene(fmt::format("cornell ({})", o.cornell_job.string()), scene, job.render, o,
+                !o.mitsuba_python.empty());
+  }
+  if (o.scene == "all" || o.scene == "cbbunny") {
+    const std::filesystem::path path = o.assets / "dae" / "CBbunny.dae";
+    if (!std::filesystem::exists(path)) {
+      throw InputError(fmt::format("{}: no such model (pass --assets to the lab's assets folder)", path.string()));
+    }
+    const PreparedScene scene(bench::cbbunny_area_lit(load_model(path)));
+    RenderSettings settings;
+    settings.max_depth = -1;
+    bench_scene("CBbunny (ceiling lamp emissive)", scene, settings, o, false);
+  }
+}
+
+}  // namespace farm

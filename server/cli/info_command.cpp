@@ -1,0 +1,78 @@
+#include "server/cli/info_command.h"
+
+#include <fmt/format.h>
+
+#include <glm/vec3.hpp>
+
+#include "renderer/scene/scene_builder.h"
+
+namespace farm {
+namespace {
+
+std::string vec(const glm::vec3& v) { return fmt::format("({:.4g}, {:.4g}, {:.4g})", v.x, v.y, v.z); }
+
+void print_camera(const Camera& c) {
+  fmt::print("  camera: position {} target {} up {} fov_y {:.4g} near {:.4g} far {:.4g}\n",
+             vec(c.position), vec(c.target), vec(c.up), c.fov_y_degrees, c.near, c.far);
+}
+
+void print_light(const Light& l) {
+  if (l.kind == Light::Kind::Directional) {
+    fmt::print("  light: directional, direction {} intensity {}\n", vec(l.direction), vec(l.intensity));
+  } else {
+    fmt::print("  light: point, position {} intensity {}\n", vec(l.position), vec(l.intensity));
+  }
+}
+
+void print_model(const std::filesystem::path& file) {
+  const Model model = load_model(file);
+  const AABB b = model.bounds();
+  fmt::print("model {}\n", file.string());
+  fmt::print("  {} triangles, {} vertices, {} mesh(es), {} material(s)\n", model.triangle_count(),
+             model.vertex_count(), model.meshes.size(), model.materials.size());
+  fmt::print("  bounds {} .. {}\n", vec(b.min), vec(b.max));
+  for (const Mesh& m : model.meshes) {
+    fmt::print("  mesh '{}': {} triangles, material '{}'\n", m.name, m.triangle_count(),
+               model.materials[m.material].name);
+  }
+  for (const Material& m : model.materials) {
+    fmt::print("  material '{}': ka {} kd {} ks {} ke {} shininess {:.4g} ior {:.4g} "
+               "transmission {:.4g}\n",
+               m.name, vec(m.ambient), vec(m.diffuse), vec(m.specular), vec(m.emission),
+               m.shininess, m.ior, m.transmission);
+  }
+  for (const Camera& c : model.cameras) print_camera(c);
+  for (const Light& l : model.lights) print_light(l);
+}
+
+void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
+  const Job job = load_job(file, load);
+  const Scene scene = build_scene(job);
+  const RenderSettings& r = job.render;
+  fmt::print("job '{}' ({})\n", job.name, file.string());
+  fmt::print("  {} object(s), {} triangles\n", scene.objects.size(), scene.triangle_count());
+  for (const SceneObject& o : scene.objects) {
+    fmt::print("  object '{}': {} triangles from {}\n", o.name, o.model->triangle_count(),
+               o.model->source.string());
+  }
+  print_camera(scene.camera);
+  for (const Light& l : scene.lights) print_light(l);
+  fmt::print("  render: engine {} {}x{} spp {} max_depth {} seed {} tile_size {} threads {} "
+             "accel {}\n",
+             to_string(r.engine), r.width, r.height, r.spp, r.max_depth, r.seed, r.tile_size,
+             r.threads, to_string(r.accel));
+  fmt::print("  output: image {} preview {}\n", job.output.image.string(),
+             job.output.preview.empty() ? std::string("(none)") : job.output.preview.string());
+}
+
+}  // namespace
+
+void run_info_command(const std::filesystem::path& file, const JobLoadOptions& load) {
+  if (file.extension() == ".json") {
+    print_job(file, load);
+  } else {
+    print_model(file);
+  }
+}
+
+}  // namespace farm

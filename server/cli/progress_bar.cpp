@@ -1,0 +1,34 @@
+#include "server/cli/progress_bar.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace farm {
+
+ProgressBar::ProgressBar(std::string label, bool enabled)
+    : label_(std::move(label)), enabled_(enabled), start_(std::chrono::steady_clock::now()) {}
+
+ProgressBar::~ProgressBar() {
+  if (drawn_) std::fputc('\n', stderr);
+}
+
+bool ProgressBar::stderr_is_terminal() { return isatty(STDERR_FILENO) == 1; }
+
+void ProgressBar::update(std::size_t done, std::size_t total) {
+  if (!enabled_ || total == 0) return;
+  const int permille = static_cast<int>(done * 1000 / total);
+  if (permille == last_permille_) return;
+  last_permille_ = permille;
+  constexpr int kWidth = 30;
+  const int filled = permille * kWidth / 1000;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  fmt::print(stderr, "\r{} [{}{}] {:5.1f}%  {}/{}  {:.1f}s", label_, std::string(filled, '#'),
+             std::string(kWidth - filled, ' '), permille / 10.0, done, total, seconds);
+  std::fflush(stderr);
+  drawn_ = true;
+}
+
+}  // namespace farm

@@ -1,0 +1,153 @@
+#include "server/cli/render_command.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <stdexcept>
+
+#include "renderer/engine.h"
+#include "renderer/geometry/instance_intersector.h"
+#include "renderer/image/box_overlay.h"
+#include "renderer/image/exr_io.h"
+#include "renderer/image/preview.h"
+#include "renderer/image/preview_writer.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/cli/progress_bar.h"
+#include "server/cli/validate_command.h"
+#include "server/client/job_submission.h"
+#include "server/embedded/embedded_farm.h"
+
+namespace farm {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::string aov_list(const AovSet& aovs) {
+  std::string s = "RGBA";
+  for (Aov a : kAllAovs) {
+    if (aovs.has(a)) s += fmt::format(" + {}", to_string(a));
+  }
+  return s;
+}
+
+// The film's colours with the boxes of the scene's BVH levels <= max_level drawn over them: the
+// top level (over objects) in white, each object's own tree in a colour per level.
+TileBuffer with_bvh_overlay(const TileBuffer& film, const PreparedScene& scene, AccelKind accel,
+                            int max_level) {
+  TileBuffer image(film.rect(), AovSet{});
+  image.paste(film);
+  // Embree's tree is not ours to draw, and `naive` has none: show our SAH BVH for those. The
+  // render may already have built (and cached) this intersector.
+  const AccelKind drawn = accel == AccelKind::BvhMedian ? accel : AccelKind::Bvh;
+  const auto cached = cached_scene_intersector(scene, drawn);
+  const auto* intersector = dynamic_cast<const InstanceIntersector*>(cached.get());
+  if (!intersector) throw std::logic_error("--show-bvh: expected our own BVH intersector");
+  BoxOverlay overlay(image, scene.scene().camera);
+  intersector->visit_bvh_boxes(max_level, [&](const BvhBox& box) {
+    overlay.draw_box(box.bounds, box.to_world,
+                     box.object < 0 ? glm::vec3(1.0f) : BoxOverlay::level_color(box.level));
+  });
+  return image;
+}
+
+}  // namespace
+
+namespace {
+
+// Puts `from` at `to` as one step: a copy next to `to`, then a rename over it.
+void publish_file(const std::filesystem::path& from, const std::filesystem::path& to) {
+  if (to.has_parent_path()) std::filesystem::create_directories(to.parent_path());
+  std::filesystem::path temp = to;
+  temp += ".part";
+  std::filesystem::copy_file(from, temp, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::rename(temp, to);
+}
+
+}  // namespace
+
+void run_render_command(const RenderCommandOptions& options) {
+  const Clock::time_point t_start = Clock::now();
+  const JobSubmission submission = make_job_submission(options.job_file, options.load, options.overrides);
+  const Job& job = submission.job;
+  if (options.overrides.show_bvh && job.output.preview.empty()) {
+    throw InputError("--show-bvh draws over the preview, but this render writes none "
+                     "(give --preview FILE.png)");
+  }
+  if (!job.output.preview.empty() && !preview_format_supported(job.output.preview)) {
+    throw InputError(fmt::format("{}: output.preview: cannot write images of type '{}'",
+                                 options.job_file.string(), job.output.preview.extension().string()));
+  }
+
+  // The same scheduler and worker code a farm runs, in this process: the job is submitted,
+  // split into tiles, rendered by an in-process worker on all threads and merged.
+  EmbeddedFarmOptions farm_options;
+  farm_options.threads = job.render.threads;
+  farm_options.exr_type = options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
+  EmbeddedFarm farm(farm_options);
+  for (const auto& [sha256, file] : submission.files) farm.add_asset_file(file);
+  // The merge writes a preview: its writer (0.3 s to load) loads while the tiles render. Not
+  // earlier: a thread being created waits for a library being loaded, and the farm makes threads.
+  start_loading_preview_writer();
+  const double load_ms = ms_since(t_start);
+
+  const Clock::time_point t_render = Clock::now();
+  EmbeddedResult result;
+  {
+    ProgressBar bar(fmt::format("rendering {}", job.name),
+                    options.progress && ProgressBar::stderr_is_terminal());
+    result = farm.run(submission.spec, [&](const v1::Job& j) { bar.update(j.tiles_done(), j.tiles_total()); });
+  }
+  const double render_ms = ms_since(t_render);
+  if (result.job.state() != v1::JOB_STATE_SUCCEEDED) {
+    throw std::runtime_error(fmt::format("{}: the render failed: {}", options.job_file.string(),
+                                         result.job.failure_reason()));
+  }
+
+  const Clock::time_point t_write = Clock::now();
+  publish_file(result.exr, job.output.image);
+  if (!job.output.preview.empty()) {
+    if (options.overrides.show_bvh) {
+      const PreparedScene prepared(build_scene(job));
+      write_preview(with_bvh_overlay(read_exr(result.exr), prepared, job.render.accel, *options.overrides.show_bvh),
+                    job.output.preview);
+    } else {
+      publish_file(result.preview, job.output.preview);
+    }
+  }
+  const double write_ms = ms_since(t_write);
+
+  const RenderSettings& r = job.render;
+  const v1::TileStats& stats = result.job.stats();
+  fmt::print("job '{}': {} engine, {}x{}, {} spp, {} object(s)\n", job.name, to_string(r.engine), r.width,
+             r.height, r.spp, job.scene.objects.size());
+  fmt::print("wrote {} ({}, {} EXR)\n", job.output.image.string(), aov_list(r.aovs),
+             farm_options.exr_type == ExrPixelType::Half ? "half" : "float");
+  if (!job.output.preview.empty()) {
+    fmt::print("wrote {} (sRGB preview{})\n", job.output.preview.string(),
+               options.overrides.show_bvh
+                   ? fmt::format(", BVH levels <= {} drawn over it", *options.overrides.show_bvh)
+                   : std::string());
+  }
+  if (stats.samples() > 0) {
+    fmt::print("samples: {} traced, {} NaN/inf samples caught and dropped\n", stats.samples(),
+               stats.invalid_samples());
+  }
+  if (stats.rays() > 0) {
+    fmt::print("rays: {} traced ({:.2f} Mrays/s)\n", stats.rays(),
+               static_cast<double>(stats.rays()) / (render_ms * 1e3));
+  }
+  fmt::print("time: load {:.1f} ms, prepare+render+merge {:.1f} ms ({} tiles of {} px, {} threads), "
+             "write {:.1f} ms, total {:.1f} ms\n",
+             load_ms, render_ms, result.job.tiles_total(), r.tile_size, resolve_thread_count(r.threads),
+             write_ms, ms_since(t_start));
+  if (!result.job.validation().empty()) fmt::print("{}\n", result.job.validation());
+}
+
+}  // namespace farm

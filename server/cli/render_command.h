@@ -1,0 +1,24 @@
+#pragma once
+// `farm render JOB`: the whole pipeline in one process (load, prepare, render tiles on local
+// threads, merge, write EXR and preview), with a progress bar and a timing summary.
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "renderer/scene/job.h"
+#include "server/client/render_overrides.h"
+
+namespace farm {
+
+struct RenderCommandOptions {
+  std::filesystem::path job_file;
+  JobLoadOptions load;
+  RenderOverrides overrides;
+  bool progress = true;  // drawn only on a terminal anyway
+};
+
+// Runs the render and prints where the files went and how long each stage took. Throws
+// InputError for bad input (exit code 2) and other exceptions for internal failures.
+void run_render_command(const RenderCommandOptions& options);
+
+}  // namespace farm

@@ -1,0 +1,129 @@
+#include "server/cli/scheduler_command.h"
+
+#include <fmt/format.h>
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <signal.h>
+
+#include <chrono>
+#include <cstdio>
+
+#include "renderer/image/preview_writer.h"
+#include "renderer/scene/input_error.h"
+#include "server/scheduler/scheduler_core.h"
+#include "server/scheduler/scheduler_service.h"
+
+namespace farm {
+
+namespace {
+
+constexpr auto kShutdownGrace = std::chrono::seconds(2);
+constexpr int kMaxRequestBytes = 64 << 20;
+
+std::string host_of(const std::string& address) {
+  const std::size_t colon = address.rfind(':');
+  return colon == std::string::npos ? address : address.substr(0, colon);
+}
+
+std::chrono::milliseconds ms(double seconds) {
+  return std::chrono::milliseconds(static_cast<std::int64_t>(seconds * 1000.0));
+}
+
+}  // namespace
+
+CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& o) {
+  CLI::App* s = app.add_subcommand(
+      "scheduler", "Serve farm.v1.Scheduler: jobs in, tiles to workers, merged EXR + PNG out");
+  s->add_option("--listen", o.listen,
+                "Address to serve on, HOST:PORT (port 0 picks a free port; the address is printed "
+                "as 'scheduler listening on HOST:PORT'); the clients' default is localhost:50051")
+      ->capture_default_str();
+  s->add_option("--data-dir", o.data_dir,
+                "Folder for the job store (jobs.db, SQLite WAL), uploaded assets, finished tiles "
+                "and results; a restarted scheduler resumes the jobs it finds there")
+      ->required();
+  s->add_option("--worker", o.workers,
+                "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
+                "register themselves (farm worker --scheduler)");
+  s->add_option("--tile-deadline", o.tile_deadline_s,
+                "Seconds a worker gets per tile of a call before the call's tiles are given to "
+                "another; a worker that misses it gets no more tiles until it answers a health check")
+      ->check(CLI::Range(0.05, 86400.0))
+      ->capture_default_str();
+  s->add_option("--max-attempts", o.max_attempts,
+                "Failed attempts of one tile (worker died, deadline, error) before its job fails")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  s->add_option("--tiles-per-worker", o.tiles_per_worker,
+                "Calls in flight per worker, so that none idles between calls")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  s->add_option("--batch-ms", o.batch_ms,
+                "Rendering time one call aims at: once a job's first tiles are timed (the worker's "
+                "CPU time per tile over its threads), consecutive tiles of a row go out together "
+                "in batches about this long (smaller near the end "
+                "of a job; a tile that failed goes alone); 0 sends one tile per call")
+      ->check(CLI::Range(0, 600000))
+      ->capture_default_str();
+  s->add_option("--heartbeat-interval", o.heartbeat_interval_s,
+                "Seconds between registered workers' heartbeats; one silent for 3 is dropped")
+      ->check(CLI::Range(0.05, 3600.0))
+      ->capture_default_str();
+  s->add_flag("--float", o.float_exr, "Write 32-bit float EXRs instead of half");
+  s->footer("Jobs run in priority order, then in submission order. A finished job's tiles are "
+            "merged into <data-dir>/results/<job>/ (EXR with the job's AOV layers + PNG "
+            "preview), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
+            "flight go back to the queue.");
+  return s;
+}
+
+int run_scheduler_command(const SchedulerCommandOptions& o) {
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  // The first merge then finds the PNG writer loaded (after the mask: its thread inherits it).
+  start_loading_preview_writer();
+
+  SchedulerOptions options;
+  options.data_dir = o.data_dir;
+  options.tile_deadline = ms(o.tile_deadline_s);
+  options.max_attempts = o.max_attempts;
+  options.tiles_per_worker = o.tiles_per_worker;
+  options.batch_target = std::chrono::milliseconds(o.batch_ms);
+  options.heartbeat_interval = ms(o.heartbeat_interval_s);
+  options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
+  SchedulerCore core(options);
+  for (const std::string& address : o.workers) {
+    core.add_worker(std::make_shared<RemoteTileWorker>(address));
+  }
+
+  SchedulerService service(core);
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(o.listen, grpc::InsecureServerCredentials(), &port);
+  builder.SetMaxReceiveMessageSize(kMaxRequestBytes);
+  builder.RegisterService(&service);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (!server || port == 0) throw InputError(fmt::format("cannot listen on '{}'", o.listen));
+
+  fmt::print("scheduler listening on {}:{}\n", host_of(o.listen), port);
+  fmt::print("  data dir {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
+             o.data_dir.string(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
+  std::fflush(stdout);
+
+  int signal_number = 0;
+  sigwait(&signals, &signal_number);
+  fmt::print("scheduler: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+  std::fflush(stdout);
+  server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
+  core.stop();
+  server->Wait();
+  return 0;
+}
+
+}  // namespace farm

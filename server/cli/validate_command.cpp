@@ -1,0 +1,49 @@
+#include "server/cli/validate_command.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+#include "renderer/geometry/embree_intersector.h"
+#include "renderer/geometry/scene_intersector.h"
+#include "renderer/scene/scene_builder.h"
+
+namespace farm {
+
+int run_validate_command(const ValidateCommandOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  Job job = load_job(options.job_file, options.load);
+  AccelKind accel = accel_to_validate(job.render.accel);
+  if (options.accel) {
+    const auto chosen = accel_from_string(*options.accel);
+    if (!chosen || *chosen == AccelKind::Embree) {
+      throw InputError(fmt::format("--accel: expected bvh, bvh-median or naive, not '{}'",
+                                   *options.accel));
+    }
+    accel = *chosen;
+  }
+  const std::uint64_t rays =
+      options.rays ? *options.rays
+                   : (job.embree_rays > 0 ? static_cast<std::uint64_t>(job.embree_rays)
+                                          : kDefaultValidationRays);
+
+  const PreparedScene prepared(build_scene(job));
+  const RenderSettings& r = job.render;
+  fmt::print("job '{}': {} triangles in {} object(s); {} vs embree on {} rays ({} primary at "
+             "{}x{}, {} from inside the scene's bounds)\n",
+             job.name, prepared.triangle_count(), prepared.objects().size(), to_string(accel), rays,
+             rays / 2, r.width, r.height, rays - rays / 2);
+  const AccelValidation result = validate_against_embree(prepared, r, accel, rays);
+  fmt::print("{}\n", result.summary());
+  const bool passes = validation_passes(result);
+  fmt::print("{}: {} hit/miss disagreements, {} tolerated (0.001% of rays); {:.1f} ms in all\n",
+             passes ? "agree" : "DISAGREE", result.hit_miss_disagreements,
+             static_cast<std::uint64_t>(kHitMissTolerance * static_cast<double>(rays)),
+             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                 .count());
+  return passes ? 0 : 1;
+}
+
+}  // namespace farm

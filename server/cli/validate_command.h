@@ -1,0 +1,29 @@
+#pragma once
+// `farm validate JOB`: checks our acceleration structure against Embree on the job's scene (the
+// check itself is renderer/geometry/accel_validation.h, which the scheduler runs for
+// validate.embree_rays).
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "renderer/geometry/accel_validation.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/job.h"
+
+namespace farm {
+
+struct ValidateCommandOptions {
+  std::filesystem::path job_file;
+  JobLoadOptions load;
+  std::optional<std::string> accel;   // bvh, bvh-median or naive; default: the job's
+  std::optional<std::uint64_t> rays;  // default: validate.embree_rays, else 100000
+};
+
+// Prints the comparison and returns the exit code: 0 when the hits agree within the tolerance,
+// 1 when they do not. Throws InputError for bad input.
+int run_validate_command(const ValidateCommandOptions& options);
+
+}  // namespace farm

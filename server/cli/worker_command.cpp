@@ -1,0 +1,169 @@
+#include "server/cli/worker_command.h"
+
+#include <fmt/format.h>
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <signal.h>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "proto/farm.grpc.pb.h"
+
+#include "renderer/scene/input_error.h"
+
+namespace farm {
+
+namespace {
+
+// Calls in flight get this long to finish after SIGINT/SIGTERM before they are cancelled.
+constexpr auto kShutdownGrace = std::chrono::seconds(2);
+// A request carries the job file (at most 16 MiB) and, for a worker without --scheduler, the
+// job's files inline (RenderTileRequest.assets).
+constexpr int kMaxRequestBytes = 1 << 30;
+
+std::string host_of(const std::string& address) {
+  const std::size_t colon = address.rfind(':');
+  return colon == std::string::npos ? address : address.substr(0, colon);
+}
+
+// With --scheduler, the worker registers itself (Scheduler.RegisterWorker) and heartbeats until
+// stopped; registers again when the scheduler forgot it (restarted), retries while it is away.
+// A scheduler without RegisterWorker (UNIMPLEMENTED) is left alone: assets are all it serves.
+class Registration {
+ public:
+  Registration(const std::string& scheduler, std::string address, int threads)
+      : address_(std::move(address)), threads_(threads),
+        stub_(v1::Scheduler::NewStub(
+            grpc::CreateChannel(scheduler, grpc::InsecureChannelCredentials()))),
+        thread_([this] { loop(); }) {}
+  ~Registration() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+
+ private:
+  bool sleep(std::chrono::milliseconds d) {
+    std::unique_lock lock(mutex_);
+    return !wake_.wait_for(lock, d, [&] { return stop_; });
+  }
+
+  void loop() {
+    std::string id;
+    std::chrono::milliseconds interval(1000);
+    while (true) {
+      grpc::ClientContext context;
+      context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+      if (id.empty()) {
+        v1::RegisterWorkerRequest request;
+        request.set_address(address_);
+        request.set_threads(threads_);
+        for (const char* e : {"raster", "whitted", "path"}) request.add_engines(e);
+        char host[256] = {};
+        ::gethostname(host, sizeof host - 1);
+        request.set_hostname(host);
+        request.set_version("0.1.0");
+        v1::RegisterWorkerResponse response;
+        const grpc::Status status = stub_->RegisterWorker(&context, request, &response);
+        if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) return;
+        if (status.ok()) {
+          id = response.worker_id();
+          interval = std::chrono::milliseconds(std::max(50u, response.heartbeat_interval_ms()));
+          fmt::print("worker: registered with the scheduler as {}\n", id);
+          std::fflush(stdout);
+        }
+      } else {
+        v1::HeartbeatRequest request;
+        request.set_worker_id(id);
+        v1::HeartbeatResponse response;
+        const grpc::Status status = stub_->Heartbeat(&context, request, &response);
+        if (status.ok() && response.register_again()) id.clear();
+      }
+      if (!sleep(interval)) return;
+    }
+  }
+
+  std::string address_;
+  int threads_;
+  std::unique_ptr<v1::Scheduler::Stub> stub_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+// Where the scheduler reaches this worker: the listening host, or this machine's name when it
+// listens on every interface.
+std::string advertised_address(const std::string& listen, int port) {
+  std::string host = host_of(listen);
+  if (host.empty() || host == "0.0.0.0" || host == "[::]" || host == "::") {
+    char name[256] = {};
+    ::gethostname(name, sizeof name - 1);
+    host = name;
+  }
+  return fmt::format("{}:{}", host, port);
+}
+
+}  // namespace
+
+int run_worker_command(const WorkerOptions& given) {
+  WorkerOptions options = given;
+  if (options.cache_dir.empty()) {
+    options.cache_dir = std::filesystem::temp_directory_path() / "farm-worker-cache";
+  }
+  std::filesystem::create_directories(options.cache_dir);
+  options.cache_dir = std::filesystem::canonical(options.cache_dir);
+
+  // SIGINT and SIGTERM are blocked before gRPC starts its threads (they inherit the mask) and
+  // taken synchronously with sigwait below, so no handler runs in signal context.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  WorkerService service(options);
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
+  builder.SetMaxReceiveMessageSize(kMaxRequestBytes);
+  builder.RegisterService(&service);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (!server || port == 0) throw InputError(fmt::format("cannot listen on '{}'", options.listen));
+
+  fmt::print("worker listening on {}:{}\n", host_of(options.listen), port);
+  fmt::print("  {} render threads, cache {} (at most {} scenes, ~{} MiB){}\n", service.threads(),
+             options.cache_dir.string(), options.max_scenes, options.cache_memory_mb,
+             options.scheduler.empty() ? "" : ", assets from scheduler " + options.scheduler);
+  std::fflush(stdout);
+  std::unique_ptr<Registration> registration;
+  if (!options.scheduler.empty()) {
+    registration = std::make_unique<Registration>(
+        options.scheduler, advertised_address(options.listen, port), service.threads());
+  }
+
+  int signal_number = 0;
+  sigwait(&signals, &signal_number);
+  fmt::print("worker: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+  std::fflush(stdout);
+  registration.reset();
+  server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
+  server->Wait();
+  return 0;
+}
+
+}  // namespace farm

@@ -1,0 +1,11 @@
+#pragma once
+// `farm worker`: serves farm.v1.Worker, gRPC health and server reflection until SIGINT/SIGTERM.
+#include "server/worker/worker_service.h"
+
+namespace farm {
+
+// Prints "worker listening on HOST:PORT" (the port chosen when ADDR asked for port 0) once the
+// server accepts calls. InputError when the address cannot be bound. Returns the exit code.
+int run_worker_command(const WorkerOptions& options);
+
+}  // namespace farm

@@ -1,0 +1,88 @@
+#include "server/client/job_submission.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "renderer/scene/input_error.h"
+#include "server/client/model_dependencies.h"
+#include "server/common/read_whole_file.h"
+#include "server/common/sha256.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+bool any_override(const RenderOverrides& o) {
+  return o.engine || o.width || o.height || o.spp || o.threads || o.tile_size || o.image || o.preview;
+}
+
+// The job text with model paths relative to the root and the overrides written in.
+std::string rewritten_job_text(const std::string& text, const Job& job, const fs::path& root,
+                               const RenderOverrides& o) {
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(text);  // load_job accepted it already
+  auto& objects = doc["scene"]["objects"];
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    objects[i]["file"] = job.scene.objects[i].file.lexically_relative(root).generic_string();
+  }
+  auto& render = doc["render"];
+  if (o.engine) render["engine"] = *o.engine;
+  if (o.width) render["width"] = *o.width;
+  if (o.height) render["height"] = *o.height;
+  if (o.spp) render["spp"] = *o.spp;
+  if (o.threads) render["threads"] = *o.threads;
+  if (o.tile_size) render["tile_size"] = *o.tile_size;
+  if (o.image) doc["output"]["image"] = o.image->generic_string();
+  if (o.preview) {
+    if (o.preview->empty()) {
+      doc["output"].erase("preview");
+    } else {
+      doc["output"]["preview"] = o.preview->generic_string();
+    }
+  }
+  return doc.dump(2) + "\n";
+}
+
+}  // namespace
+
+JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions& load,
+                                  const RenderOverrides& overrides) {
+  JobSubmission out;
+  out.job = load_job(job_file, load);
+  apply_overrides(out.job, overrides);
+  const std::string text = read_whole_file(job_file, "job file");
+  const fs::path job_dir = fs::weakly_canonical(fs::absolute(job_file).parent_path());
+  const fs::path root = load.asset_root.empty() ? job_dir : fs::weakly_canonical(fs::absolute(load.asset_root));
+
+  const bool as_written = job_dir == root && !any_override(overrides);
+  out.spec.set_job_json(as_written ? text : rewritten_job_text(text, out.job, root, overrides));
+  out.spec.set_file_name(job_file.filename().string());
+
+  std::map<std::string, fs::path> by_path;  // spec path -> file
+  const auto add = [&](const fs::path& file, const fs::path& model) {
+    const fs::path relative = file.lexically_relative(root);
+    if (relative.empty() || *relative.begin() == "..") {
+      throw InputError(fmt::format("{}: references {}, which lies outside the asset root {} (give "
+                                   "--asset-root a folder that holds both)",
+                                   model.string(), file.string(), root.string()));
+    }
+    by_path.emplace(relative.generic_string(), file);
+  };
+  for (const JobObject& object : out.job.scene.objects) {
+    add(object.file, job_file);
+    for (const fs::path& dependency : model_dependencies(object.file)) add(dependency, object.file);
+  }
+  for (const auto& [path, file] : by_path) {
+    v1::AssetRef* ref = out.spec.add_assets();
+    ref->set_path(path);
+    ref->set_sha256(sha256_file_hex(file));
+    ref->set_size(fs::file_size(file));
+    out.files.emplace(ref->sha256(), file);
+  }
+  return out;
+}
+
+}  // namespace farm

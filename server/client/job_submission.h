@@ -1,0 +1,31 @@
+#pragma once
+// A job file turned into what a scheduler is sent (farm.v1.JobSpec): the job's text and every
+// file it reads, named by content. Used by `farm submit` and by `farm render`'s embedded farm,
+// so both send the same thing.
+//
+// Asset paths in the spec are relative to the asset root (the job file's folder unless
+// --asset-root says otherwise). When the job's own folder is that root and nothing is
+// overridden, the job text goes as it is, byte for byte; otherwise its model paths are rewritten
+// relative to the root and the overrides written into it.
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "proto/farm.pb.h"
+#include "renderer/scene/job.h"
+#include "server/client/render_overrides.h"
+
+namespace farm {
+
+struct JobSubmission {
+  v1::JobSpec spec;
+  Job job;                                          // the job as parsed here, overrides applied
+  std::map<std::string, std::filesystem::path> files;  // sha256 -> a local file with those bytes
+};
+
+// Throws InputError (naming the file and the place) for a bad job or a model that references a
+// file outside the asset root.
+JobSubmission make_job_submission(const std::filesystem::path& job_file, const JobLoadOptions& load,
+                                  const RenderOverrides& overrides);
+
+}  // namespace farm

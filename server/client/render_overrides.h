@@ -1,0 +1,22 @@
+#pragma once
+// Command-line values that replace a job's own (`farm render`, `farm submit`).
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "renderer/scene/job.h"
+
+namespace farm {
+
+struct RenderOverrides {
+  std::optional<std::string> engine;
+  std::optional<int> width, height, spp, threads, tile_size;
+  std::optional<std::filesystem::path> image, preview;  // preview "" = none
+  bool full_float = false;                              // 32-bit EXR instead of half
+  std::optional<int> show_bvh;  // draw BVH boxes of levels <= this over the preview
+};
+
+// Applies overrides to a loaded job; throws InputError naming the option for a bad value.
+void apply_overrides(Job& job, const RenderOverrides& overrides);
+
+}  // namespace farm

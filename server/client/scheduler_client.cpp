@@ -1,0 +1,211 @@
+#include "server/client/scheduler_client.h"
+
+#include <fmt/format.h>
+#include <grpcpp/grpcpp.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+
+#include "renderer/scene/input_error.h"
+#include "server/common/service_error.h"
+#include "server/common/sha256.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::size_t kChunkBytes = 1 << 20;  // well under gRPC's 4 MiB message limit
+
+}  // namespace
+
+template <typename Response, typename Request, typename Method>
+Response SchedulerClient::call(Method method, const Request& request, const char* what) {
+  Response response;
+  grpc::ClientContext context;
+  const grpc::Status status = (stub_.get()->*method)(&context, request, &response);
+  if (!status.ok()) throw_for_status(status, what, address_);
+  return response;
+}
+
+std::string resolve_scheduler_address(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (const char* env = std::getenv("FARM_SCHEDULER"); env != nullptr && *env != '\0') return env;
+  return kDefaultSchedulerAddress;
+}
+
+void throw_for_status(const grpc::Status& status, const std::string& what, const std::string& address) {
+  switch (status.error_code()) {
+    case grpc::StatusCode::INVALID_ARGUMENT:
+    case grpc::StatusCode::NOT_FOUND:
+    case grpc::StatusCode::FAILED_PRECONDITION:
+    case grpc::StatusCode::ALREADY_EXISTS:
+    case grpc::StatusCode::OUT_OF_RANGE:
+      throw InputError(status.error_message());
+    case grpc::StatusCode::UNAVAILABLE:
+      throw ServiceError(grpc::StatusCode::UNAVAILABLE, fmt::format(
+          "{}: cannot reach the scheduler at {} ({}); is `farm scheduler` running there? "
+          "(--scheduler ADDR or FARM_SCHEDULER say where)",
+          what, address, status.error_message()));
+    default:
+      throw std::runtime_error(fmt::format("{}: the scheduler at {} answered {}: {}", what, address,
+                                           static_cast<int>(status.error_code()), status.error_message()));
+  }
+}
+
+std::string to_string(v1::JobState state) {
+  switch (state) {
+    case v1::JOB_STATE_QUEUED: return "queued";
+    case v1::JOB_STATE_RUNNING: return "running";
+    case v1::JOB_STATE_SUCCEEDED: return "succeeded";
+    case v1::JOB_STATE_FAILED: return "failed";
+    case v1::JOB_STATE_CANCELLED: return "cancelled";
+    default: return "unknown";
+  }
+}
+
+SchedulerClient::SchedulerClient(std::string address)
+    : address_(std::move(address)),
+      stub_(v1::Scheduler::NewStub(grpc::CreateChannel(address_, grpc::InsecureChannelCredentials()))) {}
+
+std::size_t SchedulerClient::upload_missing(const JobSubmission& submission) {
+  v1::HasAssetsRequest ask;
+  for (const auto& [sha, file] : submission.files) ask.add_sha256(sha);
+  const auto missing = call<v1::HasAssetsResponse>(&v1::Scheduler::Stub::HasAssets, ask, "HasAssets");
+  for (const std::string& sha : missing.missing()) {
+    const auto it = submission.files.find(sha);
+    if (it == submission.files.end()) continue;
+    std::ifstream in(it->second, std::ios::binary);
+    if (!in) throw InputError(fmt::format("{}: cannot read the asset", it->second.string()));
+    grpc::ClientContext context;
+    v1::UploadAssetResponse response;
+    auto writer = stub_->UploadAsset(&context, &response);
+    v1::UploadAssetRequest header;
+    header.mutable_header()->set_sha256(sha);
+    header.mutable_header()->set_size(fs::file_size(it->second));
+    bool open = writer->Write(header);
+    std::string buffer(kChunkBytes, '\0');
+    while (open && in) {
+      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+      const auto got = static_cast<std::size_t>(in.gcount());
+      if (got == 0) break;
+      v1::UploadAssetRequest chunk;
+      chunk.set_data(buffer.data(), got);
+      open = writer->Write(chunk);
+    }
+    writer->WritesDone();
+    const grpc::Status status = writer->Finish();
+    if (!status.ok()) throw_for_status(status, fmt::format("uploading {}", it->second.string()), address_);
+  }
+  return static_cast<std::size_t>(missing.missing_size());
+}
+
+v1::Job SchedulerClient::submit(const JobSubmission& submission, int priority) {
+  v1::SubmitJobRequest request;
+  *request.mutable_job() = submission.spec;
+  request.set_priority(priority);
+  return call<v1::SubmitJobResponse>(&v1::Scheduler::Stub::SubmitJob, request, "SubmitJob").job();
+}
+
+v1::Job SchedulerClient::get(const std::string& job_id) {
+  v1::GetJobRequest request;
+  request.set_job_id(job_id);
+  return call<v1::Job>(&v1::Scheduler::Stub::GetJob, request, "GetJob");
+}
+
+std::vector<v1::Job> SchedulerClient::list() {
+  std::vector<v1::Job> jobs;
+  std::string token;
+  do {
+    v1::ListJobsRequest request;
+    request.set_page_token(token);
+    const auto response = call<v1::ListJobsResponse>(&v1::Scheduler::Stub::ListJobs, request, "ListJobs");
+    jobs.insert(jobs.end(), response.jobs().begin(), response.jobs().end());
+    token = response.next_page_token();
+  } while (!token.empty());
+  return jobs;
+}
+
+v1::Job SchedulerClient::watch(const std::string& job_id,
+                               const std::function<void(const v1::JobEvent&)>& on_event) {
+  v1::WatchJobRequest request;
+  request.set_job_id(job_id);
+  grpc::ClientContext context;
+  auto reader = stub_->WatchJob(&context, request);
+  v1::JobEvent event;
+  v1::Job last;
+  while (reader->Read(&event)) {
+    last = event.job();
+    if (on_event) on_event(event);
+    if (is_final(last.state())) break;
+  }
+  if (is_final(last.state())) {
+    context.TryCancel();  // the stream ends after the final event; do not wait for it
+    return last;
+  }
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) throw_for_status(status, "WatchJob", address_);
+  // The stream ended without a final state (the scheduler restarted): ask once more.
+  return get(job_id);
+}
+
+v1::Job SchedulerClient::cancel(const std::string& job_id) {
+  v1::CancelJobRequest request;
+  request.set_job_id(job_id);
+  return call<v1::CancelJobResponse>(&v1::Scheduler::Stub::CancelJob, request, "CancelJob").job();
+}
+
+fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where) {
+  v1::GetResultRequest request;
+  request.set_job_id(job_id);
+  request.set_kind(kind);
+  grpc::ClientContext context;
+  auto reader = stub_->GetResult(&context, request);
+  v1::FileChunk chunk;
+  fs::path file, temp;
+  std::ofstream out;
+  std::string expected_sha;
+  Sha256 hash;
+  std::uint64_t written = 0, total = 0;
+  while (reader->Read(&chunk)) {
+    if (!out.is_open()) {
+      // Only a plain file name from the scheduler is passed on, never a path.
+      const fs::path suggested = fs::path(chunk.file_name()).filename();
+      file = where(suggested == fs::path(chunk.file_name()) ? suggested.string() : std::string());
+      temp = file;
+      temp += ".part";
+      if (file.has_parent_path()) fs::create_directories(file.parent_path());
+      out.open(temp, std::ios::binary | std::ios::trunc);
+      if (!out) throw InputError(fmt::format("{}: cannot write", temp.string()));
+      expected_sha = chunk.sha256();
+      total = chunk.total_size();
+    }
+    if (chunk.offset() != written) {
+      throw std::runtime_error(fmt::format("GetResult: chunk at offset {} where {} was expected", chunk.offset(), written));
+    }
+    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    hash.update(chunk.data());
+    written += chunk.data().size();
+  }
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) {
+    if (out.is_open()) {
+      out.close();
+      fs::remove(temp);
+    }
+    throw_for_status(status, "GetResult", address_);
+  }
+  if (!out.is_open()) throw std::runtime_error("GetResult: the scheduler sent no data");
+  out.close();
+  const std::string got = hash.finish_hex();
+  if ((total != 0 && written != total) || (!expected_sha.empty() && got != expected_sha)) {
+    fs::remove(temp);
+    throw std::runtime_error(fmt::format("GetResult: {} arrived damaged ({} of {} bytes, sha256 {})",
+                                         file.string(), written, total, got));
+  }
+  fs::rename(temp, file);
+  return file;
+}
+
+}  // namespace farm

@@ -1,0 +1,58 @@
+#pragma once
+// The client side of farm.v1.Scheduler, as `farm submit/status/watch/cancel/fetch` use it: one
+// blocking call per operation, gRPC failures turned into exceptions that say what to do.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "proto/farm.grpc.pb.h"
+#include "server/client/job_submission.h"
+#include "server/common/job_state.h"
+
+namespace farm {
+
+// Where the scheduler is: the --scheduler value if given, else $FARM_SCHEDULER, else
+// kDefaultSchedulerAddress.
+inline constexpr const char* kDefaultSchedulerAddress = "localhost:50051";
+std::string resolve_scheduler_address(const std::string& flag);
+
+class SchedulerClient {
+ public:
+  explicit SchedulerClient(std::string address);
+
+  const std::string& address() const { return address_; }
+
+  // Uploads the files the scheduler lacks (HasAssets first); returns how many were sent.
+  std::size_t upload_missing(const JobSubmission& submission);
+  v1::Job submit(const JobSubmission& submission, int priority);
+  v1::Job get(const std::string& job_id);
+  std::vector<v1::Job> list();
+  // Streams the job's events to `on_event` until it reaches a final state; returns that job.
+  v1::Job watch(const std::string& job_id, const std::function<void(const v1::JobEvent&)>& on_event);
+  v1::Job cancel(const std::string& job_id);
+  // Downloads a result to the file `where(suggested name)` returns (the name the scheduler
+  // suggests, a plain file name, possibly empty), through a temporary file, checking its size and
+  // SHA-256; returns the file.
+  using Destination = std::function<std::filesystem::path(const std::string& suggested_name)>;
+  std::filesystem::path fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where);
+
+ private:
+  // One unary call; failures thrown as throw_for_status says.
+  template <typename Response, typename Request, typename Method>
+  Response call(Method method, const Request& request, const char* what);
+
+  std::string address_;
+  std::unique_ptr<v1::Scheduler::Stub> stub_;
+};
+
+// Status codes that mean the request was wrong (exit code 2) become InputError; an unreachable
+// scheduler a ServiceError(UNAVAILABLE) that says where it was looked for; the rest a
+// runtime_error with the scheduler's message.
+[[noreturn]] void throw_for_status(const grpc::Status& status, const std::string& what,
+                                   const std::string& address);
+
+std::string to_string(v1::JobState state);  // "queued", "running", ...
+
+}  // namespace farm

@@ -1,0 +1,114 @@
+#include "server/common/asset_store.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <system_error>
+
+#include "renderer/scene/input_error.h"
+
+namespace farm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Unique within the folder across threads and processes sharing it.
+fs::path temp_name(const fs::path& dir, std::string_view sha256) {
+  static std::atomic<std::uint64_t> counter{0};
+  return dir / fmt::format(".tmp-{}-{}-{}", sha256.substr(0, 16), ::getpid(), counter++);
+}
+
+}  // namespace
+
+AssetStore::AssetStore(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
+
+bool AssetStore::has(std::string_view sha256) const {
+  if (!is_sha256_hex(sha256)) return false;
+  std::error_code ec;
+  return fs::is_regular_file(dir_ / std::string(sha256), ec);
+}
+
+fs::path AssetStore::path_of(std::string_view sha256) const {
+  if (!is_sha256_hex(sha256)) {
+    throw InputError(fmt::format("'{}' is not a SHA-256 (64 lowercase hex digits)",
+                                 sha256.substr(0, 80)));
+  }
+  return dir_ / std::string(sha256);
+}
+
+AssetStore::Writer AssetStore::begin(std::string_view expected_sha256,
+                                     std::optional<std::uint64_t> expected_size) const {
+  return Writer(*this, std::string(expected_sha256), expected_size);
+}
+
+AssetStore::Writer::Writer(const AssetStore& store, std::string sha256,
+                           std::optional<std::uint64_t> size)
+    : final_path_(store.path_of(sha256)),
+      temp_path_(temp_name(store.dir(), sha256)),
+      expected_sha256_(std::move(sha256)),
+      expected_size_(size),
+      out_(temp_path_, std::ios::binary | std::ios::trunc) {
+  if (!out_) throw std::runtime_error(fmt::format("cannot create '{}'", temp_path_.string()));
+}
+
+AssetStore::Writer::Writer(Writer&& o) noexcept
+    : final_path_(std::move(o.final_path_)),
+      temp_path_(std::move(o.temp_path_)),
+      expected_sha256_(std::move(o.expected_sha256_)),
+      expected_size_(o.expected_size_),
+      out_(std::move(o.out_)),
+      hash_(std::move(o.hash_)),
+      size_(o.size_),
+      done_(o.done_) {
+  o.done_ = true;  // the moved-from writer owns no temporary file any more
+}
+
+AssetStore::Writer::~Writer() {
+  if (done_) return;
+  out_.close();
+  std::error_code ec;
+  fs::remove(temp_path_, ec);
+}
+
+void AssetStore::Writer::append(std::string_view bytes) {
+  if (expected_size_ && size_ + bytes.size() > *expected_size_) {
+    throw InputError(fmt::format("asset {}: more than the announced {} bytes", expected_sha256_,
+                                 *expected_size_));
+  }
+  out_.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (!out_) throw std::runtime_error(fmt::format("cannot write '{}'", temp_path_.string()));
+  hash_.update(bytes);
+  size_ += bytes.size();
+}
+
+void AssetStore::Writer::commit() {
+  out_.close();
+  if (!out_) throw std::runtime_error(fmt::format("cannot write '{}'", temp_path_.string()));
+  if (expected_size_ && size_ != *expected_size_) {
+    throw InputError(fmt::format("asset {}: got {} bytes, expected {}", expected_sha256_, size_,
+                                 *expected_size_));
+  }
+  const std::string actual = hash_.finish_hex();
+  if (actual != expected_sha256_) {
+    throw InputError(fmt::format("asset {}: content hashes to {}", expected_sha256_, actual));
+  }
+  // rename() replaces atomically; a concurrent writer of the same blob wrote the same bytes.
+  fs::rename(temp_path_, final_path_);
+  done_ = true;
+}
+
+void AssetStore::put(std::string_view expected_sha256, std::string_view bytes) const {
+  Writer w = begin(expected_sha256, bytes.size());
+  w.append(bytes);
+  w.commit();
+}
+
+std::string AssetStore::add(std::string_view bytes) const {
+  std::string sha = sha256_hex(bytes);
+  put(sha, bytes);
+  return sha;
+}
+
+}  // namespace farm

@@ -1,0 +1,24 @@
+#include "server/common/job_state.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+
+namespace farm {
+
+bool is_final(v1::JobState state) {
+  return state == v1::JOB_STATE_SUCCEEDED || state == v1::JOB_STATE_FAILED ||
+         state == v1::JOB_STATE_CANCELLED;
+}
+
+std::string describe_tiles(std::uint32_t first, std::uint32_t count) {
+  return count > 1 ? fmt::format("tiles {}-{}", first, first + count - 1) : fmt::format("tile {}", first);
+}
+
+std::int64_t unix_ms_now() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace farm

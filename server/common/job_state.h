@@ -1,0 +1,17 @@
+#pragma once
+// Small facts about farm.v1 jobs that the scheduler, its store and the client all use.
+#include <cstdint>
+#include <string>
+
+#include "proto/farm.pb.h"
+
+namespace farm {
+
+// SUCCEEDED, FAILED or CANCELLED: the job will not change again.
+bool is_final(v1::JobState state);
+// "tile 7" or "tiles 7-9", for messages about a batch.
+std::string describe_tiles(std::uint32_t first, std::uint32_t count);
+// Wall-clock time as the store and the proto keep it.
+std::int64_t unix_ms_now();
+
+}  // namespace farm

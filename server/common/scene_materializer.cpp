@@ -1,0 +1,176 @@
+#include "server/common/scene_materializer.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <fstream>
+#include <set>
+#include <system_error>
+
+#include "renderer/scene/input_error.h"
+#include "server/common/sha256.h"
+
+namespace farm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kDefaultJobName = "job.json";
+constexpr std::size_t kMaxShown = 80;
+
+std::string shown(const std::string& s) {
+  return s.size() <= kMaxShown ? s : s.substr(0, kMaxShown) + "...";
+}
+
+std::string missing_message(const std::vector<v1::AssetRef>& missing) {
+  std::string names;
+  for (std::size_t i = 0; i < missing.size() && i < 5; ++i) {
+    names += fmt::format("{}'{}' (sha256 {})", i ? ", " : "", shown(missing[i].path()),
+                         missing[i].sha256());
+  }
+  if (missing.size() > 5) names += fmt::format(" and {} more", missing.size() - 5);
+  return fmt::format("missing asset{} {}", missing.size() == 1 ? "" : "s", names);
+}
+
+// The path an asset is laid out at, relative to the scene folder; InputError if it could leave it.
+fs::path checked_relative_path(const v1::AssetRef& ref) {
+  const std::string& p = ref.path();
+  const auto fail = [&](const std::string& why) {
+    throw InputError(fmt::format("asset path '{}': {}", shown(p), why));
+  };
+  if (p.empty()) fail("empty");
+  if (p.find('\0') != std::string::npos) fail("contains a NUL character");
+  const fs::path path(p);
+  if (path.is_absolute() || path.has_root_path()) fail("must be relative to the job's folder");
+  for (const fs::path& part : path) {
+    if (part == "..") fail("must not contain '..'");
+  }
+  const fs::path normal = path.lexically_normal();
+  if (normal.empty() || normal == "." || !normal.has_filename()) fail("names no file");
+  return normal;
+}
+
+// The job file's name inside the scene folder: the name it was submitted under, so parse_job's
+// messages read as they would for `farm render`, unless that is unusable or taken by an asset.
+std::string job_file_name(const v1::JobSpec& spec, const std::set<fs::path>& asset_paths) {
+  const fs::path given = fs::path(spec.file_name()).filename();
+  const std::string name = given.string();
+  if (!name.empty() && name != "." && name != ".." && name.find('\0') == std::string::npos &&
+      !asset_paths.count(given)) {
+    return name;
+  }
+  if (asset_paths.count(kDefaultJobName)) {
+    throw InputError(fmt::format("asset path '{}' is reserved for the job file", kDefaultJobName));
+  }
+  return kDefaultJobName;
+}
+
+void replace_all(std::string& s, const std::string& from, const std::string& to) {
+  if (from.empty()) return;
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
+    s.replace(at, from.size(), to);
+  }
+}
+
+void link_or_copy(const fs::path& blob, const fs::path& to) {
+  std::error_code ec;
+  fs::create_hard_link(blob, to, ec);
+  if (ec) fs::copy_file(blob, to);  // e.g. the cache and the blobs on different file systems
+}
+
+void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& dir,
+             const std::string& job_name) {
+  static std::atomic<std::uint64_t> counter{0};
+  const fs::path temp = dir.parent_path() /
+                        fmt::format(".tmp-{}-{}-{}", dir.filename().string().substr(0, 16),
+                                    ::getpid(), counter++);
+  try {
+    fs::create_directories(temp);
+    for (const v1::AssetRef& ref : spec.assets()) {
+      const fs::path to = temp / checked_relative_path(ref);
+      std::error_code ec;
+      fs::create_directories(to.parent_path(), ec);
+      if (ec || fs::exists(to)) {
+        // One asset's path is a folder of another's ("a" and "a/b.obj").
+        throw InputError(fmt::format("asset path '{}' conflicts with another asset's path",
+                                     shown(ref.path())));
+      }
+      link_or_copy(store.path_of(ref.sha256()), to);
+    }
+    std::ofstream(temp / job_name, std::ios::binary) << spec.job_json();
+    std::error_code ec;
+    fs::rename(temp, dir, ec);
+    // Someone else published the same scene first: theirs has the same contents.
+    if (ec && !fs::is_directory(dir)) throw fs::filesystem_error("cannot publish", temp, dir, ec);
+    if (ec) fs::remove_all(temp);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove_all(temp, ignored);
+    throw;
+  }
+}
+
+}  // namespace
+
+MissingAssetsError::MissingAssetsError(std::vector<v1::AssetRef> missing)
+    : std::runtime_error(missing_message(missing)), missing_(std::move(missing)) {}
+
+void validate_asset_refs(const v1::JobSpec& spec) {
+  std::set<fs::path> seen;
+  for (const v1::AssetRef& ref : spec.assets()) {
+    const fs::path path = checked_relative_path(ref);
+    if (!is_sha256_hex(ref.sha256())) {
+      throw InputError(fmt::format("asset '{}': sha256 '{}' is not 64 lowercase hex digits",
+                                   shown(ref.path()), shown(ref.sha256())));
+    }
+    if (!seen.insert(path).second) {
+      throw InputError(fmt::format("asset path '{}' is listed twice", shown(ref.path())));
+    }
+  }
+}
+
+std::vector<v1::AssetRef> missing_assets(const v1::JobSpec& spec, const AssetStore& store) {
+  std::vector<v1::AssetRef> missing;
+  std::set<std::string> seen;
+  for (const v1::AssetRef& ref : spec.assets()) {
+    if (!store.has(ref.sha256()) && seen.insert(ref.sha256()).second) missing.push_back(ref);
+  }
+  return missing;
+}
+
+MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& scene_hash,
+                                    const AssetStore& store, const fs::path& cache_dir) {
+  if (!is_sha256_hex(scene_hash)) throw InputError(fmt::format("bad scene hash '{}'", shown(scene_hash)));
+  validate_asset_refs(spec);
+  std::set<fs::path> asset_paths;
+  for (const v1::AssetRef& ref : spec.assets()) asset_paths.insert(checked_relative_path(ref));
+  const std::string job_name = job_file_name(spec, asset_paths);
+
+  const fs::path scenes = fs::weakly_canonical(fs::absolute(cache_dir)) / "scenes";
+  fs::create_directories(scenes);
+  MaterializedScene result{scenes / scene_hash, {}};
+  // A published folder is complete: it only ever appears by rename.
+  if (!fs::is_directory(result.dir)) {
+    if (auto missing = missing_assets(spec, store); !missing.empty()) {
+      throw MissingAssetsError(std::move(missing));
+    }
+    lay_out(spec, store, result.dir, job_name);
+  }
+
+  JobLoadOptions options;
+  options.asset_root = result.dir;
+  try {
+    result.job = parse_job(spec.job_json(), result.dir / job_name, options);
+  } catch (const InputError& e) {
+    // Name the job as its author knows it, not by this worker's cache folder.
+    std::string message = e.what();
+    replace_all(message, result.dir.string() + "/", "");
+    replace_all(message, result.dir.string(), "the job's folder");
+    throw InputError(message);
+  }
+  return result;
+}
+
+}  // namespace farm

@@ -1,0 +1,111 @@
+#include "server/common/tile_codec.h"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cstring>
+#include <string>
+
+#include "renderer/scene/input_error.h"
+
+namespace farm {
+
+// The wire format is little-endian; every machine we build for is too, so planes are plain
+// copies of the floats.
+static_assert(std::endian::native == std::endian::little,
+              "tile_codec copies floats as they lie in memory; add byte swapping for big-endian");
+
+namespace {
+
+// Copies the `components` floats of each pixel's value `get(x, y)` into one plane.
+template <typename Get>
+std::string pack(const Rect& r, int components, Get&& get) {
+  const std::size_t pixel_bytes = sizeof(float) * static_cast<std::size_t>(components);
+  std::string plane(static_cast<std::size_t>(r.width()) * static_cast<std::size_t>(r.height()) *
+                        pixel_bytes,
+                    '\0');
+  char* at = plane.data();
+  for (int y = r.y0; y < r.y1; ++y) {
+    for (int x = r.x0; x < r.x1; ++x, at += pixel_bytes) {
+      const auto value = get(x, y);
+      static_assert(sizeof value % sizeof(float) == 0);
+      std::memcpy(at, &value, pixel_bytes);
+    }
+  }
+  return plane;
+}
+
+template <typename Get>
+void unpack(const Rect& r, int components, const std::string& plane, const char* name, Get&& get) {
+  const std::size_t pixel_bytes = sizeof(float) * static_cast<std::size_t>(components);
+  const std::size_t expected =
+      static_cast<std::size_t>(r.width()) * static_cast<std::size_t>(r.height()) * pixel_bytes;
+  if (plane.size() != expected) {
+    throw InputError(fmt::format("tile {}: {} bytes for {}x{} pixels, expected {}", name,
+                                 plane.size(), r.width(), r.height(), expected));
+  }
+  const char* at = plane.data();
+  for (int y = r.y0; y < r.y1; ++y) {
+    for (int x = r.x0; x < r.x1; ++x, at += pixel_bytes) std::memcpy(get(x, y), at, pixel_bytes);
+  }
+}
+
+}  // namespace
+
+void encode_tile(const TileBuffer& t, v1::TileData& out) {
+  const Rect& r = t.rect();
+  out.Clear();
+  out.mutable_rect()->set_x0(r.x0);
+  out.mutable_rect()->set_y0(r.y0);
+  out.mutable_rect()->set_x1(r.x1);
+  out.mutable_rect()->set_y1(r.y1);
+  out.set_width(r.width());
+  out.set_height(r.height());
+  out.set_rgba(pack(r, 4, [&](int x, int y) { return t.rgba(x, y); }));
+  const AovSet& a = t.aovs();
+  if (a.depth) out.set_depth(pack(r, 1, [&](int x, int y) { return t.depth(x, y); }));
+  if (a.normal) out.set_normal(pack(r, 3, [&](int x, int y) { return t.normal(x, y); }));
+  if (a.albedo) out.set_albedo(pack(r, 3, [&](int x, int y) { return t.albedo(x, y); }));
+  if (a.bvh_cost) out.set_bvh_cost(pack(r, 1, [&](int x, int y) { return t.bvh_cost(x, y); }));
+}
+
+void encode_stats(const RenderStats& s, v1::TileStats& out) {
+  out.set_samples(s.samples);
+  out.set_invalid_samples(s.invalid_samples);
+  out.set_fragments(s.fragments);
+  out.set_rays(s.rays);
+}
+
+TileBuffer decode_tile(const v1::TileData& d) {
+  const Rect r{d.rect().x0(), d.rect().y0(), d.rect().x1(), d.rect().y1()};
+  if (r.empty() || r.width() != d.width() || r.height() != d.height()) {
+    throw InputError(fmt::format("tile rect [{}, {}) x [{}, {}) is empty or disagrees with its "
+                                 "size {}x{}", r.x0, r.x1, r.y0, r.y1, d.width(), d.height()));
+  }
+  AovSet aovs;
+  aovs.depth = !d.depth().empty();
+  aovs.normal = !d.normal().empty();
+  aovs.albedo = !d.albedo().empty();
+  aovs.bvh_cost = !d.bvh_cost().empty();
+  TileBuffer t;
+  t.reset_for_overwrite(r, aovs);
+  unpack(r, 4, d.rgba(), "rgba", [&](int x, int y) { return &t.rgba(x, y); });
+  if (aovs.depth) unpack(r, 1, d.depth(), "depth", [&](int x, int y) { return &t.depth(x, y); });
+  if (aovs.normal) unpack(r, 3, d.normal(), "normal", [&](int x, int y) { return &t.normal(x, y); });
+  if (aovs.albedo) unpack(r, 3, d.albedo(), "albedo", [&](int x, int y) { return &t.albedo(x, y); });
+  if (aovs.bvh_cost) {
+    unpack(r, 1, d.bvh_cost(), "bvh_cost", [&](int x, int y) { return &t.bvh_cost(x, y); });
+  }
+  return t;
+}
+
+RenderStats decode_stats(const v1::TileStats& s) {
+  RenderStats r;
+  r.samples = s.samples();
+  r.invalid_samples = s.invalid_samples();
+  r.fragments = s.fragments();
+  r.rays = s.rays();
+  return r;
+}
+
+}  // namespace farm

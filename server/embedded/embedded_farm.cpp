@@ -1,0 +1,91 @@
+#include "server/embedded/embedded_farm.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "server/common/read_whole_file.h"
+
+namespace farm {
+
+namespace fs = std::filesystem;
+using SteadyClock = std::chrono::steady_clock;
+
+EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data_dir) {
+  if (data_dir_.empty()) {
+    static std::atomic<int> counter{0};
+    data_dir_ = fs::temp_directory_path() / fmt::format("farm-embedded-{}-{}", ::getpid(), counter++);
+    remove_data_dir_ = true;
+  }
+  fs::create_directories(data_dir_);
+  SchedulerOptions s;
+  s.data_dir = data_dir_;
+  s.exr_type = options.exr_type;
+  s.quiet = true;  // `farm render` shows a progress bar and a summary instead
+  // One worker in the same process: it cannot die on its own, so a generous deadline is only a
+  // guard; two tiles in flight keep its threads busy between tiles.
+  s.tiles_per_worker = 2;
+  s.batch_target = options.batch_target;
+  TileRendererOptions r;
+  r.blobs_dir = data_dir_ / "assets";  // the scheduler's own store: nothing to fetch
+  r.cache_dir = data_dir_;             // scenes/<hash>/ shared with the scheduler's validation
+  r.threads = options.threads;
+  worker_ = std::make_shared<InProcessTileWorker>(r);
+  // The scene validation built is the one the worker renders: the models load once.
+  s.validated_scene = [worker = worker_](const std::string& hash, const Job& job, Scene scene) {
+    worker->renderer().adopt(hash, job, std::move(scene));
+  };
+  core_ = std::make_unique<SchedulerCore>(s);
+  core_->add_worker(worker_);
+}
+
+EmbeddedFarm::~EmbeddedFarm() {
+  core_->stop();
+  core_.reset();
+  if (remove_data_dir_) {
+    std::error_code ignored;
+    fs::remove_all(data_dir_, ignored);
+  }
+}
+
+std::string EmbeddedFarm::add_asset(std::string_view bytes) { return core_->assets().add(bytes); }
+
+std::string EmbeddedFarm::add_asset_file(const fs::path& file) {
+  return add_asset(read_whole_file(file, "asset"));
+}
+
+EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec,
+                                 const std::function<void(const v1::Job&)>& progress) {
+  // Subscribed before the job is queued: every event reaches `progress`, the last one final.
+  const auto queue = std::make_shared<JobEventQueue>();
+  const v1::Job submitted = core_->submit(spec, 0, queue);
+  EmbeddedResult result;
+  // The job's final event ends the wait. The store is polled too, as a guard: a final state
+  // whose event never came (it always comes; this only keeps a bug from hanging `farm render`)
+  // ends it after a grace second.
+  std::optional<SteadyClock::time_point> final_in_store;
+  while (true) {
+    v1::JobEvent event;
+    if (queue->pop(event, std::chrono::milliseconds(100))) {
+      if (progress) progress(event.job());
+      if (is_final(event.job().state())) break;
+      continue;
+    }
+    if (!is_final(core_->get_job(submitted.job_id())->state())) continue;
+    if (!final_in_store) final_in_store = SteadyClock::now();
+    if (SteadyClock::now() - *final_in_store > std::chrono::seconds(1)) break;
+  }
+  result.job = *core_->get_job(submitted.job_id());
+  core_->unwatch(submitted.job_id(), queue);
+  if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
+    result.exr = core_->result_file(result.job.job_id(), false).value_or(fs::path());
+    result.preview = core_->result_file(result.job.job_id(), true).value_or(fs::path());
+  }
+  return result;
+}
+
+}  // namespace farm

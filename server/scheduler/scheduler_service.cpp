@@ -1,0 +1,278 @@
+#include "server/scheduler/scheduler_service.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+
+#include "renderer/scene/input_error.h"
+#include "server/common/scene_materializer.h"
+#include "server/common/service_error.h"
+#include "server/common/sha256.h"
+
+namespace farm {
+
+namespace {
+
+constexpr std::size_t kChunk = 1 << 20;
+constexpr int kDefaultPageSize = 50;
+constexpr int kMaxPageSize = 1000;
+constexpr std::uint64_t kMaxAssetBytes = std::uint64_t{4} << 30;
+
+// Runs `body`, mapping the farm's exceptions to statuses (as the worker does).
+template <typename F>
+grpc::Status guarded(F&& body) {
+  try {
+    return body();
+  } catch (const std::exception&) {
+    return status_of_current_exception();
+  }
+}
+
+grpc::Status not_found(const std::string& id) {
+  return {grpc::StatusCode::NOT_FOUND, fmt::format("no job '{}'", id.substr(0, 80))};
+}
+
+// Streams `file` in chunks of `make(offset, bytes, first)`; false when the client went away.
+template <typename Chunk, typename Make>
+bool stream_file(const std::filesystem::path& file, grpc::ServerWriter<Chunk>* writer,
+                 grpc::ServerContext* context, Make&& make) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + file.string());
+  std::string buffer(kChunk, '\0');
+  std::uint64_t offset = 0;
+  bool first = true;
+  while (first || in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    const auto n = static_cast<std::size_t>(in.gcount());
+    if (n == 0 && !first) break;
+    if (context->IsCancelled()) return false;
+    if (!writer->Write(make(offset, std::string_view(buffer.data(), n), first))) return false;
+    offset += n;
+    first = false;
+  }
+  return true;
+}
+
+}  // namespace
+
+grpc::Status SchedulerService::SubmitJob(grpc::ServerContext*, const v1::SubmitJobRequest* request,
+                                         v1::SubmitJobResponse* response) {
+  return guarded([&] {
+    *response->mutable_job() = core_.submit(request->job(), request->priority());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::GetJob(grpc::ServerContext*, const v1::GetJobRequest* request,
+                                      v1::Job* response) {
+  return guarded([&] {
+    std::optional<v1::Job> job = core_.get_job(request->job_id());
+    if (!job) return not_found(request->job_id());
+    *response = std::move(*job);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::ListJobs(grpc::ServerContext*, const v1::ListJobsRequest* request,
+                                        v1::ListJobsResponse* response) {
+  return guarded([&] {
+    int size = request->page_size() <= 0 ? kDefaultPageSize : std::min(request->page_size(), kMaxPageSize);
+    std::int64_t before = 0;
+    if (!request->page_token().empty()) {
+      try {
+        before = std::stoll(request->page_token());
+      } catch (const std::exception&) {
+        throw InputError(fmt::format("page_token '{}' is not one ListJobs returned",
+                                     request->page_token().substr(0, 40)));
+      }
+    }
+    std::vector<v1::JobState> states;
+    for (int s : request->states()) states.push_back(static_cast<v1::JobState>(s));
+    auto [jobs, next] = core_.store().list_jobs(states, size, before);
+    for (v1::Job& job : jobs) *response->add_jobs() = std::move(job);
+    if (next > 0) response->set_next_page_token(std::to_string(next));
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::WatchJob(grpc::ServerContext* context,
+                                        const v1::WatchJobRequest* request,
+                                        grpc::ServerWriter<v1::JobEvent>* writer) {
+  return guarded([&] {
+    // Subscribe before the snapshot, so no event falls between them.
+    const std::shared_ptr<JobEventQueue> queue = core_.watch(request->job_id());
+    struct Unwatch {
+      SchedulerCore& core;
+      const std::string& id;
+      const std::shared_ptr<JobEventQueue>& queue;
+      ~Unwatch() { core.unwatch(id, queue); }
+    } unwatch{core_, request->job_id(), queue};
+
+    std::optional<v1::Job> job = core_.get_job(request->job_id());
+    if (!job) return not_found(request->job_id());
+    v1::JobEvent event;
+    *event.mutable_job() = *job;
+    event.mutable_snapshot();
+    if (!writer->Write(event)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+    if (is_final(job->state())) return grpc::Status::OK;
+    while (true) {
+      // Polls for a client that went away, so a watch never outlives its caller.
+      if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+      if (!queue->pop(event, std::chrono::milliseconds(200))) continue;
+      if (!writer->Write(event)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+      if (event.has_state_changed() && is_final(event.job().state())) return grpc::Status::OK;
+    }
+  });
+}
+
+grpc::Status SchedulerService::CancelJob(grpc::ServerContext*, const v1::CancelJobRequest* request,
+                                         v1::CancelJobResponse* response) {
+  return guarded([&] {
+    *response->mutable_job() = core_.cancel(request->job_id());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
+                                         const v1::GetResultRequest* request,
+                                         grpc::ServerWriter<v1::FileChunk>* writer) {
+  return guarded([&] {
+    std::optional<v1::Job> job = core_.get_job(request->job_id());
+    if (!job) return not_found(request->job_id());
+    if (job->state() != v1::JOB_STATE_SUCCEEDED) {
+      return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                          fmt::format("job {} is {}, not done", job->job_id(),
+                                      v1::JobState_Name(job->state())));
+    }
+    const bool preview = request->kind() == v1::RESULT_KIND_PREVIEW;
+    const std::optional<std::filesystem::path> file = core_.result_file(job->job_id(), preview);
+    if (!file) return grpc::Status(grpc::StatusCode::INTERNAL, "the job's result file is missing");
+    const std::string sha = sha256_file_hex(*file);
+    const std::uint64_t size = std::filesystem::file_size(*file);
+    const bool complete = stream_file(*file, writer, context,
+                                      [&](std::uint64_t offset, std::string_view bytes, bool first) {
+      v1::FileChunk chunk;
+      if (first) {
+        chunk.set_file_name(file->filename().string());
+        chunk.set_total_size(size);
+        chunk.set_sha256(sha);
+      }
+      chunk.set_offset(offset);
+      chunk.set_data(std::string(bytes));
+      return chunk;
+    });
+    return complete ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+  });
+}
+
+grpc::Status SchedulerService::UploadAsset(grpc::ServerContext*,
+                                           grpc::ServerReader<v1::UploadAssetRequest>* reader,
+                                           v1::UploadAssetResponse* response) {
+  return guarded([&] {
+    v1::UploadAssetRequest part;
+    if (!reader->Read(&part) || !part.has_header()) {
+      throw InputError("UploadAsset: the first message must be an AssetHeader");
+    }
+    const v1::AssetHeader header = part.header();
+    if (!is_sha256_hex(header.sha256())) {
+      throw InputError(fmt::format("UploadAsset: sha256 '{}' is not 64 lowercase hex digits",
+                                   header.sha256().substr(0, 80)));
+    }
+    if (header.size() > kMaxAssetBytes) {
+      throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                         fmt::format("asset of {} bytes: at most {}", header.size(), kMaxAssetBytes));
+    }
+    response->set_sha256(header.sha256());
+    response->set_size(header.size());
+    if (core_.assets().has(header.sha256())) {
+      while (reader->Read(&part)) {
+      }
+      response->set_already_present(true);
+      return grpc::Status::OK;
+    }
+    AssetStore::Writer writer = core_.assets().begin(header.sha256(), header.size());
+    while (reader->Read(&part)) {
+      if (!part.has_data() && part.has_header()) throw InputError("UploadAsset: a second AssetHeader");
+      if (writer.bytes_written() + part.data().size() > header.size()) {
+        throw InputError(fmt::format("UploadAsset: more than the {} bytes the header announced",
+                                     header.size()));
+      }
+      writer.append(part.data());
+    }
+    writer.commit();  // InputError when the bytes do not hash to the header's sha256
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::HasAssets(grpc::ServerContext*, const v1::HasAssetsRequest* request,
+                                         v1::HasAssetsResponse* response) {
+  return guarded([&] {
+    for (const std::string& sha : request->sha256()) {
+      if (!is_sha256_hex(sha)) {
+        throw InputError(fmt::format("HasAssets: '{}' is not 64 lowercase hex digits", sha.substr(0, 80)));
+      }
+      if (!core_.assets().has(sha)) response->add_missing(sha);
+    }
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::GetAsset(grpc::ServerContext* context,
+                                        const v1::GetAssetRequest* request,
+                                        grpc::ServerWriter<v1::AssetChunk>* writer) {
+  return guarded([&] {
+    if (!is_sha256_hex(request->sha256())) {
+      throw InputError(fmt::format("GetAsset: '{}' is not 64 lowercase hex digits",
+                                   request->sha256().substr(0, 80)));
+    }
+    if (!core_.assets().has(request->sha256())) {
+      return grpc::Status(grpc::StatusCode::NOT_FOUND, "no asset " + request->sha256());
+    }
+    const std::filesystem::path file = core_.assets().path_of(request->sha256());
+    const std::uint64_t size = std::filesystem::file_size(file);
+    const bool complete = stream_file(file, writer, context,
+                                      [&](std::uint64_t offset, std::string_view bytes, bool) {
+      v1::AssetChunk chunk;
+      chunk.set_total_size(size);
+      chunk.set_offset(offset);
+      chunk.set_data(std::string(bytes));
+      return chunk;
+    });
+    return complete ? grpc::Status::OK : grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+  });
+}
+
+grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext*,
+                                              const v1::RegisterWorkerRequest* request,
+                                              v1::RegisterWorkerResponse* response) {
+  return guarded([&] {
+    if (request->address().empty()) throw InputError("RegisterWorker: address is empty");
+    std::string old;
+    {
+      std::lock_guard lock(mutex_);
+      if (auto it = registered_.find(request->address()); it != registered_.end()) old = it->second;
+    }
+    // A worker registering again at the same address restarted: its old calls are dead.
+    if (!old.empty()) core_.remove_worker(old, "registered again (restarted)");
+    const std::string id =
+        core_.add_worker(std::make_shared<RemoteTileWorker>(request->address()), true);
+    {
+      std::lock_guard lock(mutex_);
+      registered_[request->address()] = id;
+    }
+    response->set_worker_id(id);
+    response->set_heartbeat_interval_ms(
+        static_cast<std::uint32_t>(core_.options().heartbeat_interval.count()));
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::Heartbeat(grpc::ServerContext*, const v1::HeartbeatRequest* request,
+                                         v1::HeartbeatResponse* response) {
+  return guarded([&] {
+    response->set_register_again(!core_.heartbeat(request->worker_id()));
+    return grpc::Status::OK;
+  });
+}
+
+}  // namespace farm

@@ -1,0 +1,510 @@
+#include "server/scheduler/store/job_store.h"
+
+#include <fmt/format.h>
+#include <google/protobuf/util/time_util.h>
+#include <sqlite3.h>
+
+#include <chrono>
+#include <stdexcept>
+
+namespace farm {
+
+namespace {
+
+constexpr int kSchemaVersion = 2;
+
+constexpr const char* kSchema = R"sql(
+CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
+CREATE TABLE IF NOT EXISTS jobs (
+  seq INTEGER PRIMARY KEY AUTOINCREMENT,
+  id TEXT NOT NULL UNIQUE,
+  name TEXT NOT NULL,
+  spec BLOB NOT NULL,
+  scene_hash TEXT NOT NULL,
+  engine TEXT NOT NULL,
+  width INTEGER NOT NULL,
+  height INTEGER NOT NULL,
+  priority INTEGER NOT NULL DEFAULT 0,
+  state INTEGER NOT NULL,
+  submitted_ms INTEGER NOT NULL,
+  started_ms INTEGER NOT NULL DEFAULT 0,
+  finished_ms INTEGER NOT NULL DEFAULT 0,
+  failure_reason TEXT NOT NULL DEFAULT '',
+  tiles_total INTEGER NOT NULL,
+  tiles_done INTEGER NOT NULL DEFAULT 0,
+  tile_failures INTEGER NOT NULL DEFAULT 0,
+  tiles_rendered INTEGER NOT NULL DEFAULT 0,
+  stats BLOB NOT NULL DEFAULT x'',
+  validation TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
+CREATE TABLE IF NOT EXISTS tiles (
+  job_seq INTEGER NOT NULL REFERENCES jobs (seq),
+  idx INTEGER NOT NULL,
+  x0 INTEGER NOT NULL, y0 INTEGER NOT NULL, x1 INTEGER NOT NULL, y1 INTEGER NOT NULL,
+  state INTEGER NOT NULL DEFAULT 0,
+  attempts INTEGER NOT NULL DEFAULT 0,
+  last_error TEXT NOT NULL DEFAULT '',
+  worker TEXT NOT NULL DEFAULT '',
+  part INTEGER NOT NULL DEFAULT 0,
+  PRIMARY KEY (job_seq, idx)
+);
+CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
+)sql";
+
+constexpr const char* kJobColumns =
+    "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
+    "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
+    "validation";
+
+const std::string kActiveSql =
+    fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
+                static_cast<int>(v1::JOB_STATE_RUNNING));
+
+// A prepared statement from the store's cache, reset (bindings cleared) at scope exit so the next
+// user finds it fresh. Preparing is most of the cost of the scheduler's small queries.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, sqlite3_stmt* s) : db_(db), s_(s) {}
+  ~Stmt() {
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
+  }
+  Stmt(const Stmt&) = delete;
+  Stmt& operator=(const Stmt&) = delete;
+
+  Stmt& bind(int i, std::int64_t v) { return check(sqlite3_bind_int64(s_, i, v)); }
+  Stmt& bind(int i, int v) { return check(sqlite3_bind_int(s_, i, v)); }
+  Stmt& bind(int i, std::uint32_t v) { return bind(i, static_cast<std::int64_t>(v)); }
+  Stmt& bind(int i, const std::string& v) {
+    return check(sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
+  }
+  Stmt& bind_blob(int i, const std::string& v) {
+    return check(sqlite3_bind_blob(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
+  }
+  // True while rows come.
+  bool step() {
+    const int rc = sqlite3_step(s_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    throw std::runtime_error(fmt::format("job store: {}", sqlite3_errmsg(db_)));
+  }
+  void run() {
+    while (step()) {
+    }
+  }
+  void reset() {
+    sqlite3_reset(s_);
+    sqlite3_clear_bindings(s_);
+  }
+  std::int64_t i64(int c) const { return sqlite3_column_int64(s_, c); }
+  int i32(int c) const { return sqlite3_column_int(s_, c); }
+  std::string text(int c) const {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s_, c));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(s_, c))) : std::string();
+  }
+  std::string blob(int c) const {
+    const auto* p = static_cast<const char*>(sqlite3_column_blob(s_, c));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(s_, c))) : std::string();
+  }
+
+ private:
+  Stmt& check(int rc) {
+    if (rc != SQLITE_OK) throw std::runtime_error(fmt::format("job store: {}", sqlite3_errmsg(db_)));
+    return *this;
+  }
+  sqlite3* db_;
+  sqlite3_stmt* s_ = nullptr;
+};
+
+// BEGIN IMMEDIATE ... COMMIT, rolled back when the scope is left by an exception.
+class Transaction {
+ public:
+  explicit Transaction(sqlite3* db) : db_(db) { exec("BEGIN IMMEDIATE"); }
+  ~Transaction() {
+    if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  void commit() {
+    exec("COMMIT");
+    done_ = true;
+  }
+
+ private:
+  void exec(const char* sql) {
+    char* error = nullptr;
+    if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
+      const std::string message = error ? error : "unknown error";
+      sqlite3_free(error);
+      throw std::runtime_error(fmt::format("job store: {}: {}", sql, message));
+    }
+  }
+  sqlite3* db_;
+  bool done_ = false;
+};
+
+google::protobuf::Timestamp timestamp(std::int64_t ms) {
+  return google::protobuf::util::TimeUtil::MillisecondsToTimestamp(ms);
+}
+
+v1::Job job_from_row(const Stmt& s) {
+  v1::Job job;
+  job.set_job_id(s.text(1));
+  job.set_name(s.text(2));
+  job.set_scene_hash(s.text(3));
+  job.set_engine(s.text(4));
+  job.set_width(s.i32(5));
+  job.set_height(s.i32(6));
+  job.set_priority(s.i32(7));
+  job.set_state(static_cast<v1::JobState>(s.i32(8)));
+  const std::int64_t submitted = s.i64(9), started = s.i64(10), finished = s.i64(11);
+  *job.mutable_submitted_at() = timestamp(submitted);
+  if (started) *job.mutable_started_at() = timestamp(started);
+  if (finished) *job.mutable_finished_at() = timestamp(finished);
+  if (started && finished) job.set_render_seconds(static_cast<double>(finished - started) / 1e3);
+  job.set_failure_reason(s.text(12));
+  job.set_tiles_total(static_cast<std::uint32_t>(s.i64(13)));
+  job.set_tiles_done(static_cast<std::uint32_t>(s.i64(14)));
+  job.set_tile_failures(static_cast<std::uint32_t>(s.i64(15)));
+  job.set_tiles_rendered(static_cast<std::uint32_t>(s.i64(16)));
+  job.mutable_stats()->ParseFromString(s.blob(17));
+  job.set_validation(s.text(18));
+  return job;
+}
+
+void add_stats(v1::TileStats& sum, const v1::TileStats& t) {
+  sum.set_samples(sum.samples() + t.samples());
+  sum.set_invalid_samples(sum.invalid_samples() + t.invalid_samples());
+  sum.set_fragments(sum.fragments() + t.fragments());
+  sum.set_rays(sum.rays() + t.rays());
+  sum.set_render_ms(sum.render_ms() + t.render_ms());
+  sum.set_cpu_ms(sum.cpu_ms() + t.cpu_ms());
+  sum.set_prepare_ms(sum.prepare_ms() + t.prepare_ms());
+  sum.set_threads(std::max(sum.threads(), t.threads()));
+}
+
+}  // namespace
+
+JobStore::JobStore(const std::filesystem::path& file) {
+  if (sqlite3_open_v2(file.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE |
+                                              SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
+    const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    throw std::runtime_error(fmt::format("cannot open job store {}: {}", file.string(), message));
+  }
+  sqlite3_busy_timeout(db_, 5000);
+  exec("PRAGMA journal_mode=WAL");
+  // WAL + NORMAL: a committed transaction survives a process crash (kill -9); only a power loss
+  // may drop the last few, which the tiles' files and a re-render would repair.
+  exec("PRAGMA synchronous=NORMAL");
+  exec("PRAGMA foreign_keys=ON");
+  exec(kSchema);
+  int version = 0;
+  {
+    Stmt s(db_, prepared("SELECT version FROM schema_version"));
+    if (s.step()) version = s.i32(0);
+  }
+  if (version == 0) {
+    Stmt(db_, prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
+  } else if (version == 1) {
+    // Version 1 kept one file per tile: each done tile is its own part.
+    Transaction t(db_);
+    exec("ALTER TABLE tiles ADD COLUMN part INTEGER NOT NULL DEFAULT 0");
+    exec("UPDATE tiles SET part = idx");
+    exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
+    t.commit();
+  } else if (version != kSchemaVersion) {
+    throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}",
+                                         file.string(), version, kSchemaVersion));
+  }
+  // Tiles in flight when the last scheduler stopped: their results died with it.
+  exec("UPDATE tiles SET state = 0, worker = '' WHERE state = 1");
+}
+
+JobStore::~JobStore() {
+  for (auto& [sql, statement] : statements_) sqlite3_finalize(statement);
+  sqlite3_close(db_);
+}
+
+void JobStore::exec(const char* sql) const {
+  char* error = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
+    const std::string message = error ? error : "unknown error";
+    sqlite3_free(error);
+    throw std::runtime_error(fmt::format("job store: {}", message));
+  }
+}
+
+sqlite3_stmt* JobStore::prepare(const std::string& sql, unsigned flags) const {
+  sqlite3_stmt* statement = nullptr;
+  if (sqlite3_prepare_v3(db_, sql.c_str(), -1, flags, &statement, nullptr) != SQLITE_OK) {
+    throw std::runtime_error(fmt::format("job store: {}: {}", sqlite3_errmsg(db_), sql));
+  }
+  return statement;
+}
+
+sqlite3_stmt* JobStore::prepared(const std::string& sql) const {
+  if (auto it = statements_.find(sql); it != statements_.end()) return it->second;
+  sqlite3_stmt* statement = prepare(sql, SQLITE_PREPARE_PERSISTENT);
+  statements_.emplace(sql, statement);
+  return statement;
+}
+
+v1::Job JobStore::add_job(const NewJob& j, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  Stmt(db_, prepared("INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, "
+                     "state, submitted_ms, tiles_total) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
+      .bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
+      .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
+      .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
+      .bind(11, static_cast<std::int64_t>(j.tiles.size()))
+      .run();
+  const std::int64_t seq = sqlite3_last_insert_rowid(db_);
+  Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1) VALUES (?, ?, ?, ?, ?, ?)"));
+  for (std::size_t i = 0; i < j.tiles.size(); ++i) {
+    const Rect& r = j.tiles[i];
+    tile.reset();
+    tile.bind(1, seq).bind(2, static_cast<std::int64_t>(i)).bind(3, r.x0).bind(4, r.y0)
+        .bind(5, r.x1).bind(6, r.y1);
+    tile.run();
+  }
+  t.commit();
+  return load_job_locked(j.id);
+}
+
+v1::Job JobStore::load_job_locked(const std::string& id) const {
+  std::optional<v1::Job> job = find_job_locked(id);
+  if (!job) throw std::runtime_error("job store: no job " + id);
+  return *job;
+}
+
+std::optional<v1::Job> JobStore::find_job_locked(const std::string& id) const {
+  Stmt s(db_, prepared(fmt::format("SELECT {} FROM jobs WHERE id = ?", kJobColumns)));
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  return job_from_row(s);
+}
+
+std::optional<v1::Job> JobStore::get_job(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  return find_job_locked(id);
+}
+
+std::optional<v1::JobSpec> JobStore::get_spec(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, prepared("SELECT spec FROM jobs WHERE id = ?"));
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  v1::JobSpec spec;
+  spec.ParseFromString(s.blob(0));
+  return spec;
+}
+
+std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
+    const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq) const {
+  std::string where = before_seq > 0 ? fmt::format("seq < {}", before_seq) : "1";
+  if (!states.empty()) {
+    std::string in;
+    for (v1::JobState s : states) in += fmt::format("{}{}", in.empty() ? "" : ", ", static_cast<int>(s));
+    where += fmt::format(" AND state IN ({})", in);
+  }
+  std::lock_guard lock(mutex_);
+  // Not cached: the text varies with the filter and the page.
+  sqlite3_stmt* statement =
+      prepare(fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?", kJobColumns, where), 0);
+  struct Finalize {
+    sqlite3_stmt* s;
+    ~Finalize() { sqlite3_finalize(s); }
+  } finalize{statement};
+  Stmt s(db_, statement);
+  s.bind(1, limit + 1);
+  std::vector<v1::Job> jobs;
+  std::int64_t last_seq = 0, next = 0;
+  while (s.step()) {
+    if (static_cast<int>(jobs.size()) == limit) {
+      next = last_seq;
+      break;
+    }
+    jobs.push_back(job_from_row(s));
+    last_seq = s.i64(0);
+  }
+  return {std::move(jobs), next};
+}
+
+std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part "
+                       "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx"));
+  s.bind(1, id);
+  std::vector<TileRecord> out;
+  while (s.step()) {
+    TileRecord t;
+    t.job_id = id;
+    t.index = static_cast<std::uint32_t>(s.i64(0));
+    t.rect = {s.i32(1), s.i32(2), s.i32(3), s.i32(4)};
+    t.state = static_cast<TileState>(s.i32(5));
+    t.attempts = s.i32(6);
+    t.last_error = s.text(7);
+    t.worker = s.text(8);
+    t.part = static_cast<std::uint32_t>(s.i64(9));
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+std::vector<std::string> JobStore::active_jobs() const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, prepared(fmt::format("SELECT id FROM jobs WHERE state IN {} ORDER BY seq", kActiveSql)));
+  std::vector<std::string> ids;
+  while (s.step()) ids.push_back(s.text(0));
+  return ids;
+}
+
+std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, std::int64_t now_ms,
+                                                    const BatchSize& batch_size) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  TileBatch batch;
+  std::int64_t seq = 0;
+  {
+    Stmt pick(db_, prepared(fmt::format(
+                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts FROM jobs j "
+                       "JOIN tiles t ON t.job_seq = j.seq WHERE j.state IN {} AND t.state = 0 "
+                       "ORDER BY j.priority DESC, j.seq ASC, t.idx ASC LIMIT 1",
+                       kActiveSql)));
+    if (!pick.step()) return std::nullopt;
+    seq = pick.i64(0);
+    batch.job_id = pick.text(1);
+    batch.first = static_cast<std::uint32_t>(pick.i64(2));
+    batch.rect = {pick.i32(3), pick.i32(4), pick.i32(5), pick.i32(6)};
+    batch.attempts = pick.i32(7);
+  }
+  // A tile that failed before goes alone, so it cannot take fresh neighbours down with it.
+  if (batch_size && batch.attempts == 0) {
+    int queued = 0;
+    {
+      Stmt count(db_, prepared("SELECT COUNT(*) FROM tiles WHERE state = 0 AND job_seq = ?"));
+      count.bind(1, seq);
+      if (count.step()) queued = count.i32(0);
+    }
+    const int wanted = batch_size(batch.job_id, queued);
+    if (wanted > 1) {
+      // The following tiles while they continue the same row of the grid: the batch's union is
+      // then one rectangle, rendered in one call.
+      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts FROM tiles "
+                              "WHERE job_seq = ? AND idx > ? AND idx < ? ORDER BY idx"));
+      next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
+      while (next.step()) {
+        const Rect r{next.i32(1), next.i32(2), next.i32(3), next.i32(4)};
+        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 ||
+            r.y0 != batch.rect.y0 || r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
+          break;
+        }
+        batch.rect.x1 = r.x1;
+        ++batch.count;
+      }
+    }
+  }
+  Stmt(db_, prepared("UPDATE tiles SET state = 1, worker = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+      .bind(1, worker).bind(2, seq).bind(3, batch.first).bind(4, batch.first + batch.count).run();
+  Stmt(db_, prepared("UPDATE jobs SET state = ?, started_ms = CASE WHEN started_ms = 0 THEN ? ELSE "
+                     "started_ms END WHERE seq = ?"))
+      .bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, now_ms).bind(3, seq).run();
+  t.commit();
+  return batch;
+}
+
+std::optional<std::int64_t> JobStore::running_batch_locked(const std::string& job_id, std::uint32_t first,
+                                                           std::uint32_t count) const {
+  Stmt find(db_, prepared(fmt::format(
+                     "SELECT j.seq, COUNT(*) FROM jobs j JOIN tiles t ON t.job_seq = j.seq WHERE j.id = ? "
+                     "AND j.state IN {} AND t.idx >= ? AND t.idx < ? AND t.state = 1 GROUP BY j.seq",
+                     kActiveSql)));
+  find.bind(1, job_id).bind(2, first).bind(3, static_cast<std::int64_t>(first) + count);
+  if (!find.step() || find.i64(1) != count) return std::nullopt;
+  return find.i64(0);
+}
+
+bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                          const v1::TileStats& stats) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count);
+  if (!seq) return false;
+  v1::TileStats sum;
+  {
+    Stmt s(db_, prepared("SELECT stats FROM jobs WHERE seq = ?"));
+    s.bind(1, *seq);
+    if (s.step()) sum.ParseFromString(s.blob(0));
+  }
+  add_stats(sum, stats);
+  Stmt(db_, prepared("UPDATE tiles SET state = 2, part = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+      .bind(1, first).bind(2, *seq).bind(3, first).bind(4, first + count).run();
+  Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done + ?, tiles_rendered = tiles_rendered + ?, "
+                     "stats = ? WHERE seq = ?"))
+      .bind(1, count).bind(2, count).bind_blob(3, sum.SerializeAsString()).bind(4, *seq).run();
+  t.commit();
+  return true;
+}
+
+TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                                   const std::string& reason, int max_attempts, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  TileFailure result;
+  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count);
+  if (!seq) {
+    result.job = load_job_locked(job_id);
+    return result;
+  }
+  int attempts = 0;
+  {
+    Stmt s(db_, prepared("SELECT MAX(attempts) FROM tiles WHERE job_seq = ? AND idx >= ? AND idx < ?"));
+    s.bind(1, *seq).bind(2, first).bind(3, first + count);
+    if (s.step()) attempts = s.i32(0) + 1;
+  }
+  result.will_retry = attempts < max_attempts;
+  Stmt(db_, prepared("UPDATE tiles SET state = ?, attempts = attempts + 1, last_error = ?, worker = '' "
+                     "WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+      .bind(1, static_cast<int>(result.will_retry ? TileState::Queued : TileState::Failed))
+      .bind(2, reason).bind(3, *seq).bind(4, first).bind(5, first + count).run();
+  Stmt(db_, prepared("UPDATE jobs SET tile_failures = tile_failures + ? WHERE seq = ?")).bind(1, count).bind(2, *seq).run();
+  if (!result.will_retry) {
+    const std::string tiles = describe_tiles(first, count);
+    Stmt(db_, prepared("UPDATE jobs SET state = ?, failure_reason = ?, finished_ms = ? WHERE seq = ?"))
+        .bind(1, static_cast<int>(v1::JOB_STATE_FAILED))
+        .bind(2, fmt::format("{} failed {} time{}; last error: {}", tiles, attempts, attempts == 1 ? "" : "s", reason))
+        .bind(3, now_ms).bind(4, *seq).run();
+  }
+  t.commit();
+  result.job = load_job_locked(job_id);
+  return result;
+}
+
+void JobStore::batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count) {
+  std::lock_guard lock(mutex_);
+  Stmt(db_, prepared("UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND idx >= ? AND idx < ? "
+                     "AND job_seq = (SELECT seq FROM jobs WHERE id = ?)"))
+      .bind(1, first).bind(2, static_cast<std::int64_t>(first) + count).bind(3, job_id).run();
+}
+
+v1::Job JobStore::finish_job(const std::string& id, v1::JobState state, const std::string& reason,
+                             const std::string& validation, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  Stmt(db_, prepared(fmt::format("UPDATE jobs SET state = ?, failure_reason = ?, validation = ?, "
+                                 "finished_ms = ? WHERE id = ? AND state IN {}",
+                                 kActiveSql)))
+      .bind(1, static_cast<int>(state)).bind(2, reason).bind(3, validation).bind(4, now_ms)
+      .bind(5, id).run();
+  return load_job_locked(id);
+}
+
+v1::Job JobStore::cancel_job(const std::string& id, std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  Stmt(db_, prepared(fmt::format("UPDATE jobs SET state = ?, finished_ms = ? WHERE id = ? AND state IN {}",
+                                 kActiveSql)))
+      .bind(1, static_cast<int>(v1::JOB_STATE_CANCELLED)).bind(2, now_ms).bind(3, id).run();
+  return load_job_locked(id);
+}
+
+}  // namespace farm

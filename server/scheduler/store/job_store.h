@@ -1,0 +1,143 @@
+#pragma once
+// The scheduler's durable state: jobs and their tiles in SQLite (WAL) under the data dir. Every
+// state change is one transaction, so a scheduler killed at any point reopens to a consistent
+// store; open() puts tiles that were running back in the queue (their results were lost with the
+// process) and keeps done tiles done (their data is on disk, written before they were marked).
+//
+// Schema (version 2; a version 1 store is upgraded in place):
+//   schema_version(version)
+//   jobs(seq INTEGER PRIMARY KEY   -- submission order
+//        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
+//        priority, state (farm.v1.JobState), submitted_ms, started_ms, finished_ms (Unix ms, 0 =
+//        not yet), failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered,
+//        stats BLOB (farm.v1.TileStats, summed over done tiles), validation, render_seconds)
+//   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
+//         last_error, worker, part (done tiles: the first tile of the batch whose result file
+//         holds them); PRIMARY KEY (job_seq, idx))
+// Tiles go out in batches: consecutive tiles of one row of the job's grid, rendered by one call
+// as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
+// The store is one connection behind a mutex, its statements prepared once.
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "proto/farm.pb.h"
+#include "renderer/image/tile_buffer.h"
+#include "server/common/job_state.h"
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace farm {
+
+enum class TileState : int { Queued = 0, Running = 1, Done = 2, Failed = 3 };
+
+struct NewJob {
+  std::string id;
+  std::string name;
+  v1::JobSpec spec;
+  std::string scene_hash;
+  std::string engine;
+  int width = 0, height = 0;
+  int priority = 0;
+  std::vector<Rect> tiles;
+};
+
+struct TileRecord {
+  std::string job_id;
+  std::uint32_t index = 0;
+  Rect rect;
+  TileState state = TileState::Queued;
+  int attempts = 0;
+  std::string last_error;
+  std::string worker;
+  std::uint32_t part = 0;  // done tiles: the result file that holds them (TileResults)
+};
+
+// Tiles first .. first + count - 1 of a job, handed to a worker by claim_next_batch (now
+// `running`): one row segment of the job's grid, `rect` their union.
+struct TileBatch {
+  std::string job_id;
+  std::uint32_t first = 0;
+  std::uint32_t count = 1;
+  Rect rect;
+  int attempts = 0;  // failed attempts before this one (a batch of more than one: 0)
+};
+
+// How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued.
+using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
+
+// What batch_failed did.
+struct TileFailure {
+  bool will_retry = false;  // false: the job is now FAILED with the reason
+  v1::Job job;
+};
+
+class JobStore {
+ public:
+  // Opens (creating) <file>, WAL mode; requeues running tiles. std::runtime_error on SQLite errors.
+  explicit JobStore(const std::filesystem::path& file);
+  ~JobStore();
+  JobStore(const JobStore&) = delete;
+  JobStore& operator=(const JobStore&) = delete;
+
+  // Inserts the job (QUEUED) and its queued tiles. Returns it as v1::Job.
+  v1::Job add_job(const NewJob& job, std::int64_t now_ms);
+
+  std::optional<v1::Job> get_job(const std::string& id) const;
+  std::optional<v1::JobSpec> get_spec(const std::string& id) const;
+  // Newest first; `states` empty = all; starts below submission order `before_seq` (0 = newest).
+  // Returns the jobs and the seq to continue from (0 = no more).
+  std::pair<std::vector<v1::Job>, std::int64_t> list_jobs(const std::vector<v1::JobState>& states,
+                                                         int limit, std::int64_t before_seq) const;
+  std::vector<TileRecord> tiles(const std::string& id) const;
+  // Jobs QUEUED or RUNNING, in submission order.
+  std::vector<std::string> active_jobs() const;
+
+  // The next queued tile of an active job (highest priority, then earliest submission, then tile
+  // index) and, when `batch_size` allows more than one, the queued tiles that follow it in the
+  // same grid row, never one that failed before (a tile that failed goes alone). Without
+  // `batch_size`, one tile. Marks them running on `worker` and the job RUNNING (started_at set
+  // on the first claim).
+  std::optional<TileBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
+                                            const BatchSize& batch_size = {});
+
+  // The batch's data is on disk (TileResults part `first`): marks its tiles done and adds its
+  // stats, if they are all still running on an active job (false otherwise: the job was
+  // cancelled or failed, or the tiles were requeued).
+  bool batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                  const v1::TileStats& stats);
+  // Counts a failed attempt on each of the batch's tiles. Below max_attempts they are queued
+  // again; at max_attempts the job FAILS with `reason`. Nothing happens (will_retry false, job as
+  // it is) unless the batch is running on an active job.
+  TileFailure batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                           const std::string& reason, int max_attempts, std::int64_t now_ms);
+  // Puts a running batch back in the queue without counting an attempt (a shutdown, not a failure).
+  void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count);
+
+  // Final states. Each is a no-op (returns the job as it is) when the job is already final.
+  v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
+                     const std::string& validation, std::int64_t now_ms);
+  v1::Job cancel_job(const std::string& id, std::int64_t now_ms);
+
+ private:
+  void exec(const char* sql) const;
+  sqlite3_stmt* prepare(const std::string& sql, unsigned flags) const;  // the caller finalizes it
+  sqlite3_stmt* prepared(const std::string& sql) const;  // cached; under mutex_
+  v1::Job load_job_locked(const std::string& id) const;
+  std::optional<v1::Job> find_job_locked(const std::string& id) const;
+  // The job's seq when the batch's tiles are all running on an active job.
+  std::optional<std::int64_t> running_batch_locked(const std::string& job_id, std::uint32_t first,
+                                                   std::uint32_t count) const;
+
+  mutable std::mutex mutex_;
+  sqlite3* db_ = nullptr;
+  mutable std::map<std::string, sqlite3_stmt*> statements_;
+};
+
+}  // namespace farm

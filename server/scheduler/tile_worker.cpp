@@ -1,0 +1,52 @@
+#include "server/scheduler/tile_worker.h"
+
+#include "server/common/health_check.h"
+
+namespace farm {
+
+void TileCancel::cancel() {
+  std::function<void()> hook;
+  {
+    std::lock_guard lock(mutex_);
+    cancelled_ = true;
+    hook = hook_;
+  }
+  if (hook) hook();
+}
+
+void TileCancel::set_hook(std::function<void()> hook) {
+  std::lock_guard lock(mutex_);
+  hook_ = std::move(hook);
+  if (hook_ && cancelled_) hook_();
+}
+
+RemoteTileWorker::RemoteTileWorker(std::string address) : address_(std::move(address)) {
+  grpc::ChannelArguments args;
+  args.SetMaxReceiveMessageSize(-1);
+  // A dead worker should be noticed and retried quickly, not after gRPC's default backoff.
+  args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
+  args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 200);
+  args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
+  channel_ = grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), args);
+  stub_ = v1::Worker::NewStub(channel_);
+}
+
+grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request,
+                                      v1::RenderTileResponse& response,
+                                      std::chrono::system_clock::time_point deadline,
+                                      TileCancel& cancel) {
+  grpc::ClientContext context;
+  context.set_deadline(deadline);
+  cancel.set_hook([&context] { context.TryCancel(); });
+  grpc::Status status = stub_->RenderTile(&context, request, &response);
+  cancel.set_hook(nullptr);
+  return status;
+}
+
+bool RemoteTileWorker::probe(std::chrono::milliseconds timeout) {
+  // Connected is not enough: a stopped or hung process still accepts connections. It must answer.
+  const auto deadline = std::chrono::system_clock::now() + timeout;
+  return channel_->WaitForConnected(deadline) && check_health(channel_, deadline).serving();
+}
+
+}  // namespace farm

@@ -1,0 +1,62 @@
+#pragma once
+// What the scheduler's dispatcher renders tiles on: a remote `farm worker` over gRPC here, or
+// the same TileRenderer in this process (server/embedded/in_process_tile_worker.h, what
+// `farm render` runs). Both run TileRenderer::render in the end, so a tile's pixels do not
+// depend on the route.
+#include <grpcpp/grpcpp.h>
+
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "proto/farm.grpc.pb.h"
+
+namespace farm {
+
+// Stops one render call from another thread (a cancelled job, a worker that left).
+class TileCancel {
+ public:
+  void cancel();
+  bool cancelled() const { return cancelled_.load(); }
+  // Runs `hook` on cancel() (at once if already cancelled); cleared with nullptr.
+  void set_hook(std::function<void()> hook);
+
+ private:
+  std::atomic<bool> cancelled_{false};
+  std::mutex mutex_;
+  std::function<void()> hook_;
+};
+
+class TileWorker {
+ public:
+  virtual ~TileWorker() = default;
+  // Blocking: renders `request` before `deadline`, or stops with CANCELLED once `cancel` fires.
+  virtual grpc::Status render(const v1::RenderTileRequest& request,
+                              v1::RenderTileResponse& response,
+                              std::chrono::system_clock::time_point deadline,
+                              TileCancel& cancel) = 0;
+  // Waits up to `timeout` for the worker to answer: a down or suspect worker is probed with this
+  // before it gets tiles again.
+  virtual bool probe(std::chrono::milliseconds timeout) = 0;
+  virtual std::string describe() const = 0;  // for messages: the address, or "in-process"
+};
+
+// A `farm worker` at host:port, through the generated farm.v1.Worker stub.
+class RemoteTileWorker final : public TileWorker {
+ public:
+  explicit RemoteTileWorker(std::string address);
+  grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
+                      std::chrono::system_clock::time_point deadline, TileCancel& cancel) override;
+  bool probe(std::chrono::milliseconds timeout) override;
+  std::string describe() const override { return address_; }
+
+ private:
+  std::string address_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::Worker::Stub> stub_;
+};
+
+}  // namespace farm

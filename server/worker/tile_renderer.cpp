@@ -1,0 +1,204 @@
+#include "server/worker/tile_renderer.h"
+
+#include <fmt/format.h>
+#include <time.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+
+#include "renderer/engine.h"
+#include "renderer/render_frame.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/common/scene_hash.h"
+#include "server/common/scene_materializer.h"
+#include "server/common/service_error.h"
+#include "server/common/tile_codec.h"
+
+namespace farm {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Sub-tiles are the unit of parallelism and of cancellation: small enough that a 64x64 tile keeps
+// 16 threads busy and a cancelled call stops within milliseconds, large enough that per-tile
+// engine overhead stays negligible. Pixels do not depend on the split (the engine contract).
+constexpr int kSubTile = 16;
+constexpr auto kPollInterval = std::chrono::milliseconds(10);
+// 48 bytes a pixel with every AOV; keeps a reply far below protobuf's 2 GiB message limit.
+constexpr std::int64_t kMaxRectPixels = std::int64_t{4096} * 4096;
+
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+// Why a call ended early: the caller's deadline passed, or it (or the server) cancelled.
+grpc::Status stopped(const RenderControl& control) {
+  if (control.deadline <= std::chrono::system_clock::now()) {
+    return {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline exceeded while rendering"};
+  }
+  return {grpc::StatusCode::CANCELLED, "cancelled while rendering"};
+}
+
+// One RenderTile call's sub-tiles in flight. Shared with the executor's tasks, so a call that
+// returns early (cancelled) leaves them a live buffer to finish or skip.
+struct RectRender {
+  std::shared_ptr<const CachedScene> scene;
+  TileBuffer out;
+  std::atomic<bool> stop{false};
+
+  std::mutex mutex;
+  std::condition_variable done;
+  std::size_t remaining = 0;
+  RenderStats stats;
+  double cpu_ms = 0.0;
+  std::exception_ptr failure;
+};
+
+double thread_cpu_ms() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+void render_sub_tile(RectRender& r, const Rect& sub) {
+  RenderStats stats;
+  std::exception_ptr failure;
+  const double cpu_start = thread_cpu_ms();
+  if (!r.stop.load(std::memory_order_relaxed)) {
+    try {
+      TileBuffer tile;
+      render_tile(r.scene->prepared, r.scene->job.render, sub, tile);
+      r.out.paste(tile);  // sub-tiles are disjoint: no lock needed
+      stats = tile.stats();
+    } catch (...) {
+      failure = std::current_exception();
+      r.stop = true;
+    }
+  }
+  const double cpu_ms = thread_cpu_ms() - cpu_start;
+  std::lock_guard lock(r.mutex);
+  r.stats += stats;
+  r.cpu_ms += cpu_ms;
+  if (failure && !r.failure) r.failure = failure;
+  if (--r.remaining == 0) r.done.notify_all();
+}
+
+}  // namespace
+
+TileRenderer::TileRenderer(const TileRendererOptions& options)
+    : cache_dir_(options.cache_dir),
+      store_(options.blobs_dir),
+      fetcher_(options.scheduler.empty() ? nullptr
+                                         : std::make_unique<AssetFetcher>(options.scheduler)),
+      cache_({options.max_scenes, options.cache_memory_mb << 20}),
+      executor_(options.threads) {}
+
+std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec,
+                                                          const std::string& hash) {
+  validate_asset_refs(spec);
+  const std::vector<v1::AssetRef> missing = missing_assets(spec, store_);
+  if (!missing.empty()) {
+    if (!fetcher_) {
+      throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
+                         fmt::format("{} on this worker, which has no --scheduler to fetch from",
+                                     MissingAssetsError(missing).what()));
+    }
+    for (const v1::AssetRef& ref : missing) fetcher_->fetch(ref, store_);
+  }
+  MaterializedScene m = materialize_scene(spec, hash, store_, cache_dir_);
+  Scene scene = build_scene(m.job);
+  return std::make_shared<const CachedScene>(std::move(m.job), std::move(scene));
+}
+
+void TileRenderer::adopt(const std::string& scene_hash, const Job& job, Scene scene) {
+  cache_.get(scene_hash, [&] { return std::make_shared<const CachedScene>(job, std::move(scene)); }, nullptr);
+}
+
+grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
+                                  v1::RenderTileResponse& resp, const RenderControl& control) {
+  const Clock::time_point start = Clock::now();
+  const v1::RenderTileRequest* request = &req;
+  v1::RenderTileResponse* response = &resp;
+  const auto is_stopped = [&] {
+    return (control.cancelled && control.cancelled()) ||
+           control.deadline <= std::chrono::system_clock::now();
+  };
+  try {
+    const v1::JobSpec& spec = request->job();
+    const std::string hash = scene_hash(spec);
+    if (!request->scene_hash().empty() && request->scene_hash() != hash) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("scene_hash {} does not match the job spec's {}",
+                          request->scene_hash().substr(0, 64), hash)};
+    }
+
+    // Files sent along by a scheduler we cannot fetch from: verified, then kept like fetched ones.
+    for (const v1::InlineAsset& asset : request->assets()) {
+      if (!store_.has(asset.sha256())) store_.put(asset.sha256(), asset.data());
+    }
+
+    const SceneCache::Lookup lookup = cache_.get(
+        hash, [&] { return prepare(spec, hash); }, is_stopped);
+    if (!lookup.scene || is_stopped()) return stopped(control);
+    const double prepare_ms = lookup.hit ? 0.0 : ms_since(start);
+    const RenderSettings& settings = lookup.scene->job.render;
+
+    const v1::TileRect& tr = request->rect();
+    const Rect rect = Rect{tr.x0(), tr.y0(), tr.x1(), tr.y1()}.intersect(
+        Rect{0, 0, settings.width, settings.height});
+    if (rect.empty()) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("rect [{}, {}) x [{}, {}) lies outside the {}x{} image or is empty",
+                          tr.x0(), tr.x1(), tr.y0(), tr.y1(), settings.width, settings.height)};
+    }
+    if (std::int64_t{rect.width()} * rect.height() > kMaxRectPixels) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("rect of {}x{} pixels: at most {} pixels a call", rect.width(),
+                          rect.height(), kMaxRectPixels)};
+    }
+
+    const Clock::time_point render_start = Clock::now();
+    auto r = std::make_shared<RectRender>();
+    r->scene = lookup.scene;
+    r->out.reset_for_overwrite(rect, settings.aovs);
+    const std::vector<Rect> subs = split_into_tiles(rect.width(), rect.height(), kSubTile);
+    r->remaining = subs.size();
+    for (Rect sub : subs) {
+      sub = {sub.x0 + rect.x0, sub.y0 + rect.y0, sub.x1 + rect.x0, sub.y1 + rect.y0};
+      executor_.submit([r, sub] { render_sub_tile(*r, sub); });
+    }
+    {
+      std::unique_lock lock(r->mutex);
+      while (r->remaining > 0) {
+        r->done.wait_for(lock, kPollInterval);
+        if (is_stopped()) {
+          r->stop = true;  // queued sub-tiles are skipped; the executor moves on at once
+          return stopped(control);
+        }
+      }
+      if (r->failure) std::rethrow_exception(r->failure);
+    }
+
+    // Every sub-tile has finished (remaining reached 0 under the mutex): r is ours alone now.
+    encode_tile(r->out, *response->mutable_tile());
+    v1::TileStats& stats = *response->mutable_stats();
+    encode_stats(r->stats, stats);
+    stats.set_render_ms(ms_since(render_start));
+    stats.set_cpu_ms(r->cpu_ms);
+    stats.set_prepare_ms(prepare_ms);
+    stats.set_scene_cache_hit(lookup.hit);
+    stats.set_threads(std::min<int>(executor_.threads(), static_cast<int>(subs.size())));
+    ++tiles_rendered_;
+    return grpc::Status::OK;
+  } catch (const std::exception&) {
+    return status_of_current_exception();
+  }
+}
+
+}  // namespace farm

@@ -1,0 +1,70 @@
+#pragma once
+// The body of farm.v1.Worker.RenderTile as a reusable object: a job spec and a rectangle in, the
+// rectangle's pixels out, through the worker's asset store, scene cache and render threads. The
+// gRPC WorkerService and the scheduler's in-process worker (embedded mode) both call this, so a
+// tile is rendered by one piece of code whichever way it travels.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "proto/farm.pb.h"
+#include "server/common/asset_store.h"
+#include "server/worker/asset_fetcher.h"
+#include "server/worker/scene_cache.h"
+#include "server/worker/tile_executor.h"
+
+#include <grpcpp/support/status.h>
+
+namespace farm {
+
+struct TileRendererOptions {
+  std::filesystem::path blobs_dir;    // content-addressed assets (AssetStore)
+  std::filesystem::path cache_dir;    // scenes/<scene hash>/ are laid out here
+  std::string scheduler;              // host:port to fetch missing assets from; empty = none
+  int threads = 0;                    // render threads; 0 = all hardware threads
+  std::size_t max_scenes = 8;
+  std::uint64_t cache_memory_mb = 4096;
+};
+
+// How a caller stops a render: polled every few milliseconds while sub-tiles render.
+struct RenderControl {
+  std::function<bool()> cancelled;                        // true = stop (CANCELLED)
+  std::chrono::system_clock::time_point deadline =        // passed = stop (DEADLINE_EXCEEDED)
+      std::chrono::system_clock::time_point::max();
+};
+
+class TileRenderer {
+ public:
+  explicit TileRenderer(const TileRendererOptions& options);
+
+  // Never throws: every failure is a status (INVALID_ARGUMENT for a bad job or rect,
+  // FAILED_PRECONDITION for missing assets, CANCELLED / DEADLINE_EXCEEDED when stopped).
+  grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
+                      const RenderControl& control);
+
+  // Caches a scene prepared elsewhere in this process (from `job`, laid out under the cache dir)
+  // as if a call had prepared it; a no-op when the hash is cached already.
+  void adopt(const std::string& scene_hash, const Job& job, Scene scene);
+
+  int threads() const { return executor_.threads(); }
+  const SceneCache& scene_cache() const { return cache_; }
+  const AssetStore& asset_store() const { return store_; }
+  // RenderTile calls that returned a tile (OK), since start.
+  std::uint64_t tiles_rendered() const { return tiles_rendered_.load(); }
+
+ private:
+  std::shared_ptr<const CachedScene> prepare(const v1::JobSpec& spec, const std::string& hash);
+
+  std::filesystem::path cache_dir_;
+  AssetStore store_;
+  std::unique_ptr<AssetFetcher> fetcher_;  // null without a scheduler
+  SceneCache cache_;
+  TileExecutor executor_;
+  std::atomic<std::uint64_t> tiles_rendered_{0};
+};
+
+}  // namespace farm

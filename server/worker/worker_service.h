@@ -1,0 +1,43 @@
+#pragma once
+// farm.v1.Worker: renders rectangles of jobs' frames through the engine contract.
+//
+// Built on gRPC's synchronous API. A RenderTile call is seconds of CPU work followed by one
+// reply, so a blocking handler that queues its sub-tiles on the shared TileExecutor and waits
+// (polling for cancellation and the deadline) is the simplest correct shape; the callback API
+// would save the handler threads, but those only sleep while the executor's threads render, and
+// their number is bounded by the calls in flight.
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "proto/farm.grpc.pb.h"
+#include "server/worker/tile_renderer.h"
+
+namespace farm {
+
+struct WorkerOptions {
+  std::string listen;                  // host:port; port 0 = any free port
+  int threads = 0;                     // render threads; 0 = all hardware threads
+  std::string scheduler;               // host:port to fetch missing assets from; empty = none
+  std::filesystem::path cache_dir;     // blobs/ and scenes/ live here
+  std::size_t max_scenes = 8;          // prepared scenes kept in memory
+  std::uint64_t cache_memory_mb = 4096;  // approximate memory budget of the prepared scenes
+};
+
+class WorkerService final : public v1::Worker::Service {
+ public:
+  explicit WorkerService(const WorkerOptions& options);
+
+  grpc::Status RenderTile(grpc::ServerContext* context, const v1::RenderTileRequest* request,
+                          v1::RenderTileResponse* response) override;
+
+  int threads() const { return renderer_.threads(); }
+  const SceneCache& scene_cache() const { return renderer_.scene_cache(); }
+  TileRenderer& renderer() { return renderer_; }
+
+ private:
+  TileRenderer renderer_;  // the handler's body, shared with the scheduler's in-process worker
+};
+
+}  // namespace farm

@@ -1,0 +1,3 @@
+#pragma once
+// A fixture for the layering check: util sits below the scene model.
+#include "renderer/scene/job.h"
