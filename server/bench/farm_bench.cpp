@@ -97,10 +97,13 @@ void compare_setups(const FarmBenchOptions& o, const fs::path& dir, const JobSub
     EmbeddedFarmOptions embedded_options;
     embedded_options.batch_target = std::chrono::milliseconds(o.batch_ms);
     EmbeddedFarm farm(embedded_options);
-    for (const auto& [sha, file] : submission.files) farm.add_asset_file(file);
-    const EmbeddedResult r = farm.run(submission.spec);
+    // As `farm render` runs it: the models loaded in this process, the EXR and preview written
+    // to the job's outputs.
+    JobSubmission local = submission;
+    local.job.output.image = dir / "embedded.exr";
+    local.job.output.preview = dir / "embedded.png";
+    const EmbeddedResult r = farm.run_local(local);
     if (r.job.state() != v1::JOB_STATE_SUCCEEDED) throw std::runtime_error("embedded render failed: " + r.job.failure_reason());
-    fs::copy_file(r.exr, dir / "embedded.exr", fs::copy_options::overwrite_existing);
     embedded.push_back(seconds_since(start));
     one_worker.push_back(render_through(client_one, submission, dir / "loopback.exr"));
     two_workers.push_back(render_through(client_two, submission, dir / "loopback.exr"));

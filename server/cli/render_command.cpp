@@ -59,19 +59,6 @@ TileBuffer with_bvh_overlay(const TileBuffer& film, const PreparedScene& scene, 
 
 }  // namespace
 
-namespace {
-
-// Puts `from` at `to` as one step: a copy next to `to`, then a rename over it.
-void publish_file(const std::filesystem::path& from, const std::filesystem::path& to) {
-  if (to.has_parent_path()) std::filesystem::create_directories(to.parent_path());
-  std::filesystem::path temp = to;
-  temp += ".part";
-  std::filesystem::copy_file(from, temp, std::filesystem::copy_options::overwrite_existing);
-  std::filesystem::rename(temp, to);
-}
-
-}  // namespace
-
 void run_render_command(const RenderCommandOptions& options) {
   const Clock::time_point t_start = Clock::now();
   const JobSubmission submission = make_job_submission(options.job_file, options.load, options.overrides);
@@ -86,15 +73,12 @@ void run_render_command(const RenderCommandOptions& options) {
   }
 
   // The same scheduler and worker code a farm runs, in this process: the job is submitted,
-  // split into tiles, rendered by an in-process worker on all threads and merged.
+  // split into tiles, rendered by an in-process worker on all threads and merged into the
+  // job's output files.
   EmbeddedFarmOptions farm_options;
   farm_options.threads = job.render.threads;
   farm_options.exr_type = options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
   EmbeddedFarm farm(farm_options);
-  for (const auto& [sha256, file] : submission.files) farm.add_asset_file(file);
-  // The merge writes a preview: its writer (0.3 s to load) loads while the tiles render. Not
-  // earlier: a thread being created waits for a library being loaded, and the farm makes threads.
-  start_loading_preview_writer();
   const double load_ms = ms_since(t_start);
 
   const Clock::time_point t_render = Clock::now();
@@ -102,7 +86,12 @@ void run_render_command(const RenderCommandOptions& options) {
   {
     ProgressBar bar(fmt::format("rendering {}", job.name),
                     options.progress && ProgressBar::stderr_is_terminal());
-    result = farm.run(submission.spec, [&](const v1::Job& j) { bar.update(j.tiles_done(), j.tiles_total()); });
+    LocalRunOptions run;
+    // --show-bvh: the preview is drawn here, over the merged frame, instead of by the merge.
+    run.write_preview = !options.overrides.show_bvh;
+    run.keep_frame = options.overrides.show_bvh.has_value();
+    result = farm.run_local(submission, [&](const v1::Job& j) { bar.update(j.tiles_done(), j.tiles_total()); },
+                            run);
   }
   const double render_ms = ms_since(t_render);
   if (result.job.state() != v1::JOB_STATE_SUCCEEDED) {
@@ -110,18 +99,12 @@ void run_render_command(const RenderCommandOptions& options) {
                                          result.job.failure_reason()));
   }
 
-  const Clock::time_point t_write = Clock::now();
-  publish_file(result.exr, job.output.image);
-  if (!job.output.preview.empty()) {
-    if (options.overrides.show_bvh) {
-      const PreparedScene prepared(build_scene(job));
-      write_preview(with_bvh_overlay(read_exr(result.exr), prepared, job.render.accel, *options.overrides.show_bvh),
-                    job.output.preview);
-    } else {
-      publish_file(result.preview, job.output.preview);
-    }
+  const Clock::time_point t_overlay = Clock::now();
+  if (options.overrides.show_bvh && !job.output.preview.empty()) {
+    write_preview(with_bvh_overlay(*result.frame, *result.scene, job.render.accel, *options.overrides.show_bvh),
+                  job.output.preview);
   }
-  const double write_ms = ms_since(t_write);
+  const double overlay_ms = ms_since(t_overlay);
 
   const RenderSettings& r = job.render;
   const v1::TileStats& stats = result.job.stats();
@@ -143,10 +126,11 @@ void run_render_command(const RenderCommandOptions& options) {
     fmt::print("rays: {} traced ({:.2f} Mrays/s)\n", stats.rays(),
                static_cast<double>(stats.rays()) / (render_ms * 1e3));
   }
-  fmt::print("time: load {:.1f} ms, prepare+render+merge {:.1f} ms ({} tiles of {} px, {} threads), "
-             "write {:.1f} ms, total {:.1f} ms\n",
+  fmt::print("time: job {:.1f} ms, load models+render+merge+write {:.1f} ms ({} tiles of {} px, {} threads), "
+             "{}total {:.1f} ms\n",
              load_ms, render_ms, result.job.tiles_total(), r.tile_size, resolve_thread_count(r.threads),
-             write_ms, ms_since(t_start));
+             options.overrides.show_bvh ? fmt::format("BVH overlay {:.1f} ms, ", overlay_ms) : std::string(),
+             ms_since(t_start));
   if (!result.job.validation().empty()) fmt::print("{}\n", result.job.validation());
 }
 

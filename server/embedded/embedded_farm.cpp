@@ -8,7 +8,10 @@
 #include <optional>
 #include <sstream>
 
+#include "renderer/scene/scene_builder.h"
+#include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
+#include "server/common/scene_hash.h"
 
 namespace farm {
 
@@ -26,6 +29,7 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   s.data_dir = data_dir_;
   s.exr_type = options.exr_type;
   s.quiet = true;  // `farm render` shows a progress bar and a summary instead
+  s.in_memory = true;
   // One worker in the same process: it cannot die on its own, so a generous deadline is only a
   // guard; two tiles in flight keep its threads busy between tiles.
   s.tiles_per_worker = 2;
@@ -58,12 +62,47 @@ std::string EmbeddedFarm::add_asset_file(const fs::path& file) {
   return add_asset(read_whole_file(file, "asset"));
 }
 
-EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec,
-                                 const std::function<void(const v1::Job&)>& progress) {
+EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Progress& progress,
+                                       LocalRunOptions options) {
+  const Job& job = submission.job;
+  const std::string hash = scene_hash(submission.spec);
+  const std::shared_ptr<const CachedScene> cached =
+      worker_->renderer().adopt(hash, job, build_scene(job));
+  ValidatedJob v;
+  v.spec = submission.spec;
+  v.scene_hash = hash;
+  v.job = std::shared_ptr<const Job>(cached, &cached->job);
+  v.scene = std::shared_ptr<const PreparedScene>(cached, &cached->prepared);
+  v.exr = job.output.image;
+  if (options.write_preview) v.preview = job.output.preview;
+  EmbeddedResult result;
+  if (options.keep_frame) {
+    v.merged = [&result](TileBuffer&& frame) { result.frame = std::move(frame); };
+    result.scene = v.scene;
+  }
+  const auto queue = std::make_shared<JobEventQueue>();
+  result.job = wait(core_->submit_validated(std::move(v), 0, queue), queue, progress);
+  if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
+    result.exr = job.output.image;
+    if (options.write_preview) result.preview = job.output.preview;
+  }
+  return result;
+}
+
+EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec, const Progress& progress) {
   // Subscribed before the job is queued: every event reaches `progress`, the last one final.
   const auto queue = std::make_shared<JobEventQueue>();
-  const v1::Job submitted = core_->submit(spec, 0, queue);
   EmbeddedResult result;
+  result.job = wait(core_->submit(spec, 0, queue), queue, progress);
+  if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
+    result.exr = core_->result_file(result.job.job_id(), false).value_or(fs::path());
+    result.preview = core_->result_file(result.job.job_id(), true).value_or(fs::path());
+  }
+  return result;
+}
+
+v1::Job EmbeddedFarm::wait(const v1::Job& submitted, const std::shared_ptr<JobEventQueue>& queue,
+                           const Progress& progress) {
   // The job's final event ends the wait. The store is polled too, as a guard: a final state
   // whose event never came (it always comes; this only keeps a bug from hanging `farm render`)
   // ends it after a grace second.
@@ -79,13 +118,8 @@ EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec,
     if (!final_in_store) final_in_store = SteadyClock::now();
     if (SteadyClock::now() - *final_in_store > std::chrono::seconds(1)) break;
   }
-  result.job = *core_->get_job(submitted.job_id());
   core_->unwatch(submitted.job_id(), queue);
-  if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
-    result.exr = core_->result_file(result.job.job_id(), false).value_or(fs::path());
-    result.preview = core_->result_file(result.job.job_id(), true).value_or(fs::path());
-  }
-  return result;
+  return *core_->get_job(submitted.job_id());
 }
 
 }  // namespace farm

@@ -2,14 +2,16 @@
 
 namespace farm {
 
-grpc::Status InProcessTileWorker::render(const v1::RenderTileRequest& request,
-                                         v1::RenderTileResponse& response,
+grpc::Status InProcessTileWorker::render(const v1::RenderTileRequest& request, RenderedTiles& result,
                                          std::chrono::system_clock::time_point deadline,
                                          TileCancel& cancel) {
   RenderControl control;
   control.cancelled = [&cancel] { return cancel.cancelled(); };
   control.deadline = deadline;
-  return renderer_.render(request, response, control);
+  TileBuffer pixels;
+  const grpc::Status status = renderer_.render(request, pixels, *result.response.mutable_stats(), control);
+  if (status.ok()) result.pixels = std::move(pixels);
+  return status;
 }
 
 }  // namespace farm

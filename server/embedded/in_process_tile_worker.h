@@ -13,7 +13,8 @@ namespace farm {
 class InProcessTileWorker final : public TileWorker {
  public:
   explicit InProcessTileWorker(const TileRendererOptions& options) : renderer_(options) {}
-  grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
+  // The pixels come back as rendered (RenderedTiles::pixels), not encoded.
+  grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
                       std::chrono::system_clock::time_point deadline, TileCancel& cancel) override;
   bool probe(std::chrono::milliseconds) override { return true; }
   std::string describe() const override { return "in-process"; }

@@ -100,6 +100,16 @@ struct SchedulerCore::WorkerEntry {
   SteadyClock::time_point last_heartbeat = SteadyClock::now();
 };
 
+struct SchedulerCore::JobInfo {
+  std::shared_ptr<const v1::JobSpec> spec;
+  std::string scene_hash;
+  std::shared_ptr<const Job> job;
+  FrameLayout frame;
+  std::shared_ptr<const PreparedScene> scene;  // null: the merge builds one if it needs it
+  MergedFiles files;                            // empty: results/<job id>/<stem>.exr and .png
+  std::function<void(TileBuffer&&)> merged;
+};
+
 bool JobEventQueue::pop(v1::JobEvent& event, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   if (!ready_.wait_for(lock, timeout, [&] { return !events_.empty(); })) return false;
@@ -119,8 +129,12 @@ void JobEventQueue::push(const v1::JobEvent& event) {
 SchedulerCore::SchedulerCore(SchedulerOptions options)
     : options_(std::move(options)),
       assets_((fs::create_directories(options_.data_dir), options_.data_dir / "assets")),
-      store_(options_.data_dir / "jobs.db"),
-      results_(options_.data_dir / "tiles") {
+      store_(options_.in_memory ? fs::path(":memory:") : options_.data_dir / "jobs.db") {
+  if (options_.in_memory) {
+    assembly_ = std::make_unique<InMemoryAssembly>();
+  } else {
+    assembly_ = std::make_unique<TileFileAssembly>(options_.data_dir / "tiles");
+  }
   // Jobs interrupted between their last tile and their merge.
   for (const std::string& id : store_.active_jobs()) finish_if_complete(id);
   threads_.emplace_back([this] { monitor_loop(); });
@@ -166,21 +180,52 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
     replace_all(message, m.dir.string(), "the job's folder");
     throw InputError(message);
   }
-  const RenderSettings& r = m.job.render;
+  auto info = std::make_shared<JobInfo>();
+  if (options_.validated_scene) {
+    options_.validated_scene(hash, m.job, std::move(scene));
+  } else if (m.job.embree_rays > 0) {
+    info->scene = std::make_shared<const PreparedScene>(std::move(scene));  // for the merge's check
+  }
+  info->spec = std::make_shared<const v1::JobSpec>(spec);
+  info->scene_hash = hash;
+  info->job = std::make_shared<const Job>(std::move(m.job));
+  return queue_job(priority, watcher, std::move(info));
+}
+
+v1::Job SchedulerCore::submit_validated(ValidatedJob job, int priority,
+                                        const std::shared_ptr<JobEventQueue>& watcher) {
+  if (!job.job || job.exr.empty()) throw std::invalid_argument("submit_validated: no job or no EXR path");
+  auto info = std::make_shared<JobInfo>();
+  info->spec = std::make_shared<const v1::JobSpec>(std::move(job.spec));
+  info->scene_hash = std::move(job.scene_hash);
+  info->job = std::move(job.job);
+  info->scene = std::move(job.scene);
+  info->files = {std::move(job.exr), std::move(job.preview)};
+  info->merged = std::move(job.merged);
+  return queue_job(priority, watcher, std::move(info));
+}
+
+v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
+                                 std::shared_ptr<JobInfo> info) {
+  const RenderSettings& r = info->job->render;
+  info->frame = {Rect{0, 0, r.width, r.height}, r.aovs};
   NewJob job;
   job.id = new_job_id();
-  job.name = m.job.name;
-  job.spec = spec;
-  job.scene_hash = hash;
+  job.name = info->job->name;
+  job.spec = *info->spec;
+  job.scene_hash = info->scene_hash;
   job.engine = to_string(r.engine);
   job.width = r.width;
   job.height = r.height;
   job.priority = priority;
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
-  if (options_.validated_scene) options_.validated_scene(hash, m.job, std::move(scene));
   if (watcher) {
     std::lock_guard lock(watch_mutex_);
     watchers_.emplace(job.id, watcher);
+  }
+  {
+    std::lock_guard lock(mutex_);
+    jobs_.emplace(job.id, std::move(info));
   }
   v1::Job added = store_.add_job(job, unix_ms_now());
   log_line(options_.quiet, "info", "job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
@@ -229,16 +274,24 @@ std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bo
   return std::nullopt;
 }
 
-std::shared_ptr<const v1::JobSpec> SchedulerCore::spec_of(const std::string& job_id) {
+std::shared_ptr<const SchedulerCore::JobInfo> SchedulerCore::job_info(const std::string& job_id) {
   {
     std::lock_guard lock(mutex_);
-    if (auto it = specs_.find(job_id); it != specs_.end()) return it->second;
+    if (auto it = jobs_.find(job_id); it != jobs_.end()) return it->second;
   }
+  // A job an earlier process queued: its spec from the store, laid out and parsed once.
+  std::optional<v1::Job> job = store_.get_job(job_id);
   std::optional<v1::JobSpec> spec = store_.get_spec(job_id);
-  if (!spec) throw std::runtime_error("no spec for job " + job_id);
-  auto shared = std::make_shared<const v1::JobSpec>(std::move(*spec));
+  if (!job || !spec) throw std::runtime_error("no spec for job " + job_id);
+  auto info = std::make_shared<JobInfo>();
+  info->spec = std::make_shared<const v1::JobSpec>(std::move(*spec));
+  info->scene_hash = job->scene_hash();
+  info->job = std::make_shared<const Job>(
+      materialize_scene(*info->spec, info->scene_hash, assets_, options_.data_dir).job);
+  const RenderSettings& r = info->job->render;
+  info->frame = {Rect{0, 0, r.width, r.height}, r.aovs};
   std::lock_guard lock(mutex_);
-  return specs_.emplace(job_id, shared).first->second;
+  return jobs_.emplace(job_id, std::move(info)).first->second;
 }
 
 // ---- Events --------------------------------------------------------------------------------------
@@ -288,9 +341,9 @@ void SchedulerCore::publish_state(const v1::Job& job, v1::JobState from) {
 }
 
 void SchedulerCore::cleanup_job_files(const std::string& job_id) {
-  results_.remove_job(job_id);
+  assembly_->remove_job(job_id);
   std::lock_guard lock(mutex_);
-  specs_.erase(job_id);
+  jobs_.erase(job_id);
   ms_per_tile_.erase(job_id);
 }
 
@@ -401,32 +454,33 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
     lock.unlock();
 
     v1::RenderTileRequest request;
-    v1::RenderTileResponse response;
+    RenderedTiles result;
     grpc::Status status;
     try {
-      const std::shared_ptr<const v1::JobSpec> spec = spec_of(batch->job_id);
-      *request.mutable_job() = *spec;
-      request.set_scene_hash(store_.get_job(batch->job_id)->scene_hash());
+      const std::shared_ptr<const JobInfo> info = job_info(batch->job_id);
+      const v1::JobSpec& spec = *info->spec;
+      *request.mutable_job() = spec;
+      request.set_scene_hash(info->scene_hash);
       *request.mutable_rect() = to_proto(batch->rect);
       request.set_job_id(batch->job_id);
       request.set_tile_index(batch->first);
       // Each tile of the batch has its deadline.
       const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch->count;
-      status = w->worker->render(request, response, deadline, *call->cancel);
+      status = w->worker->render(request, result, deadline, *call->cancel);
       if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION && !call->cancel->cancelled()) {
         // A worker that cannot fetch the job's files (no --scheduler): once more, files inline.
-        for (const v1::AssetRef& ref : spec->assets()) {
+        for (const v1::AssetRef& ref : spec.assets()) {
           v1::InlineAsset& asset = *request.add_assets();
           asset.set_sha256(ref.sha256());
           asset.set_data(read_whole_file(assets_.path_of(ref.sha256()), "asset"));
         }
-        response.Clear();
-        status = w->worker->render(request, response, deadline, *call->cancel);
+        result = RenderedTiles();
+        status = w->worker->render(request, result, deadline, *call->cancel);
       }
     } catch (const std::exception& e) {
       status = grpc::Status(grpc::StatusCode::INTERNAL, e.what());
     }
-    handle_result(w, *call, status, response);
+    handle_result(w, *call, status, result);
 
     lock.lock();
     in_flight_.erase(call);
@@ -459,8 +513,8 @@ void SchedulerCore::measured(const TileBatch& batch, const v1::TileStats& stats)
 }
 
 void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const InFlight& call,
-                                  const grpc::Status& status,
-                                  const v1::RenderTileResponse& response) {
+                                  const grpc::Status& status, RenderedTiles& result) {
+  const v1::RenderTileResponse& response = result.response;
   const TileBatch& batch = call.batch;
   CancelReason reason;
   std::string reason_text;
@@ -471,8 +525,8 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
   }
   if (status.ok() && reason != CancelReason::JobCancelled) {
     try {
-      // The file first, then the mark: a done tile always has its data.
-      results_.write(batch.job_id, batch.first, response);
+      // The data first, then the mark: a done tile always has its data.
+      assembly_->add(batch.job_id, job_info(batch.job_id)->frame, batch.first, result);
       if (store_.batch_done(batch.job_id, batch.first, batch.count, response.stats())) {
         measured(batch, response.stats());
         publish_with_job(batch.job_id, [&](v1::JobEvent& event) {
@@ -570,32 +624,35 @@ void SchedulerCore::merge(const std::string& job_id) {
   const v1::Job before = *store_.get_job(job_id);
   v1::Job after;
   try {
-    const std::shared_ptr<const v1::JobSpec> spec = spec_of(job_id);
-    const MaterializedScene m = materialize_scene(*spec, before.scene_hash(), assets_, options_.data_dir);
-    MergeRequest request;
-    request.job_id = job_id;
-    request.image = Rect{0, 0, m.job.render.width, m.job.render.height};
-    request.aovs = m.job.render.aovs;
+    const std::shared_ptr<const JobInfo> info = job_info(job_id);
+    const Job& job = *info->job;
     std::set<std::uint32_t> parts;
     for (const TileRecord& t : store_.tiles(job_id)) parts.insert(t.part);
-    request.parts.assign(parts.begin(), parts.end());
-    const MergedFrame merged = merge_tiles(results_, request);
-    std::string stem = m.job.output.image.stem().string();
-    if (stem.empty() || stem.starts_with(".")) stem = "image";
-    write_merged(merged.film, options_.data_dir / "results" / job_id, stem, options_.exr_type);
+    TileBuffer film = assembly_->assemble(job_id, info->frame, {parts.begin(), parts.end()});
+    MergedFiles files = info->files;
+    if (files.exr.empty()) {
+      std::string stem = job.output.image.stem().string();
+      if (stem.empty() || stem.starts_with(".")) stem = "image";
+      const fs::path dir = options_.data_dir / "results" / job_id;
+      files = {dir / (stem + ".exr"), dir / (stem + ".png")};
+    }
+    write_merged(film, files, options_.exr_type);
 
     std::string validation;
-    if (m.job.embree_rays > 0) {
-      const PreparedScene prepared(build_scene(m.job));
-      const AccelKind accel = accel_to_validate(m.job.render.accel);
+    if (job.embree_rays > 0) {
+      // The scene the job was rendered from when this process built it; else built here.
+      std::shared_ptr<const PreparedScene> scene = info->scene;
+      if (!scene) scene = std::make_shared<const PreparedScene>(build_scene(job));
+      const AccelKind accel = accel_to_validate(job.render.accel);
       const AccelValidation v = validate_against_embree(
-          prepared, m.job.render, accel, static_cast<std::uint64_t>(m.job.embree_rays));
+          *scene, job.render, accel, static_cast<std::uint64_t>(job.embree_rays));
       validation = fmt::format("{} ({} vs embree{})", v.summary(), to_string(accel),
                                validation_passes(v) ? "" : "; more hit/miss disagreements than 0.001% of rays");
     }
+    if (info->merged) info->merged(std::move(film));
     after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
     log_line(options_.quiet, "info", "job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(),
-             request.parts.size());
+             parts.size());
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED,
                               fmt::format("merging the tiles: {}", e.what()), "", unix_ms_now());

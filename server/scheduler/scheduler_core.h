@@ -31,11 +31,12 @@
 
 #include "proto/farm.pb.h"
 #include "renderer/image/exr_io.h"
+#include "renderer/prepared_scene.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene.h"
 #include "server/common/asset_store.h"
 #include "server/scheduler/store/job_store.h"
-#include "server/scheduler/tile_results.h"
+#include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/tile_worker.h"
 
 namespace farm {
@@ -52,9 +53,26 @@ struct SchedulerOptions {
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
   bool quiet = false;              // no info lines on stderr (the embedded farm of `farm render`)
+  // The embedded farm of `farm render`: the job store lives in memory and finished tiles are
+  // pasted into their frame as they arrive (InMemoryAssembly), so nothing outlives the process.
+  // Off (the farm): jobs.db on disk, each batch a file before its tiles are marked done.
+  bool in_memory = false;
   // Given each job's scene as submit() built it to validate the job: the embedded farm hands it
   // to its in-process worker, so that `farm render` loads the models once, not twice.
   std::function<void(const std::string& scene_hash, const Job& job, Scene scene)> validated_scene;
+};
+
+// A job submitted from this process, validated by its caller: parsed once, its scene built once
+// (the embedded farm hands the same scene to its worker), its frame written where the caller
+// says rather than under results/.
+struct ValidatedJob {
+  v1::JobSpec spec;                             // what the store records and workers are sent
+  std::string scene_hash;                       // scene_hash(spec)
+  std::shared_ptr<const Job> job;               // the spec's job, parsed
+  std::shared_ptr<const PreparedScene> scene;   // reused by the merge's Embree check
+  std::filesystem::path exr, preview;           // preview empty: none
+  // Given the merged frame after its files are written (`farm render --show-bvh` draws on it).
+  std::function<void(TileBuffer&&)> merged;
 };
 
 // A WatchJob subscription: events of one job, in order.
@@ -93,6 +111,9 @@ class SchedulerCore {
   // it is queued, so it sees every event of the job (pass it to unwatch() when done).
   v1::Job submit(const v1::JobSpec& spec, int priority = 0,
                  const std::shared_ptr<JobEventQueue>& watcher = nullptr);
+  // Queues a job its caller has validated (no asset check, no parse, no scene build here).
+  v1::Job submit_validated(ValidatedJob job, int priority = 0,
+                           const std::shared_ptr<JobEventQueue>& watcher = nullptr);
   std::optional<v1::Job> get_job(const std::string& job_id) const;
   // Drops the job's queued tiles and cancels its calls in flight. ServiceError NOT_FOUND.
   v1::Job cancel(const std::string& job_id);
@@ -113,16 +134,21 @@ class SchedulerCore {
  private:
   struct InFlight;
   struct WorkerEntry;
+  struct JobInfo;  // what the core keeps of a job in memory while it runs
 
   void slot_loop(const std::shared_ptr<WorkerEntry>& w);
+  // Adds a validated job to the store and the dispatch.
+  v1::Job queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
+                    std::shared_ptr<JobInfo> info);
   void handle_result(const std::shared_ptr<WorkerEntry>& w, const InFlight& call,
-                     const grpc::Status& status, const v1::RenderTileResponse& response);
+                     const grpc::Status& status, RenderedTiles& result);
   int batch_size_locked(const std::string& job_id, int queued_tiles) const;  // under mutex_
   void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void finish_if_complete(const std::string& job_id);
   void merge(const std::string& job_id);
   void monitor_loop();
-  std::shared_ptr<const v1::JobSpec> spec_of(const std::string& job_id);
+  // The job's JobInfo; after a restart built again from the store (materialized and parsed once).
+  std::shared_ptr<const JobInfo> job_info(const std::string& job_id);
   void publish(const v1::JobEvent& event);
   // An event carrying the job as the store has it now, filled in by `fill`.
   void publish_with_job(const std::string& job_id, const std::function<void(v1::JobEvent&)>& fill);
@@ -132,7 +158,7 @@ class SchedulerCore {
   SchedulerOptions options_;
   AssetStore assets_;
   JobStore store_;
-  TileResults results_;
+  std::unique_ptr<FrameAssembly> assembly_;
 
   mutable std::mutex mutex_;  // dispatcher state below
   std::condition_variable work_;
@@ -141,7 +167,7 @@ class SchedulerCore {
   std::map<std::string, std::shared_ptr<WorkerEntry>> workers_;
   std::vector<std::thread> threads_;  // slots of every worker ever added, and the monitor
   std::set<std::shared_ptr<InFlight>> in_flight_;
-  std::map<std::string, std::shared_ptr<const v1::JobSpec>> specs_;
+  std::map<std::string, std::shared_ptr<const JobInfo>> jobs_;
   std::set<std::string> merging_;
   std::map<std::string, double> ms_per_tile_;  // per job: recent cost of a tile (measured())
 

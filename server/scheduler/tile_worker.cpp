@@ -31,14 +31,13 @@ RemoteTileWorker::RemoteTileWorker(std::string address) : address_(std::move(add
   stub_ = v1::Worker::NewStub(channel_);
 }
 
-grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request,
-                                      v1::RenderTileResponse& response,
+grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request, RenderedTiles& result,
                                       std::chrono::system_clock::time_point deadline,
                                       TileCancel& cancel) {
   grpc::ClientContext context;
   context.set_deadline(deadline);
   cancel.set_hook([&context] { context.TryCancel(); });
-  grpc::Status status = stub_->RenderTile(&context, request, &response);
+  grpc::Status status = stub_->RenderTile(&context, request, &result.response);
   cancel.set_hook(nullptr);
   return status;
 }

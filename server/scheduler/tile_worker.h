@@ -10,9 +10,11 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "proto/farm.grpc.pb.h"
+#include "renderer/image/tile_buffer.h"
 
 namespace farm {
 
@@ -30,12 +32,19 @@ class TileCancel {
   std::function<void()> hook_;
 };
 
+// What a render call brings back: its statistics, and the pixels either encoded (TileData in the
+// response, from a remote worker) or as they were rendered (from a worker in this process, which
+// need not encode what the scheduler would only decode again).
+struct RenderedTiles {
+  v1::RenderTileResponse response;
+  std::optional<TileBuffer> pixels;
+};
+
 class TileWorker {
  public:
   virtual ~TileWorker() = default;
   // Blocking: renders `request` before `deadline`, or stops with CANCELLED once `cancel` fires.
-  virtual grpc::Status render(const v1::RenderTileRequest& request,
-                              v1::RenderTileResponse& response,
+  virtual grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
                               std::chrono::system_clock::time_point deadline,
                               TileCancel& cancel) = 0;
   // Waits up to `timeout` for the worker to answer: a down or suspect worker is probed with this
@@ -48,7 +57,7 @@ class TileWorker {
 class RemoteTileWorker final : public TileWorker {
  public:
   explicit RemoteTileWorker(std::string address);
-  grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
+  grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
                       std::chrono::system_clock::time_point deadline, TileCancel& cancel) override;
   bool probe(std::chrono::milliseconds timeout) override;
   std::string describe() const override { return address_; }

@@ -116,15 +116,26 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
   return std::make_shared<const CachedScene>(std::move(m.job), std::move(scene));
 }
 
-void TileRenderer::adopt(const std::string& scene_hash, const Job& job, Scene scene) {
-  cache_.get(scene_hash, [&] { return std::make_shared<const CachedScene>(job, std::move(scene)); }, nullptr);
+std::shared_ptr<const CachedScene> TileRenderer::adopt(const std::string& scene_hash, Job job,
+                                                         Scene scene) {
+  return cache_
+      .get(scene_hash,
+           [&] { return std::make_shared<const CachedScene>(std::move(job), std::move(scene)); }, nullptr)
+      .scene;
 }
 
-grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
-                                  v1::RenderTileResponse& resp, const RenderControl& control) {
+grpc::Status TileRenderer::render(const v1::RenderTileRequest& request,
+                                  v1::RenderTileResponse& response, const RenderControl& control) {
+  TileBuffer pixels;
+  grpc::Status status = render(request, pixels, *response.mutable_stats(), control);
+  if (status.ok()) encode_tile(pixels, *response.mutable_tile());
+  return status;
+}
+
+grpc::Status TileRenderer::render(const v1::RenderTileRequest& req, TileBuffer& pixels,
+                                  v1::TileStats& stats, const RenderControl& control) {
   const Clock::time_point start = Clock::now();
   const v1::RenderTileRequest* request = &req;
-  v1::RenderTileResponse* response = &resp;
   const auto is_stopped = [&] {
     return (control.cancelled && control.cancelled()) ||
            control.deadline <= std::chrono::system_clock::now();
@@ -186,8 +197,7 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& req,
     }
 
     // Every sub-tile has finished (remaining reached 0 under the mutex): r is ours alone now.
-    encode_tile(r->out, *response->mutable_tile());
-    v1::TileStats& stats = *response->mutable_stats();
+    pixels = std::move(r->out);
     encode_stats(r->stats, stats);
     stats.set_render_ms(ms_since(render_start));
     stats.set_cpu_ms(r->cpu_ms);

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "proto/farm.pb.h"
+#include "renderer/image/tile_buffer.h"
 #include "server/common/asset_store.h"
 #include "server/worker/asset_fetcher.h"
 #include "server/worker/scene_cache.h"
@@ -45,10 +46,13 @@ class TileRenderer {
   // FAILED_PRECONDITION for missing assets, CANCELLED / DEADLINE_EXCEEDED when stopped).
   grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
                       const RenderControl& control);
+  // The same, the pixels left as rendered instead of encoded (a caller in this process).
+  grpc::Status render(const v1::RenderTileRequest& request, TileBuffer& pixels,
+                      v1::TileStats& stats, const RenderControl& control);
 
-  // Caches a scene prepared elsewhere in this process (from `job`, laid out under the cache dir)
-  // as if a call had prepared it; a no-op when the hash is cached already.
-  void adopt(const std::string& scene_hash, const Job& job, Scene scene);
+  // Caches a scene built elsewhere in this process from `job` as if a call had prepared it, and
+  // returns the cached one (the earlier one when the hash was cached already).
+  std::shared_ptr<const CachedScene> adopt(const std::string& scene_hash, Job job, Scene scene);
 
   int threads() const { return executor_.threads(); }
   const SceneCache& scene_cache() const { return cache_; }

@@ -15,6 +15,7 @@
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/common/tile_codec.h"
+#include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_merger.h"
 #include "server/scheduler/store/job_store.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -98,7 +99,7 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
   for (const int batch_ms : {0, 200}) {
     SCOPED_TRACE(batch_ms);
     test::TempDir dir;
-    std::string id;
+    std::vector<TileRecord> tiles;
     {
       EmbeddedFarmOptions options;
       options.data_dir = dir / "farm";
@@ -111,9 +112,8 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
       ASSERT_EQ(result.job.state(), v1::JOB_STATE_SUCCEEDED) << result.job.failure_reason();
       EXPECT_EQ(result.job.tiles_rendered(), 96u);
       expect_same_pixels(read_exr(result.exr), local, "merged");
-      id = result.job.job_id();
+      tiles = farm.core().store().tiles(result.job.job_id());  // the store lives in memory
     }
-    const std::vector<TileRecord> tiles = JobStore(dir / "farm" / "jobs.db").tiles(id);
     ASSERT_EQ(tiles.size(), 96u);
     std::map<std::uint32_t, std::vector<const TileRecord*>> calls;
     for (const TileRecord& t : tiles) calls[t.part].push_back(&t);
@@ -133,32 +133,46 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
   }
 }
 
-TEST(JobMergerTest, TilesWrittenAsFilesMergeIntoTheFrame) {
+// Both places a job's tiles wait for the merge give the frame render_frame gives, from encoded
+// tiles (a remote worker's) and from tiles as rendered (an in-process worker's) alike; a part
+// the store lists but nobody kept is an error, not a hole in the image.
+TEST(FrameAssemblyTest, FilesAndMemoryAssembleTheFrameRenderFrameGives) {
   test::TempDir dir;
   const v1::JobSpec spec = test::cornell_job_spec("whitted", 40, 30, 1);
   const Job job = parse_job(spec.job_json(), test::kSource / "jobs" / spec.file_name());
   const PreparedScene scene(build_scene(job));
-  TileResults results(dir / "tiles");
-  MergeRequest request{"job", Rect{0, 0, 40, 30}, job.render.aovs, {}};
-  const std::vector<Rect> tiles = split_into_tiles(40, 30, 13);
-  for (std::uint32_t i = 0; i < tiles.size(); ++i) {
-    TileBuffer tile;
-    render_tile(scene, job.render, tiles[i], tile);
-    v1::RenderTileResponse response;
-    encode_tile(tile, *response.mutable_tile());
-    encode_stats(tile.stats(), *response.mutable_stats());
-    results.write("job", i, response);
-    request.parts.push_back(i);
-  }
-  const MergedFrame merged = merge_tiles(results, request);
+  const FrameLayout frame{Rect{0, 0, 40, 30}, job.render.aovs};
   const TileBuffer local = render_frame(scene, job.render);
-  expect_same_pixels(merged.film, local, "merged");
-  EXPECT_EQ(merged.film.stats().rays, local.stats().rays);
-  const MergedFiles files = write_merged(merged.film, dir / "out", "frame", ExrPixelType::Float);
-  expect_same_pixels(read_exr(files.exr), local, "written");
+  const std::vector<Rect> tiles = split_into_tiles(40, 30, 13);
+  TileFileAssembly files(dir / "tiles");
+  InMemoryAssembly memory;
+  for (FrameAssembly* assembly : std::initializer_list<FrameAssembly*>{&files, &memory}) {
+    const std::string what = assembly == &files ? "files" : "memory";
+    std::vector<std::uint32_t> parts;
+    for (std::uint32_t i = 0; i < tiles.size(); ++i) {
+      TileBuffer tile;
+      render_tile(scene, job.render, tiles[i], tile);
+      RenderedTiles rendered;
+      encode_stats(tile.stats(), *rendered.response.mutable_stats());
+      if (i % 2 == 0) {
+        encode_tile(tile, *rendered.response.mutable_tile());
+      } else {
+        rendered.pixels = std::move(tile);
+      }
+      assembly->add("job", frame, i, rendered);
+      parts.push_back(i);
+    }
+    const TileBuffer merged = assembly->assemble("job", frame, parts);
+    expect_same_pixels(merged, local, what);
+    EXPECT_EQ(merged.stats().rays, local.stats().rays) << what;
+    const MergedFiles written{dir / what / "frame.exr", dir / what / "frame.png"};
+    write_merged(merged, written, ExrPixelType::Float);
+    expect_same_pixels(read_exr(written.exr), local, what + ", written");
+    EXPECT_TRUE(std::filesystem::exists(written.preview)) << what;
 
-  request.parts.push_back(99);  // a part whose file is missing
-  EXPECT_THROW(merge_tiles(results, request), std::runtime_error);
+    parts.push_back(99);  // a part nobody kept
+    EXPECT_THROW(assembly->assemble("job", frame, parts), std::runtime_error) << what;
+  }
 }
 
 }  // namespace

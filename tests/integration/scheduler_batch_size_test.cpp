@@ -24,9 +24,10 @@ namespace {
 class CrowdedWorker final : public TileWorker {
  public:
   CrowdedWorker(const TileRendererOptions& options, bool report_cpu) : inner_(options), report_cpu_(report_cpu) {}
-  grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
+  grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
                       std::chrono::system_clock::time_point deadline, TileCancel& cancel) override {
-    grpc::Status status = inner_.render(request, response, deadline, cancel);
+    grpc::Status status = inner_.render(request, result, deadline, cancel);
+    v1::RenderTileResponse& response = result.response;
     const v1::TileRect& r = request.rect();
     const int tiles = std::max(1, (r.x1() - r.x0()) / 8);  // the test's batches are row segments of 8 px tiles
     response.mutable_stats()->set_render_ms(1000.0 * tiles);

@@ -1,0 +1,104 @@
+#include "server/scheduler/frame_assembly.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "server/common/tile_codec.h"
+
+namespace farm {
+
+namespace {
+
+// A batch's pixels as a buffer: as rendered when they came from this process, else decoded.
+TileBuffer pixels_of(RenderedTiles& tiles) {
+  if (tiles.pixels) return std::move(*tiles.pixels);
+  return decode_tile(tiles.response.tile());
+}
+
+void check_fits(const TileBuffer& tile, const FrameLayout& frame, const std::string& job_id,
+                std::uint32_t part) {
+  if (tile.rect().empty() || tile.rect().intersect(frame.image) != tile.rect()) {
+    throw std::runtime_error(fmt::format("result {} of job {} lies outside the image", part, job_id));
+  }
+}
+
+}  // namespace
+
+void TileFileAssembly::add(const std::string& job_id, const FrameLayout&, std::uint32_t part,
+                           RenderedTiles& tiles) {
+  // A worker in this process hands over pixels, not TileData: the file needs them encoded.
+  if (tiles.pixels) {
+    encode_tile(*tiles.pixels, *tiles.response.mutable_tile());
+    tiles.pixels.reset();
+  }
+  files_.write(job_id, part, tiles.response);
+}
+
+TileBuffer TileFileAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
+                                      const std::vector<std::uint32_t>& parts) {
+  TileBuffer film;
+  // The parts cover the image exactly (tiles of split_into_tiles, in batches), so the film need
+  // not be cleared first.
+  film.reset_for_overwrite(frame.image, frame.aovs);
+  for (std::uint32_t part : parts) {
+    RenderedTiles tiles;
+    tiles.response = files_.read(job_id, part);
+    const TileBuffer buffer = pixels_of(tiles);
+    check_fits(buffer, frame, job_id, part);
+    film.paste(buffer);
+    film.stats() += decode_stats(tiles.response.stats());
+  }
+  return film;
+}
+
+void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, std::uint32_t part,
+                           RenderedTiles& tiles) {
+  std::shared_ptr<Film> f;
+  {
+    std::lock_guard lock(mutex_);
+    std::shared_ptr<Film>& slot = films_[job_id];
+    if (!slot) {
+      slot = std::make_shared<Film>();
+      // The batches cover the image exactly: no clearing needed.
+      slot->film.reset_for_overwrite(frame.image, frame.aovs);
+    }
+    f = slot;
+  }
+  const TileBuffer buffer = pixels_of(tiles);
+  check_fits(buffer, frame, job_id, part);
+  f->film.paste(buffer);  // batches are disjoint: concurrent pastes touch different pixels
+  std::lock_guard lock(f->mutex);
+  f->film.stats() += decode_stats(tiles.response.stats());
+  f->parts.push_back(part);
+}
+
+TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
+                                      const std::vector<std::uint32_t>& parts) {
+  std::shared_ptr<Film> f;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = films_.find(job_id);
+    if (it != films_.end()) f = it->second;
+  }
+  if (!f) throw std::runtime_error(fmt::format("job {}: no tiles were kept for it", job_id));
+  std::lock_guard lock(f->mutex);
+  std::vector<std::uint32_t> kept = f->parts;
+  std::sort(kept.begin(), kept.end());
+  std::vector<std::uint32_t> wanted = parts;
+  std::sort(wanted.begin(), wanted.end());
+  // The store and the film must agree on what was rendered, as the files would.
+  if (kept != wanted || f->film.rect() != frame.image) {
+    throw std::runtime_error(fmt::format("job {}: {} batches kept in memory, the job store lists {}",
+                                         job_id, kept.size(), wanted.size()));
+  }
+  return std::move(f->film);
+}
+
+void InMemoryAssembly::remove_job(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  films_.erase(job_id);
+}
+
+}  // namespace farm

@@ -1,0 +1,75 @@
+#pragma once
+// Where a job's finished batches of tiles wait for the merge, and how they become its frame.
+//
+// - TileFileAssembly (the farm): each batch is a file (TileResults) written before its tiles are
+//   marked done, so a restarted scheduler merges what an earlier process rendered.
+// - InMemoryAssembly (the embedded farm of `farm render`): each batch is pasted into the job's
+//   film as it arrives. Nothing is encoded, written, read back or decoded; nothing survives the
+//   process, which `farm render` does not need (its job store lives in memory too).
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "renderer/image/tile_buffer.h"
+#include "server/scheduler/tile_results.h"
+#include "server/scheduler/tile_worker.h"
+
+namespace farm {
+
+// The frame a job's tiles make up.
+struct FrameLayout {
+  Rect image;  // {0, 0, width, height}
+  AovSet aovs;
+};
+
+class FrameAssembly {
+ public:
+  virtual ~FrameAssembly() = default;
+  // Keeps one batch (the part is its first tile index). Throws when it cannot: the batch is
+  // then not marked done.
+  virtual void add(const std::string& job_id, const FrameLayout& frame, std::uint32_t part,
+                   RenderedTiles& tiles) = 0;
+  // The job's frame from its parts (each once, as the job store lists them), with the render
+  // statistics summed. std::runtime_error when a part is missing or does not fit.
+  virtual TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
+                              const std::vector<std::uint32_t>& parts) = 0;
+  // Forgets the job (done, failed or cancelled).
+  virtual void remove_job(const std::string& job_id) = 0;
+};
+
+class TileFileAssembly final : public FrameAssembly {
+ public:
+  explicit TileFileAssembly(std::filesystem::path dir) : files_(std::move(dir)) {}
+  void add(const std::string& job_id, const FrameLayout& frame, std::uint32_t part,
+           RenderedTiles& tiles) override;
+  TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
+                      const std::vector<std::uint32_t>& parts) override;
+  void remove_job(const std::string& job_id) override { files_.remove_job(job_id); }
+
+ private:
+  TileResults files_;
+};
+
+class InMemoryAssembly final : public FrameAssembly {
+ public:
+  void add(const std::string& job_id, const FrameLayout& frame, std::uint32_t part,
+           RenderedTiles& tiles) override;
+  TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
+                      const std::vector<std::uint32_t>& parts) override;
+  void remove_job(const std::string& job_id) override;
+
+ private:
+  struct Film {
+    std::mutex mutex;                  // guards stats and parts; pastes are of disjoint rects
+    TileBuffer film;
+    std::vector<std::uint32_t> parts;  // pasted so far
+  };
+  std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<Film>> films_;
+};
+
+}  // namespace farm
