@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "renderer/scene/input_error.h"
+#include "server/bench/bench_stats.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
@@ -20,23 +21,14 @@
 namespace farm {
 namespace {
 
+using bench::median;
+using bench::self_binary;
+
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 constexpr auto kStartTimeout = std::chrono::seconds(30);
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-
-std::string self_binary() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) throw std::runtime_error("cannot find the farm binary (/proc/self/exe)");
-  return self.string();
-}
 
 // A scheduler and `workers` workers on loopback, each in its own process, as a user runs them.
 class LoopbackFarm {

@@ -8,21 +8,18 @@
 #include "renderer/render_frame.h"
 #include "renderer/scene/input_error.h"
 #include "server/bench/bench_scenes.h"
+#include "server/bench/bench_stats.h"
 
 namespace farm {
 namespace {
+
+using bench::median;
 
 struct Measurement {
   int threads = 0;
   double frame_ms = 0.0, setup_ms = 0.0;  // medians
   std::uint64_t fragments = 0;
 };
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 Measurement measure(const Scene& scene, const RenderSettings& settings, int threads, int warmup,
                     int frames) {

@@ -10,6 +10,7 @@
 #include "server/bench/farm_bench.h"
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
+#include "server/bench/render_bench.h"
 #include "server/bench/rt_bench.h"
 #include "server/cli/client_commands.h"
 #include "server/cli/info_command.h"
@@ -227,6 +228,20 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1024))->capture_default_str();
   bench_farm->add_option("--tiny-jobs", farm_bench.tiny_jobs, "Tiny jobs to submit")->check(CLI::Range(1, 100000))->capture_default_str();
 
+  farm::RenderBenchOptions render_bench;
+  CLI::App* bench_render = bench->add_subcommand(
+      "render", "The whole `farm render` command (process start to exit) against the bare engine frame "
+                "on the same scene: the lab's cow job and a 100-cow grid at 1920x1080, 1 and 2 threads");
+  bench_render->add_option("--cow-job", render_bench.cow_job, "The cow job")->capture_default_str();
+  bench_render->add_option("--asset-root", render_bench.asset_root, "Asset root of the cow job")
+      ->capture_default_str();
+  bench_render->add_option("--threads", render_bench.threads, "Thread counts")
+      ->delimiter(',')->check(CLI::Range(1, 1024));
+  bench_render->add_option("--repeats", render_bench.repeats, "Rounds (medians reported)")
+      ->check(CLI::Range(1, 100))->capture_default_str();
+  bench_render->add_option("--scene", render_bench.scene, "Which scene: cow, cow-grid-100 or all")
+      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))->capture_default_str();
+
   farm::SchedulerCommandOptions scheduler_options;
   CLI::App* scheduler = farm::add_scheduler_command(app, scheduler_options);
   farm::ClientCommands client_commands;
@@ -251,6 +266,8 @@ int main(int argc, char** argv) {
       farm::run_render_command(render_options);
     } else if (bench_rt->parsed()) {
       farm::run_rt_bench(rt_bench);
+    } else if (bench_render->parsed()) {
+      farm::run_render_bench(render_bench);
     } else if (bench_farm->parsed()) {
       farm::run_farm_bench(farm_bench);
     } else if (bench_path->parsed()) {

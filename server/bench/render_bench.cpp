@@ -1,0 +1,162 @@
+#include "server/bench/render_bench.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <thread>
+
+#include "renderer/render_frame.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/bench/bench_stats.h"
+#include "server/common/child_process.h"
+#include "server/common/read_whole_file.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using bench::median;
+using bench::ms_since;
+
+constexpr auto kCommandTimeout = std::chrono::minutes(5);
+
+struct BenchJob {
+  std::string name;
+  fs::path file;
+  JobLoadOptions load;
+};
+
+// The grid of bench::cow_grid as a job file: 10 x 10 cows 1.0 apart in x and 1.7 in z, each
+// turned by its own angle, seen from above one end, lit by one light over the grid. The cow is
+// copied beside the job, so the job's folder is its asset root as a user's would be.
+BenchJob write_grid_job(const fs::path& cow_model, const fs::path& dir) {
+  fs::copy_file(cow_model, dir / "cow.dae", fs::copy_options::overwrite_existing);
+  constexpr int kSide = 10;
+  constexpr float kDx = 1.0f, kDz = 1.7f, kExtent = kSide * kDz;
+  nlohmann::json objects = nlohmann::json::array();
+  for (int j = 0; j < kSide; ++j) {
+    for (int i = 0; i < kSide; ++i) {
+      objects.push_back({{"file", "cow.dae"},
+                         {"translate", {(static_cast<float>(i) - 0.5f * (kSide - 1)) * kDx, 0.0f,
+                                        (static_cast<float>(j) - 0.5f * (kSide - 1)) * kDz}},
+                         {"rotate", {{"axis", {0, 1, 0}}, {"degrees", (i * 37 + j * 11) % 360}}}});
+    }
+  }
+  const nlohmann::json job = {
+      {"version", 1},
+      {"name", "cow_grid_100"},
+      {"scene",
+       {{"objects", objects},
+        {"camera", {{"position", {0.0f, 0.75f * kExtent, 0.95f * kExtent}}, {"target", {0, 0, 0}},
+                    {"far", 4.0f * kExtent}}},
+        {"lights", {{{"position", {0.0f, kExtent, 0.3f * kExtent}}, {"intensity", kExtent * kExtent}}}}}},
+      {"render", {{"engine", "raster"}, {"width", 1920}, {"height", 1080}}},
+      {"output", {{"image", "out/cow_grid_100.exr"}, {"preview", "out/cow_grid_100.png"}}}};
+  const fs::path file = dir / "cow_grid_100.json";
+  std::ofstream(file) << job.dump(1) << '\n';
+  return {"cow-grid-100", file, {}};
+}
+
+// One `farm render` of `job`, process start to exit, its outputs under `dir`.
+double time_command(const BenchJob& job, int threads, const fs::path& dir) {
+  std::vector<std::string> argv{bench::self_binary(), "render", job.file.string(), "--threads",
+                                std::to_string(threads), "--quiet",
+                                "--out", (dir / (job.name + ".exr")).string(),
+                                "--preview", (dir / (job.name + ".png")).string()};
+  if (!job.load.asset_root.empty()) {
+    argv.insert(argv.end(), {"--asset-root", job.load.asset_root.string()});
+  }
+  const Clock::time_point start = Clock::now();
+  ChildProcess command(argv);
+  const std::optional<int> code = command.wait_exit(kCommandTimeout);
+  const double ms = ms_since(start);
+  if (code != 0) {
+    throw std::runtime_error(fmt::format("farm render {} failed ({}): {}", job.file.string(),
+                                         code ? fmt::format("exit {}", *code) : "timed out",
+                                         command.output()));
+  }
+  return ms;
+}
+
+// The engine alone: render_frame on an already loaded scene, a fresh PreparedScene for each frame
+// (as `farm bench raster` does) so the engine's per-frame set-up is counted, a pool made once.
+double time_engine_frame(const Scene& scene, RenderSettings settings, int threads, ThreadPool& pool) {
+  settings.threads = threads;
+  const PreparedScene prepared{Scene(scene)};
+  TileBuffer film;
+  FrameTimings timings;
+  render_frame(prepared, settings, pool, film, {}, &timings);
+  return timings.total_ms;
+}
+
+void bench_job(const BenchJob& job, const RenderBenchOptions& o, const fs::path& out_dir) {
+  const Job parsed = load_job(job.file, job.load);
+  const Scene scene = build_scene(parsed);
+  const RenderSettings& r = parsed.render;
+  fmt::print("\n{}: {} engine, {}x{}, {} triangles in {} object(s), median of {} rounds\n", job.name,
+             to_string(r.engine), r.width, r.height, scene.triangle_count(), scene.objects.size(),
+             o.repeats);
+  fmt::print("{:>7} {:>14} {:>15} {:>8} {:>22}\n", "threads", "engine frame", "farm render", "ratio",
+             "2 x frame + 100 ms");
+  std::map<int, double> command_ms;
+  for (int threads : o.threads) {
+    ThreadPool pool(threads);
+    time_engine_frame(scene, r, threads, pool);  // warm-up: caches, page faults
+    time_command(job, threads, out_dir);
+    // Taking turns, so that a change in a shared machine's load falls on both alike.
+    std::vector<double> engine, command, ratio;
+    for (int i = 0; i < o.repeats; ++i) {
+      engine.push_back(time_engine_frame(scene, r, threads, pool));
+      command.push_back(time_command(job, threads, out_dir));
+      ratio.push_back(command.back() / engine.back());
+    }
+    const double e = median(engine), c = median(command);
+    command_ms[threads] = c;
+    const double bound = 2.0 * e + 100.0;
+    fmt::print("{:>7} {:>11.1f} ms {:>12.1f} ms {:>7.1f}x {:>12.1f} ms ({})\n", threads, e, c,
+               median(ratio), bound, c <= bound ? "within" : "over");
+  }
+  if (command_ms.size() > 1) {
+    const auto first = command_ms.begin();
+    for (auto it = std::next(first); it != command_ms.end(); ++it) {
+      fmt::print("whole-command speedup {} -> {} threads: {:.2f}x\n", first->first, it->first,
+                 first->second / it->second);
+    }
+  }
+}
+
+}  // namespace
+
+void run_render_bench(const RenderBenchOptions& o) {
+  if (!fs::exists(o.cow_job)) {
+    throw InputError(fmt::format("{}: no such job (pass --cow-job PATH to jobs/cow.json)", o.cow_job.string()));
+  }
+  BenchJob cow{"cow", o.cow_job, {o.asset_root}};
+  const Job cow_job = load_job(cow.file, cow.load);
+  const fs::path dir = fs::temp_directory_path() / fmt::format("farm-bench-render-{}", ::getpid());
+  fs::create_directories(dir);
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() {
+      std::error_code ignored;
+      fs::remove_all(dir, ignored);
+    }
+  } cleanup{dir};
+  fmt::print("farm bench render ({} build, {} hardware threads): the whole `farm render` command "
+             "(process start to exit) vs the bare engine frame on the same scene\n",
+             FARM_BUILD_TYPE, std::thread::hardware_concurrency());
+  if (o.scene == "all" || o.scene == "cow") bench_job(cow, o, dir);
+  if (o.scene == "all" || o.scene == "cow-grid-100") {
+    bench_job(write_grid_job(cow_job.scene.objects.at(0).file, dir), o, dir);
+  }
+}
+
+}  // namespace farm
