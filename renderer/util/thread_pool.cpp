@@ -4,80 +4,117 @@
 
 namespace farm {
 
+namespace {
+
+// Which pool, if any, the current thread belongs to, and its index there: a pool thread that
+// starts a loop works on it instead of blocking one of the threads the loop needs.
+thread_local const ThreadPool* t_pool = nullptr;
+thread_local int t_index = -1;
+
+}  // namespace
+
 int resolve_thread_count(int threads) {
   if (threads > 0) return threads;
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-ThreadPool::ThreadPool(int threads) {
-  const int n = resolve_thread_count(threads);
-  for (int i = 1; i < n; ++i) workers_.emplace_back([this, i] { worker_loop(i); });
-}
+ThreadPool::Work::Work(std::size_t count, std::size_t grain, Body body)
+    : count_(count),
+      grain_(std::max<std::size_t>(1, grain)),
+      chunks_((count + grain_ - 1) / grain_),
+      body_(std::move(body)) {}
 
-ThreadPool::~ThreadPool() {
-  {
-    std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-  for (std::thread& t : workers_) t.join();
-}
-
-void ThreadPool::run_chunks(int worker) {
+void ThreadPool::Work::run_chunks(int worker) {
   for (;;) {
     const std::size_t begin = next_.fetch_add(grain_);
     if (begin >= count_) return;
-    try {
-      (*body_)(begin, std::min(count_, begin + grain_), worker);
-    } catch (...) {
-      std::lock_guard lock(mutex_);
-      if (!failure_) failure_ = std::current_exception();
-      next_ = count_;  // abandon the remaining chunks
-      return;
+    std::exception_ptr failure;
+    if (!cancelled_.load(std::memory_order_relaxed)) {
+      try {
+        body_(begin, std::min(count_, begin + grain_), worker);
+      } catch (...) {
+        failure = std::current_exception();
+        cancelled_ = true;  // the rest is skipped
+      }
     }
+    std::lock_guard lock(mutex_);
+    if (failure && !failure_) failure_ = failure;
+    if (++chunks_done_ == chunks_) finished_.notify_all();
   }
 }
 
-void ThreadPool::worker_loop(int worker) {
-  std::uint64_t seen = 0;
-  for (;;) {
-    {
-      std::unique_lock lock(mutex_);
-      wake_.wait(lock, [&] { return stopping_ || generation_ != seen; });
-      if (stopping_) return;
-      seen = generation_;
-    }
-    run_chunks(worker);
-    {
-      std::lock_guard lock(mutex_);
-      if (--busy_ == 0) done_.notify_one();
-    }
-  }
+bool ThreadPool::Work::wait_for(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  return finished_.wait_for(lock, timeout, [this] { return chunks_done_ == chunks_; });
 }
 
-void ThreadPool::parallel_for(std::size_t count, std::size_t grain,
-                              const std::function<void(std::size_t, std::size_t, int)>& body) {
-  if (count == 0) return;
+void ThreadPool::Work::wait() {
+  std::unique_lock lock(mutex_);
+  finished_.wait(lock, [this] { return chunks_done_ == chunks_; });
+}
+
+std::exception_ptr ThreadPool::Work::failure() const {
+  std::lock_guard lock(mutex_);
+  return failure_;
+}
+
+ThreadPool::ThreadPool(int threads) {
+  const int n = resolve_thread_count(threads);
+  threads_.reserve(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) threads_.emplace_back([this, i] { thread_loop(i); });
+}
+
+ThreadPool::~ThreadPool() {
+  std::deque<std::shared_ptr<Work>> left;
   {
     std::lock_guard lock(mutex_);
-    body_ = &body;
-    count_ = count;
-    grain_ = std::max<std::size_t>(1, grain);
-    next_ = 0;
-    failure_ = nullptr;
-    busy_ = static_cast<int>(workers_.size());
-    ++generation_;
+    stopping_ = true;
+    left.swap(queue_);
   }
   wake_.notify_all();
-  run_chunks(0);
-  std::exception_ptr failure;
-  {
-    std::unique_lock lock(mutex_);
-    done_.wait(lock, [&] { return busy_ == 0; });
-    failure = failure_;
-    body_ = nullptr;
+  for (std::thread& t : threads_) t.join();
+  // Loops nobody will run: skip their chunks here, so that whoever waits on them returns.
+  for (const std::shared_ptr<Work>& work : left) {
+    work->cancel();
+    work->run_chunks(0);
   }
-  if (failure) std::rethrow_exception(failure);
+}
+
+std::shared_ptr<ThreadPool::Work> ThreadPool::start(std::size_t count, std::size_t grain, Body body) {
+  auto work = std::make_shared<Work>(count, grain, std::move(body));
+  if (work->chunks_ == 0) return work;  // nothing to do: already finished
+  {
+    std::lock_guard lock(mutex_);
+    queue_.push_back(work);
+  }
+  wake_.notify_all();
+  return work;
+}
+
+void ThreadPool::parallel_for(std::size_t count, std::size_t grain, const Body& body) {
+  const std::shared_ptr<Work> work = start(count, grain, body);
+  if (t_pool == this) work->run_chunks(t_index);  // nested: help rather than block a thread
+  work->wait();
+  if (const std::exception_ptr failure = work->failure()) std::rethrow_exception(failure);
+}
+
+void ThreadPool::thread_loop(int index) {
+  t_pool = this;
+  t_index = index;
+  for (;;) {
+    std::shared_ptr<Work> work;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      work = queue_.front();
+    }
+    work->run_chunks(index);
+    // Nothing left to claim: out of the queue (another thread may have taken it out already).
+    std::lock_guard lock(mutex_);
+    const auto it = std::find(queue_.begin(), queue_.end(), work);
+    if (it != queue_.end()) queue_.erase(it);
+  }
 }
 
 }  // namespace farm

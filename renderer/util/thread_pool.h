@@ -1,13 +1,23 @@
 #pragma once
-// A fixed set of std::threads, created once per render and reused for every parallel step of it
-// (vertex stage, triangle set-up, tiles), so no step pays for thread creation. Work is handed out
-// dynamically in chunks from an atomic counter, so uneven items balance across threads.
+// The one pool of render threads: a fixed set of std::threads created once (per render, or per
+// worker process) and reused for every parallel step (vertex stage, triangle set-up, tiles,
+// sub-tiles of concurrent RenderTile calls), so no step pays for thread creation.
+//
+// Work is a parallel loop over [0, count) in chunks claimed from an atomic counter, so uneven
+// items balance across threads. Several loops may be in flight at once (a worker's concurrent
+// calls): the threads serve them first come, first served. A loop can be started and waited for
+// with a timeout, or cancelled (its chunks not yet started are skipped), which lets a caller stop
+// waiting the moment its client gives up. A pool thread that starts a loop of its own (nested
+// parallelism) works on it while it waits, so nesting never deadlocks.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
-#include <cstdint>
 #include <cstddef>
+#include <cstdint>
+#include <deque>
 #include <exception>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -19,37 +29,62 @@ int resolve_thread_count(int threads);
 
 class ThreadPool {
  public:
-  // `threads` workers in all, the calling thread included (0 = all hardware threads).
+  using Body = std::function<void(std::size_t begin, std::size_t end, int worker)>;
+
+  // One parallel loop in flight.
+  class Work {
+   public:
+    Work(std::size_t count, std::size_t grain, Body body);
+    // True once every chunk has finished or been skipped; false when `timeout` passed first.
+    bool wait_for(std::chrono::milliseconds timeout);
+    void wait();
+    // Chunks not yet started are skipped; those running finish.
+    void cancel() { cancelled_ = true; }
+    // The first exception a chunk threw (the chunks after it are skipped), or null.
+    std::exception_ptr failure() const;
+
+   private:
+    friend class ThreadPool;
+    // Claims and runs (or skips) chunks until none is left to claim.
+    void run_chunks(int worker);
+    bool exhausted() const { return next_.load() >= count_; }
+
+    const std::size_t count_, grain_, chunks_;
+    const Body body_;
+    std::atomic<std::size_t> next_{0};
+    std::atomic<bool> cancelled_{false};
+    mutable std::mutex mutex_;  // guards the two below
+    std::condition_variable finished_;
+    std::size_t chunks_done_ = 0;
+    std::exception_ptr failure_;
+  };
+
+  // `threads` threads of its own (0 = all hardware threads). A caller that is not one of them
+  // waits while they work.
   explicit ThreadPool(int threads);
+  // Skips the chunks of loops still queued and joins the threads.
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
 
-  int size() const { return static_cast<int>(workers_.size()) + 1; }
+  int size() const { return static_cast<int>(threads_.size()); }
 
-  // Calls body(begin, end, worker) for consecutive chunks of [0, count) of at most `grain` items,
-  // on all threads, and returns when every chunk is done. `worker` is in [0, size()), so callers
-  // can keep per-thread scratch space. The first exception thrown by a chunk is rethrown here
-  // after the rest of the work has been abandoned.
-  void parallel_for(std::size_t count, std::size_t grain,
-                    const std::function<void(std::size_t, std::size_t, int)>& body);
+  // Queues body(begin, end, worker) for consecutive chunks of [0, count) of at most `grain`
+  // items and returns at once. `worker` is the index in [0, size()) of the thread running the
+  // chunk, so callers can keep per-thread scratch space. The body is kept until the work ends.
+  std::shared_ptr<Work> start(std::size_t count, std::size_t grain, Body body);
+
+  // start() and wait; rethrows the first exception a chunk threw, after the rest was skipped.
+  void parallel_for(std::size_t count, std::size_t grain, const Body& body);
 
  private:
-  void worker_loop(int worker);
-  void run_chunks(int worker);
+  void thread_loop(int index);
 
-  std::vector<std::thread> workers_;
-  std::mutex mutex_;
-  std::condition_variable wake_, done_;
-  std::uint64_t generation_ = 0;  // bumped for each parallel_for
-  int busy_ = 0;                  // workers still inside the current parallel_for
+  std::mutex mutex_;  // guards the queue and stopping_
+  std::condition_variable wake_;
+  std::deque<std::shared_ptr<Work>> queue_;  // loops with chunks left to claim, oldest first
   bool stopping_ = false;
-
-  // The current parallel_for.
-  const std::function<void(std::size_t, std::size_t, int)>* body_ = nullptr;
-  std::size_t count_ = 0, grain_ = 1;
-  std::atomic<std::size_t> next_{0};
-  std::exception_ptr failure_;
+  std::vector<std::thread> threads_;
 };
 
 }  // namespace farm

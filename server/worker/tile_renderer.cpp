@@ -45,16 +45,15 @@ grpc::Status stopped(const RenderControl& control) {
   return {grpc::StatusCode::CANCELLED, "cancelled while rendering"};
 }
 
-// One RenderTile call's sub-tiles in flight. Shared with the executor's tasks, so a call that
-// returns early (cancelled) leaves them a live buffer to finish or skip.
+// One RenderTile call's sub-tiles in flight. Shared with the pool's work, so a call that returns
+// early (cancelled) leaves the chunks still running a live buffer to finish.
 struct RectRender {
   std::shared_ptr<const CachedScene> scene;
+  std::vector<Rect> subs;
   TileBuffer out;
   std::atomic<bool> stop{false};
 
-  std::mutex mutex;
-  std::condition_variable done;
-  std::size_t remaining = 0;
+  std::mutex mutex;  // guards the three below
   RenderStats stats;
   double cpu_ms = 0.0;
   std::exception_ptr failure;
@@ -86,7 +85,6 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
   r.stats += stats;
   r.cpu_ms += cpu_ms;
   if (failure && !r.failure) r.failure = failure;
-  if (--r.remaining == 0) r.done.notify_all();
 }
 
 }  // namespace
@@ -97,7 +95,7 @@ TileRenderer::TileRenderer(const TileRendererOptions& options)
       fetcher_(options.scheduler.empty() ? nullptr
                                          : std::make_unique<AssetFetcher>(options.scheduler)),
       cache_({options.max_scenes, options.cache_memory_mb << 20}),
-      executor_(options.threads) {}
+      pool_(options.threads) {}
 
 std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec,
                                                           const std::string& hash) {
@@ -175,35 +173,34 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& req, TileBuffer& 
     }
 
     const Clock::time_point render_start = Clock::now();
+    // The engine's per-frame set-up (the rasterizer's transformed and binned triangles) on all
+    // render threads, once per frame: the sub-tiles then find it built.
+    prepare_frame(lookup.scene->prepared, settings, pool_);
     auto r = std::make_shared<RectRender>();
     r->scene = lookup.scene;
     r->out.reset_for_overwrite(rect, settings.aovs);
-    const std::vector<Rect> subs = split_into_tiles(rect.width(), rect.height(), kSubTile);
-    r->remaining = subs.size();
-    for (Rect sub : subs) {
-      sub = {sub.x0 + rect.x0, sub.y0 + rect.y0, sub.x1 + rect.x0, sub.y1 + rect.y0};
-      executor_.submit([r, sub] { render_sub_tile(*r, sub); });
-    }
-    {
-      std::unique_lock lock(r->mutex);
-      while (r->remaining > 0) {
-        r->done.wait_for(lock, kPollInterval);
-        if (is_stopped()) {
-          r->stop = true;  // queued sub-tiles are skipped; the executor moves on at once
-          return stopped(control);
-        }
+    r->subs = split_into_tiles(rect.width(), rect.height(), kSubTile);
+    for (Rect& sub : r->subs) sub = {sub.x0 + rect.x0, sub.y0 + rect.y0, sub.x1 + rect.x0, sub.y1 + rect.y0};
+    const std::shared_ptr<ThreadPool::Work> work =
+        pool_.start(r->subs.size(), 1, [r](std::size_t begin, std::size_t end, int) {
+          for (std::size_t i = begin; i < end; ++i) render_sub_tile(*r, r->subs[i]);
+        });
+    while (!work->wait_for(kPollInterval)) {
+      if (is_stopped()) {
+        r->stop = true;  // sub-tiles not started are skipped; the pool moves on at once
+        work->cancel();
+        return stopped(control);
       }
-      if (r->failure) std::rethrow_exception(r->failure);
     }
-
-    // Every sub-tile has finished (remaining reached 0 under the mutex): r is ours alone now.
+    // Every sub-tile has finished: r is ours alone now.
+    if (r->failure) std::rethrow_exception(r->failure);
     pixels = std::move(r->out);
     encode_stats(r->stats, stats);
     stats.set_render_ms(ms_since(render_start));
     stats.set_cpu_ms(r->cpu_ms);
     stats.set_prepare_ms(prepare_ms);
     stats.set_scene_cache_hit(lookup.hit);
-    stats.set_threads(std::min<int>(executor_.threads(), static_cast<int>(subs.size())));
+    stats.set_threads(std::min<int>(pool_.size(), static_cast<int>(r->subs.size())));
     ++tiles_rendered_;
     return grpc::Status::OK;
   } catch (const std::exception&) {

@@ -13,10 +13,10 @@
 
 #include "proto/farm.pb.h"
 #include "renderer/image/tile_buffer.h"
+#include "renderer/util/thread_pool.h"
 #include "server/common/asset_store.h"
 #include "server/worker/asset_fetcher.h"
 #include "server/worker/scene_cache.h"
-#include "server/worker/tile_executor.h"
 
 #include <grpcpp/support/status.h>
 
@@ -54,7 +54,7 @@ class TileRenderer {
   // returns the cached one (the earlier one when the hash was cached already).
   std::shared_ptr<const CachedScene> adopt(const std::string& scene_hash, Job job, Scene scene);
 
-  int threads() const { return executor_.threads(); }
+  int threads() const { return pool_.size(); }
   const SceneCache& scene_cache() const { return cache_; }
   const AssetStore& asset_store() const { return store_; }
   // RenderTile calls that returned a tile (OK), since start.
@@ -67,7 +67,7 @@ class TileRenderer {
   AssetStore store_;
   std::unique_ptr<AssetFetcher> fetcher_;  // null without a scheduler
   SceneCache cache_;
-  TileExecutor executor_;
+  ThreadPool pool_;  // the render threads every call shares
   std::atomic<std::uint64_t> tiles_rendered_{0};
 };
 

@@ -2,9 +2,9 @@
 // farm.v1.Worker: renders rectangles of jobs' frames through the engine contract.
 //
 // Built on gRPC's synchronous API. A RenderTile call is seconds of CPU work followed by one
-// reply, so a blocking handler that queues its sub-tiles on the shared TileExecutor and waits
+// reply, so a blocking handler that queues its sub-tiles on the shared render ThreadPool and waits
 // (polling for cancellation and the deadline) is the simplest correct shape; the callback API
-// would save the handler threads, but those only sleep while the executor's threads render, and
+// would save the handler threads, but those only sleep while the pool's threads render, and
 // their number is bounded by the calls in flight.
 #include <cstdint>
 #include <filesystem>

@@ -1,0 +1,109 @@
+// The render thread pool: every item once, errors surface, loops nest, and a loop can be
+// abandoned. No sleeps: threads are held and released with promises.
+#include "renderer/util/thread_pool.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <future>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace farm {
+namespace {
+
+TEST(ThreadPool, ParallelForVisitsEveryItemOnceOnAThreadOfThePool) {
+  ThreadPool pool(3);
+  ASSERT_EQ(pool.size(), 3);
+  std::vector<std::atomic<int>> seen(1000);
+  std::atomic<bool> bad_worker{false};
+  pool.parallel_for(seen.size(), 7, [&](std::size_t begin, std::size_t end, int worker) {
+    if (worker < 0 || worker >= pool.size()) bad_worker = true;
+    for (std::size_t i = begin; i < end; ++i) ++seen[i];
+  });
+  for (const auto& s : seen) ASSERT_EQ(s.load(), 1);
+  EXPECT_FALSE(bad_worker);
+}
+
+TEST(ThreadPool, TheFirstExceptionIsRethrownAndTheRestSkipped) {
+  ThreadPool pool(2);
+  std::atomic<int> ran{0};
+  EXPECT_THROW(pool.parallel_for(10000, 1,
+                                 [&](std::size_t begin, std::size_t, int) {
+                                   ++ran;
+                                   if (begin == 0) throw std::runtime_error("chunk 0");
+                                 }),
+               std::runtime_error);
+  EXPECT_LT(ran.load(), 10000);
+  // The pool still works afterwards.
+  std::atomic<int> after{0};
+  pool.parallel_for(10, 1, [&](std::size_t, std::size_t, int) { ++after; });
+  EXPECT_EQ(after.load(), 10);
+}
+
+TEST(ThreadPool, ALoopStartedFromAPoolThreadNestsWithoutDeadlock) {
+  ThreadPool pool(1);  // the one thread runs the outer chunk and must help with the inner loop
+  std::atomic<int> inner{0};
+  pool.parallel_for(2, 1, [&](std::size_t, std::size_t, int) {
+    pool.parallel_for(50, 1, [&](std::size_t, std::size_t, int) { ++inner; });
+  });
+  EXPECT_EQ(inner.load(), 100);
+}
+
+TEST(ThreadPool, ConcurrentCallersEachGetTheirLoopDone) {
+  ThreadPool pool(2);
+  std::atomic<int> total{0};
+  std::vector<std::thread> callers;
+  for (int c = 0; c < 4; ++c) {
+    callers.emplace_back([&] {
+      pool.parallel_for(500, 3, [&](std::size_t b, std::size_t e, int) { total += static_cast<int>(e - b); });
+    });
+  }
+  for (std::thread& t : callers) t.join();
+  EXPECT_EQ(total.load(), 2000);
+}
+
+TEST(ThreadPool, ACancelledLoopSkipsWhatHasNotStartedAndItsWaiterReturns) {
+  ThreadPool pool(1);
+  std::promise<void> started, release;
+  std::shared_future<void> released = release.get_future().share();
+  std::atomic<int> ran{0};
+  const auto work = pool.start(100, 1, [&](std::size_t begin, std::size_t, int) {
+    ++ran;
+    if (begin == 0) {
+      started.set_value();
+      released.wait();  // the pool's only thread is held inside the first chunk
+    }
+  });
+  started.get_future().wait();
+  EXPECT_FALSE(work->wait_for(std::chrono::milliseconds(0)));
+  work->cancel();
+  release.set_value();
+  work->wait();
+  EXPECT_EQ(ran.load(), 1);  // only the chunk that had started
+  EXPECT_EQ(work->failure(), nullptr);
+}
+
+TEST(ThreadPool, LoopsQueuedWhenThePoolIsDestroyedAreSkippedNotLost) {
+  std::shared_ptr<ThreadPool::Work> queued;
+  std::atomic<int> ran{0};
+  {
+    ThreadPool pool(1);
+    std::promise<void> started, release;
+    std::shared_future<void> released = release.get_future().share();
+    const auto busy = pool.start(1, 1, [&](std::size_t, std::size_t, int) {
+      started.set_value();
+      released.wait();
+    });
+    started.get_future().wait();
+    queued = pool.start(10, 1, [&](std::size_t, std::size_t, int) { ++ran; });
+    release.set_value();
+    busy->wait();
+  }  // the queued loop may or may not have run by now; either way it has ended
+  EXPECT_TRUE(queued->wait_for(std::chrono::milliseconds(0)));
+  EXPECT_TRUE(ran.load() == 0 || ran.load() == 10);
+}
+
+}  // namespace
+}  // namespace farm
