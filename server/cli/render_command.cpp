@@ -10,7 +10,6 @@
 #include "renderer/image/box_overlay.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/preview.h"
-#include "renderer/image/preview_writer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/input_error.h"
@@ -92,9 +91,6 @@ void run_render_command(const RenderCommandOptions& options) {
   farm_options.exr_type = options.overrides.full_float ? ExrPixelType::Float : ExrPixelType::Half;
   EmbeddedFarm farm(farm_options);
   for (const auto& [sha256, file] : submission.files) farm.add_asset_file(file);
-  // The merge writes a preview: its writer (0.3 s to load) loads while the tiles render. Not
-  // earlier: a thread being created waits for a library being loaded, and the farm makes threads.
-  start_loading_preview_writer();
   const double load_ms = ms_since(t_start);
 
   const Clock::time_point t_render = Clock::now();
