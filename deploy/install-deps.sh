@@ -6,15 +6,18 @@ set -euo pipefail
 packages=(
   # toolchain
   build-essential cmake ninja-build pkg-config git ca-certificates
-  # renderer
-  libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libimath-dev
-  libtinygltf-dev libassimp-dev libglm-dev libtbb-dev libstb-dev
+  # renderer (TBB, which Embree's CMake config asks for, comes with libembree-dev)
+  libembree-dev libopenexr-dev libimath-dev libpng-dev libjpeg-dev
+  libtinygltf-dev libassimp-dev libglm-dev
+  # OpenImageIO: farm_oiio_tests read previews back with it; `farm compare` (DESIGN.md) reads
+  # images of any format, and idiff is its threshold metric's anchor
+  libopenimageio-dev openimageio-tools
   # service
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
   # command line, config, logging
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev python3 python3-venv
+  libgtest-dev libbenchmark-dev python3 python3-venv
   # the Python client test (stubs generated from proto/farm.proto by grpc_tools)
   python3-grpcio python3-grpc-tools python3-protobuf
 )

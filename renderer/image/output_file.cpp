@@ -5,8 +5,19 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
 
 namespace farm {
+namespace {
+
+struct CloseFile {
+  void operator()(std::FILE* file) const { std::fclose(file); }
+};
+
+}  // namespace
 
 void write_file_atomically(const std::filesystem::path& target,
                            const std::function<void(const std::filesystem::path&)>& write) {
@@ -24,6 +35,21 @@ void write_file_atomically(const std::filesystem::path& target,
     fs::remove(temp, ignored);
     throw;
   }
+}
+
+void write_c_file_atomically(const std::filesystem::path& target, const std::function<void(std::FILE*)>& write) {
+  write_file_atomically(target, [&](const std::filesystem::path& temp) {
+    // The deleter closes it if `write` throws; otherwise it is closed below, where the result counts.
+    std::unique_ptr<std::FILE, CloseFile> out(std::fopen(temp.c_str(), "wb"));
+    if (!out) {
+      throw std::runtime_error(fmt::format("{}: cannot create {}: {}", target.string(), temp.string(),
+                                           std::strerror(errno)));
+    }
+    write(out.get());
+    if (std::fclose(out.release()) != 0) {
+      throw std::runtime_error(fmt::format("{}: cannot write: {}", target.string(), std::strerror(errno)));
+    }
+  });
 }
 
 }  // namespace farm

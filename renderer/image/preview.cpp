@@ -3,14 +3,52 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
-#include <vector>
+#include <string>
+#include <string_view>
 
+#include "renderer/image/jpeg_writer.h"
 #include "renderer/image/output_file.h"
-#include "renderer/image/preview_writer.h"
+#include "renderer/image/png_writer.h"
+#include "renderer/image/rgb8_image.h"
 
 namespace farm {
+namespace {
+
+enum class PreviewFormat { Png, Jpeg };
+
+// The extensions OpenImageIO, which wrote previews before, took for these two formats.
+std::optional<PreviewFormat> preview_format(const std::filesystem::path& file) {
+  std::string extension = file.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension == ".png") return PreviewFormat::Png;
+  constexpr std::array<std::string_view, 6> jpeg = {".jpg", ".jpeg", ".jpe", ".jif", ".jfif", ".jfi"};
+  if (std::find(jpeg.begin(), jpeg.end(), extension) != jpeg.end()) return PreviewFormat::Jpeg;
+  return std::nullopt;
+}
+
+Rgb8Image to_srgb8_image(const TileBuffer& image) {
+  const Rect& r = image.rect();
+  Rgb8Image out{r.width(), r.height(), {}};
+  out.pixels.resize(static_cast<std::size_t>(r.width()) * static_cast<std::size_t>(r.height()) * 3);
+  std::size_t i = 0;
+  for (int y = r.y0; y < r.y1; ++y) {
+    for (int x = r.x0; x < r.x1; ++x) {
+      const glm::vec4& c = image.rgba(x, y);
+      out.pixels[i++] = to_srgb8(c.x);
+      out.pixels[i++] = to_srgb8(c.y);
+      out.pixels[i++] = to_srgb8(c.z);
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 float linear_to_srgb(float linear) {
   if (std::isnan(linear)) return 0.0f;  // NaN shows as black, not as garbage
@@ -22,29 +60,24 @@ std::uint8_t to_srgb8(float linear) {
   return static_cast<std::uint8_t>(std::lround(linear_to_srgb(linear) * 255.0f));
 }
 
-bool preview_format_supported(const std::filesystem::path& file) {
-  return preview_writer().can_write(file.c_str()) != 0;
-}
+bool preview_format_supported(const std::filesystem::path& file) { return preview_format(file).has_value(); }
 
 void write_preview(const TileBuffer& image, const std::filesystem::path& file) {
-  const Rect& r = image.rect();
-  if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
-  std::vector<std::uint8_t> pixels(static_cast<std::size_t>(r.width()) *
-                                   static_cast<std::size_t>(r.height()) * 3);
-  std::size_t i = 0;
-  for (int y = r.y0; y < r.y1; ++y) {
-    for (int x = r.x0; x < r.x1; ++x) {
-      const glm::vec4& c = image.rgba(x, y);
-      pixels[i++] = to_srgb8(c.x);
-      pixels[i++] = to_srgb8(c.y);
-      pixels[i++] = to_srgb8(c.z);
-    }
+  if (image.rect().empty()) {
+    throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
   }
-  const PreviewWriter& writer = preview_writer();
-  write_file_atomically(file, [&](const std::filesystem::path& temp) {
-    char error[512] = "";
-    if (writer.write_rgb8(temp.c_str(), r.width(), r.height(), pixels.data(), error, sizeof error) == 0) {
-      throw std::runtime_error(fmt::format("{}: cannot write preview: {}", file.string(), error));
+  const std::optional<PreviewFormat> format = preview_format(file);
+  if (!format) {
+    throw std::runtime_error(fmt::format("{}: cannot write preview: no image writer for '{}' files "
+                                         "(PNG: .png, JPEG: .jpg or .jpeg)",
+                                         file.string(), file.extension().string()));
+  }
+  const Rgb8Image pixels = to_srgb8_image(image);
+  write_c_file_atomically(file, [&](std::FILE* out) {
+    if (*format == PreviewFormat::Png) {
+      write_png(pixels, out, file);
+    } else {
+      write_jpeg(pixels, out, file);
     }
   });
 }

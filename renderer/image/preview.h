@@ -1,6 +1,6 @@
 #pragma once
-// 8-bit previews (PNG, JPEG, anything OpenImageIO writes by extension) of a linear film:
-// RGB clamped to [0, 1] and sRGB-encoded.
+// 8-bit previews (PNG or JPEG, chosen by extension) of a linear film: RGB clamped to [0, 1] and
+// sRGB-encoded.
 #include <cstdint>
 #include <filesystem>
 
@@ -11,9 +11,11 @@ namespace farm {
 float linear_to_srgb(float linear);      // the sRGB transfer function, input clamped to [0, 1]
 std::uint8_t to_srgb8(float linear);
 
+// Writes to a temporary file beside `file` and renames it into place. Errors name `file`.
 void write_preview(const TileBuffer& image, const std::filesystem::path& file);
 
-// True when OpenImageIO can write this file type (checked before a long render starts).
+// True for the extensions write_preview knows, in any case: .png; .jpg .jpeg .jpe .jif .jfif .jfi
+// (checked before a long render starts).
 bool preview_format_supported(const std::filesystem::path& file);
 
 }  // namespace farm

@@ -10,7 +10,6 @@
 #include "renderer/image/box_overlay.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/preview.h"
-#include "renderer/image/preview_writer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/input_error.h"

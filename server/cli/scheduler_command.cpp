@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cstdio>
 
-#include "renderer/image/preview_writer.h"
 #include "renderer/scene/input_error.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
@@ -84,8 +83,6 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  // The first merge then finds the PNG writer loaded (after the mask: its thread inherits it).
-  start_loading_preview_writer();
 
   SchedulerOptions options;
   options.data_dir = o.data_dir;

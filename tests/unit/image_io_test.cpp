@@ -5,7 +5,9 @@
 #include <glm/geometric.hpp>
 #include <ImfInputFile.h>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -117,6 +119,32 @@ TEST(PreviewFormat, UnknownExtensionIsReportedBeforeRendering) {
   EXPECT_TRUE(preview_format_supported("x.png"));
   EXPECT_TRUE(preview_format_supported("x.jpg"));
   EXPECT_FALSE(preview_format_supported("x.notanimage"));
+}
+
+TEST(PreviewFormat, PngAndJpegByTheirExtensionsInAnyCase) {
+  for (const char* name : {"x.PNG", "x.jpeg", "x.JPG", "x.jpe", "x.jif", "x.jfif", "x.jfi", "a.b/x.png"}) {
+    EXPECT_TRUE(preview_format_supported(name)) << name;
+  }
+  for (const char* name : {"x.exr", "x.tif", "png", "x.png.part", "x"}) EXPECT_FALSE(preview_format_supported(name)) << name;
+}
+
+TEST_F(ImageIoTest, FileWriterErrorsLeaveNeitherTargetNorTemporaryFile) {
+  const fs::path target = dir_ / "never.png";
+  EXPECT_THROW(write_c_file_atomically(target,
+                                       [](std::FILE* out) {
+                                         std::fputs("partial", out);
+                                         throw std::runtime_error("disk full");
+                                       }),
+               std::runtime_error);
+  EXPECT_FALSE(fs::exists(target));
+  EXPECT_TRUE(fs::is_empty(dir_.path()));
+}
+
+TEST_F(ImageIoTest, FileWriterRenamesWhatItWroteOntoTheTarget) {
+  const fs::path target = dir_ / "sub" / "done.png";
+  write_c_file_atomically(target, [](std::FILE* out) { std::fputs("bytes", out); });
+  EXPECT_EQ(fs::file_size(target), 5u);
+  EXPECT_EQ(std::distance(fs::directory_iterator(target.parent_path()), fs::directory_iterator()), 1);
 }
 
 }  // namespace

@@ -1,0 +1,78 @@
+#include "renderer/image/jpeg_writer.h"
+
+#include <fmt/format.h>
+
+#include <csetjmp>
+#include <cstddef>
+#include <cstdio>  // jpeglib.h needs FILE and size_t declared before it
+#include <jpeglib.h>
+#include <stdexcept>
+
+namespace farm {
+namespace {
+
+constexpr int kQuality = 98;
+
+// libjpeg's default error_exit ends the process. Ours longjmps back to encode() instead, the
+// message kept in plain storage for the C++ side to throw.
+struct JpegError {
+  jpeg_error_mgr manager{};
+  std::jmp_buf jump{};
+  char message[JMSG_LENGTH_MAX] = "";
+};
+
+void on_jpeg_error(j_common_ptr cinfo) {
+  auto* error = static_cast<JpegError*>(cinfo->client_data);
+  (*cinfo->err->format_message)(cinfo, error->message);
+  std::longjmp(error->jump, 1);
+}
+
+// Every libjpeg call that can fail happens in here, below the setjmp: a longjmp then skips only
+// libjpeg's own C frames and lands in a frame that holds nothing with a destructor. Returns false
+// after an error (its message is in the JpegError).
+bool encode(jpeg_compress_struct& cinfo, JpegError& error, const Rgb8Image& image, std::FILE* out) {
+  if (setjmp(error.jump) != 0) return false;
+  jpeg_create_compress(&cinfo);
+  jpeg_stdio_dest(&cinfo, out);
+  cinfo.image_width = static_cast<JDIMENSION>(image.width);
+  cinfo.image_height = static_cast<JDIMENSION>(image.height);
+  cinfo.input_components = 3;
+  cinfo.in_color_space = JCS_RGB;
+  jpeg_set_defaults(&cinfo);  // among them 4:2:0 chroma subsampling
+  jpeg_set_quality(&cinfo, kQuality, TRUE);
+  jpeg_start_compress(&cinfo, TRUE);
+  const std::size_t stride = static_cast<std::size_t>(image.width) * 3;
+  while (cinfo.next_scanline < cinfo.image_height) {
+    // libjpeg's API takes rows as non-const; compression only reads them.
+    JSAMPROW row = const_cast<JSAMPROW>(image.pixels.data() + cinfo.next_scanline * stride);
+    jpeg_write_scanlines(&cinfo, &row, 1);
+  }
+  jpeg_finish_compress(&cinfo);
+  return true;
+}
+
+// Owns libjpeg's compressor for one file. Zeroed, so destroying one whose creation failed is safe.
+struct JpegCompressor {
+  jpeg_compress_struct cinfo{};
+  JpegError error;
+
+  JpegCompressor() {
+    cinfo.err = jpeg_std_error(&error.manager);
+    error.manager.error_exit = on_jpeg_error;
+    cinfo.client_data = &error;
+  }
+  ~JpegCompressor() { jpeg_destroy_compress(&cinfo); }
+  JpegCompressor(const JpegCompressor&) = delete;
+  JpegCompressor& operator=(const JpegCompressor&) = delete;
+};
+
+}  // namespace
+
+void write_jpeg(const Rgb8Image& image, std::FILE* out, const std::filesystem::path& name) {
+  JpegCompressor compressor;
+  if (!encode(compressor.cinfo, compressor.error, image, out)) {
+    throw std::runtime_error(fmt::format("{}: cannot write JPEG: {}", name.string(), compressor.error.message));
+  }
+}
+
+}  // namespace farm

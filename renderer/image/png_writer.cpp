@@ -1,0 +1,82 @@
+#include "renderer/image/png_writer.h"
+
+#include <fmt/format.h>
+#include <png.h>
+
+#include <csetjmp>
+#include <cstddef>
+#include <cstdio>
+#include <stdexcept>
+
+namespace farm {
+namespace {
+
+// libpng reports an error by calling our handler, which must not return. It longjmps back to
+// encode(); the message waits here, in plain storage, for the C++ side to throw it.
+struct PngError {
+  char message[256] = "";
+};
+
+void on_png_error(png_structp png, png_const_charp message) {
+  auto* error = static_cast<PngError*>(png_get_error_ptr(png));
+  std::snprintf(error->message, sizeof error->message, "%s", message);
+  png_longjmp(png, 1);
+}
+
+// Every libpng call that can fail happens in here, below the setjmp: a longjmp then skips only
+// libpng's own C frames and lands in a frame that holds nothing with a destructor. Returns false
+// after an error (its message is in the PngError).
+bool encode(png_structp png, png_infop info, const Rgb8Image& image, std::FILE* out) {
+  if (setjmp(png_jmpbuf(png)) != 0) return false;
+  png_init_io(png, out);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), 8,
+               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  // The values are sRGB-encoded (preview.cpp); the sRGB chunk says so to viewers.
+  png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  // Speed before size. zlib level 1 and the "up" filter alone, rather than libpng's default
+  // (level 6, the best of five filters per row): a 512x512 4-spp Cornell box preview in 21 ms
+  // instead of 40, 5% larger; the 640x480 cow in 2.2 ms instead of 10.
+  png_set_compression_level(png, 1);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
+  png_write_info(png, info);
+  const std::size_t stride = static_cast<std::size_t>(image.width) * 3;
+  for (std::size_t y = 0; y < static_cast<std::size_t>(image.height); ++y) {
+    png_write_row(png, image.pixels.data() + y * stride);
+  }
+  png_write_end(png, info);
+  return true;
+}
+
+// Owns libpng's write and info structs for one file.
+class PngWriteStruct {
+ public:
+  explicit PngWriteStruct(PngError& error)
+      : png_(png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, on_png_error, nullptr)),
+        info_(png_ != nullptr ? png_create_info_struct(png_) : nullptr) {}
+  ~PngWriteStruct() { png_destroy_write_struct(&png_, &info_); }
+  PngWriteStruct(const PngWriteStruct&) = delete;
+  PngWriteStruct& operator=(const PngWriteStruct&) = delete;
+
+  bool created() const { return info_ != nullptr; }
+  png_structp png() const { return png_; }
+  png_infop info() const { return info_; }
+
+ private:
+  png_structp png_;
+  png_infop info_;
+};
+
+}  // namespace
+
+void write_png(const Rgb8Image& image, std::FILE* out, const std::filesystem::path& name) {
+  PngError error;
+  PngWriteStruct write(error);
+  if (!write.created()) {
+    throw std::runtime_error(fmt::format("{}: cannot write PNG: libpng failed to start", name.string()));
+  }
+  if (!encode(write.png(), write.info(), image, out)) {
+    throw std::runtime_error(fmt::format("{}: cannot write PNG: {}", name.string(), error.message));
+  }
+}
+
+}  // namespace farm

@@ -1,0 +1,14 @@
+#pragma once
+// PNG files through libpng, for previews: speed before size.
+#include <cstdio>
+#include <filesystem>
+
+#include "renderer/image/rgb8_image.h"
+
+namespace farm {
+
+// Writes `image` as an 8-bit RGB PNG marked sRGB, at zlib level 1, to `out`. Throws
+// std::runtime_error naming `name` (what the caller knows `out` as) on any libpng error.
+void write_png(const Rgb8Image& image, std::FILE* out, const std::filesystem::path& name);
+
+}  // namespace farm
