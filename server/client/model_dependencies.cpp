@@ -1,16 +1,14 @@
 #include "server/client/model_dependencies.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <string>
 
+#include "server/client/collada_images.h"
 #include "server/common/read_whole_file.h"
 
 namespace farm {
@@ -109,12 +107,10 @@ void glb_dependencies(const fs::path& model, std::vector<fs::path>& out) {
   gltf_json_dependencies(model, bytes.substr(20, length), out);
 }
 
-// COLLADA: <init_from>path</init_from> inside <image> elements.
+// COLLADA: the <image> elements' files, read as XML (collada_images.h).
 void collada_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  const std::string text = read_whole_file(model, "model file");
-  static const std::regex init_from(R"(<init_from>\s*([^<]+?)\s*</init_from>)");
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), init_from); it != std::sregex_iterator(); ++it) {
-    add_reference(model, (*it)[1].str(), out);
+  for (const std::string& uri : collada_image_uris(read_whole_file(model, "model file"))) {
+    add_reference(model, uri, out);
   }
 }
 
