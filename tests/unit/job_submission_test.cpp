@@ -119,6 +119,19 @@ TEST(JobSubmission, AColladaImageOutsideTheAssetRootIsRefusedAsAPathOrAFileUri) 
   expect_outside_root_error(job, "m.dae");
 }
 
+TEST(JobSubmission, AHundredObjectsOfOneModelReadItsReferencesOnceAndHashEachFileOnce) {
+  TempDir dir;
+  std::ofstream(dir / "skin.png") << "png";
+  std::ofstream(dir / "cow.dae") << "<COLLADA><library_images><image id=\"i\"><init_from>skin.png</init_from>"
+                                    "</image></library_images></COLLADA>";
+  const fs::path job = dir.write("j.json", job_of_copies({"cow.dae"}, 100));
+  const JobSubmission s = make_job_submission(job, {}, {});
+  EXPECT_EQ(s.job.scene.objects.size(), 100u);
+  EXPECT_EQ(asset_paths(s.spec), (std::vector<std::string>{"cow.dae", "skin.png"}));
+  EXPECT_EQ(s.files_scanned, 1u);
+  EXPECT_EQ(s.files_hashed, 2u);
+}
+
 TEST(JobSubmission, AMalformedColladaModelGoesWithoutReferencesForItsLoaderToReport) {
   TempDir dir;
   std::ofstream(dir / "skin.png") << "png";

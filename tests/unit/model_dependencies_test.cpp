@@ -105,5 +105,29 @@ TEST(ModelDependencies, AMalformedColladaFileHasNoneAndIsLeftToItsLoader) {
   }
 }
 
+TEST(ModelDependencyScanner, ReadsEachModelAndMaterialLibraryOnce) {
+  TempDir dir;
+  std::ofstream(dir / "wood.png") << "png";
+  std::ofstream(dir / "shared.mtl") << "newmtl m\nmap_Kd wood.png\n";
+  std::ofstream(dir / "a.obj") << "mtllib shared.mtl\n";
+  std::ofstream(dir / "b.obj") << "mtllib shared.mtl shared.mtl\n";  // named twice, read once
+  ModelDependencyScanner scanner;
+  const std::vector<fs::path> expected{(dir / "shared.mtl").lexically_normal(), (dir / "wood.png").lexically_normal()};
+  for (int i = 0; i < 100; ++i) {
+    EXPECT_EQ(scanner.dependencies(dir / "a.obj"), expected);
+    EXPECT_EQ(scanner.dependencies(dir / "./b.obj"), expected);  // the same file, however written
+  }
+  EXPECT_EQ(scanner.files_scanned(), 3u);
+}
+
+TEST(ModelDependencyScanner, AModelThatCannotBeReadIsNotRememberedAsHavingNone) {
+  TempDir dir;
+  ModelDependencyScanner scanner;
+  EXPECT_THROW(scanner.dependencies(dir / "m.obj"), InputError);
+  std::ofstream(dir / "m.obj") << "v 0 0 0\n";
+  EXPECT_TRUE(scanner.dependencies(dir / "m.obj").empty());
+  EXPECT_EQ(scanner.files_scanned(), 1u);
+}
+
 }  // namespace
 }  // namespace farm
