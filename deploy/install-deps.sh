@@ -16,6 +16,8 @@ packages=(
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
   # command line, config, logging
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
+  # XML (the COLLADA files a job's models name)
+  libpugixml-dev
   # tests and benchmarks
   libgtest-dev libbenchmark-dev python3 python3-venv
   # the Python client test (stubs generated from proto/farm.proto by grpc_tools)

@@ -337,7 +337,7 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
   return job;
 }
 
-Job load_job(const fs::path& path, const JobLoadOptions& options) {
+std::string read_job_file(const fs::path& path) {
   const std::string file = path.string();
   auto fail = [&](const std::string& what) -> void {
     throw InputError(fmt::format("{}: {}", file, what));
@@ -359,7 +359,11 @@ Job load_job(const fs::path& path, const JobLoadOptions& options) {
   if (!in) fail(fmt::format("cannot open the job file: {}", std::generic_category().message(errno)));
   const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) fail("cannot read the job file");
-  return parse_job(text, path, options);
+  return text;
+}
+
+Job load_job(const fs::path& path, const JobLoadOptions& options) {
+  return parse_job(read_job_file(path), path, options);
 }
 
 }  // namespace farm

@@ -55,5 +55,8 @@ Job load_job(const std::filesystem::path& path, const JobLoadOptions& options = 
 // Same, from JSON text; `path` names the file in messages and anchors relative model paths.
 Job parse_job(const std::string& json_text, const std::filesystem::path& path,
               const JobLoadOptions& options = {});
+// The text of the job file `path`, read as load_job reads it (a regular file, at most 16 MiB),
+// for callers that send the text on as well as parse it: then the file is read once.
+std::string read_job_file(const std::filesystem::path& path);
 
 }  // namespace farm

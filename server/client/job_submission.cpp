@@ -2,13 +2,10 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "renderer/scene/input_error.h"
 #include "server/client/model_dependencies.h"
-#include "server/common/read_whole_file.h"
 #include "server/common/sha256.h"
 
 namespace farm {
@@ -23,7 +20,9 @@ bool any_override(const RenderOverrides& o) {
 // The job text with model paths relative to the root and the overrides written in.
 std::string rewritten_job_text(const std::string& text, const Job& job, const fs::path& root,
                                const RenderOverrides& o) {
-  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(text);  // load_job accepted it already
+  // parse_job accepted the text already; it is parsed again here, once, because only an
+  // ordered document writes the keys back in the user's order.
+  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(text);
   auto& objects = doc["scene"]["objects"];
   for (std::size_t i = 0; i < objects.size(); ++i) {
     objects[i]["file"] = job.scene.objects[i].file.lexically_relative(root).generic_string();
@@ -51,9 +50,10 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
 JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions& load,
                                   const RenderOverrides& overrides) {
   JobSubmission out;
-  out.job = load_job(job_file, load);
+  // Read once: the same text is parsed here and sent.
+  const std::string text = read_job_file(job_file);
+  out.job = parse_job(text, job_file, load);
   apply_overrides(out.job, overrides);
-  const std::string text = read_whole_file(job_file, "job file");
   const fs::path job_dir = fs::weakly_canonical(fs::absolute(job_file).parent_path());
   const fs::path root = load.asset_root.empty() ? job_dir : fs::weakly_canonical(fs::absolute(load.asset_root));
 
@@ -71,14 +71,19 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
     }
     by_path.emplace(relative.generic_string(), file);
   };
+  // Objects that share a model (a field of 100 cows is one cow.dae) share one scan of it.
+  ModelDependencyScanner scanner;
   for (const JobObject& object : out.job.scene.objects) {
     add(object.file, job_file);
-    for (const fs::path& dependency : model_dependencies(object.file)) add(dependency, object.file);
+    for (const fs::path& dependency : scanner.dependencies(object.file)) add(dependency, object.file);
   }
+  out.files_scanned = scanner.files_scanned();
+  // by_path holds each file once, so each is hashed once.
   for (const auto& [path, file] : by_path) {
     v1::AssetRef* ref = out.spec.add_assets();
     ref->set_path(path);
     ref->set_sha256(sha256_file_hex(file));
+    ++out.files_hashed;
     ref->set_size(fs::file_size(file));
     out.files.emplace(ref->sha256(), file);
   }

@@ -7,6 +7,7 @@
 // --asset-root says otherwise). When the job's own folder is that root and nothing is
 // overridden, the job text goes as it is, byte for byte; otherwise its model paths are rewritten
 // relative to the root and the overrides written into it.
+#include <cstddef>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -21,6 +22,10 @@ struct JobSubmission {
   v1::JobSpec spec;
   Job job;                                          // the job as parsed here, overrides applied
   std::map<std::string, std::filesystem::path> files;  // sha256 -> a local file with those bytes
+  // What building it read, so the cost stays visible: each model and material library is scanned
+  // for the files it names once, and each file hashed once, however many objects name it.
+  std::size_t files_scanned = 0;
+  std::size_t files_hashed = 0;
 };
 
 // Throws InputError (naming the file and the place) for a bad job or a model that references a

@@ -1,16 +1,14 @@
 #include "server/client/model_dependencies.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <string>
 
+#include "server/client/collada_images.h"
 #include "server/common/read_whole_file.h"
 
 namespace farm {
@@ -57,9 +55,9 @@ void add_reference(const fs::path& model, std::string reference, std::vector<fs:
   if (fs::is_regular_file(file, ec)) out.push_back(file);
 }
 
-// OBJ: `mtllib a.mtl [b.mtl ...]`; MTL: map_Kd, bump, disp, ... whose last word is the file.
-void obj_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  std::istringstream lines(read_whole_file(model, "model file"));
+// OBJ: `mtllib a.mtl [b.mtl ...]`.
+std::vector<fs::path> obj_material_libraries(const fs::path& model, const std::string& text) {
+  std::istringstream lines(text);
   std::string line;
   std::vector<fs::path> libraries;
   while (std::getline(lines, line)) {
@@ -70,19 +68,24 @@ void obj_dependencies(const fs::path& model, std::vector<fs::path>& out) {
     std::string name;
     while (words >> name) add_reference(model, name, libraries);
   }
-  for (const fs::path& library : libraries) {
-    out.push_back(library);
-    std::istringstream mtl(read_whole_file(library, "material library"));
-    while (std::getline(mtl, line)) {
-      std::istringstream words(line);
-      std::string key, word, last;
-      words >> key;
-      std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
-      if (key.rfind("map_", 0) != 0 && key != "bump" && key != "disp" && key != "decal" && key != "refl") continue;
-      while (words >> word) last = word;
-      add_reference(library, last, out);
-    }
+  return libraries;
+}
+
+// MTL: map_Kd, bump, disp, ... whose last word is the file.
+std::vector<fs::path> mtl_maps(const fs::path& library, const std::string& text) {
+  std::istringstream lines(text);
+  std::string line;
+  std::vector<fs::path> out;
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string key, word, last;
+    words >> key;
+    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (key.rfind("map_", 0) != 0 && key != "bump" && key != "disp" && key != "decal" && key != "refl") continue;
+    while (words >> word) last = word;
+    add_reference(library, last, out);
   }
+  return out;
 }
 
 void gltf_json_dependencies(const fs::path& model, const std::string& json_text, std::vector<fs::path>& out) {
@@ -99,8 +102,7 @@ void gltf_json_dependencies(const fs::path& model, const std::string& json_text,
 }
 
 // GLB: a 12-byte header, then chunks; the first is the JSON.
-void glb_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  const std::string bytes = read_whole_file(model, "model file");
+void glb_dependencies(const fs::path& model, const std::string& bytes, std::vector<fs::path>& out) {
   if (bytes.size() < 20) return;
   std::uint32_t length = 0, type = 0;
   std::memcpy(&length, bytes.data() + 12, 4);
@@ -109,34 +111,68 @@ void glb_dependencies(const fs::path& model, std::vector<fs::path>& out) {
   gltf_json_dependencies(model, bytes.substr(20, length), out);
 }
 
-// COLLADA: <init_from>path</init_from> inside <image> elements.
-void collada_dependencies(const fs::path& model, std::vector<fs::path>& out) {
-  const std::string text = read_whole_file(model, "model file");
-  static const std::regex init_from(R"(<init_from>\s*([^<]+?)\s*</init_from>)");
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), init_from); it != std::sregex_iterator(); ++it) {
-    add_reference(model, (*it)[1].str(), out);
-  }
+void sort_unique(std::vector<fs::path>& paths) {
+  std::sort(paths.begin(), paths.end());
+  paths.erase(std::unique(paths.begin(), paths.end()), paths.end());
 }
 
 }  // namespace
 
-std::vector<fs::path> model_dependencies(const fs::path& model) {
-  std::vector<fs::path> out;
+const std::vector<fs::path>& ModelDependencyScanner::dependencies(const fs::path& model) {
+  const fs::path key = model.lexically_normal();
+  if (const auto found = models_.find(key); found != models_.end()) return found->second;
+  // Stored only once the scan succeeded: a file that could not be read is not remembered as
+  // having no dependencies.
+  Paths found = scan_model(key);
+  sort_unique(found);
+  found.erase(std::remove(found.begin(), found.end(), key), found.end());
+  return models_.emplace(key, std::move(found)).first->second;
+}
+
+std::string ModelDependencyScanner::read(const fs::path& file, const char* what) {
+  std::string bytes = read_whole_file(file, what);
+  ++files_scanned_;
+  return bytes;
+}
+
+ModelDependencyScanner::Paths ModelDependencyScanner::scan_model(const fs::path& model) {
   const std::string ext = lower_extension(model);
+  Paths out;
   if (ext == ".obj") {
-    obj_dependencies(model, out);
+    out = scan_obj(model);
   } else if (ext == ".gltf") {
-    gltf_json_dependencies(model, read_whole_file(model, "model file"), out);
+    gltf_json_dependencies(model, read(model, "model file"), out);
   } else if (ext == ".glb") {
-    glb_dependencies(model, out);
+    glb_dependencies(model, read(model, "model file"), out);
   } else if (ext == ".dae") {
-    collada_dependencies(model, out);
+    for (const std::string& uri : collada_image_uris(read(model, "model file"))) {
+      add_reference(model, uri, out);
+    }
   }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  const fs::path self = model.lexically_normal();
-  out.erase(std::remove(out.begin(), out.end(), self), out.end());
   return out;
+}
+
+ModelDependencyScanner::Paths ModelDependencyScanner::scan_obj(const fs::path& model) {
+  Paths out = obj_material_libraries(model, read(model, "model file"));
+  const std::size_t libraries = out.size();
+  for (std::size_t i = 0; i < libraries; ++i) {
+    const Paths& maps = material_library_maps(out[i]);
+    out.insert(out.end(), maps.begin(), maps.end());
+  }
+  return out;
+}
+
+const ModelDependencyScanner::Paths& ModelDependencyScanner::material_library_maps(const fs::path& library) {
+  if (const auto found = material_libraries_.find(library); found != material_libraries_.end()) {
+    return found->second;
+  }
+  Paths maps = mtl_maps(library, read(library, "material library"));
+  return material_libraries_.emplace(library, std::move(maps)).first->second;
+}
+
+std::vector<fs::path> model_dependencies(const fs::path& model) {
+  ModelDependencyScanner scanner;
+  return scanner.dependencies(model);
 }
 
 }  // namespace farm

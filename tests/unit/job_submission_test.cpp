@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 
 #include "renderer/scene/input_error.h"
-#include "server/client/model_dependencies.h"
 #include "server/common/sha256.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
@@ -25,6 +24,26 @@ std::vector<std::string> asset_paths(const v1::JobSpec& spec) {
   std::vector<std::string> out;
   for (const v1::AssetRef& a : spec.assets()) out.push_back(a.path());
   return out;
+}
+
+// The error a submission refuses a model with: it names the model and the asset root.
+void expect_outside_root_error(const fs::path& job, const std::string& model) {
+  try {
+    make_job_submission(job, {}, {});
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(model), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("outside the asset root"), std::string::npos) << e.what();
+  }
+}
+
+// A job of `copies_each` objects of each model, side by side.
+std::string job_of_copies(const std::vector<std::string>& models, int copies_each) {
+  nlohmann::json objects = nlohmann::json::array();
+  for (int i = 0; i < copies_each; ++i) {
+    for (const std::string& model : models) objects.push_back({{"file", model}, {"translate", {i, 0, 0}}});
+  }
+  return nlohmann::json{{"version", 1}, {"scene", {{"objects", objects}}}}.dump();
 }
 
 TEST(JobSubmission, JobInItsOwnFolderGoesByteForByteWithItsModelAndMaterials) {
@@ -86,40 +105,39 @@ TEST(JobSubmission, AReferenceOutsideTheAssetRootIsRefusedNamingBoth) {
   }
 }
 
-TEST(ModelDependencies, ObjMaterialLibrariesAndTheirMapsThatExist) {
+TEST(JobSubmission, AColladaImageOutsideTheAssetRootIsRefusedAsAPathOrAFileUri) {
   TempDir dir;
-  std::ofstream(dir / "a.mtl") << "newmtl m\nKd 1 1 1\nmap_Kd -s 1 1 1 tex/wood.png\nmap_Ks missing.png\n";
-  std::ofstream(dir / "b.mtl") << "newmtl n\n";
-  fs::create_directories(dir / "tex");
-  std::ofstream(dir / "tex/wood.png") << "png";
-  std::ofstream(dir / "m.obj") << "mtllib a.mtl b.mtl\nv 0 0 0\n";
-  const auto deps = model_dependencies(dir / "m.obj");
-  const std::vector<fs::path> expected{(dir / "a.mtl").lexically_normal(), (dir / "b.mtl").lexically_normal(),
-                                       (dir / "tex/wood.png").lexically_normal()};
-  EXPECT_EQ(deps, expected);
+  fs::create_directories(dir / "job");
+  std::ofstream(dir / "outside.png") << "png";
+  const fs::path job = dir.write("job/j.json", R"({"version": 1, "scene": {"objects": [{"file": "m.dae"}]}})");
+  std::ofstream(dir / "job/m.dae") << "<COLLADA><library_images><image id=\"i\"><init_from>../outside.png"
+                                      "</init_from></image></library_images></COLLADA>";
+  expect_outside_root_error(job, "m.dae");
+  std::ofstream(dir / "job/m.dae") << "<COLLADA><library_images><image id=\"i\"><init_from><ref>file://"
+                                   << (dir / "outside.png").generic_string()
+                                   << "</ref></init_from></image></library_images></COLLADA>";
+  expect_outside_root_error(job, "m.dae");
 }
 
-TEST(ModelDependencies, GltfExternalBuffersAndImagesButNotDataUris) {
-  TempDir dir;
-  std::ofstream(dir / "mesh data.bin") << "bin";
-  std::ofstream(dir / "albedo.png") << "png";
-  std::ofstream(dir / "m.gltf") << R"({"asset": {"version": "2.0"},
-      "buffers": [{"uri": "mesh%20data.bin", "byteLength": 3}, {"uri": "data:application/octet-stream;base64,AAAA"}],
-      "images": [{"uri": "albedo.png"}, {"uri": "https://example.com/x.png"}]})";
-  const auto deps = model_dependencies(dir / "m.gltf");
-  const std::vector<fs::path> expected{(dir / "albedo.png").lexically_normal(), (dir / "mesh data.bin").lexically_normal()};
-  EXPECT_EQ(deps, expected);
-  // The test GLB embeds everything.
-  EXPECT_TRUE(model_dependencies(fs::path(FARM_TEST_DATA) / "quad_scene.glb").empty());
-}
-
-TEST(ModelDependencies, ColladaImages) {
+TEST(JobSubmission, AHundredObjectsOfOneModelReadItsReferencesOnceAndHashEachFileOnce) {
   TempDir dir;
   std::ofstream(dir / "skin.png") << "png";
-  std::ofstream(dir / "m.dae") << "<COLLADA><library_images><image id=\"i\"><init_from>skin.png</init_from></image>"
-                                  "</library_images><surface><init_from>i</init_from></surface></COLLADA>";
-  EXPECT_EQ(model_dependencies(dir / "m.dae"), std::vector<fs::path>{(dir / "skin.png").lexically_normal()});
-  EXPECT_TRUE(model_dependencies(fs::path(FARM_SHARED_ASSETS) / "dae/cow.dae").empty());
+  std::ofstream(dir / "cow.dae") << "<COLLADA><library_images><image id=\"i\"><init_from>skin.png</init_from>"
+                                    "</image></library_images></COLLADA>";
+  const fs::path job = dir.write("j.json", job_of_copies({"cow.dae"}, 100));
+  const JobSubmission s = make_job_submission(job, {}, {});
+  EXPECT_EQ(s.job.scene.objects.size(), 100u);
+  EXPECT_EQ(asset_paths(s.spec), (std::vector<std::string>{"cow.dae", "skin.png"}));
+  EXPECT_EQ(s.files_scanned, 1u);
+  EXPECT_EQ(s.files_hashed, 2u);
+}
+
+TEST(JobSubmission, AMalformedColladaModelGoesWithoutReferencesForItsLoaderToReport) {
+  TempDir dir;
+  std::ofstream(dir / "skin.png") << "png";
+  std::ofstream(dir / "m.dae") << "<COLLADA><library_images><image id=\"i\"><init_from>skin.png</init_from>";
+  const JobSubmission s = make_job_submission(dir.write("j.json", job_of_copies({"m.dae"}, 1)), {}, {});
+  EXPECT_EQ(asset_paths(s.spec), std::vector<std::string>{"m.dae"});
 }
 
 }  // namespace
