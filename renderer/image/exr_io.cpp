@@ -10,7 +10,6 @@
 #include <fmt/format.h>
 
 #include <Imath/half.h>
-#include <functional>
 #include <mutex>
 #include <stdexcept>
 #include <string>
@@ -23,48 +22,43 @@
 namespace farm {
 namespace {
 
-// One EXR channel and how to read its value out of a TileBuffer pixel.
-struct ChannelSpec {
+// One EXR channel as OpenEXR sees it in a TileBuffer: the channel's value in the first pixel and
+// the distance to the next pixel. OpenEXR reads and writes the buffer's own arrays through these
+// (converting to and from half itself, as Imath::half does), so no planar copy is made.
+struct ChannelSlice {
   const char* name;
-  bool always_float;
-  std::function<float(const TileBuffer&, int, int)> get;
-  std::function<void(TileBuffer&, int, int, float)> set;
+  bool always_float;   // depth and bvh_cost keep full precision in a half EXR
+  float* first;        // the value at the rect's top-left pixel
+  std::size_t stride;  // bytes from one pixel to the next
 };
 
-std::vector<ChannelSpec> channels_for(const AovSet& aovs) {
-  std::vector<ChannelSpec> specs;
+std::vector<ChannelSlice> channel_slices(TileBuffer& t) {
+  const Rect& r = t.rect();
+  const int x = r.x0, y = r.y0;
+  std::vector<ChannelSlice> slices;
   const char* rgba_names[] = {"R", "G", "B", "A"};
-  for (int c = 0; c < 4; ++c) {
-    specs.push_back({rgba_names[c], false,
-                     [c](const TileBuffer& t, int x, int y) { return t.rgba(x, y)[c]; },
-                     [c](TileBuffer& t, int x, int y, float v) { t.rgba(x, y)[c] = v; }});
-  }
-  if (aovs.depth) {
-    specs.push_back({"Z", true, [](const TileBuffer& t, int x, int y) { return t.depth(x, y); },
-                     [](TileBuffer& t, int x, int y, float v) { t.depth(x, y) = v; }});
-  }
+  for (int c = 0; c < 4; ++c) slices.push_back({rgba_names[c], false, &t.rgba(x, y)[c], sizeof(glm::vec4)});
+  const AovSet& aovs = t.aovs();
+  if (aovs.depth) slices.push_back({"Z", true, &t.depth(x, y), sizeof(float)});
   if (aovs.normal) {
     const char* names[] = {"N.X", "N.Y", "N.Z"};
-    for (int c = 0; c < 3; ++c) {
-      specs.push_back({names[c], false,
-                       [c](const TileBuffer& t, int x, int y) { return t.normal(x, y)[c]; },
-                       [c](TileBuffer& t, int x, int y, float v) { t.normal(x, y)[c] = v; }});
-    }
+    for (int c = 0; c < 3; ++c) slices.push_back({names[c], false, &t.normal(x, y)[c], sizeof(glm::vec3)});
   }
   if (aovs.albedo) {
     const char* names[] = {"albedo.R", "albedo.G", "albedo.B"};
-    for (int c = 0; c < 3; ++c) {
-      specs.push_back({names[c], false,
-                       [c](const TileBuffer& t, int x, int y) { return t.albedo(x, y)[c]; },
-                       [c](TileBuffer& t, int x, int y, float v) { t.albedo(x, y)[c] = v; }});
-    }
+    for (int c = 0; c < 3; ++c) slices.push_back({names[c], false, &t.albedo(x, y)[c], sizeof(glm::vec3)});
   }
-  if (aovs.bvh_cost) {
-    specs.push_back({"bvh_cost", true,
-                     [](const TileBuffer& t, int x, int y) { return t.bvh_cost(x, y); },
-                     [](TileBuffer& t, int x, int y, float v) { t.bvh_cost(x, y) = v; }});
-  }
-  return specs;
+  if (aovs.bvh_cost) slices.push_back({"bvh_cost", true, &t.bvh_cost(x, y), sizeof(float)});
+  return slices;
+}
+
+// A float slice over `slice` for OpenEXR, which addresses pixel (x, y) as base + x * xStride +
+// y * yStride in data-window coordinates: the base is moved back from the rect's first pixel.
+Imf::Slice float_slice(const ChannelSlice& slice, const Rect& r, double fill = 0.0) {
+  const std::size_t row = slice.stride * static_cast<std::size_t>(r.width());
+  char* base = reinterpret_cast<char*>(slice.first) - static_cast<std::ptrdiff_t>(r.x0) * static_cast<std::ptrdiff_t>(slice.stride) -
+               static_cast<std::ptrdiff_t>(r.y0) * static_cast<std::ptrdiff_t>(row);
+  return Imf::Slice(Imf::FLOAT, base, slice.stride, row, 1, 1, fill);
 }
 
 }  // namespace
@@ -72,42 +66,33 @@ std::vector<ChannelSpec> channels_for(const AovSet& aovs) {
 void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPixelType type) {
   const Rect& r = image.rect();
   if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
-  const int width = r.width(), height = r.height();
-  const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  const int height = r.height();
 
   Imf::Header header(Imath::Box2i({r.x0, r.y0}, {r.x1 - 1, r.y1 - 1}),
                      Imath::Box2i({r.x0, r.y0}, {r.x1 - 1, r.y1 - 1}));
   header.compression() = Imf::ZIP_COMPRESSION;
   header.zipCompressionLevel() = 1;  // 2% larger than the default level, at about half the time
   Imf::FrameBuffer frame;
-
-  // Planar copies of each channel in the pixel type it is stored as.
-  const std::vector<ChannelSpec> specs = channels_for(image.aovs());
-  std::vector<std::vector<float>> float_planes;
+  // Float channels are written straight from the buffer. OpenEXR's OutputFile does not convert
+  // float to half, so half channels get a plane each, converted here by Imath::half.
   std::vector<std::vector<Imath::half>> half_planes;
-  float_planes.reserve(specs.size());
-  half_planes.reserve(specs.size());
-  // Slice base pointers are expressed relative to the data window origin, as OpenEXR expects.
-  const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(r.y0) * width + r.x0;
-  for (const ChannelSpec& spec : specs) {
-    const bool as_float = spec.always_float || type == ExrPixelType::Float;
-    header.channels().insert(spec.name, Imf::Channel(as_float ? Imf::FLOAT : Imf::HALF));
+  const std::size_t width = static_cast<std::size_t>(r.width());
+  // Slices are non-const in OpenEXR's API; a file being written only reads through them.
+  for (const ChannelSlice& slice : channel_slices(const_cast<TileBuffer&>(image))) {
+    const bool as_float = slice.always_float || type == ExrPixelType::Float;
+    header.channels().insert(slice.name, Imf::Channel(as_float ? Imf::FLOAT : Imf::HALF));
     if (as_float) {
-      std::vector<float>& plane = float_planes.emplace_back(pixels);
-      for (int y = r.y0; y < r.y1; ++y)
-        for (int x = r.x0; x < r.x1; ++x)
-          plane[static_cast<std::size_t>((y - r.y0) * width + (x - r.x0))] = spec.get(image, x, y);
-      frame.insert(spec.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(plane.data() - origin),
-                                         sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
-    } else {
-      std::vector<Imath::half>& plane = half_planes.emplace_back(pixels);
-      for (int y = r.y0; y < r.y1; ++y)
-        for (int x = r.x0; x < r.x1; ++x)
-          plane[static_cast<std::size_t>((y - r.y0) * width + (x - r.x0))] = Imath::half(spec.get(image, x, y));
-      frame.insert(spec.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(plane.data() - origin),
-                                         sizeof(Imath::half),
-                                         sizeof(Imath::half) * static_cast<std::size_t>(width)));
+      frame.insert(slice.name, float_slice(slice, r));
+      continue;
     }
+    std::vector<Imath::half>& plane = half_planes.emplace_back(width * static_cast<std::size_t>(height));
+    const char* from = reinterpret_cast<const char*>(slice.first);
+    for (std::size_t i = 0; i < plane.size(); ++i, from += slice.stride) {
+      plane[i] = Imath::half(*reinterpret_cast<const float*>(from));
+    }
+    const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(r.y0) * r.width() + r.x0;
+    frame.insert(slice.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(plane.data() - origin),
+                                        sizeof(Imath::half), sizeof(Imath::half) * width));
   }
 
   // A frame's line blocks are compressed on OpenEXR's pool, one thread a core: compression is most
@@ -130,8 +115,6 @@ TileBuffer read_exr(const std::filesystem::path& file) {
     Imf::InputFile in(file.c_str());
     const Imath::Box2i dw = in.header().dataWindow();
     const Rect r{dw.min.x, dw.min.y, dw.max.x + 1, dw.max.y + 1};
-    const int width = r.width();
-    const std::size_t pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(r.height());
 
     AovSet present;
     const Imf::ChannelList& channels = in.header().channels();
@@ -140,24 +123,14 @@ TileBuffer read_exr(const std::filesystem::path& file) {
     if (channels.findChannel("albedo.R")) present.albedo = true;
     if (channels.findChannel("bvh_cost")) present.bvh_cost = true;
 
+    // Channels the file lacks read as OpenEXR's fill value: alpha 1, the others 0.
     TileBuffer image(r, present);
-    std::vector<ChannelSpec> specs = channels_for(present);
-    std::vector<std::vector<float>> planes;
-    planes.reserve(specs.size());
     Imf::FrameBuffer frame;
-    const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(r.y0) * width + r.x0;
-    for (const ChannelSpec& spec : specs) {
-      std::vector<float>& plane = planes.emplace_back(pixels, spec.name[0] == 'A' ? 1.0f : 0.0f);
-      frame.insert(spec.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(plane.data() - origin),
-                                         sizeof(float), sizeof(float) * static_cast<std::size_t>(width),
-                                         1, 1, spec.name[0] == 'A' ? 1.0 : 0.0));
+    for (const ChannelSlice& slice : channel_slices(image)) {
+      frame.insert(slice.name, float_slice(slice, r, slice.name[0] == 'A' ? 1.0 : 0.0));
     }
     in.setFrameBuffer(frame);
     in.readPixels(dw.min.y, dw.max.y);
-    for (std::size_t c = 0; c < specs.size(); ++c)
-      for (int y = r.y0; y < r.y1; ++y)
-        for (int x = r.x0; x < r.x1; ++x)
-          specs[c].set(image, x, y, planes[c][static_cast<std::size_t>((y - r.y0) * width + (x - r.x0))]);
     return image;
   } catch (const Iex::BaseExc& e) {
     throw std::runtime_error(fmt::format("{}: cannot read EXR: {}", file.string(), e.what()));

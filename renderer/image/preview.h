@@ -4,12 +4,16 @@
 #include <cstdint>
 #include <filesystem>
 
+#include "renderer/image/rgb8_image.h"
 #include "renderer/image/tile_buffer.h"
 
 namespace farm {
 
 float linear_to_srgb(float linear);      // the sRGB transfer function, input clamped to [0, 1]
-std::uint8_t to_srgb8(float linear);
+std::uint8_t to_srgb8(float linear);        // rounded to 8 bits: what previews hold
+
+// The film's RGB as a preview holds it: every channel through to_srgb8, rows top to bottom.
+Rgb8Image to_srgb8_image(const TileBuffer& image);
 
 // Writes to a temporary file beside `file` and renames it into place. Errors name `file`.
 void write_preview(const TileBuffer& image, const std::filesystem::path& file);

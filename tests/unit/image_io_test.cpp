@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <limits>
+
 #include <ImfChannelList.h>
 #include <ImfHeader.h>
 #include <glm/geometric.hpp>
@@ -99,6 +102,40 @@ TEST(Srgb, TransferFunctionMatchesTheStandardAndClamps) {
   EXPECT_EQ(to_srgb8(7.0f), 255);
   EXPECT_EQ(to_srgb8(-1.0f), 0);
   EXPECT_EQ(to_srgb8(std::nanf("")), 0);
+}
+
+// Previews are encoded by table (fast); every code must still be to_srgb8's. Floats in [0, 1]
+// are sampled every 997th bit pattern, and wherever the code changes between two samples every
+// float between them is checked: each step of the table, exhaustively around it.
+TEST(Srgb, PreviewEncodingIsToSrgb8ForEveryFloatAroundEachStep) {
+  const std::uint32_t one = std::bit_cast<std::uint32_t>(1.0f);
+  std::vector<float> values;
+  std::uint32_t previous = 0;
+  for (std::uint32_t bits = 0; bits <= one; bits += 997) {
+    if (to_srgb8(std::bit_cast<float>(bits)) != to_srgb8(std::bit_cast<float>(previous))) {
+      for (std::uint32_t b = previous; b <= bits; ++b) values.push_back(std::bit_cast<float>(b));
+    } else {
+      values.push_back(std::bit_cast<float>(bits));
+    }
+    previous = bits;
+  }
+  for (float v : {1.0f, 2.0f, -0.5f, 0.0f, -0.0f, std::numeric_limits<float>::infinity(),
+                  -std::numeric_limits<float>::infinity(), std::nanf("")}) {
+    values.push_back(v);
+  }
+  const int width = 1024;
+  const int height = static_cast<int>((values.size() + width - 1) / width);
+  TileBuffer film(Rect{0, 0, width, height}, AovSet{});
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    film.rgba(static_cast<int>(i % width), static_cast<int>(i / width)) = glm::vec4(values[i], values[i], values[i], 1.0f);
+  }
+  const Rgb8Image encoded = to_srgb8_image(film);
+  std::size_t mismatches = 0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (encoded.pixels[3 * i] != to_srgb8(values[i])) ++mismatches;
+  }
+  EXPECT_EQ(mismatches, 0u) << "of " << values.size() << " values";
+  EXPECT_GT(values.size(), 1'000'000u);
 }
 
 TEST_F(ImageIoTest, FailedWriteLeavesNeitherTargetNorTemporaryFile) {
