@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "renderer/scene/input_error.h"
-#include "server/bench/bench_stats.h"
+#include "server/bench/bench_support.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
@@ -123,15 +123,8 @@ void compare_setups(const FarmBenchOptions& o, const fs::path& dir, const JobSub
 }  // namespace
 
 void run_farm_bench(const FarmBenchOptions& o) {
-  const fs::path dir = fs::temp_directory_path() / fmt::format("farm-bench-{}", ::getpid());
-  fs::create_directories(dir);
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() {
-      std::error_code ignored;
-      fs::remove_all(dir, ignored);
-    }
-  } cleanup{dir};
+  const bench::ScratchDir scratch("bench");
+  const fs::path& dir = scratch.path();
 
   RenderOverrides overrides;
   overrides.width = o.width;

@@ -8,7 +8,7 @@
 #include "renderer/render_frame.h"
 #include "renderer/scene/input_error.h"
 #include "server/bench/bench_scenes.h"
-#include "server/bench/bench_stats.h"
+#include "server/bench/bench_support.h"
 
 namespace farm {
 namespace {

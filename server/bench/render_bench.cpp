@@ -1,7 +1,6 @@
 #include "server/bench/render_bench.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <fstream>
@@ -14,7 +13,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
-#include "server/bench/bench_stats.h"
+#include "server/bench/bench_support.h"
 #include "server/common/child_process.h"
 #include "server/common/read_whole_file.h"
 
@@ -141,15 +140,8 @@ void run_render_bench(const RenderBenchOptions& o) {
   }
   BenchJob cow{"cow", o.cow_job, {o.asset_root}};
   const Job cow_job = load_job(cow.file, cow.load);
-  const fs::path dir = fs::temp_directory_path() / fmt::format("farm-bench-render-{}", ::getpid());
-  fs::create_directories(dir);
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() {
-      std::error_code ignored;
-      fs::remove_all(dir, ignored);
-    }
-  } cleanup{dir};
+  const bench::ScratchDir scratch("bench-render");
+  const fs::path& dir = scratch.path();
   fmt::print("farm bench render ({} build, {} hardware threads): the whole `farm render` command "
              "(process start to exit) vs the bare engine frame on the same scene\n",
              FARM_BUILD_TYPE, std::thread::hardware_concurrency());

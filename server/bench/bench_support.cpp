@@ -1,4 +1,7 @@
-#include "server/bench/bench_stats.h"
+#include "server/bench/bench_support.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -22,6 +25,16 @@ std::string self_binary() {
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (ec) throw std::runtime_error("cannot find the farm binary (/proc/self/exe)");
   return self.string();
+}
+
+ScratchDir::ScratchDir(const std::string& what)
+    : path_(std::filesystem::temp_directory_path() / fmt::format("farm-{}-{}", what, ::getpid())) {
+  std::filesystem::create_directories(path_);
+}
+
+ScratchDir::~ScratchDir() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
 }
 
 }  // namespace farm::bench
