@@ -2,6 +2,7 @@
 
 #include <memory>
 
+#include "renderer/scene/job_limits.h"
 #include "server/bench/farm_bench.h"
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
@@ -20,6 +21,16 @@ void add_runner(CommandTable& commands, CLI::App* command, std::shared_ptr<Optio
   });
 }
 
+// The rendered image's size; the benchmarks' defaults differ, the job's limits do not.
+void add_image_size_options(CLI::App& command, int& width, int& height) {
+  command.add_option("--width", width, "Image width")
+      ->check(CLI::Range(1, kMaxImageSide))
+      ->capture_default_str();
+  command.add_option("--height", height, "Image height")
+      ->check(CLI::Range(1, kMaxImageSide))
+      ->capture_default_str();
+}
+
 void add_raster_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<RasterBenchOptions>();
   CLI::App* raster = bench.add_subcommand(
@@ -28,7 +39,7 @@ void add_raster_bench(CLI::App& bench, CommandTable& commands) {
   raster->add_option("--model", o->model, "The cow model (default ../shared/assets/dae/cow.dae)");
   raster->add_option("--threads", o->threads, "Thread counts to measure")
       ->delimiter(',')
-      ->check(CLI::Range(1, 1024))
+      ->check(CLI::Range(1, kMaxThreads))
       ->capture_default_str();
   raster->add_option("--frames", o->frames, "Timed frames per configuration")
       ->check(CLI::Range(1, 1000))
@@ -41,12 +52,7 @@ void add_raster_bench(CLI::App& bench, CommandTable& commands) {
       ->capture_default_str();
   raster->add_flag("--oversubscribe", o->oversubscribe,
                    "Also run thread counts above the number of cores");
-  raster->add_option("--width", o->width, "Image width")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
-  raster->add_option("--height", o->height, "Image height")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
+  add_image_size_options(*raster, o->width, o->height);
   add_runner(commands, raster, o, run_raster_bench);
 }
 
@@ -72,16 +78,11 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
                    "The lab's assets folder, for CBbunny (default ../shared/assets)");
   path->add_option("--threads", o->threads, "Thread counts (default: 1 and all)")
       ->delimiter(',')
-      ->check(CLI::Range(1, 1024));
+      ->check(CLI::Range(1, kMaxThreads));
   path->add_option("--spp", o->spp, "Samples per pixel")
       ->check(CLI::Range(1, 65536))
       ->capture_default_str();
-  path->add_option("--width", o->width, "Image width")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
-  path->add_option("--height", o->height, "Image height")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
+  add_image_size_options(*path, o->width, o->height);
   path->add_option("--scene", o->scene, "Which scene: cornell, cbbunny or all")
       ->check(CLI::IsMember({"cornell", "cbbunny", "all"}))
       ->capture_default_str();
@@ -103,12 +104,7 @@ void add_farm_bench(CLI::App& bench, CommandTable& commands) {
   farm->add_option("--spp", o->spp, "Samples per pixel")
       ->check(CLI::Range(1, 65536))
       ->capture_default_str();
-  farm->add_option("--width", o->width, "Image width")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
-  farm->add_option("--height", o->height, "Image height")
-      ->check(CLI::Range(1, 16384))
-      ->capture_default_str();
+  add_image_size_options(*farm, o->width, o->height);
   farm->add_option("--repeats", o->repeats, "Renders per configuration (median reported)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
@@ -122,7 +118,7 @@ void add_farm_bench(CLI::App& bench, CommandTable& commands) {
       ->capture_default_str();
   farm->add_option("--two-worker-threads", o->two_worker_threads,
                    "--threads of each worker in (c) (0: all cores each, as `farm worker` defaults)")
-      ->check(CLI::Range(0, 1024))
+      ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   farm->add_option("--tiny-jobs", o->tiny_jobs, "Tiny jobs to submit")
       ->check(CLI::Range(1, 100000))

@@ -14,6 +14,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/cli/job_file_options.h"
 #include "server/cli/progress_bar.h"
@@ -159,7 +160,7 @@ void add_render_command(CLI::App& app, CommandTable& commands) {
   add_job_file_options(*render, o->job_file, o->load);
   add_render_override_options(*render, o->overrides);
   render->add_option("--threads", o->overrides.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 1024));
+      ->check(CLI::Range(0, kMaxThreads));
   render->add_option("--out", o->overrides.image, "EXR output path (replaces output.image)");
   render->add_option_function<std::string>(
       "--preview",

@@ -19,7 +19,9 @@
 
 #include "proto/farm.grpc.pb.h"
 
+#include "renderer/render_settings.h"
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
 
 namespace farm {
 
@@ -71,7 +73,7 @@ class Registration {
         v1::RegisterWorkerRequest request;
         request.set_address(address_);
         request.set_threads(threads_);
-        for (const char* e : {"raster", "whitted", "path"}) request.add_engines(e);
+        for (std::string_view e : kEngineNames) request.add_engines(std::string(e));
         char host[256] = {};
         ::gethostname(host, sizeof host - 1);
         request.set_hostname(host);
@@ -176,7 +178,7 @@ void add_worker_command(CLI::App& app, CommandTable& commands) {
                      "printed as 'worker listening on HOST:PORT')")
       ->required();
   worker->add_option("--threads", o->threads, "Render threads shared by all calls (0 = all cores)")
-      ->check(CLI::Range(0, 1024))
+      ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   worker->add_option("--scheduler", o->scheduler,
                      "Scheduler HOST:PORT to fetch assets this worker lacks from (by SHA-256); "
