@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include "renderer/scene/input_error.h"
 #include "server/cli/bench_command.h"
@@ -18,6 +19,7 @@
 #include "server/cli/status_command.h"
 #include "server/cli/submit_command.h"
 #include "server/cli/validate_command.h"
+#include "server/cli/version.h"
 #include "server/cli/watch_command.h"
 #include "server/cli/worker_command.h"
 #include "server/common/service_error.h"
@@ -45,7 +47,7 @@ constexpr const char* kOverview =
 int main(int argc, char** argv) {
   CLI::App app{kOverview};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "farm 0.1.0");
+  app.set_version_flag("--version", "farm " + std::string(farm::kFarmVersion));
 
   farm::CommandTable commands;
   farm::add_render_command(app, commands);

@@ -22,6 +22,7 @@
 #include "renderer/render_settings.h"
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
+#include "server/cli/version.h"
 
 namespace farm {
 
@@ -77,7 +78,7 @@ class Registration {
         char host[256] = {};
         ::gethostname(host, sizeof host - 1);
         request.set_hostname(host);
-        request.set_version("0.1.0");
+        request.set_version(std::string(kFarmVersion));
         v1::RegisterWorkerResponse response;
         const grpc::Status status = stub_->RegisterWorker(&context, request, &response);
         if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) return;
