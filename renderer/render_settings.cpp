@@ -3,12 +3,8 @@
 namespace farm {
 
 std::string_view to_string(EngineKind e) {
-  switch (e) {
-    case EngineKind::Raster: return "raster";
-    case EngineKind::Whitted: return "whitted";
-    case EngineKind::Path: return "path";
-  }
-  return "?";
+  const auto i = static_cast<std::size_t>(e);
+  return i < kEngineNames.size() ? kEngineNames[i] : "?";
 }
 
 std::string_view to_string(AccelKind a) {
@@ -22,8 +18,8 @@ std::string_view to_string(AccelKind a) {
 }
 
 std::optional<EngineKind> engine_from_string(std::string_view s) {
-  for (EngineKind e : {EngineKind::Raster, EngineKind::Whitted, EngineKind::Path}) {
-    if (to_string(e) == s) return e;
+  for (std::size_t i = 0; i < kEngineNames.size(); ++i) {
+    if (kEngineNames[i] == s) return static_cast<EngineKind>(i);
   }
   return std::nullopt;
 }

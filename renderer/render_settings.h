@@ -1,5 +1,6 @@
 #pragma once
 // How to render: the job's `render` block plus the AOVs asked for in `output`.
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -10,6 +11,9 @@
 namespace farm {
 
 enum class EngineKind { Raster, Whitted, Path };
+// Every engine's name as job files and the command line spell it, in EngineKind's order: the one
+// list that to_string, engine_from_string, the job parser's messages and `farm`'s checks share.
+inline constexpr std::array<std::string_view, 3> kEngineNames = {"raster", "whitted", "path"};
 enum class AccelKind { Bvh, BvhMedian, Naive, Embree };
 // How the path tracer finds light: next-event estimation combined with BSDF sampling by MIS
 // (the default), or BSDF sampling alone (a reference for checking MIS; point lights, which

@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/scene/json_reader.h"
 
 namespace farm {
@@ -20,7 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kMaxImageSide = 16384;
 constexpr std::uintmax_t kMaxJobFileBytes = 16u << 20;  // job files are small; refuse to slurp huge ones
 constexpr std::size_t kMaxShownText = 64;
 
@@ -217,7 +217,6 @@ std::string names_of(const Enum (&values)[N]) {
   return join_alternatives(names);
 }
 
-constexpr EngineKind kEngines[] = {EngineKind::Raster, EngineKind::Whitted, EngineKind::Path};
 constexpr AccelKind kAccels[] = {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive,
                                  AccelKind::Embree};
 
@@ -228,16 +227,16 @@ void parse_render(const JsonValue& v, RenderSettings& r) {
   if (auto x = obj.get("engine")) {
     const std::string s = x->string();
     const auto e = engine_from_string(s);
-    if (!e) x->fail(fmt::format("unknown engine '{}' (expected {})", shown(s), names_of(kEngines)));
+    if (!e) x->fail(fmt::format("unknown engine '{}' (expected {})", shown(s), join_alternatives({kEngineNames.begin(), kEngineNames.end()})));
     r.engine = *e;
   }
   if (auto x = obj.get("width")) r.width = x->int32(1, kMaxImageSide);
   if (auto x = obj.get("height")) r.height = x->int32(1, kMaxImageSide);
-  if (auto x = obj.get("spp")) r.spp = x->int32(1, kIntMax);
+  if (auto x = obj.get("spp")) r.spp = x->int32(1, kMaxSpp);
   if (auto x = obj.get("max_depth")) r.max_depth = x->int32(-1, kIntMax);
   if (auto x = obj.get("seed")) r.seed = x->unsigned_integer();
-  if (auto x = obj.get("tile_size")) r.tile_size = x->int32(1, kIntMax);
-  if (auto x = obj.get("threads")) r.threads = x->int32(0, kIntMax);
+  if (auto x = obj.get("tile_size")) r.tile_size = x->int32(1, kMaxTileSize);
+  if (auto x = obj.get("threads")) r.threads = x->int32(0, kMaxThreads);
   if (auto x = obj.get("accel")) {
     const std::string s = x->string();
     const auto a = accel_from_string(s);

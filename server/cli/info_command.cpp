@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 
 #include <glm/vec3.hpp>
+#include <memory>
 
 #include "renderer/scene/scene_builder.h"
+#include "server/cli/job_file_options.h"
 
 namespace farm {
 namespace {
@@ -73,6 +75,23 @@ void run_info_command(const std::filesystem::path& file, const JobLoadOptions& l
   } else {
     print_model(file);
   }
+}
+
+void add_info_command(CLI::App& app, CommandTable& commands) {
+  struct Options {
+    std::filesystem::path file;
+    JobLoadOptions load;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* info = app.add_subcommand("info", "Print a model's or a job's statistics");
+  info->add_option("file", o->file, "Model (.dae .obj .ply .gltf .glb) or job (.json)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  add_asset_root_option(*info, o->load);
+  commands.add(info, [o] {
+    run_info_command(o->file, o->load);
+    return 0;
+  });
 }
 
 }  // namespace farm

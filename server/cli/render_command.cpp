@@ -13,8 +13,11 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
+#include "server/cli/job_file_options.h"
 #include "server/cli/progress_bar.h"
+#include "server/cli/render_override_options.h"
 #include "server/cli/validate_command.h"
 #include "server/client/job_submission.h"
 #include "server/embedded/embedded_farm.h"
@@ -131,6 +134,33 @@ void run_render_command(const RenderCommandOptions& options) {
              options.overrides.show_bvh ? fmt::format("BVH overlay {:.1f} ms, ", overlay_ms) : std::string(),
              ms_since(t_start));
   if (!result.job.validation().empty()) fmt::print("{}\n", result.job.validation());
+}
+
+void add_render_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<RenderCommandOptions>();
+  CLI::App* render = app.add_subcommand(
+      "render", "Render a job in this process (embedded scheduler and local worker threads)");
+  add_job_file_options(*render, o->job_file, o->load);
+  add_render_override_options(*render, o->overrides);
+  render->add_option("--threads", o->overrides.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::Range(0, kMaxThreads));
+  render->add_option("--out", o->overrides.image, "EXR output path (replaces output.image)");
+  render->add_option_function<std::string>(
+      "--preview",
+      [o](const std::string& preview) {
+        if (!preview.empty()) o->overrides.preview = preview == "none" ? "" : preview;
+      },
+      "Preview path, .png or .jpg (replaces output.preview; 'none' for no preview)");
+  render->add_flag("--float", o->overrides.full_float, "Write 32-bit float EXR instead of half");
+  render->add_option("--show-bvh", o->overrides.show_bvh,
+                     "Draw the BVH boxes of levels <= DEPTH over the preview (white: the tree over "
+                     "objects; colours: each object's tree by level)")
+      ->check(CLI::Range(0, 64));
+  render->add_flag("--quiet", [o](std::int64_t) { o->progress = false; }, "No progress bar");
+  commands.add(render, [o] {
+    run_render_command(*o);
+    return 0;
+  });
 }
 
 }  // namespace farm

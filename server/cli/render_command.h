@@ -6,6 +6,7 @@
 #include <string>
 
 #include "renderer/scene/job.h"
+#include "server/cli/command_table.h"
 #include "server/client/render_overrides.h"
 
 namespace farm {
@@ -20,5 +21,8 @@ struct RenderCommandOptions {
 // Runs the render and prints where the files went and how long each stage took. Throws
 // InputError for bad input (exit code 2) and other exceptions for internal failures.
 void run_render_command(const RenderCommandOptions& options);
+
+// Adds `farm render` to `app` and its runner to `commands`.
+void add_render_command(CLI::App& app, CommandTable& commands);
 
 }  // namespace farm

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
 
 #include "renderer/scene/input_error.h"
 #include "server/scheduler/scheduler_core.h"
@@ -30,52 +31,6 @@ std::chrono::milliseconds ms(double seconds) {
 }
 
 }  // namespace
-
-CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& o) {
-  CLI::App* s = app.add_subcommand(
-      "scheduler", "Serve farm.v1.Scheduler: jobs in, tiles to workers, merged EXR + PNG out");
-  s->add_option("--listen", o.listen,
-                "Address to serve on, HOST:PORT (port 0 picks a free port; the address is printed "
-                "as 'scheduler listening on HOST:PORT'); the clients' default is localhost:50051")
-      ->capture_default_str();
-  s->add_option("--data-dir", o.data_dir,
-                "Folder for the job store (jobs.db, SQLite WAL), uploaded assets, finished tiles "
-                "and results; a restarted scheduler resumes the jobs it finds there")
-      ->required();
-  s->add_option("--worker", o.workers,
-                "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
-                "register themselves (farm worker --scheduler)");
-  s->add_option("--tile-deadline", o.tile_deadline_s,
-                "Seconds a worker gets per tile of a call before the call's tiles are given to "
-                "another; a worker that misses it gets no more tiles until it answers a health check")
-      ->check(CLI::Range(0.05, 86400.0))
-      ->capture_default_str();
-  s->add_option("--max-attempts", o.max_attempts,
-                "Failed attempts of one tile (worker died, deadline, error) before its job fails")
-      ->check(CLI::Range(1, 1000))
-      ->capture_default_str();
-  s->add_option("--tiles-per-worker", o.tiles_per_worker,
-                "Calls in flight per worker, so that none idles between calls")
-      ->check(CLI::Range(1, 64))
-      ->capture_default_str();
-  s->add_option("--batch-ms", o.batch_ms,
-                "Rendering time one call aims at: once a job's first tiles are timed (the worker's "
-                "CPU time per tile over its threads), consecutive tiles of a row go out together "
-                "in batches about this long (smaller near the end "
-                "of a job; a tile that failed goes alone); 0 sends one tile per call")
-      ->check(CLI::Range(0, 600000))
-      ->capture_default_str();
-  s->add_option("--heartbeat-interval", o.heartbeat_interval_s,
-                "Seconds between registered workers' heartbeats; one silent for 3 is dropped")
-      ->check(CLI::Range(0.05, 3600.0))
-      ->capture_default_str();
-  s->add_flag("--float", o.float_exr, "Write 32-bit float EXRs instead of half");
-  s->footer("Jobs run in priority order, then in submission order. A finished job's tiles are "
-            "merged into <data-dir>/results/<job>/ (EXR with the job's AOV layers + PNG "
-            "preview), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
-            "flight go back to the queue.");
-  return s;
-}
 
 int run_scheduler_command(const SchedulerCommandOptions& o) {
   sigset_t signals;
@@ -121,6 +76,53 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   core.stop();
   server->Wait();
   return 0;
+}
+
+void add_scheduler_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<SchedulerCommandOptions>();
+  CLI::App* s = app.add_subcommand(
+      "scheduler", "Serve farm.v1.Scheduler: jobs in, tiles to workers, merged EXR + PNG out");
+  s->add_option("--listen", o->listen,
+                "Address to serve on, HOST:PORT (port 0 picks a free port; the address is printed "
+                "as 'scheduler listening on HOST:PORT'); the clients' default is localhost:50051")
+      ->capture_default_str();
+  s->add_option("--data-dir", o->data_dir,
+                "Folder for the job store (jobs.db, SQLite WAL), uploaded assets, finished tiles "
+                "and results; a restarted scheduler resumes the jobs it finds there")
+      ->required();
+  s->add_option("--worker", o->workers,
+                "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
+                "register themselves (farm worker --scheduler)");
+  s->add_option("--tile-deadline", o->tile_deadline_s,
+                "Seconds a worker gets per tile of a call before the call's tiles are given to "
+                "another; a worker that misses it gets no more tiles until it answers a health check")
+      ->check(CLI::Range(0.05, 86400.0))
+      ->capture_default_str();
+  s->add_option("--max-attempts", o->max_attempts,
+                "Failed attempts of one tile (worker died, deadline, error) before its job fails")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  s->add_option("--tiles-per-worker", o->tiles_per_worker,
+                "Calls in flight per worker, so that none idles between calls")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  s->add_option("--batch-ms", o->batch_ms,
+                "Rendering time one call aims at: once a job's first tiles are timed (the worker's "
+                "CPU time per tile over its threads), consecutive tiles of a row go out together "
+                "in batches about this long (smaller near the end "
+                "of a job; a tile that failed goes alone); 0 sends one tile per call")
+      ->check(CLI::Range(0, 600000))
+      ->capture_default_str();
+  s->add_option("--heartbeat-interval", o->heartbeat_interval_s,
+                "Seconds between registered workers' heartbeats; one silent for 3 is dropped")
+      ->check(CLI::Range(0.05, 3600.0))
+      ->capture_default_str();
+  s->add_flag("--float", o->float_exr, "Write 32-bit float EXRs instead of half");
+  s->footer("Jobs run in priority order, then in submission order. A finished job's tiles are "
+            "merged into <data-dir>/results/<job>/ (EXR with the job's AOV layers + PNG "
+            "preview), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
+            "flight go back to the queue.");
+  commands.add(s, [o] { return run_scheduler_command(*o); });
 }
 
 }  // namespace farm

@@ -1,11 +1,11 @@
 #pragma once
 // `farm scheduler`: serves farm.v1.Scheduler (SchedulerCore over gRPC), gRPC health and server
 // reflection until SIGINT/SIGTERM.
-#include <CLI/CLI.hpp>
-
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "server/cli/command_table.h"
 
 namespace farm {
 
@@ -21,11 +21,11 @@ struct SchedulerCommandOptions {
   bool float_exr = false;
 };
 
-// Adds the `scheduler` subcommand to `app` (options into `options`).
-CLI::App* add_scheduler_command(CLI::App& app, SchedulerCommandOptions& options);
-
 // Prints "scheduler listening on HOST:PORT" once it accepts calls. InputError when the address
 // cannot be bound. Returns the exit code.
 int run_scheduler_command(const SchedulerCommandOptions& options);
+
+// Adds `farm scheduler` to `app` and its runner to `commands`.
+void add_scheduler_command(CLI::App& app, CommandTable& commands);
 
 }  // namespace farm

@@ -3,12 +3,14 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "renderer/geometry/embree_intersector.h"
 #include "renderer/geometry/scene_intersector.h"
 #include "renderer/scene/scene_builder.h"
+#include "server/cli/job_file_options.h"
 
 namespace farm {
 
@@ -44,6 +46,24 @@ int run_validate_command(const ValidateCommandOptions& options) {
              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
                  .count());
   return passes ? 0 : 1;
+}
+
+void add_validate_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<ValidateCommandOptions>();
+  CLI::App* validate = app.add_subcommand(
+      "validate", "Compare our acceleration structure's ray hits with Embree's on a job's scene");
+  add_job_file_options(*validate, o->job_file, o->load);
+  validate->add_option("--rays", o->rays,
+                       "Rays to compare, half primary and half from inside the scene "
+                       "(default: the job's validate.embree_rays, else 100000)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 32));
+  validate->add_option("--accel", o->accel,
+                       "Ours to compare: bvh, bvh-median or naive (default: the job's render.accel; "
+                       "bvh when that is embree)")
+      ->check(CLI::IsMember({"bvh", "bvh-median", "naive"}));
+  validate->footer("Exit codes: 0 the hits agree (hit/miss disagreements at most 0.001% of the "
+                   "rays), 1 they do not (or an internal error), 2 bad input.");
+  commands.add(validate, [o] { return run_validate_command(*o); });
 }
 
 }  // namespace farm

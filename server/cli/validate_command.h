@@ -12,6 +12,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job.h"
+#include "server/cli/command_table.h"
 
 namespace farm {
 
@@ -25,5 +26,8 @@ struct ValidateCommandOptions {
 // Prints the comparison and returns the exit code: 0 when the hits agree within the tolerance,
 // 1 when they do not. Throws InputError for bad input.
 int run_validate_command(const ValidateCommandOptions& options);
+
+// Adds `farm validate` to `app` and its runner to `commands`.
+void add_validate_command(CLI::App& app, CommandTable& commands);
 
 }  // namespace farm

@@ -13,12 +13,16 @@
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <thread>
 
 #include "proto/farm.grpc.pb.h"
 
+#include "renderer/render_settings.h"
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
+#include "server/cli/version.h"
 
 namespace farm {
 
@@ -70,11 +74,11 @@ class Registration {
         v1::RegisterWorkerRequest request;
         request.set_address(address_);
         request.set_threads(threads_);
-        for (const char* e : {"raster", "whitted", "path"}) request.add_engines(e);
+        for (std::string_view e : kEngineNames) request.add_engines(std::string(e));
         char host[256] = {};
         ::gethostname(host, sizeof host - 1);
         request.set_hostname(host);
-        request.set_version("0.1.0");
+        request.set_version(std::string(kFarmVersion));
         v1::RegisterWorkerResponse response;
         const grpc::Status status = stub_->RegisterWorker(&context, request, &response);
         if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) return;
@@ -164,6 +168,38 @@ int run_worker_command(const WorkerOptions& given) {
   server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
   server->Wait();
   return 0;
+}
+
+void add_worker_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<WorkerOptions>();
+  CLI::App* worker = app.add_subcommand(
+      "worker", "Serve farm.v1.Worker (RenderTile) plus gRPC health and reflection");
+  worker->add_option("--listen", o->listen,
+                     "Address to serve on, HOST:PORT (port 0 picks a free port; the address is "
+                     "printed as 'worker listening on HOST:PORT')")
+      ->required();
+  worker->add_option("--threads", o->threads, "Render threads shared by all calls (0 = all cores)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
+  worker->add_option("--scheduler", o->scheduler,
+                     "Scheduler HOST:PORT to fetch assets this worker lacks from (by SHA-256); "
+                     "without it, a job whose assets are not in the cache fails with "
+                     "FAILED_PRECONDITION");
+  worker->add_option("--cache-dir", o->cache_dir,
+                     "Folder for fetched assets (blobs/<sha256>) and laid-out scenes "
+                     "(scenes/<scene hash>/) (default: <temp>/farm-worker-cache)");
+  worker->add_option("--max-scenes", o->max_scenes, "Prepared scenes kept in memory (LRU)")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  worker->add_option("--cache-memory", o->cache_memory_mb,
+                     "Approximate memory budget of the prepared scenes, MiB (LRU)")
+      ->check(CLI::Range(1, 1 << 24))
+      ->capture_default_str();
+  worker->footer("Each RenderTile call renders its rectangle on all render threads, in 16x16 "
+                 "sub-tiles shared with concurrent calls; a call stops when its client cancels "
+                 "or its deadline passes. Scenes are prepared once per scene hash. SIGINT or "
+                 "SIGTERM shut the worker down cleanly.");
+  commands.add(worker, [o] { return run_worker_command(*o); });
 }
 
 }  // namespace farm

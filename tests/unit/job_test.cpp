@@ -270,6 +270,11 @@ TEST_F(JobFiles, JobParse_BoundaryValuesAreAccepted) {
   EXPECT_EQ(job.render.width, 16384);
   EXPECT_EQ(job.render.height, 1);
   EXPECT_EQ(job.render.max_depth, -1);
+  const Job upper = parse(job_with_keys(
+      R"("render": {"spp": 1048576, "tile_size": 16384, "threads": 1024})"));
+  EXPECT_EQ(upper.render.spp, 1048576);
+  EXPECT_EQ(upper.render.tile_size, 16384);
+  EXPECT_EQ(upper.render.threads, 1024);
 }
 
 TEST_F(JobFiles, JobParse_RepeatedFileGivesOneObjectPerEntry) {
@@ -453,6 +458,8 @@ const std::vector<BadJob> kBadJobs = {
     {"HugeIntegerWidth", job_with_keys(R"("render": {"width": 99999999999999999999999})"),
      "render.width", "expected an integer <= 16384"},
     {"ZeroSpp", job_with_keys(R"("render": {"spp": 0})"), "render.spp", ">= 1"},
+    {"SppAboveLimit", job_with_keys(R"("render": {"spp": 1048577})"), "render.spp",
+     "expected an integer <= 1048576, got 1048577"},
     {"MaxDepthBelowMinusOne", job_with_keys(R"("render": {"max_depth": -2})"), "render.max_depth",
      "expected an integer >= -1, got -2"},
     {"NegativeSeed", job_with_keys(R"("render": {"seed": -1})"), "render.seed",
@@ -460,7 +467,11 @@ const std::vector<BadJob> kBadJobs = {
     {"FractionalSeed", job_with_keys(R"("render": {"seed": 1.5})"), "render.seed",
      "expected an unsigned integer"},
     {"ZeroTileSize", job_with_keys(R"("render": {"tile_size": 0})"), "render.tile_size", ">= 1"},
+    {"TileSizeAboveLimit", job_with_keys(R"("render": {"tile_size": 16385})"), "render.tile_size",
+     "expected an integer <= 16384, got 16385"},
     {"NegativeThreads", job_with_keys(R"("render": {"threads": -1})"), "render.threads", ">= 0"},
+    {"ThreadsAboveLimit", job_with_keys(R"("render": {"threads": 1025})"), "render.threads",
+     "expected an integer <= 1024, got 1025"},
     {"NegativeEmbreeRays", job_with_keys(R"("validate": {"embree_rays": -3})"),
      "validate.embree_rays", ">= 0"},
     // enumerations

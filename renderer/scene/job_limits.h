@@ -1,0 +1,18 @@
+#pragma once
+// The numeric limits of a job's render settings, in one place: the job file's parser (job.cpp)
+// and the command line's overrides (--width, --spp, --threads, ...) check against the same
+// constants, so a value one of them accepts the other accepts too.
+
+namespace farm {
+
+// render.width and render.height: a 16384 x 16384 film of RGBA floats is already 4 GiB.
+inline constexpr int kMaxImageSide = 16384;
+// render.tile_size: a tile larger than the largest image renders as one that size would.
+inline constexpr int kMaxTileSize = kMaxImageSide;
+// render.spp: 2^20 samples per pixel is beyond any reference render; more is a typo.
+inline constexpr int kMaxSpp = 1 << 20;
+// render.threads (0 = all hardware threads): each is a std::thread, so a count no machine has is
+// refused rather than attempted.
+inline constexpr int kMaxThreads = 1024;
+
+}  // namespace farm

@@ -1,0 +1,162 @@
+#include "server/cli/bench_command.h"
+
+#include <memory>
+
+#include "renderer/scene/job_limits.h"
+#include "server/bench/farm_bench.h"
+#include "server/bench/path_bench.h"
+#include "server/bench/raster_bench.h"
+#include "server/bench/render_bench.h"
+#include "server/bench/rt_bench.h"
+
+namespace farm {
+namespace {
+
+// Binds the options of a sub-command to `*options`, which its runner then hands to `run`.
+template <typename Options>
+void add_runner(CommandTable& commands, CLI::App* command, std::shared_ptr<Options> options,
+                void (*run)(const Options&)) {
+  commands.add(command, [options, run] {
+    run(*options);
+    return 0;
+  });
+}
+
+// The rendered image's size; the benchmarks' defaults differ, the job's limits do not.
+void add_image_size_options(CLI::App& command, int& width, int& height) {
+  command.add_option("--width", width, "Image width")
+      ->check(CLI::Range(1, kMaxImageSide))
+      ->capture_default_str();
+  command.add_option("--height", height, "Image height")
+      ->check(CLI::Range(1, kMaxImageSide))
+      ->capture_default_str();
+}
+
+void add_raster_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<RasterBenchOptions>();
+  CLI::App* raster = bench.add_subcommand(
+      "raster", "Rasterizer frame times for the cow and the 100-cow grid at 1920x1080 "
+                "across thread counts");
+  raster->add_option("--model", o->model, "The cow model (default ../shared/assets/dae/cow.dae)");
+  raster->add_option("--threads", o->threads, "Thread counts to measure")
+      ->delimiter(',')
+      ->check(CLI::Range(1, kMaxThreads))
+      ->capture_default_str();
+  raster->add_option("--frames", o->frames, "Timed frames per configuration")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  raster->add_option("--warmup", o->warmup, "Untimed frames first")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
+  raster->add_option("--scene", o->scene, "Which scene: cow, cow-grid-100 or all")
+      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))
+      ->capture_default_str();
+  raster->add_flag("--oversubscribe", o->oversubscribe,
+                   "Also run thread counts above the number of cores");
+  add_image_size_options(*raster, o->width, o->height);
+  add_runner(commands, raster, o, run_raster_bench);
+}
+
+void add_rt_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<RtBenchOptions>();
+  CLI::App* rt = bench.add_subcommand(
+      "rt", "Our BVHs against Embree: build time and single-thread Mrays/s (primary and incoherent, "
+            "closest and any hit) on cow, bunny, CBbunny and the 100-cow grid");
+  rt->add_option("--assets", o->assets, "The lab's assets folder (default ../shared/assets)");
+  rt->add_option("--rays", o->rays, "Rays per set")
+      ->check(CLI::Range(1000, 100'000'000))
+      ->capture_default_str();
+  add_runner(commands, rt, o, run_rt_bench);
+}
+
+void add_path_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<PathBenchOptions>();
+  CLI::App* path = bench.add_subcommand(
+      "path", "Path tracer Msamples/s and Mrays/s on the Cornell box and CBbunny at 512x512, on one "
+              "thread and all; with --mitsuba, Mitsuba 3 scalar_rgb on the same Cornell box beside it");
+  path->add_option("--job", o->cornell_job, "The Cornell box job")->capture_default_str();
+  path->add_option("--assets", o->assets,
+                   "The lab's assets folder, for CBbunny (default ../shared/assets)");
+  path->add_option("--threads", o->threads, "Thread counts (default: 1 and all)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, kMaxThreads));
+  path->add_option("--spp", o->spp, "Samples per pixel")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
+  add_image_size_options(*path, o->width, o->height);
+  path->add_option("--scene", o->scene, "Which scene: cornell, cbbunny or all")
+      ->check(CLI::IsMember({"cornell", "cbbunny", "all"}))
+      ->capture_default_str();
+  path->add_option("--mitsuba", o->mitsuba_python,
+                   "A Python with the mitsuba package (see tools/requirements-mitsuba.txt): "
+                   "time Mitsuba 3 scalar_rgb on the Cornell box too");
+  path->add_option("--mitsuba-script", o->mitsuba_script,
+                   "The script that renders a job with Mitsuba")
+      ->capture_default_str();
+  add_runner(commands, path, o, run_path_bench);
+}
+
+void add_farm_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<FarmBenchOptions>();
+  CLI::App* farm = bench.add_subcommand(
+      "farm", "The farm's overhead: the Cornell box path traced through farm render, a scheduler with 1 "
+              "and with 2 workers over loopback; then tiny jobs for jobs/s and submit latency");
+  farm->add_option("--job", o->job, "The job to render")->capture_default_str();
+  farm->add_option("--spp", o->spp, "Samples per pixel")
+      ->check(CLI::Range(1, 65536))
+      ->capture_default_str();
+  add_image_size_options(*farm, o->width, o->height);
+  farm->add_option("--repeats", o->repeats, "Renders per configuration (median reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  farm->add_option("--tiles-per-worker", o->tiles_per_worker,
+                   "The scheduler's --tiles-per-worker for (b), (c) and the tiny jobs")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  farm->add_option("--batch-ms", o->batch_ms,
+                   "The scheduler's --batch-ms for (a), (b), (c) and the tiny jobs (0: one tile a call)")
+      ->check(CLI::Range(0, 600000))
+      ->capture_default_str();
+  farm->add_option("--two-worker-threads", o->two_worker_threads,
+                   "--threads of each worker in (c) (0: all cores each, as `farm worker` defaults)")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
+  farm->add_option("--tiny-jobs", o->tiny_jobs, "Tiny jobs to submit")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  add_runner(commands, farm, o, run_farm_bench);
+}
+
+void add_render_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<RenderBenchOptions>();
+  CLI::App* render = bench.add_subcommand(
+      "render", "The whole `farm render` command (process start to exit) against the bare engine frame "
+                "on the same scene: the lab's cow job and a 100-cow grid at 1920x1080, 1 and 2 threads");
+  render->add_option("--cow-job", o->cow_job, "The cow job")->capture_default_str();
+  render->add_option("--asset-root", o->asset_root, "The cow job's asset root")->capture_default_str();
+  render->add_option("--threads", o->threads, "Thread counts")
+      ->delimiter(',')
+      ->check(CLI::Range(1, kMaxThreads))
+      ->capture_default_str();
+  render->add_option("--repeats", o->repeats, "Rounds (medians reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  render->add_option("--scene", o->scene, "Which scene: cow, cow-grid-100 or all")
+      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))
+      ->capture_default_str();
+  add_runner(commands, render, o, run_render_bench);
+}
+
+}  // namespace
+
+void add_bench_command(CLI::App& app, CommandTable& commands) {
+  CLI::App* bench = app.add_subcommand("bench", "Measure engine performance");
+  bench->require_subcommand(1);
+  add_raster_bench(*bench, commands);
+  add_rt_bench(*bench, commands);
+  add_path_bench(*bench, commands);
+  add_farm_bench(*bench, commands);
+  add_render_bench(*bench, commands);
+}
+
+}  // namespace farm

@@ -1,0 +1,49 @@
+#include "server/cli/fetch_command.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "renderer/scene/input_error.h"
+#include "server/cli/result_download.h"
+#include "server/cli/scheduler_target.h"
+#include "server/client/scheduler_client.h"
+
+namespace farm {
+namespace {
+
+struct FetchOptions {
+  JobOnScheduler target;
+  std::filesystem::path output_dir = ".";
+};
+
+int run_fetch(const FetchOptions& o) {
+  const std::string& job_id = o.target.job_id;
+  SchedulerClient client(resolve_scheduler_address(o.target.scheduler));
+  const v1::Job job = client.get(job_id);
+  if (job.state() != v1::JOB_STATE_SUCCEEDED) {
+    throw InputError(fmt::format("job {} is {}: nothing to fetch yet{}", job_id, to_string(job.state()),
+                                 job.failure_reason().empty() ? "" : " (" + job.failure_reason() + ")"));
+  }
+  download_results(client, job_id,
+                   [&](v1::ResultKind kind, const std::string& name) {
+                     const std::string fallback = job.name() + (kind == v1::RESULT_KIND_EXR ? ".exr" : ".png");
+                     return o.output_dir / (name.empty() ? fallback : name);
+                   },
+                   true);
+  return 0;
+}
+
+}  // namespace
+
+void add_fetch_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<FetchOptions>();
+  CLI::App* fetch = app.add_subcommand("fetch", "Download a finished job's EXR and preview");
+  add_job_on_scheduler_options(*fetch, o->target);
+  fetch->add_option("-o,--output", o->output_dir, "Folder to write into")->capture_default_str();
+  commands.add(fetch, [o] { return run_fetch(*o); });
+}
+
+}  // namespace farm

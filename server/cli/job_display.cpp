@@ -1,0 +1,74 @@
+#include "server/cli/job_display.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <ctime>
+
+#include "server/cli/progress_bar.h"
+#include "server/common/job_state.h"
+
+namespace farm {
+
+std::string progress_of(const v1::Job& job) {
+  return fmt::format("{}/{} tiles", job.tiles_done(), job.tiles_total());
+}
+
+std::string local_time(const google::protobuf::Timestamp& t) {
+  if (t.seconds() == 0) return "-";
+  const std::time_t seconds = static_cast<std::time_t>(t.seconds());
+  std::tm tm{};
+  localtime_r(&seconds, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M:%S", &tm);
+  return text;
+}
+
+void print_job(const v1::Job& job) {
+  fmt::print("job {} '{}': {}, {}\n", job.job_id(), job.name(), to_string(job.state()), progress_of(job));
+  fmt::print("  {} engine, {}x{}, scene {}\n", job.engine(), job.width(), job.height(),
+             job.scene_hash().substr(0, 16));
+  fmt::print("  submitted {}, started {}, finished {}\n", local_time(job.submitted_at()),
+             local_time(job.started_at()), local_time(job.finished_at()));
+  if (job.tile_failures() > 0) fmt::print("  tile retries: {}\n", job.tile_failures());
+  if (!job.failure_reason().empty()) fmt::print("  failure: {}\n", job.failure_reason());
+  const v1::TileStats& s = job.stats();
+  if (s.samples() > 0) fmt::print("  samples: {} traced, {} NaN/inf dropped\n", s.samples(), s.invalid_samples());
+  if (s.rays() > 0) fmt::print("  rays: {}\n", s.rays());
+  if (s.render_ms() > 0) fmt::print("  render time summed over tiles: {:.1f} ms\n", s.render_ms());
+  if (s.cpu_ms() > 0) fmt::print("  CPU time of the render threads: {:.1f} ms\n", s.cpu_ms());
+  if (job.render_seconds() > 0) {
+    fmt::print("  wall time from the first tile handed out to the merged image: {:.3f} s\n", job.render_seconds());
+  }
+}
+
+v1::Job follow(SchedulerClient& client, const std::string& job_id) {
+  const bool terminal = ProgressBar::stderr_is_terminal();
+  ProgressBar bar(fmt::format("job {}", job_id), terminal);
+  v1::JobState shown = v1::JOB_STATE_UNSPECIFIED;
+  const v1::Job last = client.watch(job_id, [&](const v1::JobEvent& event) {
+    const v1::Job& job = event.job();
+    bar.update(job.tiles_done(), std::max<std::size_t>(1, job.tiles_total()));
+    if (!terminal && job.state() != shown) {
+      fmt::print("job {}: {} ({})\n", job_id, to_string(job.state()), progress_of(job));
+      std::fflush(stdout);
+      shown = job.state();
+    }
+    if (event.has_tile_failed()) {
+      const v1::TileFailed& f = event.tile_failed();
+      fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, describe_tiles(f.tile_index(), f.tile_count()),
+                 f.worker(), f.reason(), f.will_retry() ? " (will retry)" : "");
+    }
+  });
+  return last;
+}
+
+int exit_code_of(const v1::Job& job) {
+  if (job.state() == v1::JOB_STATE_SUCCEEDED) return 0;
+  fmt::print(stderr, "job {} {}{}\n", job.job_id(), to_string(job.state()),
+             job.failure_reason().empty() ? "" : ": " + job.failure_reason());
+  return 1;
+}
+
+}  // namespace farm

@@ -1,0 +1,27 @@
+#pragma once
+// How the client commands (`farm submit --wait`, `status`, `watch`, `cancel`) show a job on the
+// scheduler: its summary, a progress line, and following it to its end.
+#include <string>
+
+#include "proto/farm.pb.h"
+#include "server/client/scheduler_client.h"
+
+namespace farm {
+
+// "3/12 tiles".
+std::string progress_of(const v1::Job& job);
+
+// A Timestamp in local time, "2024-05-01 12:00:00"; "-" when unset.
+std::string local_time(const google::protobuf::Timestamp& t);
+
+// The job's state, settings, times and render statistics, one item a line.
+void print_job(const v1::Job& job);
+
+// Follows a job to its end with a progress bar (on a terminal) or a line per state change, and
+// reports failed tiles on stderr. Returns the job as it ended.
+v1::Job follow(SchedulerClient& client, const std::string& job_id);
+
+// 0 when the job succeeded; else says how it ended on stderr and returns 1.
+int exit_code_of(const v1::Job& job);
+
+}  // namespace farm

@@ -1,0 +1,36 @@
+#include "server/cli/render_override_options.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <string>
+#include <vector>
+
+#include "renderer/render_settings.h"
+#include "renderer/scene/job_limits.h"
+
+namespace farm {
+
+void add_render_override_options(CLI::App& command, RenderOverrides& o) {
+  // One heading in the help: these replace the job's own values, the others do not.
+  constexpr const char* kGroup = "Render settings (replace the job file's)";
+  const std::vector<std::string> engines(kEngineNames.begin(), kEngineNames.end());
+  command.add_option("--engine", o.engine,
+                     fmt::format("Engine: {} (render.engine)", fmt::join(engines, ", ")))
+      ->check(CLI::IsMember(engines))
+      ->group(kGroup);
+  command.add_option("--width", o.width, "Image width in pixels (render.width)")
+      ->check(CLI::Range(1, kMaxImageSide))
+      ->group(kGroup);
+  command.add_option("--height", o.height, "Image height in pixels (render.height)")
+      ->check(CLI::Range(1, kMaxImageSide))
+      ->group(kGroup);
+  command.add_option("--spp", o.spp, "Samples per pixel (render.spp)")
+      ->check(CLI::Range(1, kMaxSpp))
+      ->group(kGroup);
+  command.add_option("--tile-size", o.tile_size, "Tile edge in pixels (render.tile_size)")
+      ->check(CLI::Range(1, kMaxTileSize))
+      ->group(kGroup);
+}
+
+}  // namespace farm

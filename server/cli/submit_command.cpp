@@ -1,0 +1,68 @@
+#include "server/cli/submit_command.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "renderer/scene/job.h"
+#include "server/cli/job_display.h"
+#include "server/cli/job_file_options.h"
+#include "server/cli/render_override_options.h"
+#include "server/cli/result_download.h"
+#include "server/cli/scheduler_target.h"
+#include "server/client/job_submission.h"
+#include "server/client/scheduler_client.h"
+
+namespace farm {
+namespace {
+
+struct SubmitOptions {
+  std::string scheduler;  // empty: $FARM_SCHEDULER or the default
+  std::filesystem::path job_file;
+  JobLoadOptions load;
+  RenderOverrides overrides;
+  bool wait = false;
+  int priority = 0;
+};
+
+int run_submit(const SubmitOptions& o) {
+  const JobSubmission submission = make_job_submission(o.job_file, o.load, o.overrides);
+  SchedulerClient client(resolve_scheduler_address(o.scheduler));
+  const std::size_t uploaded = client.upload_missing(submission);
+  const v1::Job job = client.submit(submission, o.priority);
+  fmt::print("{}\n", job.job_id());
+  fmt::print(stderr, "submitted '{}' to {}: {} tiles, {} of {} assets uploaded\n", job.name(), client.address(),
+             job.tiles_total(), uploaded, submission.spec.assets_size());
+  if (!o.wait) return 0;
+  const v1::Job last = follow(client, job.job_id());
+  if (last.state() != v1::JOB_STATE_SUCCEEDED) return exit_code_of(last);
+  // Like `farm render`: the results land where the job's output section says.
+  download_results(client, job.job_id(),
+                   [&](v1::ResultKind kind, const std::string&) {
+                     return kind == v1::RESULT_KIND_EXR ? submission.job.output.image : submission.job.output.preview;
+                   },
+                   !submission.job.output.preview.empty());
+  return 0;
+}
+
+}  // namespace
+
+void add_submit_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<SubmitOptions>();
+  CLI::App* submit = app.add_subcommand("submit", "Send a job and its assets to a scheduler; prints the job id");
+  add_job_file_options(*submit, o->job_file, o->load);
+  add_scheduler_address_option(*submit, o->scheduler);
+  submit->add_flag("--wait", o->wait,
+                   "Follow the job to its end, then download the EXR and preview to the job's "
+                   "output paths (exit 1 if the job fails or is cancelled)");
+  submit->add_option("--priority", o->priority, "Higher runs first; equal priorities in submission order")
+      ->capture_default_str();
+  add_render_override_options(*submit, o->overrides);
+  submit->footer("Assets are content-addressed (SHA-256): only those the scheduler lacks are uploaded.");
+  commands.add(submit, [o] { return run_submit(*o); });
+}
+
+}  // namespace farm

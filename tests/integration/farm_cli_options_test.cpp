@@ -1,0 +1,103 @@
+// The `farm` command line's shared declarations: option groups declared once stay the same in
+// every command that takes them, and what --help and --version print comes from the one place
+// each value lives (the renderer's engine names and job limits, CMake's project version).
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "renderer/render_settings.h"
+#include "renderer/scene/job_limits.h"
+#include "tests/support/farm_cli_fixture.h"
+
+namespace farm {
+namespace {
+
+using test::run_command;
+
+class FarmCliOptionsTest : public test::FarmCliFixture {};
+
+// An option's entry in CLI11's help: its line and the indented lines that continue it.
+std::string help_entry(const std::string& help, const std::string& option) {
+  std::istringstream lines(help);
+  std::string line, entry;
+  bool inside = false;
+  while (std::getline(lines, line)) {
+    const bool continues = line.rfind("    ", 0) == 0;
+    if (inside && !continues) break;
+    if (inside || line.rfind(fmt::format("  {} ", option), 0) == 0) {
+      inside = true;
+      entry += line + "\n";
+    }
+  }
+  return entry;
+}
+
+std::string help_of(const std::string& command) {
+  const auto r = run_command(test::farm_command(fmt::format("{} --help", command)));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return r.output;
+}
+
+TEST_F(FarmCliOptionsTest, RenderAndSubmitShareTheRenderOverrideOptions) {
+  const std::string render = help_of("render"), submit = help_of("submit");
+  for (const std::string option : {"--engine", "--width", "--height", "--spp", "--tile-size"}) {
+    const std::string entry = help_entry(render, option);
+    EXPECT_FALSE(entry.empty()) << option << " missing from farm render --help:\n" << render;
+    EXPECT_EQ(entry, help_entry(submit, option)) << option;
+  }
+}
+
+TEST_F(FarmCliOptionsTest, EngineChoicesAreTheRenderersEngineNames) {
+  std::string choices = "{";
+  for (std::string_view name : kEngineNames) choices += fmt::format("{},", name);
+  choices.back() = '}';
+  for (const std::string command : {"render", "submit"}) {
+    const std::string entry = help_entry(help_of(command), "--engine");
+    EXPECT_NE(entry.find(choices), std::string::npos) << command << ":\n" << entry;
+  }
+}
+
+TEST_F(FarmCliOptionsTest, OverrideRangesAreTheJobsLimits) {
+  const std::string render = help_of("render");
+  const auto range = [](int min, int max) { return fmt::format("[{} - {}]", min, max); };
+  EXPECT_NE(help_entry(render, "--width").find(range(1, kMaxImageSide)), std::string::npos) << render;
+  EXPECT_NE(help_entry(render, "--height").find(range(1, kMaxImageSide)), std::string::npos) << render;
+  EXPECT_NE(help_entry(render, "--spp").find(range(1, kMaxSpp)), std::string::npos) << render;
+  EXPECT_NE(help_entry(render, "--tile-size").find(range(1, kMaxTileSize)), std::string::npos) << render;
+  EXPECT_NE(help_entry(render, "--threads").find(range(0, kMaxThreads)), std::string::npos) << render;
+}
+
+TEST_F(FarmCliOptionsTest, VersionIsTheCMakeProjectVersion) {
+  const auto r = run_command(farm("--version"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, fmt::format("farm {}\n", FARM_PROJECT_VERSION));
+}
+
+TEST_F(FarmCliOptionsTest, EveryCommandExplainsItselfInHelp) {
+  const std::string overview = help_of("");
+  const std::vector<std::string> commands = {"render", "info",   "validate",    "bench raster", "bench rt",
+                                             "bench path", "bench farm", "bench render", "worker", "scheduler", "submit",
+                                             "status", "watch", "cancel", "fetch"};
+  for (const std::string& command : commands) {
+    const std::string first_word = command.substr(0, command.find(' '));
+    EXPECT_NE(overview.find(fmt::format("\n  {} ", first_word)), std::string::npos) << first_word << ":\n" << overview;
+    const std::string help = help_of(command);
+    // The description first, then the usage line that names the command.
+    EXPECT_EQ(help.rfind("Usage:", 0), std::string::npos) << command << ":\n" << help;
+    EXPECT_NE(help.find(fmt::format(" {} [OPTIONS]", command)), std::string::npos) << command << ":\n" << help;
+  }
+}
+
+TEST_F(FarmCliOptionsTest, UnknownEngineIsBadInput) {
+  const auto r = run_command(farm("render " + test::shell_quote((test::kSource / "jobs/cornell.json").string()) +
+                                  " --engine rayleigh"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--engine"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace farm
