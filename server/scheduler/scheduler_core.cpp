@@ -1,7 +1,6 @@
 #include "server/scheduler/scheduler_core.h"
 
 #include <fmt/format.h>
-#include <cstdio>
 
 #include <random>
 
@@ -23,14 +22,6 @@ using SteadyClock = std::chrono::steady_clock;
 
 namespace {
 
-// One line on stderr: the scheduler's log (stdout carries only the "listening" line). `quiet`
-// keeps the info lines back (warnings and errors always go out).
-template <typename... Args>
-void log_line(bool quiet, const char* level, fmt::format_string<Args...> format, Args&&... args) {
-  if (quiet && std::string_view(level) == "info") return;
-  fmt::print(stderr, "scheduler {}: {}\n", level, fmt::format(format, std::forward<Args>(args)...));
-}
-
 // Why a call in flight was cancelled by the scheduler, which decides what becomes of its tile.
 enum class CancelReason { None, JobCancelled, WorkerLeft, Stopping };
 
@@ -45,21 +36,6 @@ void replace_all(std::string& s, const std::string& from, const std::string& to)
   if (from.empty()) return;
   for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
     s.replace(at, from.size(), to);
-  }
-}
-
-const char* code_name(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
-    default: return "ERROR";
   }
 }
 
@@ -129,7 +105,8 @@ void JobEventQueue::push(const v1::JobEvent& event) {
 SchedulerCore::SchedulerCore(SchedulerOptions options)
     : options_(std::move(options)),
       assets_((fs::create_directories(options_.data_dir), options_.data_dir / "assets")),
-      store_(options_.in_memory ? fs::path(":memory:") : options_.data_dir / "jobs.db") {
+      store_(options_.in_memory ? fs::path(":memory:") : options_.data_dir / "jobs.db"),
+      log_(make_logger("scheduler", options_.log_level)) {
   if (options_.in_memory) {
     assembly_ = std::make_unique<InMemoryAssembly>();
   } else {
@@ -228,7 +205,7 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
     jobs_.emplace(job.id, std::move(info));
   }
   v1::Job added = store_.add_job(job, unix_ms_now());
-  log_line(options_.quiet, "info", "job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
+  log_->info("job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
                added.engine(), added.width(), added.height(), added.tiles_total(), priority);
   work_.notify_all();
   return added;
@@ -254,7 +231,7 @@ v1::Job SchedulerCore::cancel(const std::string& job_id) {
     }
   }
   if (after.state() != before->state()) {
-    log_line(options_.quiet, "info", "job {} cancelled", job_id);
+    log_->info("job {} cancelled", job_id);
     publish_state(after, before->state());
     cleanup_job_files(job_id);
   }
@@ -361,7 +338,7 @@ std::string SchedulerCore::add_worker(std::shared_ptr<TileWorker> worker, bool r
       threads_.emplace_back([this, entry] { slot_loop(entry); });
     }
   }
-  log_line(options_.quiet, "info", "worker {} added{}", entry->id, registered ? " (registered)" : "");
+  log_->info("worker {} added{}", entry->id, registered ? " (registered)" : "");
   return entry->id;
 }
 
@@ -380,7 +357,7 @@ void SchedulerCore::remove_worker(const std::string& worker_id, const std::strin
     }
     workers_.erase(it);
   }
-  log_line(options_.quiet, "warn", "worker {} removed: {}", worker_id, reason);
+  log_->warn("worker {} removed: {}", worker_id, reason);
   work_.notify_all();
 }
 
@@ -431,7 +408,7 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
         work_.wait_for(lock, options_.probe_interval / 4, [&] { return stopping_ || w->removed; });
         continue;
       }
-      if (w->down) log_line(options_.quiet, "info", "worker {} is up", w->id);
+      if (w->down) log_->info("worker {} is up", w->id);
       w->down = false;
       continue;
     }
@@ -441,7 +418,7 @@ void SchedulerCore::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
         return batch_size_locked(job_id, queued);
       });
     } catch (const std::exception& e) {
-      log_line(options_.quiet, "error", "claiming tiles: {}", e.what());
+      log_->error("claiming tiles: {}", e.what());
     }
     if (!batch) {
       work_.wait_for(lock, std::chrono::milliseconds(500));
@@ -541,7 +518,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
       }
       return;
     } catch (const std::exception& e) {
-      log_line(options_.quiet, "error", "job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
+      log_->error("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
       store_.batch_requeue(batch.job_id, batch.first, batch.count);
       work_.notify_all();
       return;
@@ -558,7 +535,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
   if (reason == CancelReason::WorkerLeft) {
     why = fmt::format("worker {} left: {}", w->worker->describe(), reason_text);
   } else {
-    why = fmt::format("worker {}: {}: {}", w->worker->describe(), code_name(status.error_code()),
+    why = fmt::format("worker {}: {}: {}", w->worker->describe(), status_code_name(status.error_code()),
                       status.error_message());
     if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
       why = fmt::format("worker {}: no result within the tile deadline of {} ms{}",
@@ -578,7 +555,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
       w->probe_after = SteadyClock::now() + options_.probe_interval;
     }
   }
-  log_line(options_.quiet, "warn", "job {} {}: {}", batch.job_id, describe(batch), why);
+  log_->warn("job {} {}: {}", batch.job_id, describe(batch), why);
   const v1::JobState before = store_.get_job(batch.job_id)->state();
   const TileFailure failure =
       store_.batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now());
@@ -591,7 +568,7 @@ void SchedulerCore::handle_result(const std::shared_ptr<WorkerEntry>& w, const I
     f.set_will_retry(failure.will_retry);
   });
   if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
-    log_line(options_.quiet, "error", "job {} failed: {}", batch.job_id, failure.job.failure_reason());
+    log_->error("job {} failed: {}", batch.job_id, failure.job.failure_reason());
     {
       // Its other tiles in flight are of no use now.
       std::lock_guard lock(mutex_);
@@ -651,12 +628,12 @@ void SchedulerCore::merge(const std::string& job_id) {
     }
     if (info->merged) info->merged(std::move(film));
     after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
-    log_line(options_.quiet, "info", "job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(),
+    log_->info("job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(),
              parts.size());
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED,
                               fmt::format("merging the tiles: {}", e.what()), "", unix_ms_now());
-    log_line(options_.quiet, "error", "job {} failed: {}", job_id, after.failure_reason());
+    log_->error("job {} failed: {}", job_id, after.failure_reason());
   }
   if (after.state() != before.state()) publish_state(after, before.state());
   cleanup_job_files(job_id);

@@ -35,6 +35,7 @@
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene.h"
 #include "server/common/asset_store.h"
+#include "server/common/log.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/tile_worker.h"
@@ -52,7 +53,9 @@ struct SchedulerOptions {
   std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
-  bool quiet = false;              // no info lines on stderr (the embedded farm of `farm render`)
+  // What the scheduler logs on stderr unless the operator chose (set_log_level): a server logs
+  // info and up, the embedded farm of `farm render` only warnings and errors.
+  LogLevel log_level = LogLevel::info;
   // The embedded farm of `farm render`: the job store lives in memory and finished tiles are
   // pasted into their frame as they arrive (InMemoryAssembly), so nothing outlives the process.
   // Off (the farm): jobs.db on disk, each batch a file before its tiles are marked done.
@@ -158,6 +161,7 @@ class SchedulerCore {
   SchedulerOptions options_;
   AssetStore assets_;
   JobStore store_;
+  std::shared_ptr<spdlog::logger> log_;
   std::unique_ptr<FrameAssembly> assembly_;
 
   mutable std::mutex mutex_;  // dispatcher state below
