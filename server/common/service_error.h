@@ -27,4 +27,8 @@ namespace farm {
 // INVALID_ARGUMENT, bad_alloc RESOURCE_EXHAUSTED, anything else INTERNAL.
 grpc::Status status_of_current_exception();
 
+// "UNAVAILABLE", "DEADLINE_EXCEEDED", ...: the code as logs and messages name it; "ERROR" for
+// codes the farm does not use.
+const char* status_code_name(grpc::StatusCode code);
+
 }  // namespace farm

@@ -28,7 +28,8 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   SchedulerOptions s;
   s.data_dir = data_dir_;
   s.exr_type = options.exr_type;
-  s.quiet = true;  // `farm render` shows a progress bar and a summary instead
+  // `farm render` shows a progress bar and a summary: its log is for warnings and errors.
+  s.log_level = LogLevel::warn;
   s.in_memory = true;
   // One worker in the same process: it cannot die on its own, so a generous deadline is only a
   // guard; two tiles in flight keep its threads busy between tiles.
@@ -38,6 +39,7 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   r.blobs_dir = data_dir_ / "assets";  // the scheduler's own store: nothing to fetch
   r.cache_dir = data_dir_;             // scenes/<hash>/ shared with the scheduler's validation
   r.threads = options.threads;
+  r.log_level = s.log_level;
   worker_ = std::make_shared<InProcessTileWorker>(r);
   // The scene validation built is the one the worker renders: the models load once.
   s.validated_scene = [worker = worker_](const std::string& hash, const Job& job, Scene scene) {

@@ -90,7 +90,8 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
 }  // namespace
 
 TileRenderer::TileRenderer(const TileRendererOptions& options)
-    : cache_dir_(options.cache_dir),
+    : log_(make_logger("worker", options.log_level)),
+      cache_dir_(options.cache_dir),
       store_(options.blobs_dir),
       fetcher_(options.scheduler.empty() ? nullptr
                                          : std::make_unique<AssetFetcher>(options.scheduler)),
@@ -99,6 +100,7 @@ TileRenderer::TileRenderer(const TileRendererOptions& options)
 
 std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec,
                                                           const std::string& hash) {
+  const Clock::time_point start = Clock::now();
   validate_asset_refs(spec);
   const std::vector<v1::AssetRef> missing = missing_assets(spec, store_);
   if (!missing.empty()) {
@@ -111,7 +113,13 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
   }
   MaterializedScene m = materialize_scene(spec, hash, store_, cache_dir_);
   Scene scene = build_scene(m.job);
-  return std::make_shared<const CachedScene>(std::move(m.job), std::move(scene));
+  auto prepared = std::make_shared<const CachedScene>(std::move(m.job), std::move(scene));
+  // Once per scene and worker: what an operator looks for when a job's first tiles are slow.
+  log_->info("scene {} of job '{}' prepared in {:.0f} ms: {} triangles{}", hash.substr(0, 12),
+             prepared->job.name, ms_since(start), prepared->prepared.triangle_count(),
+             missing.empty() ? std::string()
+                             : fmt::format(", {} files fetched from {}", missing.size(), fetcher_->address()));
+  return prepared;
 }
 
 std::shared_ptr<const CachedScene> TileRenderer::adopt(const std::string& scene_hash, Job job,
@@ -130,8 +138,31 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& request,
   return status;
 }
 
-grpc::Status TileRenderer::render(const v1::RenderTileRequest& req, TileBuffer& pixels,
+grpc::Status TileRenderer::render(const v1::RenderTileRequest& request, TileBuffer& pixels,
                                   v1::TileStats& stats, const RenderControl& control) {
+  const grpc::Status status = render_rect(request, pixels, stats, control);
+  log_call(request, status, stats);
+  return status;
+}
+
+void TileRenderer::log_call(const v1::RenderTileRequest& request, const grpc::Status& status,
+                            const v1::TileStats& stats) const {
+  // Only other failures are warnings. A cancelled call is the scheduler's decision (a job
+  // cancelled, a worker dropped, a shutdown); a call for files this worker cannot fetch is
+  // answered by the scheduler sending them along with its next call.
+  const grpc::StatusCode code = status.error_code();
+  const bool expected = status.ok() || code == grpc::StatusCode::CANCELLED ||
+                        code == grpc::StatusCode::FAILED_PRECONDITION;
+  const LogLevel level = expected ? LogLevel::debug : LogLevel::warn;
+  if (!log_->should_log(level)) return;  // spares the formatting of every call
+  const v1::TileRect& r = request.rect();
+  log_->log(level, "job {} rect [{}, {}) x [{}, {}): {}", request.job_id(), r.x0(), r.x1(), r.y0(), r.y1(),
+            status.ok() ? fmt::format("rendered in {:.0f} ms ({:.0f} ms CPU)", stats.render_ms(), stats.cpu_ms())
+                        : fmt::format("{}: {}", status_code_name(code), status.error_message()));
+}
+
+grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuffer& pixels,
+                                       v1::TileStats& stats, const RenderControl& control) {
   const Clock::time_point start = Clock::now();
   const v1::RenderTileRequest* request = &req;
   const auto is_stopped = [&] {

@@ -15,6 +15,7 @@
 #include "renderer/image/tile_buffer.h"
 #include "renderer/util/thread_pool.h"
 #include "server/common/asset_store.h"
+#include "server/common/log.h"
 #include "server/worker/asset_fetcher.h"
 #include "server/worker/scene_cache.h"
 
@@ -29,6 +30,9 @@ struct TileRendererOptions {
   int threads = 0;                    // render threads; 0 = all hardware threads
   std::size_t max_scenes = 8;
   std::uint64_t cache_memory_mb = 4096;
+  // The "worker" log on stderr unless the operator chose (set_log_level): scenes prepared at
+  // info, failed calls at warn, every call at debug.
+  LogLevel log_level = LogLevel::info;
 };
 
 // How a caller stops a render: polled every few milliseconds while sub-tiles render.
@@ -62,7 +66,13 @@ class TileRenderer {
 
  private:
   std::shared_ptr<const CachedScene> prepare(const v1::JobSpec& spec, const std::string& hash);
+  // The body of render(): logs nothing, render() logs what it returns.
+  grpc::Status render_rect(const v1::RenderTileRequest& request, TileBuffer& pixels,
+                           v1::TileStats& stats, const RenderControl& control);
+  void log_call(const v1::RenderTileRequest& request, const grpc::Status& status,
+                const v1::TileStats& stats) const;
 
+  std::shared_ptr<spdlog::logger> log_;
   std::filesystem::path cache_dir_;
   AssetStore store_;
   std::unique_ptr<AssetFetcher> fetcher_;  // null without a scheduler

@@ -51,7 +51,7 @@ std::size_t calls_for_job(bool report_cpu) {
   {
     SchedulerOptions options;
     options.data_dir = dir / "farm";
-    options.quiet = true;
+    options.log_level = LogLevel::warn;
     options.batch_target = std::chrono::milliseconds(200);
     SchedulerCore core(options);
     for (const auto& [path, file] : test::cornell_assets()) core.assets().add(read_whole_file(file, "asset"));

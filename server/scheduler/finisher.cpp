@@ -1,0 +1,99 @@
+#include "server/scheduler/finisher.h"
+
+#include <fmt/format.h>
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "renderer/geometry/accel_validation.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/common/job_state.h"
+
+namespace farm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The job's `validate.embree_rays` check: our BVH's hits against Embree's, on the scene the job
+// was rendered from when this process built it (else built here). Empty when the job asks none.
+std::string check_against_embree(const JobInfo& info) {
+  const Job& job = *info.job;
+  if (job.embree_rays <= 0) return {};
+  std::shared_ptr<const PreparedScene> scene = info.scene;
+  if (!scene) scene = std::make_shared<const PreparedScene>(build_scene(job));
+  const AccelKind accel = accel_to_validate(job.render.accel);
+  const AccelValidation v =
+      validate_against_embree(*scene, job.render, accel, static_cast<std::uint64_t>(job.embree_rays));
+  return fmt::format("{} ({} vs embree{})", v.summary(), to_string(accel),
+                     validation_passes(v) ? "" : "; more hit/miss disagreements than 0.001% of rays");
+}
+
+}  // namespace
+
+void Finisher::finish_if_complete(const std::string& job_id) {
+  const std::optional<v1::Job> job = store_.get_job(job_id);
+  if (!job || is_final(job->state()) || job->tiles_done() < job->tiles_total()) return;
+  {
+    std::lock_guard lock(mutex_);
+    if (!merging_.insert(job_id).second) return;
+  }
+  merge(job_id);
+  std::lock_guard lock(mutex_);
+  merging_.erase(job_id);
+}
+
+void Finisher::release(const std::string& job_id) {
+  assembly_.remove_job(job_id);
+  jobs_.forget(job_id);
+}
+
+void Finisher::merge(const std::string& job_id) {
+  const v1::Job before = *store_.get_job(job_id);
+  v1::Job after;
+  try {
+    const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
+    std::set<std::uint32_t> parts;
+    for (const TileRecord& t : store_.tiles(job_id)) parts.insert(t.part);
+    TileBuffer film = assembly_.assemble(job_id, info->frame, {parts.begin(), parts.end()});
+    write_merged(film, files_of(job_id, *info), options_.exr_type);
+    const std::string validation = check_against_embree(*info);
+    if (info->merged) info->merged(std::move(film));
+    after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
+    log_.info("job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(), parts.size());
+  } catch (const std::exception& e) {
+    after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, fmt::format("merging the tiles: {}", e.what()),
+                              "", unix_ms_now());
+    log_.error("job {} failed: {}", job_id, after.failure_reason());
+  }
+  if (after.state() != before.state()) events_.publish_state(after, before.state());
+  release(job_id);
+}
+
+MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info) const {
+  if (!info.files.exr.empty()) return info.files;
+  std::string stem = info.job->output.image.stem().string();
+  if (stem.empty() || stem.starts_with(".")) stem = "image";
+  const fs::path dir = results_dir(job_id);
+  return {dir / (stem + ".exr"), dir / (stem + ".png")};
+}
+
+fs::path Finisher::results_dir(const std::string& job_id) const {
+  return options_.data_dir / "results" / job_id;
+}
+
+std::optional<fs::path> Finisher::result_file(const std::string& job_id, bool preview) const {
+  const std::optional<v1::Job> job = store_.get_job(job_id);
+  if (!job || job->state() != v1::JOB_STATE_SUCCEEDED) return std::nullopt;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(results_dir(job_id), ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.starts_with(".")) continue;
+    if (e.path().extension() == (preview ? ".png" : ".exr")) return e.path();
+  }
+  return std::nullopt;
+}
+
+}  // namespace farm

@@ -1,0 +1,54 @@
+#pragma once
+// The end of a job: once its tiles are all done, its frame is assembled (FrameAssembly), written
+// (the EXR and the preview, job_merger.h), checked against Embree when the job asks for it, and
+// the job marked SUCCEEDED (FAILED when any of that throws). A final job's memory and kept tiles
+// then go (release()), whichever way it ended.
+//
+// Lock: Finisher::mutex_ guards merging_ only, and is a leaf: the merge itself runs without it.
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+
+#include <spdlog/logger.h>
+
+#include "server/scheduler/frame_assembly.h"
+#include "server/scheduler/job_events.h"
+#include "server/scheduler/running_jobs.h"
+#include "server/scheduler/scheduler_options.h"
+#include "server/scheduler/store/job_store.h"
+
+namespace farm {
+
+class Finisher {
+ public:
+  Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly,
+           RunningJobs& jobs, JobEvents& events, spdlog::logger& log)
+      : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), log_(log) {}
+
+  // Merges the job if its tiles are all done and it is not final; one caller merges, others
+  // calling at the same time return at once.
+  void finish_if_complete(const std::string& job_id);
+  // The job is final: what is kept of it in memory and its tiles go.
+  void release(const std::string& job_id);
+  // The merged EXR or PNG under results/ of a SUCCEEDED job; nullopt otherwise.
+  std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview) const;
+
+ private:
+  void merge(const std::string& job_id);
+  // Where the job's frame goes: where its submitter said, or results/<job id>/<stem>.exr and .png.
+  MergedFiles files_of(const std::string& job_id, const JobInfo& info) const;
+  std::filesystem::path results_dir(const std::string& job_id) const;
+
+  const SchedulerOptions& options_;
+  JobStore& store_;
+  FrameAssembly& assembly_;
+  RunningJobs& jobs_;
+  JobEvents& events_;
+  spdlog::logger& log_;
+  std::mutex mutex_;
+  std::set<std::string> merging_;
+};
+
+}  // namespace farm

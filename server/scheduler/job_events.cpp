@@ -1,0 +1,61 @@
+#include "server/scheduler/job_events.h"
+
+namespace farm {
+
+bool JobEventQueue::pop(v1::JobEvent& event, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (!ready_.wait_for(lock, timeout, [&] { return !events_.empty(); })) return false;
+  event = std::move(events_.front());
+  events_.pop_front();
+  return true;
+}
+
+void JobEventQueue::push(const v1::JobEvent& event) {
+  {
+    std::lock_guard lock(mutex_);
+    events_.push_back(event);
+  }
+  ready_.notify_all();
+}
+
+void JobEvents::subscribe(const std::string& job_id, std::shared_ptr<JobEventQueue> queue) {
+  std::lock_guard lock(mutex_);
+  watchers_.emplace(job_id, std::move(queue));
+}
+
+void JobEvents::unsubscribe(const std::string& job_id, const std::shared_ptr<JobEventQueue>& queue) {
+  std::lock_guard lock(mutex_);
+  auto [begin, end] = watchers_.equal_range(job_id);
+  for (auto it = begin; it != end; ++it) {
+    if (it->second == queue) {
+      watchers_.erase(it);
+      return;
+    }
+  }
+}
+
+void JobEvents::publish(const std::string& job_id, const std::function<void(v1::JobEvent&)>& fill) {
+  // The job is read under the watchers' lock, so that events from concurrent slots reach a
+  // watcher in the order of the store's changes: tiles_done never goes back.
+  std::lock_guard lock(mutex_);
+  v1::JobEvent event;
+  *event.mutable_job() = *store_.get_job(job_id);
+  fill(event);
+  push_locked(event);
+}
+
+void JobEvents::publish_state(const v1::Job& job, v1::JobState from) {
+  v1::JobEvent event;
+  *event.mutable_job() = job;
+  event.mutable_state_changed()->set_from(from);
+  event.mutable_state_changed()->set_to(job.state());
+  std::lock_guard lock(mutex_);
+  push_locked(event);
+}
+
+void JobEvents::push_locked(const v1::JobEvent& event) {
+  auto [begin, end] = watchers_.equal_range(event.job().job_id());
+  for (auto it = begin; it != end; ++it) it->second->push(event);
+}
+
+}  // namespace farm

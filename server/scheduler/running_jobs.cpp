@@ -1,0 +1,58 @@
+#include "server/scheduler/running_jobs.h"
+
+#include <stdexcept>
+
+#include "server/common/scene_materializer.h"
+
+namespace farm {
+
+void RunningJobs::add(const std::string& job_id, std::shared_ptr<JobInfo> info) {
+  keep(job_id, std::move(info));
+}
+
+std::shared_ptr<const JobInfo> RunningJobs::get(const std::string& job_id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = jobs_.find(job_id); it != jobs_.end()) return it->second;
+  }
+  // A job an earlier process queued: its spec from the store, laid out and parsed once.
+  std::optional<v1::Job> job = store_.get_job(job_id);
+  std::optional<v1::JobSpec> spec = store_.get_spec(job_id);
+  if (!job || !spec) throw std::runtime_error("no spec for job " + job_id);
+  auto info = std::make_shared<JobInfo>();
+  info->spec = std::make_shared<const v1::JobSpec>(std::move(*spec));
+  info->scene_hash = job->scene_hash();
+  info->job = std::make_shared<const Job>(
+      materialize_scene(*info->spec, info->scene_hash, assets_, data_dir_).job);
+  return keep(job_id, std::move(info));
+}
+
+std::shared_ptr<const JobInfo> RunningJobs::keep(const std::string& job_id,
+                                                 std::shared_ptr<JobInfo> info) {
+  const RenderSettings& r = info->job->render;
+  info->frame = {Rect{0, 0, r.width, r.height}, r.aovs};
+  std::lock_guard lock(mutex_);
+  // Two slots may parse a resumed job at once: the first kept wins, so all share one.
+  return jobs_.emplace(job_id, std::move(info)).first->second;
+}
+
+void RunningJobs::add_tile_cost(const std::string& job_id, double ms) {
+  std::lock_guard lock(mutex_);
+  auto [it, added] = ms_per_tile_.emplace(job_id, ms);
+  if (!added) it->second = 0.5 * (it->second + ms);  // tiles differ: follow the recent ones
+}
+
+std::optional<double> RunningJobs::tile_cost(const std::string& job_id) const {
+  std::lock_guard lock(mutex_);
+  const auto it = ms_per_tile_.find(job_id);
+  if (it == ms_per_tile_.end()) return std::nullopt;
+  return it->second;
+}
+
+void RunningJobs::forget(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  jobs_.erase(job_id);
+  ms_per_tile_.erase(job_id);
+}
+
+}  // namespace farm

@@ -1,0 +1,68 @@
+#pragma once
+// What the scheduler keeps in memory of each job it runs, from its submission until it is final:
+// the job parsed once (JobInfo) and what its tiles cost to render (the dispatcher sizes batches
+// by it). After a restart, a job of an earlier process is read back from the store on first use.
+//
+// Lock: RunningJobs::mutex_ guards both maps and is a leaf (the store is read, and a job parsed,
+// outside it). The dispatcher reads tile costs under its own lock and the job store's (batch
+// sizing), never the other way round.
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "proto/farm.pb.h"
+#include "renderer/image/tile_buffer.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/scene/job.h"
+#include "server/common/asset_store.h"
+#include "server/scheduler/frame_assembly.h"
+#include "server/scheduler/job_merger.h"
+#include "server/scheduler/store/job_store.h"
+
+namespace farm {
+
+struct JobInfo {
+  std::shared_ptr<const v1::JobSpec> spec;
+  std::string scene_hash;
+  std::shared_ptr<const Job> job;
+  FrameLayout frame;                            // set by RunningJobs from the job's settings
+  std::shared_ptr<const PreparedScene> scene;  // null: the merge builds one if it needs it
+  MergedFiles files;                            // empty: results/<job id>/<stem>.exr and .png
+  std::function<void(TileBuffer&&)> merged;
+};
+
+class RunningJobs {
+ public:
+  RunningJobs(const JobStore& store, const AssetStore& assets, std::filesystem::path data_dir)
+      : store_(store), assets_(assets), data_dir_(std::move(data_dir)) {}
+
+  // Keeps a job being queued (its frame laid out here).
+  void add(const std::string& job_id, std::shared_ptr<JobInfo> info);
+  // The job's JobInfo; one an earlier process queued is read from the store, materialized and
+  // parsed once. std::runtime_error when the store does not have it.
+  std::shared_ptr<const JobInfo> get(const std::string& job_id);
+
+  // What one of the job's tiles took to render, as a batch measured it: the estimate follows the
+  // recent batches (tiles differ across a frame).
+  void add_tile_cost(const std::string& job_id, double ms);
+  std::optional<double> tile_cost(const std::string& job_id) const;  // nullopt: none measured yet
+
+  // The job is final: its memory goes.
+  void forget(const std::string& job_id);
+
+ private:
+  std::shared_ptr<const JobInfo> keep(const std::string& job_id, std::shared_ptr<JobInfo> info);
+
+  const JobStore& store_;
+  const AssetStore& assets_;
+  const std::filesystem::path data_dir_;
+  mutable std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<const JobInfo>> jobs_;
+  std::map<std::string, double> ms_per_tile_;
+};
+
+}  // namespace farm

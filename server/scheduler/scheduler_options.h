@@ -1,0 +1,39 @@
+#pragma once
+// How a scheduler core runs: read by every part of it (scheduler_core.h), set by its front ends
+// (`farm scheduler`'s flags, the embedded farm of `farm render`).
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "renderer/image/exr_io.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene.h"
+#include "server/common/log.h"
+
+namespace farm {
+
+struct SchedulerOptions {
+  std::filesystem::path data_dir;  // jobs.db, assets/, scenes/, tiles/, results/
+  std::chrono::milliseconds tile_deadline = std::chrono::minutes(10);
+  int max_attempts = 3;            // failed attempts of one tile before its job fails
+  int tiles_per_worker = 2;        // calls in flight per worker, so it never idles between calls
+  // Rendering time a call aims at; 0 sends one tile per call.
+  std::chrono::milliseconds batch_target = std::chrono::milliseconds(200);
+  std::chrono::milliseconds probe_interval = std::chrono::seconds(1);
+  std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
+  int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
+  ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
+  // What the scheduler logs on stderr unless the operator chose a level (set_log_level): a
+  // server logs info and up, the embedded farm of `farm render` only warnings and errors.
+  LogLevel log_level = LogLevel::info;
+  // The embedded farm of `farm render`: the job store lives in memory and finished tiles are
+  // pasted into their frame as they arrive (InMemoryAssembly), so nothing outlives the process.
+  // Off (the farm): jobs.db on disk, each batch a file before its tiles are marked done.
+  bool in_memory = false;
+  // Given each job's scene as submit() built it to validate the job: the embedded farm hands it
+  // to its in-process worker, so that `farm render` loads the models once, not twice.
+  std::function<void(const std::string& scene_hash, const Job& job, Scene scene)> validated_scene;
+};
+
+}  // namespace farm
