@@ -16,6 +16,7 @@
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/cli/job_file_options.h"
+#include "server/cli/log_level_option.h"
 #include "server/cli/progress_bar.h"
 #include "server/cli/render_override_options.h"
 #include "server/cli/validate_command.h"
@@ -157,6 +158,7 @@ void add_render_command(CLI::App& app, CommandTable& commands) {
                      "objects; colours: each object's tree by level)")
       ->check(CLI::Range(0, 64));
   render->add_flag("--quiet", [o](std::int64_t) { o->progress = false; }, "No progress bar");
+  add_log_level_option(*render, "warn");
   commands.add(render, [o] {
     run_render_command(*o);
     return 0;

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "renderer/scene/input_error.h"
+#include "server/cli/log_level_option.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
 
@@ -122,6 +123,7 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
             "merged into <data-dir>/results/<job>/ (EXR with the job's AOV layers + PNG "
             "preview), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
             "flight go back to the queue.");
+  add_log_level_option(*s, "info");
   commands.add(s, [o] { return run_scheduler_command(*o); });
 }
 

@@ -22,6 +22,7 @@
 #include "renderer/render_settings.h"
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
+#include "server/cli/log_level_option.h"
 #include "server/cli/version.h"
 
 namespace farm {
@@ -199,6 +200,7 @@ void add_worker_command(CLI::App& app, CommandTable& commands) {
                  "sub-tiles shared with concurrent calls; a call stops when its client cancels "
                  "or its deadline passes. Scenes are prepared once per scene hash. SIGINT or "
                  "SIGTERM shut the worker down cleanly.");
+  add_log_level_option(*worker, "info");
   commands.add(worker, [o] { return run_worker_command(*o); });
 }
 

@@ -99,5 +99,24 @@ TEST_F(FarmCliOptionsTest, UnknownEngineIsBadInput) {
   EXPECT_NE(r.output.find("--engine"), std::string::npos) << r.output;
 }
 
+// `--log-level` reaches the embedded farm's scheduler: at info its "queued" line shows, by
+// default (warn) it does not; a bad level is a usage error that names the choices.
+TEST_F(FarmCliOptionsTest, LogLevelChoosesWhatTheEmbeddedFarmLogs) {
+  const std::string render = "render " + test::shell_quote((test::kSource / "jobs/cornell.json").string()) +
+                             " --width 16 --height 16 --preview none --quiet --out " +
+                             test::shell_quote((dir_ / "out.exr").string());
+  const auto quiet = run_command(farm(render));
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output.find("queued"), std::string::npos) << quiet.output;
+  const auto chatty = run_command(farm(render + " --log-level info"));
+  ASSERT_EQ(chatty.exit_code, 0) << chatty.output;
+  EXPECT_NE(chatty.output.find("[scheduler] [info] job "), std::string::npos) << chatty.output;
+  EXPECT_NE(chatty.output.find("queued"), std::string::npos) << chatty.output;
+  const auto bad = run_command(farm(render + " --log-level loud"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("loud"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("trace, debug, info, warn, error"), std::string::npos) << bad.output;
+}
+
 }  // namespace
 }  // namespace farm
