@@ -25,6 +25,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/loaders.h"
+#include "renderer/util/path_confinement.h"
 
 namespace farm {
 namespace {
@@ -36,13 +37,7 @@ namespace {
 struct Confinement {
   std::filesystem::path folder;  // canonical folder of the .gltf/.glb
 
-  bool allows(const std::string& path) const {
-    std::error_code ec;
-    const std::filesystem::path p = std::filesystem::weakly_canonical(path, ec);
-    if (ec) return false;
-    const std::filesystem::path rel = p.lexically_relative(folder);
-    return !rel.empty() && *rel.begin() != "..";
-  }
+  bool allows(const std::string& path) const { return resolve_within(folder, path).has_value(); }
 };
 
 // Existence is answered truthfully so that a refused file fails in the read, with the reason.

@@ -14,6 +14,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/json_reader.h"
+#include "renderer/util/path_confinement.h"
 
 namespace farm {
 
@@ -36,16 +37,6 @@ struct Context {
 std::string shown(const std::string& s) {
   if (s.size() <= kMaxShownText) return s;
   return s.substr(0, kMaxShownText) + "...";
-}
-
-// Component-wise, so /assets2 is not taken to lie inside /assets.
-bool lies_within(const fs::path& root, const fs::path& p) {
-  auto pi = p.begin();
-  for (auto ri = root.begin(); ri != root.end(); ++ri, ++pi) {
-    if (ri->empty()) continue;  // a trailing separator
-    if (pi == p.end() || *ri != *pi) return false;
-  }
-  return true;
 }
 
 fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {

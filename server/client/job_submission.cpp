@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/util/path_confinement.h"
 #include "server/client/model_dependencies.h"
 #include "server/common/sha256.h"
 
@@ -64,7 +65,7 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   std::map<std::string, fs::path> by_path;  // spec path -> file
   const auto add = [&](const fs::path& file, const fs::path& model) {
     const fs::path relative = file.lexically_relative(root);
-    if (relative.empty() || *relative.begin() == "..") {
+    if (!resolve_within(root, file) || relative.empty() || *relative.begin() == "..") {
       throw InputError(fmt::format("{}: references {}, which lies outside the asset root {} (give "
                                    "--asset-root a folder that holds both)",
                                    model.string(), file.string(), root.string()));

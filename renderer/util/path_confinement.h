@@ -1,0 +1,20 @@
+#pragma once
+// The one rule for "this file lies inside that folder", wherever a path from outside must stay
+// within a root: a job's model files (its asset root), a glTF's buffers and images (the model's
+// folder), the files a submission sends (its asset root). Paths are resolved first
+// (weakly_canonical: `..` and every symlink along the existing part of the path), so neither
+// `..` nor a symlink leads out; folders compare component-wise, so /assets2 is not inside /assets.
+#include <filesystem>
+#include <optional>
+
+namespace farm {
+
+// Both already resolved (weakly_canonical): true when `path` is `root` or lies below it.
+bool lies_within(const std::filesystem::path& resolved_root, const std::filesystem::path& resolved_path);
+
+// `path` resolved, when it lies within `resolved_root`; nullopt when it does not or cannot be
+// resolved.
+std::optional<std::filesystem::path> resolve_within(const std::filesystem::path& resolved_root,
+                                                    const std::filesystem::path& path);
+
+}  // namespace farm
