@@ -1,3 +1,6 @@
+// The SQLite job store in one file (over 500 lines on purpose): the schema, its upgrade from
+// older versions and every statement on it change together, and a reader checks a query against
+// the schema without leaving the file.
 #include "server/scheduler/store/job_store.h"
 
 #include <fmt/format.h>
