@@ -1,6 +1,7 @@
 // glTF 2.0 (.gltf, .glb) through tinygltf, one loader in one file (over 500 lines: the bounds
-// checks below are most of it, and split apart they would be easier to leave out). Debian ships tinygltf as a shared library, so this file
-// only includes the header (no TINYGLTF_IMPLEMENTATION; see renderer/CMakeLists.txt on link order).
+// checks below are most of it, and split apart they would be easier to leave out). Debian ships
+// tinygltf as a shared library, so this file only includes the header (no
+// TINYGLTF_IMPLEMENTATION; see renderer/CMakeLists.txt on link order).
 // tinygltf parses the JSON and the buffers but leaves it to us to check that accessors fit their
 // buffers, so every read below is bounds-checked: malformed input ends in an InputError, never in
 // an out-of-bounds read.
