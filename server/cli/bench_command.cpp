@@ -1,6 +1,8 @@
 #include "server/cli/bench_command.h"
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "renderer/scene/job_limits.h"
 #include "server/bench/farm_bench.h"
@@ -32,25 +34,32 @@ void add_image_size_options(CLI::App& command, int& width, int& height) {
       ->capture_default_str();
 }
 
+// A list of thread counts to measure, "1,2,4".
+CLI::Option* add_thread_counts_option(CLI::App& command, std::vector<int>& threads, const std::string& what) {
+  return command.add_option("--threads", threads, what)->delimiter(',')->check(CLI::Range(1, kMaxThreads));
+}
+
+// The benchmarks over the lab's cow: the cow alone, the 10 x 10 grid of it, or both.
+void add_cow_scene_option(CLI::App& command, std::string& scene) {
+  command.add_option("--scene", scene, "Which scene: cow, cow-grid-100 or all")
+      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))
+      ->capture_default_str();
+}
+
 void add_raster_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<RasterBenchOptions>();
   CLI::App* raster = bench.add_subcommand(
       "raster", "Rasterizer frame times for the cow and the 100-cow grid at 1920x1080 "
                 "across thread counts");
   raster->add_option("--model", o->model, "The cow model (default ../shared/assets/dae/cow.dae)");
-  raster->add_option("--threads", o->threads, "Thread counts to measure")
-      ->delimiter(',')
-      ->check(CLI::Range(1, kMaxThreads))
-      ->capture_default_str();
+  add_thread_counts_option(*raster, o->threads, "Thread counts to measure")->capture_default_str();
   raster->add_option("--frames", o->frames, "Timed frames per configuration")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   raster->add_option("--warmup", o->warmup, "Untimed frames first")
       ->check(CLI::Range(0, 100))
       ->capture_default_str();
-  raster->add_option("--scene", o->scene, "Which scene: cow, cow-grid-100 or all")
-      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))
-      ->capture_default_str();
+  add_cow_scene_option(*raster, o->scene);
   raster->add_flag("--oversubscribe", o->oversubscribe,
                    "Also run thread counts above the number of cores");
   add_image_size_options(*raster, o->width, o->height);
@@ -77,9 +86,7 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
   path->add_option("--job", o->cornell_job, "The Cornell box job")->capture_default_str();
   path->add_option("--assets", o->assets,
                    "The lab's assets folder, for CBbunny (default ../shared/assets)");
-  path->add_option("--threads", o->threads, "Thread counts (default: 1 and all)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, kMaxThreads));
+  add_thread_counts_option(*path, o->threads, "Thread counts (default: 1 and all)");
   path->add_option("--spp", o->spp, "Samples per pixel")
       ->check(CLI::Range(1, 65536))
       ->capture_default_str();
@@ -134,16 +141,11 @@ void add_render_bench(CLI::App& bench, CommandTable& commands) {
                 "on the same scene: the lab's cow job and a 100-cow grid at 1920x1080, 1 and 2 threads");
   render->add_option("--cow-job", o->cow_job, "The cow job")->capture_default_str();
   render->add_option("--asset-root", o->asset_root, "The cow job's asset root")->capture_default_str();
-  render->add_option("--threads", o->threads, "Thread counts")
-      ->delimiter(',')
-      ->check(CLI::Range(1, kMaxThreads))
-      ->capture_default_str();
+  add_thread_counts_option(*render, o->threads, "Thread counts")->capture_default_str();
   render->add_option("--repeats", o->repeats, "Rounds (medians reported)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
-  render->add_option("--scene", o->scene, "Which scene: cow, cow-grid-100 or all")
-      ->check(CLI::IsMember({"cow", "cow-grid-100", "all"}))
-      ->capture_default_str();
+  add_cow_scene_option(*render, o->scene);
   add_runner(commands, render, o, run_render_bench);
 }
 
