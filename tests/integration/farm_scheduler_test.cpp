@@ -193,10 +193,16 @@ TEST_F(FarmSchedulerTest, KillingOneOfTwoWorkersMidJobStillFinishesWithIdentical
 // their deadline; they go to the other worker, and the hung one gets no more tiles, since it
 // fails the health check it is probed with.
 TEST_F(FarmSchedulerTest, AHungWorkersTilesMissTheirDeadlineAndFinishOnTheOther) {
+  // Long enough for a healthy worker's 1024-spp tile: an unoptimised (debug) build needs more.
+#ifdef NDEBUG
+  const std::string deadline_s = "1.5", deadline_ms = "1500";
+#else
+  const std::string deadline_s = "8", deadline_ms = "8000";
+#endif
   auto w1 = start_worker("w1");
   auto w2 = start_worker("w2");
   auto scheduler = start_scheduler(
-      {"--worker", w1->address(), "--worker", w2->address(), "--tile-deadline", "1.5", "--float"});
+      {"--worker", w1->address(), "--worker", w2->address(), "--tile-deadline", deadline_s, "--float"});
   ASSERT_TRUE(stub_);
   const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);  // 48 tiles, ~2 s on two threads
   const auto final_job = signal_worker_mid_job(spec, *w1, SIGSTOP);
@@ -204,7 +210,7 @@ TEST_F(FarmSchedulerTest, AHungWorkersTilesMissTheirDeadlineAndFinishOnTheOther)
   ASSERT_TRUE(final_job);
   ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
   EXPECT_GE(final_job->tile_failures(), 1u);
-  EXPECT_TRUE(scheduler->process().wait_for_line("no result within the tile deadline of 1500 ms", 5s))
+  EXPECT_TRUE(scheduler->process().wait_for_line("no result within the tile deadline of " + deadline_ms + " ms", 5s))
       << scheduler->process().output();
   EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 }
