@@ -5,13 +5,13 @@
 namespace farm {
 
 void TileCancel::cancel() {
-  std::function<void()> hook;
-  {
-    std::lock_guard lock(mutex_);
-    cancelled_ = true;
-    hook = hook_;
-  }
-  if (hook) hook();
+  // The hook runs under the lock: set_hook(nullptr) then waits for it, so the call it cancels
+  // (a ClientContext on the render thread's stack) is never touched after it has returned.
+  // Cancelling outside the lock crashed a scheduler now and then (absl: "Mutex unlocked when
+  // destroyed") when a job was cancelled as its call finished.
+  std::lock_guard lock(mutex_);
+  cancelled_ = true;
+  if (hook_) hook_();
 }
 
 void TileCancel::set_hook(std::function<void()> hook) {

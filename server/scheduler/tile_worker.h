@@ -23,7 +23,8 @@ class TileCancel {
  public:
   void cancel();
   bool cancelled() const { return cancelled_.load(); }
-  // Runs `hook` on cancel() (at once if already cancelled); cleared with nullptr.
+  // Runs `hook` on cancel() (at once if already cancelled); cleared with nullptr, which returns
+  // only once a hook already running has finished. The hook must not call back into this object.
   void set_hook(std::function<void()> hook);
 
  private:

@@ -342,7 +342,8 @@ TEST_F(FarmSchedulerTest, CancelStopsTheJobQuicklyAndTheWorkerServesTheNextJob) 
   v1::CancelJobRequest request;
   request.set_job_id(big.job_id());
   v1::CancelJobResponse response;
-  ASSERT_TRUE(stub_->CancelJob(&context, request, &response).ok());
+  const grpc::Status call = stub_->CancelJob(&context, request, &response);
+  ASSERT_TRUE(call.ok()) << call.error_code() << ": " << call.error_message();
   EXPECT_EQ(response.job().state(), v1::JOB_STATE_CANCELLED);
   const std::uint32_t done_at_cancel = response.job().tiles_done();
 
