@@ -211,7 +211,7 @@ void Dispatcher::keep(const WorkerEntry& w, const TileBatch& batch, RenderedTile
   const v1::TileStats& stats = result.response.stats();
   try {
     // The data first, then the mark: a done tile always has its data.
-    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame, batch.first, result);
+    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(), batch.first, result);
     if (!store_.batch_done(batch.job_id, batch.first, batch.count, stats)) return;
     measured(batch, stats);
     events_.publish(batch.job_id, [&](v1::JobEvent& event) {

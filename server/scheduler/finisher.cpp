@@ -57,7 +57,7 @@ void Finisher::merge(const std::string& job_id) {
     const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
     std::set<std::uint32_t> parts;
     for (const TileRecord& t : store_.tiles(job_id)) parts.insert(t.part);
-    TileBuffer film = assembly_.assemble(job_id, info->frame, {parts.begin(), parts.end()});
+    TileBuffer film = assembly_.assemble(job_id, info->frame(), {parts.begin(), parts.end()});
     write_merged(film, files_of(job_id, *info), options_.exr_type);
     const std::string validation = check_against_embree(*info);
     if (info->merged) info->merged(std::move(film));

@@ -6,9 +6,6 @@
 
 namespace farm {
 
-void RunningJobs::add(const std::string& job_id, std::shared_ptr<JobInfo> info) {
-  keep(job_id, std::move(info));
-}
 
 std::shared_ptr<const JobInfo> RunningJobs::get(const std::string& job_id) {
   {
@@ -24,13 +21,11 @@ std::shared_ptr<const JobInfo> RunningJobs::get(const std::string& job_id) {
   info->scene_hash = job->scene_hash();
   info->job = std::make_shared<const Job>(
       materialize_scene(*info->spec, info->scene_hash, assets_, data_dir_).job);
-  return keep(job_id, std::move(info));
+  return add(job_id, std::move(info));
 }
 
-std::shared_ptr<const JobInfo> RunningJobs::keep(const std::string& job_id,
-                                                 std::shared_ptr<JobInfo> info) {
-  const RenderSettings& r = info->job->render;
-  info->frame = {Rect{0, 0, r.width, r.height}, r.aovs};
+std::shared_ptr<const JobInfo> RunningJobs::add(const std::string& job_id,
+                                                std::shared_ptr<const JobInfo> info) {
   std::lock_guard lock(mutex_);
   // Two slots may parse a resumed job at once: the first kept wins, so all share one.
   return jobs_.emplace(job_id, std::move(info)).first->second;

@@ -29,10 +29,12 @@ struct JobInfo {
   std::shared_ptr<const v1::JobSpec> spec;
   std::string scene_hash;
   std::shared_ptr<const Job> job;
-  FrameLayout frame;                            // set by RunningJobs from the job's settings
   std::shared_ptr<const PreparedScene> scene;  // null: the merge builds one if it needs it
   MergedFiles files;                            // empty: results/<job id>/<stem>.exr and .png
   std::function<void(TileBuffer&&)> merged;
+
+  // The frame the job's tiles make up: its image and AOVs.
+  FrameLayout frame() const { return {Rect{0, 0, job->render.width, job->render.height}, job->render.aovs}; }
 };
 
 class RunningJobs {
@@ -40,8 +42,8 @@ class RunningJobs {
   RunningJobs(const JobStore& store, const AssetStore& assets, std::filesystem::path data_dir)
       : store_(store), assets_(assets), data_dir_(std::move(data_dir)) {}
 
-  // Keeps a job being queued (its frame laid out here).
-  void add(const std::string& job_id, std::shared_ptr<JobInfo> info);
+  // Keeps a job being queued; returns the one kept (an earlier one for the same id wins).
+  std::shared_ptr<const JobInfo> add(const std::string& job_id, std::shared_ptr<const JobInfo> info);
   // The job's JobInfo; one an earlier process queued is read from the store, materialized and
   // parsed once. std::runtime_error when the store does not have it.
   std::shared_ptr<const JobInfo> get(const std::string& job_id);
@@ -55,8 +57,6 @@ class RunningJobs {
   void forget(const std::string& job_id);
 
  private:
-  std::shared_ptr<const JobInfo> keep(const std::string& job_id, std::shared_ptr<JobInfo> info);
-
   const JobStore& store_;
   const AssetStore& assets_;
   const std::filesystem::path data_dir_;
