@@ -34,6 +34,12 @@ void add_image_size_options(CLI::App& command, int& width, int& height) {
       ->capture_default_str();
 }
 
+// The path-traced benchmarks' samples per pixel (bounded below the job's limit: a benchmark
+// should end).
+void add_spp_option(CLI::App& command, int& spp) {
+  command.add_option("--spp", spp, "Samples per pixel")->check(CLI::Range(1, 65536))->capture_default_str();
+}
+
 // A list of thread counts to measure, "1,2,4".
 CLI::Option* add_thread_counts_option(CLI::App& command, std::vector<int>& threads, const std::string& what) {
   return command.add_option("--threads", threads, what)->delimiter(',')->check(CLI::Range(1, kMaxThreads));
@@ -87,9 +93,7 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
   path->add_option("--assets", o->assets,
                    "The lab's assets folder, for CBbunny (default ../shared/assets)");
   add_thread_counts_option(*path, o->threads, "Thread counts (default: 1 and all)");
-  path->add_option("--spp", o->spp, "Samples per pixel")
-      ->check(CLI::Range(1, 65536))
-      ->capture_default_str();
+  add_spp_option(*path, o->spp);
   add_image_size_options(*path, o->width, o->height);
   path->add_option("--scene", o->scene, "Which scene: cornell, cbbunny or all")
       ->check(CLI::IsMember({"cornell", "cbbunny", "all"}))
@@ -109,9 +113,7 @@ void add_farm_bench(CLI::App& bench, CommandTable& commands) {
       "farm", "The farm's overhead: the Cornell box path traced through farm render, a scheduler with 1 "
               "and with 2 workers over loopback; then tiny jobs for jobs/s and submit latency");
   farm->add_option("--job", o->job, "The job to render")->capture_default_str();
-  farm->add_option("--spp", o->spp, "Samples per pixel")
-      ->check(CLI::Range(1, 65536))
-      ->capture_default_str();
+  add_spp_option(*farm, o->spp);
   add_image_size_options(*farm, o->width, o->height);
   farm->add_option("--repeats", o->repeats, "Renders per configuration (median reported)")
       ->check(CLI::Range(1, 100))
