@@ -64,6 +64,9 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
 
   std::map<std::string, fs::path> by_path;  // spec path -> file
   const auto add = [&](const fs::path& file, const fs::path& model) {
+    // Two conditions, both needed: the file must really lie in the root (resolved, so no symlink
+    // leads out), and it must be named under the root as the model names it (lexically, since a
+    // worker lays the files out by the names the models use, symlinks or not).
     const fs::path relative = file.lexically_relative(root);
     if (!resolve_within(root, file) || relative.empty() || *relative.begin() == "..") {
       throw InputError(fmt::format("{}: references {}, which lies outside the asset root {} (give "
