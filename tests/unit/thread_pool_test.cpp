@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <future>
+#include <memory>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -29,13 +30,28 @@ TEST(ThreadPool, ParallelForVisitsEveryItemOnceOnAThreadOfThePool) {
 TEST(ThreadPool, TheFirstExceptionIsRethrownAndTheRestSkipped) {
   ThreadPool pool(2);
   std::atomic<int> ran{0};
-  EXPECT_THROW(pool.parallel_for(10000, 1,
-                                 [&](std::size_t begin, std::size_t, int) {
-                                   ++ran;
-                                   if (begin == 0) throw std::runtime_error("chunk 0");
-                                 }),
+  // Every chunk but the throwing one is held until the failure is recorded, so the outcome does
+  // not depend on which thread the OS runs first (a preempted thrower once let the other thread
+  // run all 9999 chunks before the skip took effect).
+  std::promise<std::shared_ptr<ThreadPool::Work>> work_promise;
+  const std::shared_future<std::shared_ptr<ThreadPool::Work>> work_future = work_promise.get_future().share();
+  const std::shared_ptr<ThreadPool::Work> work =
+      pool.start(10000, 1, [&](std::size_t begin, std::size_t, int) {
+        ++ran;
+        if (begin == 0) throw std::runtime_error("chunk 0");
+        const std::shared_ptr<ThreadPool::Work>& self = work_future.get();
+        while (!self->failure()) std::this_thread::yield();
+      });
+  work_promise.set_value(work);
+  work->wait();
+  ASSERT_TRUE(work->failure());
+  // Chunk 0, plus at most the one chunk each other thread had claimed before the failure.
+  EXPECT_LE(ran.load(), pool.size());
+  // parallel_for rethrows the chunk's exception to its caller.
+  EXPECT_THROW(pool.parallel_for(100, 1, [](std::size_t begin, std::size_t, int) {
+                 if (begin == 0) throw std::runtime_error("chunk 0");
+               }),
                std::runtime_error);
-  EXPECT_LT(ran.load(), 10000);
   // The pool still works afterwards.
   std::atomic<int> after{0};
   pool.parallel_for(10, 1, [&](std::size_t, std::size_t, int) { ++after; });
