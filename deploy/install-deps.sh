@@ -31,12 +31,27 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
-  exit 0
+else
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# The Python test tools (PyPI, pinned): a venv of Debian's python3 at build/test-venv, which the
+# tests find through CMake (FARM_TEST_PYTHON). Reinstalled only when the pins change.
+repo="$(cd "$(dirname "$0")/.." && pwd)"
+venv="$repo/build/test-venv"
+requirements="$repo/tests/python/requirements-test.txt"
+stamp="$venv/.requirements-test.txt"
+if ! cmp -s "$requirements" "$stamp" 2>/dev/null; then
+  echo "install-deps: Python test tools into $venv"
+  rm -rf "$venv"
+  /usr/bin/python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$requirements"
+  cp "$requirements" "$stamp"
+else
+  echo "install-deps: Python test tools present in $venv"
+fi

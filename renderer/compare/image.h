@@ -1,0 +1,56 @@
+#pragma once
+// An image as the comparison metrics see it: float channels exactly as stored, any channel set.
+// EXR channels keep their names and values (half widened to float); an 8-bit PNG or JPEG holds
+// its stored values scaled to [0, 1] (sRGB-encoded, as `idiff` reads them), channels R G B
+// (and A), or Y for a grey image.
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace farm {
+
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<std::string> channels;  // EXR names: R G B A Z N.X ... variance.R ...
+  std::vector<float> values;          // interleaved: ((y * width) + x) * channels.size() + c
+  bool display_referred = false;      // true for PNG/JPEG: sRGB-encoded values, not linear
+
+  std::size_t pixel_count() const { return static_cast<std::size_t>(width) * static_cast<std::size_t>(height); }
+  std::size_t channel_count() const { return channels.size(); }
+  // The index of the channel called `name`, or -1.
+  int channel(std::string_view name) const;
+  float at(int x, int y, int c) const {
+    return values[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) *
+                      channels.size() +
+                  static_cast<std::size_t>(c)];
+  }
+  float& at(int x, int y, int c) {
+    return values[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) *
+                      channels.size() +
+                  static_cast<std::size_t>(c)];
+  }
+};
+
+// A blank image of the given size and channels, every value 0.
+Image make_image(int width, int height, std::vector<std::string> channels);
+
+// Reads an EXR (every channel of its first part, as float), a PNG (8 or 16 bit) or a JPEG by
+// its contents, not its extension. Throws InputError naming the file on a missing or unreadable
+// file, and refuses images over job_limits' pixel bound.
+Image read_image(const std::filesystem::path& file);
+
+// The colour channels a metric compares: R G B when present, else Y (grey). Empty when neither.
+std::vector<int> colour_channels(const Image& image);
+
+// Writes an 8-bit RGB PNG of channels R G B (or a single channel as grey) of `image`, each value
+// clamped to [0, 1] and stored as is (no transfer function: diff maps are already display
+// values). Written to a temporary file and renamed into place.
+void write_png_image(const Image& image, const std::filesystem::path& file);
+
+// Writes every channel of `image` to an EXR as 32-bit float, atomically.
+void write_exr_image(const Image& image, const std::filesystem::path& file);
+
+}  // namespace farm
