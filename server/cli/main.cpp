@@ -12,6 +12,7 @@
 #include "server/cli/bench_command.h"
 #include "server/cli/cancel_command.h"
 #include "server/cli/command_table.h"
+#include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
 #include "server/cli/info_command.h"
 #include "server/cli/render_command.h"
@@ -34,6 +35,8 @@ constexpr const char* kOverview =
     "  farm render JOB   render a job locally to EXR + PNG preview\n"
     "  farm info FILE    show what a model or job file contains\n"
     "  farm validate JOB compare our BVH's ray hits with Embree's on a job's scene\n"
+    "  farm compare REF NEW  compare an image with its reference (exact, idiff threshold, PSNR, SSIM,\n"
+    "                    FLIP, z-test): PASS / WARN / FAIL\n"
     "  farm bench raster measure rasterizer speed and thread scaling\n"
     "  farm bench rt     compare our BVHs with Embree\n"
     "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
@@ -54,6 +57,7 @@ int main(int argc, char** argv) {
   farm::add_render_command(app, commands);
   farm::add_info_command(app, commands);
   farm::add_validate_command(app, commands);
+  farm::add_compare_command(app, commands);
   farm::add_bench_command(app, commands);
   farm::add_worker_command(app, commands);
   farm::add_scheduler_command(app, commands);

@@ -1,0 +1,201 @@
+#include "renderer/compare/image.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <Iex.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+#include "renderer/image/jpeg_reader.h"
+#include "renderer/image/output_file.h"
+#include "renderer/image/png_reader.h"
+#include "renderer/image/png_writer.h"
+#include "renderer/image/rgb8_image.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+enum class Format { exr, png, jpeg, unknown };
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<std::FILE, FileCloser>;
+
+Format sniff(std::FILE* in) {
+  std::array<unsigned char, 4> magic{};
+  const std::size_t got = std::fread(magic.data(), 1, magic.size(), in);
+  std::rewind(in);
+  if (got >= 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) return Format::exr;
+  if (got >= 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return Format::png;
+  if (got >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff) return Format::jpeg;
+  return Format::unknown;
+}
+
+// Colour first, as image tools list them (R G B A), then every other channel by name.
+int channel_rank(const std::string& name) {
+  static constexpr std::array<const char*, 4> kFirst = {"R", "G", "B", "A"};
+  for (std::size_t i = 0; i < kFirst.size(); ++i)
+    if (name == kFirst[i]) return static_cast<int>(i);
+  return static_cast<int>(kFirst.size());
+}
+
+Image read_exr_channels(const fs::path& file) {
+  try {
+    Imf::InputFile in(file.c_str());
+    const Imath::Box2i dw = in.header().dataWindow();
+    const long long width = static_cast<long long>(dw.max.x) - dw.min.x + 1;
+    const long long height = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+    if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide) {
+      throw InputError(fmt::format("{}: a {}x{} data window is outside 1..{} pixels a side", file.string(), width,
+                                   height, kMaxImageSide));
+    }
+    std::vector<std::string> names;
+    for (auto it = in.header().channels().begin(); it != in.header().channels().end(); ++it) {
+      if (it.channel().xSampling != 1 || it.channel().ySampling != 1) {
+        throw InputError(fmt::format("{}: channel {} is subsampled, which comparisons do not support", file.string(),
+                                     it.name()));
+      }
+      names.emplace_back(it.name());
+    }
+    if (names.empty()) throw InputError(fmt::format("{}: the EXR has no channels", file.string()));
+    std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+      const int ra = channel_rank(a), rb = channel_rank(b);
+      return ra != rb ? ra < rb : (ra == 4 && a < b);
+    });
+    Image image = make_image(static_cast<int>(width), static_cast<int>(height), names);
+    // OpenEXR writes each channel straight into the interleaved array (converting half to float),
+    // addressed from the data window's corner.
+    const std::size_t pixel = sizeof(float) * names.size();
+    const std::size_t row = pixel * static_cast<std::size_t>(width);
+    Imf::FrameBuffer frame;
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      char* base = reinterpret_cast<char*>(image.values.data() + c) - static_cast<std::ptrdiff_t>(dw.min.x) * static_cast<std::ptrdiff_t>(pixel) -
+                   static_cast<std::ptrdiff_t>(dw.min.y) * static_cast<std::ptrdiff_t>(row);
+      frame.insert(names[c], Imf::Slice(Imf::FLOAT, base, pixel, row));
+    }
+    in.setFrameBuffer(frame);
+    in.readPixels(dw.min.y, dw.max.y);
+    return image;
+  } catch (const Iex::BaseExc& e) {
+    throw InputError(fmt::format("{}: cannot read EXR: {}", file.string(), e.what()));
+  }
+}
+
+Image from_decoded(DecodedImage decoded) {
+  static const std::vector<std::vector<std::string>> kNames = {
+      {"Y"}, {"Y", "A"}, {"R", "G", "B"}, {"R", "G", "B", "A"}};
+  Image image;
+  image.width = decoded.width;
+  image.height = decoded.height;
+  image.channels = kNames[static_cast<std::size_t>(decoded.channels - 1)];
+  image.values = std::move(decoded.values);
+  image.display_referred = true;
+  return image;
+}
+
+}  // namespace
+
+int Image::channel(std::string_view name) const {
+  for (std::size_t i = 0; i < channels.size(); ++i)
+    if (channels[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+Image make_image(int width, int height, std::vector<std::string> channels) {
+  Image image;
+  image.width = width;
+  image.height = height;
+  image.channels = std::move(channels);
+  image.values.assign(image.pixel_count() * image.channels.size(), 0.0f);
+  return image;
+}
+
+Image read_image(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) {
+    throw InputError(fmt::format("{}: {}", file.string(), fs::exists(file, ec) ? "not a regular file" : "no such file"));
+  }
+  const File in(std::fopen(file.c_str(), "rb"));
+  if (!in) throw InputError(fmt::format("{}: cannot open for reading", file.string()));
+  try {
+    switch (sniff(in.get())) {
+      case Format::exr: return read_exr_channels(file);
+      case Format::png: return from_decoded(read_png(in.get(), file, kMaxImageSide));
+      case Format::jpeg: return from_decoded(read_jpeg(in.get(), file, kMaxImageSide));
+      case Format::unknown: break;
+    }
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {  // the readers' errors already name the file
+    throw InputError(e.what());
+  }
+  throw InputError(fmt::format("{}: not an EXR, PNG or JPEG image", file.string()));
+}
+
+std::vector<int> colour_channels(const Image& image) {
+  const int r = image.channel("R"), g = image.channel("G"), b = image.channel("B");
+  if (r >= 0 && g >= 0 && b >= 0) return {r, g, b};
+  if (const int y = image.channel("Y"); y >= 0) return {y};
+  return {};
+}
+
+void write_png_image(const Image& image, const fs::path& file) {
+  std::vector<int> source = colour_channels(image);
+  if (source.empty() && !image.channels.empty()) source = {0};
+  if (source.empty()) throw std::invalid_argument(fmt::format("{}: an image without channels", file.string()));
+  if (source.size() == 1) source = {source[0], source[0], source[0]};
+  Rgb8Image rgb;
+  rgb.width = image.width;
+  rgb.height = image.height;
+  rgb.pixels.resize(image.pixel_count() * 3);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (std::size_t c = 0; c < 3; ++c) {
+        const float v = std::clamp(image.at(x, y, source[c]), 0.0f, 1.0f);  // NaN stays NaN here...
+        const float safe = v == v ? v : 0.0f;                                    // ...and is shown black
+        rgb.pixels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(image.width) + static_cast<std::size_t>(x)) * 3 + c] =
+            static_cast<std::uint8_t>(safe * 255.0f + 0.5f);
+      }
+  write_c_file_atomically(file, [&](std::FILE* out) { write_png(rgb, out, file); });
+}
+
+void write_exr_image(const Image& image, const fs::path& file) {
+  if (image.pixel_count() == 0 || image.channels.empty()) {
+    throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
+  }
+  Imf::Header header(image.width, image.height);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  Imf::FrameBuffer frame;
+  const std::size_t pixel = sizeof(float) * image.channels.size();
+  const std::size_t row = pixel * static_cast<std::size_t>(image.width);
+  for (std::size_t c = 0; c < image.channels.size(); ++c) {
+    header.channels().insert(image.channels[c], Imf::Channel(Imf::FLOAT));
+    // Slices are non-const in OpenEXR's API; a file being written only reads through them.
+    frame.insert(image.channels[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(image.values.data() + c)),
+                                               pixel, row));
+  }
+  write_file_atomically(file, [&](const fs::path& temp) {
+    try {
+      Imf::OutputFile out(temp.c_str(), header);
+      out.setFrameBuffer(frame);
+      out.writePixels(image.height);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(fmt::format("{}: cannot write EXR: {}", file.string(), e.what()));
+    }
+  });
+}
+
+}  // namespace farm
