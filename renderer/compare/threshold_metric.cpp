@@ -1,6 +1,8 @@
 // threshold: OpenImageIO idiff's rule, so that `idiff` with the same flags gives the same verdict.
 // Per pixel, a channel's error is |a - b|; it counts toward failing when it exceeds `fail` and
-// (with fail_relative > 0) also that fraction of the mean of |a| and |b|; likewise warnings. A
+// (with fail_relative > 0) also that fraction of the mean of |a| and |b|; likewise warnings. As
+// in idiff, an image without a failing pixel passes, so WARN means "some pixels fail, but fewer
+// than fail_percent, and the warnings exceed warn_percent (or an error exceeds hard_warn)". A
 // non-finite value matches a non-finite value of the same kind (NaN or inf); against anything
 // else its error is infinite. One deliberate difference from idiff: idiff lets the first
 // mismatched non-finite value raise the max error without counting its pixel as failing; here it
@@ -72,7 +74,11 @@ CompareResult threshold_metric(const Image& reference, const Image& test, const 
   const double pixels = static_cast<double>(pixel_count);
 
   CompareResult result;
-  if (static_cast<double>(failing) > s.fail_percent / 100.0 * pixels || max_error > s.hard_fail) {
+  // idiff's order: no failing pixel at all is a PASS (warnings and hard limits notwithstanding);
+  // then FAIL over fail_percent or hard_fail; then WARN over warn_percent or hard_warn.
+  if (failing == 0) {
+    result.verdict = Verdict::pass;
+  } else if (static_cast<double>(failing) > s.fail_percent / 100.0 * pixels || max_error > s.hard_fail) {
     result.verdict = Verdict::fail;
   } else if (static_cast<double>(warning) > s.warn_percent / 100.0 * pixels || max_error > s.hard_warn) {
     result.verdict = Verdict::warn;
