@@ -25,9 +25,11 @@ ALLOWED = {
     "server/client": ["server/common", "renderer", "renderer/util", "proto"],
     "server/embedded": ["server/worker", "server/scheduler", "server/client", "server/common",
                         "renderer", "renderer/util", "proto"],
+    "server/review": ["server/embedded", "server/worker", "server/scheduler", "server/client",
+                      "server/common", "renderer", "renderer/util", "proto"],
     "server/bench": ["server/embedded", "server/worker", "server/scheduler", "server/client",
                      "server/common", "renderer", "renderer/util", "proto"],
-    "server/cli": ["server/bench", "server/embedded", "server/worker", "server/scheduler",
+    "server/cli": ["server/bench", "server/review", "server/embedded", "server/worker", "server/scheduler",
                    "server/client", "server/common", "renderer", "renderer/util", "proto"],
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"')

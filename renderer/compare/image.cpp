@@ -18,6 +18,7 @@
 #include "renderer/image/output_file.h"
 #include "renderer/image/png_reader.h"
 #include "renderer/image/png_writer.h"
+#include "renderer/image/preview.h"
 #include "renderer/image/rgb8_image.h"
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
@@ -170,6 +171,21 @@ void write_png_image(const Image& image, const fs::path& file) {
             static_cast<std::uint8_t>(safe * 255.0f + 0.5f);
       }
   write_c_file_atomically(file, [&](std::FILE* out) { write_png(rgb, out, file); });
+}
+
+Image to_display(const Image& image) {
+  std::vector<int> source = colour_channels(image);
+  if (source.empty()) return {};
+  if (source.size() == 1) source = {source[0], source[0], source[0]};
+  Image out = make_image(image.width, image.height, {"R", "G", "B"});
+  out.display_referred = true;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      for (std::size_t c = 0; c < 3; ++c) {
+        const float v = image.at(x, y, source[c]);
+        out.at(x, y, static_cast<int>(c)) = image.display_referred ? v : linear_to_srgb(v);
+      }
+  return out;
 }
 
 void write_exr_image(const Image& image, const fs::path& file) {

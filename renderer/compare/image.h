@@ -50,6 +50,11 @@ std::vector<int> colour_channels(const Image& image);
 // values). Written to a temporary file and renamed into place.
 void write_png_image(const Image& image, const std::filesystem::path& file);
 
+// What a person looks at: the colour channels as R G B display values. An 8-bit image's stored
+// (sRGB-encoded) values as they are; a linear image's clamped to [0, 1] and sRGB-encoded, as
+// previews are.
+Image to_display(const Image& image);
+
 // Writes every channel of `image` to an EXR as 32-bit float, atomically.
 void write_exr_image(const Image& image, const std::filesystem::path& file);
 

@@ -323,13 +323,20 @@ std::vector<JsonValue> JsonValue::array() const {
 }
 
 JsonObject JsonValue::object(std::initializer_list<std::string_view> allowed) const {
-  JsonObject obj(*this, allowed);
+  return object(std::vector<std::string_view>(allowed));
+}
+
+JsonObject JsonValue::object(std::vector<std::string_view> allowed) const {
+  JsonObject obj(*this, std::move(allowed));
   obj.reject_unknown_keys();
   return obj;
 }
 
 JsonObject::JsonObject(const JsonValue& value, std::initializer_list<std::string_view> allowed)
-    : value_(value), allowed_(allowed) {
+    : JsonObject(value, std::vector<std::string_view>(allowed)) {}
+
+JsonObject::JsonObject(const JsonValue& value, std::vector<std::string_view> allowed)
+    : value_(value), allowed_(std::move(allowed)) {
   if (!value_.raw().is_object()) value_.fail_expected("an object");
 }
 

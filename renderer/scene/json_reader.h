@@ -1,5 +1,5 @@
 #pragma once
-// Strict, path-aware reading of JSON input files (internal to the scene library). Every failure
+// Strict, path-aware reading of JSON input files (job files, regression suites). Every failure
 // is an InputError "<file>: <json.path>: <what>", so a user can find the offending value.
 #include <cstdint>
 #include <glm/vec3.hpp>
@@ -71,6 +71,7 @@ class JsonValue {
   std::vector<JsonValue> array() const;
   // An object whose keys must all be among `allowed`; the first other key is an error.
   JsonObject object(std::initializer_list<std::string_view> allowed) const;
+  JsonObject object(std::vector<std::string_view> allowed) const;  // keys known only at run time
 
  private:
   const nlohmann::json* value_;
@@ -82,6 +83,7 @@ class JsonObject {
  public:
   // Checks only that `value` is an object; call reject_unknown_keys() to enforce `allowed`.
   JsonObject(const JsonValue& value, std::initializer_list<std::string_view> allowed);
+  JsonObject(const JsonValue& value, std::vector<std::string_view> allowed);
 
   std::optional<JsonValue> get(std::string_view key) const;
   JsonValue require(std::string_view key) const;

@@ -15,6 +15,7 @@
 #include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
 #include "server/cli/info_command.h"
+#include "server/cli/regress_command.h"
 #include "server/cli/render_command.h"
 #include "server/cli/scheduler_command.h"
 #include "server/cli/status_command.h"
@@ -37,6 +38,7 @@ constexpr const char* kOverview =
     "  farm validate JOB compare our BVH's ray hits with Embree's on a job's scene\n"
     "  farm compare REF NEW  compare an image with its reference (exact, idiff threshold, PSNR, SSIM,\n"
     "                    FLIP, z-test): PASS / WARN / FAIL\n"
+    "  farm regress SUITE render a regression suite, compare with references; JUnit, HTML report\n"
     "  farm bench raster measure rasterizer speed and thread scaling\n"
     "  farm bench rt     compare our BVHs with Embree\n"
     "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
@@ -58,6 +60,7 @@ int main(int argc, char** argv) {
   farm::add_info_command(app, commands);
   farm::add_validate_command(app, commands);
   farm::add_compare_command(app, commands);
+  farm::add_regress_command(app, commands);
   farm::add_bench_command(app, commands);
   farm::add_worker_command(app, commands);
   farm::add_scheduler_command(app, commands);

@@ -15,7 +15,8 @@ namespace {
 namespace fs = std::filesystem;
 
 bool any_override(const RenderOverrides& o) {
-  return o.engine || o.width || o.height || o.spp || o.threads || o.tile_size || o.image || o.preview;
+  return o.engine || o.width || o.height || o.spp || o.threads || o.tile_size || o.max_depth || o.seed ||
+         !o.add_aovs.empty() || o.image || o.preview;
 }
 
 // The job text with model paths relative to the root and the overrides written in.
@@ -35,6 +36,15 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
   if (o.spp) render["spp"] = *o.spp;
   if (o.threads) render["threads"] = *o.threads;
   if (o.tile_size) render["tile_size"] = *o.tile_size;
+  if (o.max_depth) render["max_depth"] = *o.max_depth;
+  if (o.seed) render["seed"] = *o.seed;
+  if (!o.add_aovs.empty()) {
+    // The job's AOVs as parsed (overrides applied), written back in the job file's names.
+    nlohmann::ordered_json aovs = nlohmann::ordered_json::array();
+    for (Aov aov : kAllAovs)
+      if (job.render.aovs.has(aov)) aovs.push_back(std::string(to_string(aov)));
+    doc["output"]["aovs"] = aovs;
+  }
   if (o.image) doc["output"]["image"] = o.image->generic_string();
   if (o.preview) {
     if (o.preview->empty()) {

@@ -18,6 +18,13 @@ void apply_overrides(Job& job, const RenderOverrides& o) {
   if (o.spp) r.spp = *o.spp;
   if (o.threads) r.threads = *o.threads;
   if (o.tile_size) r.tile_size = *o.tile_size;
+  if (o.max_depth) r.max_depth = *o.max_depth;
+  if (o.seed) r.seed = *o.seed;
+  for (const std::string& name : o.add_aovs) {
+    const auto aov = aov_from_string(name);
+    if (!aov) throw InputError(fmt::format("unknown AOV '{}'", name));
+    r.aovs.add(*aov);
+  }
   if (o.image) job.output.image = *o.image;
   if (o.preview) job.output.preview = *o.preview;
 }

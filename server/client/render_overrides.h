@@ -1,8 +1,10 @@
 #pragma once
 // Command-line values that replace a job's own (`farm render`, `farm submit`).
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "renderer/scene/job.h"
 
@@ -10,7 +12,9 @@ namespace farm {
 
 struct RenderOverrides {
   std::optional<std::string> engine;
-  std::optional<int> width, height, spp, threads, tile_size;
+  std::optional<int> width, height, spp, threads, tile_size, max_depth;
+  std::optional<std::uint64_t> seed;
+  std::vector<std::string> add_aovs;  // AOV names the output gains (a regression z-test's variance)
   std::optional<std::filesystem::path> image, preview;  // preview "" = none
   bool full_float = false;                              // 32-bit EXR instead of half
   std::optional<int> show_bvh;  // draw BVH boxes of levels <= this over the preview

@@ -1,0 +1,100 @@
+#include "server/cli/regress_command.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "renderer/scene/job_limits.h"
+#include "server/cli/progress_bar.h"
+#include "server/client/scheduler_client.h"
+#include "server/review/html_report.h"
+#include "server/review/junit_report.h"
+#include "server/review/regress_runner.h"
+#include "server/review/regress_summary.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RegressCommandOptions {
+  fs::path suite;
+  std::vector<std::string> filters;
+  std::optional<std::string> update;  // "failed" (the flag alone) or "all"
+  int jobs = 1;
+  int threads = 0;
+  std::optional<std::string> scheduler;
+  std::optional<fs::path> junit;
+  std::optional<fs::path> report;
+};
+
+// "PASS cow-raster exact", "FAIL cbox-path ztest: <summary>".
+std::string outcome_line(const TestOutcome& o) {
+  std::string line = fmt::format("{:<5} {} {}", to_string(o.status), o.name, to_string(o.settings.metric));
+  if (o.status != TestStatus::passed && o.status != TestStatus::skipped) line += ": " + o.message;
+  if (o.reference_updated) line += fmt::format(" [reference {} {}]", o.reference_missing ? "created:" : "replaced:", o.reference.string());
+  return line;
+}
+
+int run_regress_command(const RegressCommandOptions& o) {
+  const RegressSuite suite = load_regress_suite(o.suite);
+  RegressOptions options;
+  options.filters = o.filters;
+  options.update = !o.update ? ReferenceUpdate::none : (*o.update == "all" ? ReferenceUpdate::all : ReferenceUpdate::failed);
+  options.jobs = o.jobs;
+  options.threads = o.threads;
+  if (o.scheduler) options.scheduler = resolve_scheduler_address(*o.scheduler);
+  options.output_dir = o.report ? *o.report : fs::path("regress-report") / suite.name;
+
+  ProgressBar bar(suite.name, ProgressBar::stderr_is_terminal());
+  RegressEvents events;
+  events.finished = [&](const TestOutcome& outcome) {
+    if (ProgressBar::stderr_is_terminal()) fmt::print(stderr, "\r\x1b[K");  // the bar's line, cleared
+    fmt::print("{}\n", outcome_line(outcome));
+    std::fflush(stdout);
+  };
+  events.progress = [&](std::size_t done, std::size_t total) { bar.update(done, total); };
+  const std::vector<TestOutcome> outcomes = run_regress_suite(suite, options, events);
+
+  write_html_report(suite, outcomes, options.output_dir);
+  if (o.junit) write_junit_report(suite, outcomes, *o.junit);
+  const RegressCounts counts = count_outcomes(outcomes);
+  fmt::print("{}\n", counts.line());
+  fmt::print("report: {}\n", (options.output_dir / "index.html").string());
+  if (o.junit) fmt::print("junit: {}\n", o.junit->string());
+  return counts.exit_code();
+}
+
+}  // namespace
+
+void add_regress_command(CLI::App& app, CommandTable& commands) {
+  auto o = std::make_shared<RegressCommandOptions>();
+  CLI::App* regress = app.add_subcommand(
+      "regress", "Render a regression suite and compare every image with its reference (jobs/regress/README.md)");
+  regress->add_option("SUITE", o->suite, "The suite file (JSON)")->required();
+  regress->add_option("--filter", o->filters, "Run only the tests whose name matches this glob (repeatable)");
+  regress->add_option("--update", o->update,
+                      "Write the new image as the reference of every failed or missing test (--update), or of every "
+                      "test (--update all); each file written is named")
+      ->expected(0, 1)
+      ->default_str("failed")
+      ->check(CLI::IsMember({"failed", "all"}));
+  regress->add_option("--jobs", o->jobs, "Embedded farm: tests rendered at a time (default 1)")->check(CLI::Range(1, 64));
+  regress->add_option("--threads", o->threads, "Embedded farm: render threads (default: all cores)")
+      ->check(CLI::Range(0, kMaxThreads));
+  regress->add_option("--scheduler", o->scheduler,
+                      "Render on this scheduler instead (HOST:PORT, or $FARM_SCHEDULER when given empty): every job is "
+                      "submitted up front and compared as it finishes");
+  regress->add_option("--junit", o->junit, "Write JUnit XML here");
+  regress->add_option("--report", o->report, "The HTML report's folder (default regress-report/<suite name>/)");
+  regress->footer("Exit codes: 0 every test passed (warnings pass), 1 a test failed or could not be rendered, "
+                  "2 a bad suite file (the message names the JSON path).");
+  commands.add(regress, [o] { return run_regress_command(*o); });
+}
+
+}  // namespace farm

@@ -1,0 +1,14 @@
+#pragma once
+// A "compare" object of a regression suite (or of one of its tests): the metric and its
+// thresholds, keys as renderer/compare/compare_settings.h names them, each replacing the value it
+// is laid over one by one, so a test can tighten one threshold of the suite's defaults.
+#include "renderer/compare/compare_settings.h"
+#include "renderer/scene/json_reader.h"
+
+namespace farm {
+
+// `base` with the keys of `object` applied; unknown keys, wrong types and out-of-range values
+// are InputErrors naming the JSON path.
+CompareSettings read_compare_settings(const JsonValue& object, CompareSettings base);
+
+}  // namespace farm
