@@ -27,7 +27,7 @@ ALLOWED = {
                         "renderer", "renderer/util", "proto"],
     "server/review": ["server/embedded", "server/worker", "server/scheduler", "server/client",
                       "server/common", "renderer", "renderer/util", "proto"],
-    "server/bench": ["server/embedded", "server/worker", "server/scheduler", "server/client",
+    "server/bench": ["server/review", "server/embedded", "server/worker", "server/scheduler", "server/client",
                      "server/common", "renderer", "renderer/util", "proto"],
     "server/cli": ["server/bench", "server/review", "server/embedded", "server/worker", "server/scheduler",
                    "server/client", "server/common", "renderer", "renderer/util", "proto"],

@@ -13,6 +13,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "server/bench/bench_support.h"
+#include "server/bench/loopback_farm.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
@@ -26,42 +27,8 @@ using bench::self_binary;
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-constexpr auto kStartTimeout = std::chrono::seconds(30);
 
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-// A scheduler and `workers` workers on loopback, each in its own process, as a user runs them.
-class LoopbackFarm {
- public:
-  LoopbackFarm(const fs::path& dir, int workers, int tiles_per_worker, int batch_ms, int worker_threads) {
-    const std::string farm = self_binary();
-    scheduler_ = std::make_unique<ChildProcess>(std::vector<std::string>{
-        farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir", (dir / "scheduler").string(),
-        "--tiles-per-worker", std::to_string(tiles_per_worker), "--batch-ms", std::to_string(batch_ms)});
-    address_ = wait_for_listening(*scheduler_, "scheduler", kStartTimeout);
-    if (address_.empty()) throw std::runtime_error("the scheduler did not start: " + scheduler_->output());
-    for (int i = 0; i < workers; ++i) {
-      // Registered workers fetch their assets from the scheduler, like a real deployment.
-      auto worker = std::make_unique<ChildProcess>(std::vector<std::string>{
-          farm, "worker", "--listen", "127.0.0.1:0", "--scheduler", address_, "--cache-dir",
-          (dir / fmt::format("worker{}", i)).string(), "--threads", std::to_string(worker_threads)});
-      if (wait_for_listening(*worker, "worker", kStartTimeout).empty()) {
-        throw std::runtime_error("a worker did not start: " + worker->output());
-      }
-      workers_.push_back(std::move(worker));
-    }
-    // Wait until every worker has registered: a job then sees all of them from its first tile.
-    if (!scheduler_->wait_for_line(fmt::format("worker w{}-", workers), kStartTimeout)) {
-      throw std::runtime_error("the workers did not register: " + scheduler_->output());
-    }
-  }
-  const std::string& address() const { return address_; }
-
- private:
-  std::unique_ptr<ChildProcess> scheduler_;
-  std::vector<std::unique_ptr<ChildProcess>> workers_;
-  std::string address_;
-};
 
 // Submit, follow to the end, fetch the EXR: what `farm submit --wait` does.
 double render_through(SchedulerClient& client, const JobSubmission& submission, const fs::path& out) {
@@ -80,8 +47,8 @@ double render_through(SchedulerClient& client, const JobSubmission& submission, 
 void compare_setups(const FarmBenchOptions& o, const fs::path& dir, const JobSubmission& submission) {
   // The three set-ups take turns, (a) (b) (c) (a) (b) (c) ..., so that a change in the machine's
   // load during the run (it is shared) falls on all three alike; the medians are compared.
-  LoopbackFarm one(dir / "loopback1", 1, o.tiles_per_worker, o.batch_ms, 0);
-  LoopbackFarm two(dir / "loopback2", 2, o.tiles_per_worker, o.batch_ms, o.two_worker_threads);
+  bench::LoopbackFarm one(dir / "loopback1", 1, o.tiles_per_worker, o.batch_ms, 0);
+  bench::LoopbackFarm two(dir / "loopback2", 2, o.tiles_per_worker, o.batch_ms, o.two_worker_threads);
   SchedulerClient client_one(one.address()), client_two(two.address());
   std::vector<double> embedded, one_worker, two_workers;
   for (int i = 0; i < o.repeats; ++i) {
@@ -143,7 +110,7 @@ void run_farm_bench(const FarmBenchOptions& o) {
   ::sync();
 
   // Tiny jobs: one 16x16 tile each, submitted back to back, then followed to the end.
-  LoopbackFarm farm(dir / "tiny", 1, o.tiles_per_worker, o.batch_ms, 0);
+  bench::LoopbackFarm farm(dir / "tiny", 1, o.tiles_per_worker, o.batch_ms, 0);
   SchedulerClient client(farm.address());
   RenderOverrides tiny;
   tiny.engine = "raster";

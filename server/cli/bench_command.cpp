@@ -8,6 +8,7 @@
 #include "server/bench/farm_bench.h"
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
+#include "server/bench/regress_bench.h"
 #include "server/bench/render_bench.h"
 #include "server/bench/rt_bench.h"
 
@@ -151,6 +152,21 @@ void add_render_bench(CLI::App& bench, CommandTable& commands) {
   add_runner(commands, render, o, run_render_bench);
 }
 
+void add_regress_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<RegressBenchOptions>();
+  CLI::App* regress = bench.add_subcommand(
+      "regress", "A regression suite on the embedded farm (--jobs 1 and 2) and through a scheduler with two "
+                 "workers over loopback, taking turns; checks that all three give the same verdicts");
+  regress->add_option("--suite", o->suite, "The suite")->capture_default_str();
+  regress->add_option("--repeats", o->repeats, "Rounds (medians reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  regress->add_option("--worker-threads", o->worker_threads, "--threads of each worker")
+      ->check(CLI::Range(0, kMaxThreads))
+      ->capture_default_str();
+  add_runner(commands, regress, o, run_regress_bench);
+}
+
 }  // namespace
 
 void add_bench_command(CLI::App& app, CommandTable& commands) {
@@ -161,6 +177,7 @@ void add_bench_command(CLI::App& app, CommandTable& commands) {
   add_path_bench(*bench, commands);
   add_farm_bench(*bench, commands);
   add_render_bench(*bench, commands);
+  add_regress_bench(*bench, commands);
 }
 
 }  // namespace farm

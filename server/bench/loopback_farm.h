@@ -1,0 +1,27 @@
+#pragma once
+// A scheduler and workers on loopback, each its own `farm` process as a user runs them, for the
+// benchmarks that measure the farm over the network (bench farm, bench regress).
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "server/common/child_process.h"
+
+namespace farm::bench {
+
+class LoopbackFarm {
+ public:
+  // Starts `farm scheduler` under dir/scheduler and `workers` registered workers with
+  // `worker_threads` threads each (0: all cores); returns once every worker has registered.
+  // Throws std::runtime_error with the process's output when one does not start.
+  LoopbackFarm(const std::filesystem::path& dir, int workers, int tiles_per_worker, int batch_ms, int worker_threads);
+  const std::string& address() const { return address_; }
+
+ private:
+  std::unique_ptr<ChildProcess> scheduler_;
+  std::vector<std::unique_ptr<ChildProcess>> workers_;
+  std::string address_;
+};
+
+}  // namespace farm::bench
