@@ -8,6 +8,7 @@ std::string_view to_string(Aov aov) {
     case Aov::Normal: return "normal";
     case Aov::Albedo: return "albedo";
     case Aov::BvhCost: return "bvh_cost";
+    case Aov::Variance: return "variance";
   }
   return "?";
 }

@@ -5,14 +5,17 @@
 
 namespace farm {
 
-enum class Aov { Depth, Normal, Albedo, BvhCost };
-inline constexpr Aov kAllAovs[] = {Aov::Depth, Aov::Normal, Aov::Albedo, Aov::BvhCost};
+// Variance: per colour channel, the variance of the pixel's mean estimate (the path tracer's
+// Monte Carlo noise); engines whose pixel is no Monte Carlo estimate write zeros.
+enum class Aov { Depth, Normal, Albedo, BvhCost, Variance };
+inline constexpr Aov kAllAovs[] = {Aov::Depth, Aov::Normal, Aov::Albedo, Aov::BvhCost, Aov::Variance};
 
-std::string_view to_string(Aov aov);               // job-file name: depth, normal, albedo, bvh_cost
+// Job-file name: depth, normal, albedo, bvh_cost, variance.
+std::string_view to_string(Aov aov);
 std::optional<Aov> aov_from_string(std::string_view name);
 
 struct AovSet {
-  bool depth = false, normal = false, albedo = false, bvh_cost = false;
+  bool depth = false, normal = false, albedo = false, bvh_cost = false, variance = false;
 
   bool has(Aov a) const {
     switch (a) {
@@ -20,6 +23,7 @@ struct AovSet {
       case Aov::Normal: return normal;
       case Aov::Albedo: return albedo;
       case Aov::BvhCost: return bvh_cost;
+      case Aov::Variance: return variance;
     }
     return false;
   }
@@ -29,6 +33,7 @@ struct AovSet {
       case Aov::Normal: normal = true; break;
       case Aov::Albedo: albedo = true; break;
       case Aov::BvhCost: bvh_cost = true; break;
+      case Aov::Variance: variance = true; break;
     }
   }
 };

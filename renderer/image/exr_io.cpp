@@ -27,7 +27,7 @@ namespace {
 // (converting to and from half itself, as Imath::half does), so no planar copy is made.
 struct ChannelSlice {
   const char* name;
-  bool always_float;   // depth and bvh_cost keep full precision in a half EXR
+  bool always_float;   // depth, bvh_cost and variance keep full precision in a half EXR
   float* first;        // the value at the rect's top-left pixel
   std::size_t stride;  // bytes from one pixel to the next
 };
@@ -49,6 +49,10 @@ std::vector<ChannelSlice> channel_slices(TileBuffer& t) {
     for (int c = 0; c < 3; ++c) slices.push_back({names[c], false, &t.albedo(x, y)[c], sizeof(glm::vec3)});
   }
   if (aovs.bvh_cost) slices.push_back({"bvh_cost", true, &t.bvh_cost(x, y), sizeof(float)});
+  if (aovs.variance) {
+    const char* names[] = {"variance.R", "variance.G", "variance.B"};
+    for (int c = 0; c < 3; ++c) slices.push_back({names[c], true, &t.variance(x, y)[c], sizeof(glm::vec3)});
+  }
   return slices;
 }
 
@@ -122,6 +126,7 @@ TileBuffer read_exr(const std::filesystem::path& file) {
     if (channels.findChannel("N.X")) present.normal = true;
     if (channels.findChannel("albedo.R")) present.albedo = true;
     if (channels.findChannel("bvh_cost")) present.bvh_cost = true;
+    if (channels.findChannel("variance.R")) present.variance = true;
 
     // Channels the file lacks read as OpenEXR's fill value: alpha 1, the others 0.
     TileBuffer image(r, present);

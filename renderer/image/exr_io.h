@@ -1,6 +1,6 @@
 #pragma once
 // OpenEXR files of a film: R G B A, plus the AOV layers Z, N.X N.Y N.Z, albedo.R albedo.G
-// albedo.B and bvh_cost, named so any EXR tool finds them.
+// albedo.B, bvh_cost and variance.R variance.G variance.B, named so any EXR tool finds them.
 #include <filesystem>
 
 #include "renderer/image/tile_buffer.h"
@@ -9,8 +9,9 @@ namespace farm {
 
 enum class ExrPixelType { Half, Float };
 
-// Colour, normal and albedo are stored as `type` (half by default); depth and bvh_cost are always
-// 32-bit float, since half would quantise depth to ~3 significant digits. Writes to a temporary
+// Colour, normal and albedo are stored as `type` (half by default); depth, bvh_cost and variance
+// are always 32-bit float, since half would quantise depth to ~3 significant digits and flush the
+// tiny variances of a converged render to zero (half's smallest normal is 6e-5). Writes to a temporary
 // file and renames it into place, so a failed write never leaves a truncated image behind.
 void write_exr(const TileBuffer& image, const std::filesystem::path& file,
                ExrPixelType type = ExrPixelType::Half);

@@ -20,6 +20,7 @@ void TileBuffer::reset_for_overwrite(const Rect& rect, const AovSet& aovs) {
   normal_.allocate(aovs.normal ? n : 0);
   albedo_.allocate(aovs.albedo ? n : 0);
   bvh_cost_.allocate(aovs.bvh_cost ? n : 0);
+  variance_.allocate(aovs.variance ? n : 0);
 }
 
 void TileBuffer::reset(const Rect& rect, const AovSet& aovs) {
@@ -29,6 +30,7 @@ void TileBuffer::reset(const Rect& rect, const AovSet& aovs) {
   std::fill(normal_.begin(), normal_.end(), glm::vec3(0.0f));
   std::fill(albedo_.begin(), albedo_.end(), glm::vec3(0.0f));
   std::fill(bvh_cost_.begin(), bvh_cost_.end(), 0.0f);
+  std::fill(variance_.begin(), variance_.end(), glm::vec3(0.0f));
 }
 
 void TileBuffer::paste(const TileBuffer& tile) {
@@ -36,7 +38,8 @@ void TileBuffer::paste(const TileBuffer& tile) {
   if (overlap.empty()) return;
   const bool depth = aovs_.depth && tile.aovs().depth, normal = aovs_.normal && tile.aovs().normal,
              albedo = aovs_.albedo && tile.aovs().albedo,
-             bvh_cost = aovs_.bvh_cost && tile.aovs().bvh_cost;
+             bvh_cost = aovs_.bvh_cost && tile.aovs().bvh_cost,
+             variance = aovs_.variance && tile.aovs().variance;
   const auto width = static_cast<std::ptrdiff_t>(overlap.width());
   // Row by row: each row of the overlap is contiguous in both buffers.
   for (int y = overlap.y0; y < overlap.y1; ++y) {
@@ -50,6 +53,7 @@ void TileBuffer::paste(const TileBuffer& tile) {
     if (normal) copy_row(tile.normal_, normal_);
     if (albedo) copy_row(tile.albedo_, albedo_);
     if (bvh_cost) copy_row(tile.bvh_cost_, bvh_cost_);
+    if (variance) copy_row(tile.variance_, variance_);
   }
 }
 

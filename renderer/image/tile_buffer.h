@@ -65,6 +65,9 @@ class TileBuffer {
   const glm::vec3& albedo(int x, int y) const { return albedo_[index(x, y)]; }
   float& bvh_cost(int x, int y) { return bvh_cost_[index(x, y)]; }
   float bvh_cost(int x, int y) const { return bvh_cost_[index(x, y)]; }
+  // Per channel, the variance of the pixel's mean estimate (Aov::Variance).
+  glm::vec3& variance(int x, int y) { return variance_[index(x, y)]; }
+  const glm::vec3& variance(int x, int y) const { return variance_[index(x, y)]; }
 
   RenderStats& stats() { return stats_; }
   const RenderStats& stats() const { return stats_; }
@@ -90,6 +93,7 @@ class TileBuffer {
   UninitializedArray<glm::vec3> normal_;
   UninitializedArray<glm::vec3> albedo_;
   UninitializedArray<float> bvh_cost_;
+  UninitializedArray<glm::vec3> variance_;
 };
 
 }  // namespace farm

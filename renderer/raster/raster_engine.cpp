@@ -155,6 +155,8 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
 void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene,
                             const RenderSettings& settings, const Rect& requested, TileBuffer& out) {
   const Rect tile = requested.intersect(Rect{0, 0, frame.width, frame.height});
+  // The variance AOV stays at the zeros reset() writes: the rasterizer is deterministic, so its
+  // pixel has no Monte Carlo noise to report.
   out.reset(tile, settings.aovs);
   if (tile.empty()) return;
   const int samples = std::max(1, settings.spp);

@@ -37,6 +37,28 @@ float power_heuristic(float f, float g) {
 
 bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+// The variance of a pixel's mean estimate, from its own samples in sample order (Welford's
+// update, in double): the same samples give the same bits whatever the tiling or thread.
+class SampleVariance {
+ public:
+  void add(const glm::vec3& x) {
+    ++n_;
+    const glm::dvec3 v(x), delta = v - mean_;
+    mean_ += delta / static_cast<double>(n_);
+    m2_ += delta * (v - mean_);
+  }
+  // Unbiased sample variance over n, the variance of the mean of n samples; 0 for one sample.
+  glm::vec3 of_mean() const {
+    if (n_ < 2) return glm::vec3(0.0f);
+    const double n = static_cast<double>(n_);
+    return glm::vec3(m2_ / ((n - 1.0) * n));
+  }
+
+ private:
+  std::uint64_t n_ = 0;
+  glm::dvec3 mean_{0.0}, m2_{0.0};
+};
+
 class PathTracer {
  public:
   PathTracer(const PreparedScene& scene, const RenderSettings& settings,
@@ -205,6 +227,7 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
     for (int x = tile.x0; x < tile.x1; ++x) {
       glm::vec3 sum(0.0f);
       float coverage = 0.0f;
+      SampleVariance variance;
       const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
                                   static_cast<std::uint64_t>(x);
       for (int s = 0; s < samples; ++s) {
@@ -215,11 +238,15 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
                                            settings.width, settings.height);
         const PathTracer::Result r = tracer.trace(ray, key);
         ++out.stats().samples;
-        if (!finite(r.radiance)) {
+        // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
+        // counts it as a 0 too.
+        const bool valid = finite(r.radiance);
+        if (!valid) {
           ++out.stats().invalid_samples;  // counted, and never allowed into the pixel
         } else {
           sum += r.radiance;
         }
+        if (out.aovs().variance) variance.add(valid ? r.radiance : glm::vec3(0.0f));
         coverage += r.hit ? 1.0f : 0.0f;
         if (s != 0 || !r.hit) continue;
         if (out.aovs().depth) out.depth(x, y) = r.first.t;
@@ -228,6 +255,7 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
       }
       const float inv = 1.0f / static_cast<float>(samples);
       out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);
+      if (out.aovs().variance) out.variance(x, y) = variance.of_mean();
     }
   }
   out.stats().rays += tracer.rays_traced();

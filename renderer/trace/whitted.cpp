@@ -119,6 +119,9 @@ class WhittedTracer {
 
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out) {
+  // The variance AOV stays at the zeros reset() writes: a Whitted pixel is no Monte Carlo
+  // estimate of the light reaching it (its extra samples only antialias), so there is no noise
+  // in it to report.
   out.reset(tile, settings.aovs);
   if (tile.empty()) return;
   const auto intersector = cached_scene_intersector(scene, settings.accel);

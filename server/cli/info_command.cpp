@@ -63,8 +63,13 @@ void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
              "accel {}\n",
              to_string(r.engine), r.width, r.height, r.spp, r.max_depth, r.seed, r.tile_size,
              r.threads, to_string(r.accel));
-  fmt::print("  output: image {} preview {}\n", job.output.image.string(),
-             job.output.preview.empty() ? std::string("(none)") : job.output.preview.string());
+  std::string aovs;
+  for (Aov a : kAllAovs) {
+    if (r.aovs.has(a)) aovs += fmt::format("{}{}", aovs.empty() ? "" : " ", to_string(a));
+  }
+  fmt::print("  output: image {} preview {} aovs {}\n", job.output.image.string(),
+             job.output.preview.empty() ? std::string("(none)") : job.output.preview.string(),
+             aovs.empty() ? std::string("(none)") : aovs);
 }
 
 }  // namespace

@@ -67,6 +67,7 @@ void encode_tile(const TileBuffer& t, v1::TileData& out) {
   if (a.normal) out.set_normal(pack(r, 3, [&](int x, int y) { return t.normal(x, y); }));
   if (a.albedo) out.set_albedo(pack(r, 3, [&](int x, int y) { return t.albedo(x, y); }));
   if (a.bvh_cost) out.set_bvh_cost(pack(r, 1, [&](int x, int y) { return t.bvh_cost(x, y); }));
+  if (a.variance) out.set_variance(pack(r, 3, [&](int x, int y) { return t.variance(x, y); }));
 }
 
 void encode_stats(const RenderStats& s, v1::TileStats& out) {
@@ -87,6 +88,7 @@ TileBuffer decode_tile(const v1::TileData& d) {
   aovs.normal = !d.normal().empty();
   aovs.albedo = !d.albedo().empty();
   aovs.bvh_cost = !d.bvh_cost().empty();
+  aovs.variance = !d.variance().empty();
   TileBuffer t;
   t.reset_for_overwrite(r, aovs);
   unpack(r, 4, d.rgba(), "rgba", [&](int x, int y) { return &t.rgba(x, y); });
@@ -95,6 +97,9 @@ TileBuffer decode_tile(const v1::TileData& d) {
   if (aovs.albedo) unpack(r, 3, d.albedo(), "albedo", [&](int x, int y) { return &t.albedo(x, y); });
   if (aovs.bvh_cost) {
     unpack(r, 1, d.bvh_cost(), "bvh_cost", [&](int x, int y) { return &t.bvh_cost(x, y); });
+  }
+  if (aovs.variance) {
+    unpack(r, 3, d.variance(), "variance", [&](int x, int y) { return &t.variance(x, y); });
   }
   return t;
 }

@@ -43,6 +43,10 @@ void expect_same_pixels(const TileBuffer& a, const TileBuffer& b, const std::str
       if (a.aovs().has(Aov::Depth) && !same_bits(a.depth(x, y), b.depth(x, y))) ++differing;
       if (a.aovs().has(Aov::Normal) &&
           std::memcmp(&a.normal(x, y), &b.normal(x, y), sizeof(glm::vec3)) != 0) ++differing;
+      if (a.aovs().has(Aov::Albedo) &&
+          std::memcmp(&a.albedo(x, y), &b.albedo(x, y), sizeof(glm::vec3)) != 0) ++differing;
+      if (a.aovs().has(Aov::Variance) &&
+          std::memcmp(&a.variance(x, y), &b.variance(x, y), sizeof(glm::vec3)) != 0) ++differing;
     }
   }
   EXPECT_EQ(differing, 0) << what;

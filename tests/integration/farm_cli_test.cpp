@@ -8,6 +8,10 @@
 #include <fstream>
 #include <string>
 
+#include <ImfChannelList.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+
 #include "renderer/image/exr_io.h"
 #include "tests/support/farm_cli_fixture.h"
 
@@ -158,6 +162,44 @@ TEST_F(FarmCliTest, WhittedBvhCostAovCountsTraversalWork) {
   // and far fewer than the scene's 7968 triangles.
   EXPECT_GE(image.bvh_cost(32, 32), 2.0f);
   EXPECT_LT(image.bvh_cost(32, 32), 1000.0f);
+}
+
+TEST_F(FarmCliTest, PathVarianceAovReachesTheExrAsFloatChannels) {
+  // The Cornell box beside a job that asks for the variance alone.
+  fs::copy_file(kSource / "jobs/assets/cornell_box.obj", dir_ / "cornell_box.obj");
+  fs::copy_file(kSource / "jobs/assets/cornell_box.mtl", dir_ / "cornell_box.mtl");
+  const fs::path job = dir_.write("variance.json", R"({"version": 1,
+    "scene": {"objects": [{"file": "cornell_box.obj"}], "lights": [], "background": [0, 0, 0],
+              "camera": {"position": [0, 0, 3.9], "target": [0, 0, 0], "fov_y": 40, "far": 20}},
+    "render": {"engine": "path", "width": 40, "height": 40, "spp": 8, "max_depth": 3, "tile_size": 16},
+    "output": {"aovs": ["variance"]}})");
+  const fs::path exr = dir_ / "v.exr";
+  const auto r = run_command(farm("render " + shell_quote(job.string()) + " --preview none --out " +
+                                  shell_quote(exr.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("RGBA + variance"), std::string::npos) << r.output;
+  {
+    Imf::InputFile in(exr.c_str());
+    for (const char* name : {"variance.R", "variance.G", "variance.B"}) {
+      const Imf::Channel* channel = in.header().channels().findChannel(name);
+      ASSERT_NE(channel, nullptr) << name;
+      EXPECT_EQ(channel->type, Imf::FLOAT) << name << ": 32-bit even in a half EXR";
+    }
+    EXPECT_EQ(in.header().channels().findChannel("Z"), nullptr);
+  }
+  const TileBuffer image = read_exr(exr);
+  ASSERT_TRUE(image.aovs().variance);
+  EXPECT_FALSE(image.aovs().depth || image.aovs().normal || image.aovs().albedo);
+  // Lit walls are noisy at 8 spp, and nothing is negative.
+  int noisy = 0;
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 40; ++x) {
+      const glm::vec3 v = image.variance(x, y);
+      ASSERT_TRUE(v.x >= 0.0f && v.y >= 0.0f && v.z >= 0.0f) << x << "," << y;
+      noisy += v.x > 0.0f ? 1 : 0;
+    }
+  }
+  EXPECT_GT(noisy, 40 * 40 / 2);
 }
 
 TEST_F(FarmCliTest, BenchPathReportsThroughputAndRaysPerSample) {

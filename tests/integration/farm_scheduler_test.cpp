@@ -58,7 +58,11 @@ int differing_pixels(const TileBuffer& a, const TileBuffer& b) {
       if (std::memcmp(&a.rgba(x, y), &b.rgba(x, y), sizeof(glm::vec4)) != 0 ||
           (a.aovs().has(Aov::Depth) && !same_bits(a.depth(x, y), b.depth(x, y))) ||
           (a.aovs().has(Aov::Normal) &&
-           std::memcmp(&a.normal(x, y), &b.normal(x, y), sizeof(glm::vec3)) != 0)) {
+           std::memcmp(&a.normal(x, y), &b.normal(x, y), sizeof(glm::vec3)) != 0) ||
+          (a.aovs().has(Aov::Albedo) &&
+           std::memcmp(&a.albedo(x, y), &b.albedo(x, y), sizeof(glm::vec3)) != 0) ||
+          (a.aovs().has(Aov::Variance) &&
+           std::memcmp(&a.variance(x, y), &b.variance(x, y), sizeof(glm::vec3)) != 0)) {
         ++differing;
       }
     }

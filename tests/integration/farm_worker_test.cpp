@@ -78,6 +78,7 @@ void expect_bit_identical(const v1::TileData& got, const v1::TileData& want, con
   EXPECT_TRUE(got.normal() == want.normal()) << what << ": normal differs";
   EXPECT_TRUE(got.albedo() == want.albedo()) << what << ": albedo differs";
   EXPECT_TRUE(got.bvh_cost() == want.bvh_cost()) << what << ": bvh_cost differs";
+  EXPECT_TRUE(got.variance() == want.variance()) << what << ": variance differs";
 }
 
 class FarmWorkerTest : public ::testing::Test {
@@ -109,7 +110,8 @@ TEST_F(FarmWorkerTest, RenderTileIsBitIdenticalToInProcessRenderTileForEveryEngi
                              << worker->process().output();
     EXPECT_EQ(response.tile().rect().x0(), 5);
     EXPECT_EQ(response.tile().rect().y1(), 37);
-    EXPECT_FALSE(response.tile().depth().empty());  // the job asks for depth, normal, albedo
+    EXPECT_FALSE(response.tile().depth().empty());  // the job asks for depth, normal, albedo, variance
+    EXPECT_FALSE(response.tile().variance().empty());
     expect_bit_identical(response.tile(), render_in_process(spec, rect), engine);
     // Not trivially equal: the middle of the box is covered and lit.
     const TileBuffer tile = decode_tile(response.tile());

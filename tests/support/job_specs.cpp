@@ -22,6 +22,8 @@ std::string read_file(const fs::path& file) {
 std::string cornell_job_json(const std::string& engine, int width, int height, int spp) {
   nlohmann::json job = nlohmann::json::parse(read_file(fs::path(FARM_SOURCE_DIR) / "jobs/cornell.json"));
   job["render"] = {{"engine", engine}, {"width", width}, {"height", height}, {"spp", spp}};
+  // Every AOV a farm merges: variance too (zeros but for the path engine).
+  job["output"]["aovs"].push_back("variance");
   return job.dump(2);
 }
 

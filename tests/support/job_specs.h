@@ -11,7 +11,8 @@ namespace farm::test {
 
 std::string read_file(const std::filesystem::path& file);
 
-// jobs/cornell.json with its render block replaced: `engine` at width x height, `spp` samples.
+// jobs/cornell.json with its render block replaced: `engine` at width x height, `spp` samples,
+// and the variance AOV added to the job's depth, normal and albedo.
 std::string cornell_job_json(const std::string& engine, int width, int height, int spp);
 
 // A spec of `json` and the files it reads, each given as (path as the job names it, file on disk).

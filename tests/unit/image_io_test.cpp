@@ -9,6 +9,7 @@
 #include <ImfInputFile.h>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iterator>
 #include <set>
@@ -32,7 +33,7 @@ class ImageIoTest : public ::testing::Test {
 
 TileBuffer sample_film() {
   AovSet aovs;
-  aovs.depth = aovs.normal = aovs.albedo = aovs.bvh_cost = true;
+  aovs.depth = aovs.normal = aovs.albedo = aovs.bvh_cost = aovs.variance = true;
   TileBuffer film(Rect{0, 0, 7, 5}, aovs);
   for (int y = 0; y < 5; ++y) {
     for (int x = 0; x < 7; ++x) {
@@ -41,6 +42,9 @@ TileBuffer sample_film() {
       film.normal(x, y) = glm::normalize(glm::vec3(x - 3, 1, y));
       film.albedo(x, y) = {0.8f, 0.6f, 0.4f};
       film.bvh_cost(x, y) = static_cast<float>(100 + x + 7 * y);
+      // Below half's smallest normal (6e-5) and with more digits than half keeps.
+      film.variance(x, y) = {1.2345678e-7f * static_cast<float>(x + 1), 3.0e-12f * static_cast<float>(y + 1),
+                             0.123456789f + static_cast<float>(x * y)};
     }
   }
   return film;
@@ -57,10 +61,11 @@ TEST_F(ImageIoTest, ExrHalfRoundTripKeepsValuesAndStandardChannelNames) {
     names.insert(it.name());
     const bool is_float = it.channel().type == Imf::FLOAT;
     const std::string name = it.name();
-    EXPECT_EQ(is_float, name == "Z" || name == "bvh_cost") << name;
+    EXPECT_EQ(is_float, name == "Z" || name == "bvh_cost" || name.starts_with("variance.")) << name;
   }
   EXPECT_EQ(names, (std::set<std::string>{"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "albedo.R",
-                                          "albedo.G", "albedo.B", "bvh_cost"}));
+                                          "albedo.G", "albedo.B", "bvh_cost", "variance.R",
+                                          "variance.G", "variance.B"}));
 
   const TileBuffer back = read_exr(file);
   ASSERT_EQ(back.rect(), film.rect());
@@ -71,6 +76,8 @@ TEST_F(ImageIoTest, ExrHalfRoundTripKeepsValuesAndStandardChannelNames) {
       for (int c = 0; c < 3; ++c) EXPECT_NEAR(back.normal(x, y)[c], film.normal(x, y)[c], 1e-3f);
       EXPECT_NEAR(back.albedo(x, y).x, 0.8f, 1e-3f);
       EXPECT_EQ(back.bvh_cost(x, y), film.bvh_cost(x, y));
+      // float even in a half file: bit-exact
+      EXPECT_EQ(std::memcmp(&back.variance(x, y), &film.variance(x, y), sizeof(glm::vec3)), 0) << x << "," << y;
     }
   }
 }

@@ -104,7 +104,7 @@ TEST_F(JobFiles, JobParse_FullJobKeepsEveryField) {
     "render": { "engine": "path", "width": 320, "height": 240, "spp": 16, "max_depth": -1,
                 "seed": 42, "tile_size": 16, "threads": 3, "accel": "bvh-median" },
     "output": { "image": "renders/cow.exr", "preview": "renders/cow.jpg",
-                "aovs": ["depth", "normal", "albedo", "bvh_cost"] },
+                "aovs": ["depth", "normal", "albedo", "bvh_cost", "variance"] },
     "validate": { "embree_rays": 4096 }
   })");
 
@@ -167,7 +167,7 @@ TEST_F(JobFiles, JobParse_FullJobKeepsEveryField) {
   EXPECT_EQ(job.render.threads, 3);
   EXPECT_EQ(job.render.accel, AccelKind::BvhMedian);
   EXPECT_TRUE(job.render.aovs.depth && job.render.aovs.normal && job.render.aovs.albedo &&
-              job.render.aovs.bvh_cost);
+              job.render.aovs.bvh_cost && job.render.aovs.variance);
 
   EXPECT_EQ(job.output.image, fs::path("renders/cow.exr"));
   EXPECT_EQ(job.output.preview, fs::path("renders/cow.jpg"));
@@ -200,7 +200,7 @@ TEST_F(JobFiles, JobParse_MinimalJobGetsDefaults) {
   EXPECT_EQ(job.render.threads, 0);
   EXPECT_EQ(job.render.accel, AccelKind::Bvh);
   EXPECT_FALSE(job.render.aovs.depth || job.render.aovs.normal || job.render.aovs.albedo ||
-               job.render.aovs.bvh_cost);
+               job.render.aovs.bvh_cost || job.render.aovs.variance);
   EXPECT_EQ(job.output.image, fs::path("out/job.exr"));
   EXPECT_EQ(job.output.preview, fs::path("out/job.png"));
   EXPECT_EQ(job.embree_rays, 0);
@@ -480,7 +480,7 @@ const std::vector<BadJob> kBadJobs = {
     {"UnknownAccel", job_with_keys(R"("render": {"accel": "kdtree"})"), "render.accel",
      "unknown accel 'kdtree' (expected bvh, bvh-median, naive or embree)"},
     {"UnknownAov", job_with_keys(R"("output": {"aovs": ["depth", "motion"]})"), "output.aovs[1]",
-     "unknown AOV 'motion' (expected depth, normal, albedo or bvh_cost)"},
+     "unknown AOV 'motion' (expected depth, normal, albedo, bvh_cost or variance)"},
     {"DuplicateAov", job_with_keys(R"("output": {"aovs": ["depth", "normal", "depth"]})"),
      "output.aovs[2]", "duplicate AOV 'depth'"},
     // objects

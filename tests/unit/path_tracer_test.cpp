@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -210,16 +211,28 @@ TEST(PathRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
   const PreparedScene prepared(std::move(scene));
   RenderSettings settings = path_settings(37, 29, 4);
   settings.seed = 7;
+  settings.aovs.depth = settings.aovs.normal = settings.aovs.albedo = settings.aovs.variance = true;
   const TileBuffer whole = test::render_full(prepared, settings);
+  int noisy = 0;
   for (int threads : {1, 3}) {
     for (int tile : {8, 16}) {
       settings.threads = threads;
       settings.tile_size = tile;
       const TileBuffer tiled = render_frame(prepared, settings);
-      for (int y = 0; y < 29; ++y)
-        for (int x = 0; x < 37; ++x) ASSERT_EQ(whole.rgba(x, y), tiled.rgba(x, y)) << x << "," << y;
+      for (int y = 0; y < 29; ++y) {
+        for (int x = 0; x < 37; ++x) {
+          ASSERT_EQ(std::memcmp(&whole.rgba(x, y), &tiled.rgba(x, y), sizeof(glm::vec4)), 0) << x << "," << y;
+          const float depth_whole = whole.depth(x, y), depth_tiled = tiled.depth(x, y);
+          ASSERT_EQ(std::memcmp(&depth_whole, &depth_tiled, sizeof(float)), 0) << x << "," << y;
+          ASSERT_EQ(std::memcmp(&whole.normal(x, y), &tiled.normal(x, y), sizeof(glm::vec3)), 0) << x << "," << y;
+          ASSERT_EQ(std::memcmp(&whole.albedo(x, y), &tiled.albedo(x, y), sizeof(glm::vec3)), 0) << x << "," << y;
+          ASSERT_EQ(std::memcmp(&whole.variance(x, y), &tiled.variance(x, y), sizeof(glm::vec3)), 0) << x << "," << y;
+          noisy += whole.variance(x, y).x > 0.0f ? 1 : 0;
+        }
+      }
     }
   }
+  EXPECT_GT(noisy, 4 * 100);  // the variance compared is not all zeros
   // A different seed gives a different (noisy) image.
   settings.seed = 8;
   const TileBuffer other = render_frame(prepared, settings);
@@ -227,6 +240,128 @@ TEST(PathRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
   for (int y = 0; y < 29; ++y)
     for (int x = 0; x < 37; ++x) differ += whole.rgba(x, y) != other.rgba(x, y) ? 1 : 0;
   EXPECT_GT(differ, 100);
+}
+
+// A lamp seen directly (max_depth 0) on a black background: each sample is either the lamp's Le
+// or 0, so a pixel on the lamp's edge whose fraction of hits is p = k / n (its alpha) has the
+// sample variance Le^2 * k (n - k) / (n (n - 1)), and its mean estimate that over n.
+TEST(PathVarianceAov, EqualsTheSampleVarianceOverSppOfTwoValuedSamples) {
+  Material lamp;
+  lamp.emission = {3.0f, 1.5f, 0.25f};
+  Scene scene;
+  // A triangle facing the camera, so its edges cross pixels at every angle.
+  scene.objects.push_back(test::object_of(test::make_quad({-1, -1, 0}, {1, -0.7f, 0}, {0.2f, 1, 0}, {-0.9f, 0.6f, 0}),
+                                          glm::mat4(1.0f), lamp));
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {0, 0, 3};
+  scene.camera.target = {0, 0, 0};
+  scene.camera.fov_y_degrees = 50;
+  const PreparedScene prepared(std::move(scene));
+  const int n = 24;
+  RenderSettings settings = path_settings(20, 20, n);
+  settings.max_depth = 0;
+  settings.aovs.variance = true;
+  const TileBuffer image = render_frame(prepared, settings);
+  int edge_pixels = 0;
+  for (int y = 0; y < 20; ++y) {
+    for (int x = 0; x < 20; ++x) {
+      const double k = std::round(static_cast<double>(image.rgba(x, y).w) * n);
+      for (int c = 0; c < 3; ++c) {
+        const double le = lamp.emission[c];
+        const double expected = le * le * k * (n - k) / (static_cast<double>(n) * n * (n - 1));
+        ASSERT_NEAR(image.variance(x, y)[c], expected, 1e-6 * le * le) << x << "," << y << " channel " << c;
+      }
+      if (k > 0 && k < n) ++edge_pixels;
+    }
+  }
+  EXPECT_GT(edge_pixels, 10);  // the edges were crossed: not only 0 and full pixels
+}
+
+TEST(PathVarianceAov, IsZeroForOneSampleAndZeroForRasterAndWhitted) {
+  Material light;
+  light.emission = glm::vec3(2.0f);
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_box({-2, -1.2f, -2}, {2, -1, 2})));
+  scene.objects.push_back(test::object_of(test::make_quad({-1, 2, -1}, {1, 2, -1}, {1, 2, 1}, {-1, 2, 1}), glm::mat4(1.0f), light));
+  scene.lights.push_back(Light{Light::Kind::Point, {0, 3, 0}, {}, glm::vec3(10.0f)});
+  scene.camera.position = {0, 2, 4};
+  scene.camera.target = {0, -1, 0};
+  const PreparedScene prepared(std::move(scene));
+  for (EngineKind engine : {EngineKind::Path, EngineKind::Raster, EngineKind::Whitted}) {
+    for (int spp : {1, 8}) {
+      if (engine == EngineKind::Path && spp != 1) continue;
+      RenderSettings settings = path_settings(12, 10, spp);
+      settings.engine = engine;
+      settings.aovs.variance = true;
+      const TileBuffer image = render_frame(prepared, settings);
+      ASSERT_TRUE(image.aovs().variance);
+      double lit = 0.0;
+      for (int y = 0; y < 10; ++y) {
+        for (int x = 0; x < 12; ++x) {
+          ASSERT_EQ(image.variance(x, y), glm::vec3(0.0f)) << to_string(engine) << " spp " << spp;
+          lit += image.rgba(x, y).x;
+        }
+      }
+      EXPECT_GT(lit, 0.0) << to_string(engine);
+    }
+  }
+}
+
+// The AOV against the spread of the mean over independent renders: both estimate the variance
+// of a pixel's mean, and halving it takes four times the samples.
+TEST(PathVarianceAov, MatchesTheSpreadOfTheMeanOverSeedsAndFallsAsOneOverSpp) {
+  Material floor;
+  floor.diffuse = glm::vec3(0.7f);
+  Material light;
+  light.emission = glm::vec3(5.0f);
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_quad({-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, {-2, 0, -2}), glm::mat4(1.0f), floor));
+  scene.objects.push_back(test::object_of(test::make_quad({-0.5f, 1.5f, -0.5f}, {0.5f, 1.5f, -0.5f}, {0.5f, 1.5f, 0.5f}, {-0.5f, 1.5f, 0.5f}),
+                                          glm::mat4(1.0f), light));
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {0, 2.5f, 2.5f};
+  scene.camera.target = {0, 0, 0};
+  scene.camera.fov_y_degrees = 30;  // the floor fills the view
+  scene.camera.far = 50;
+  const PreparedScene prepared(std::move(scene));
+  constexpr int kWidth = 16, kHeight = 16, kSeeds = 12;
+  const auto red_aov_mean = [&](const TileBuffer& image) {
+    double sum = 0.0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) sum += image.variance(x, y).x;
+    return sum / (kWidth * kHeight);
+  };
+  RenderSettings settings = path_settings(kWidth, kHeight, 16);
+  settings.max_depth = 3;
+  settings.aovs.variance = true;
+  // Per pixel over the seeds: the mean of the AOV, and the unbiased variance of the red means.
+  std::vector<double> sum(kWidth * kHeight, 0.0), sum2(kWidth * kHeight, 0.0);
+  double aov = 0.0;
+  for (int seed = 0; seed < kSeeds; ++seed) {
+    settings.seed = static_cast<std::uint64_t>(seed);
+    const TileBuffer image = render_frame(prepared, settings);
+    aov += red_aov_mean(image) / kSeeds;
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        const double v = image.rgba(x, y).x;
+        sum[static_cast<std::size_t>(y * kWidth + x)] += v;
+        sum2[static_cast<std::size_t>(y * kWidth + x)] += v * v;
+      }
+    }
+  }
+  double spread = 0.0;
+  for (std::size_t i = 0; i < sum.size(); ++i) {
+    spread += (sum2[i] - sum[i] * sum[i] / kSeeds) / (kSeeds - 1);
+  }
+  spread /= static_cast<double>(sum.size());
+  settings.seed = 0;
+  settings.spp = 64;
+  const double aov_64 = red_aov_mean(render_frame(prepared, settings));
+  std::printf("variance of the mean at 16 spp: AOV %.4g, over %d seeds %.4g; AOV at 64 spp %.4g (ratio %.3f)\n",
+              aov, kSeeds, spread, aov_64, aov / aov_64);
+  EXPECT_GT(aov, 0.0);
+  EXPECT_NEAR(spread / aov, 1.0, 0.2);
+  EXPECT_NEAR(aov / aov_64, 4.0, 0.6);
 }
 
 }  // namespace
