@@ -194,7 +194,7 @@ std::vector<Pair> ldr_pairs() {
 
 std::vector<Pair> hdr_pairs() {
   std::vector<Pair> pairs;
-  const Image scene = render(160, 128, 60.0f);
+  const Image scene = render(128, 96, 60.0f);
   pairs.push_back({"hdr noise", true, scene, map_pixels(scene, [](int x, int y, Rgb c) {
                      const float n = 1.0f + 0.4f * (noise(x, y, 7) - 0.5f);
                      return Rgb{c.r * n, c.g * n, c.b * n};
@@ -207,7 +207,7 @@ std::vector<Pair> hdr_pairs() {
                    })});
   pairs.push_back({"hdr blur", true, scene, box_blur(scene)});
   // A wide dynamic range (many exposures) at another size.
-  const Image bright = render(224, 128, 2000.0f);
+  const Image bright = render(192, 112, 2000.0f);
   pairs.push_back({"hdr wide range shift", true, bright, map_pixels(bright, [&](int x, int y, Rgb) {
                      return sample(bright, x, y - 1);
                    })});
