@@ -8,6 +8,7 @@
 #include "server/bench/farm_bench.h"
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
+#include "server/bench/flip_bench.h"
 #include "server/bench/regress_bench.h"
 #include "server/bench/render_bench.h"
 #include "server/bench/rt_bench.h"
@@ -167,6 +168,22 @@ void add_regress_bench(CLI::App& bench, CommandTable& commands) {
   add_runner(commands, regress, o, run_regress_bench);
 }
 
+void add_flip_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<FlipBenchOptions>();
+  CLI::App* flip = bench.add_subcommand(
+      "flip", "`farm compare --metric flip` against NVIDIA's flip-evaluator on the same 1920x1080 pair (LDR and "
+              "HDR) and thread count, whole commands taking turns");
+  flip->add_option("--job", o->job, "The scene, rendered at 4 spp (reference) and 1 spp")->capture_default_str();
+  add_image_size_options(*flip, o->width, o->height);
+  add_thread_counts_option(*flip, o->threads, "Thread counts")->capture_default_str();
+  flip->add_option("--repeats", o->repeats, "Runs of each command (median reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  flip->add_option("--python", o->python, "A Python with flip-evaluator (deploy/install-deps.sh makes this venv)")
+      ->capture_default_str();
+  add_runner(commands, flip, o, run_flip_bench);
+}
+
 }  // namespace
 
 void add_bench_command(CLI::App& app, CommandTable& commands) {
@@ -178,6 +195,7 @@ void add_bench_command(CLI::App& app, CommandTable& commands) {
   add_farm_bench(*bench, commands);
   add_render_bench(*bench, commands);
   add_regress_bench(*bench, commands);
+  add_flip_bench(*bench, commands);
 }
 
 }  // namespace farm
