@@ -39,9 +39,9 @@ void print_model(const std::filesystem::path& file) {
   }
   for (const Material& m : model.materials) {
     fmt::print("  material '{}': ka {} kd {} ks {} ke {} shininess {:.4g} ior {:.4g} "
-               "transmission {:.4g}\n",
+               "transmission {:.4g} emission_sides {}\n",
                m.name, vec(m.ambient), vec(m.diffuse), vec(m.specular), vec(m.emission),
-               m.shininess, m.ior, m.transmission);
+               m.shininess, m.ior, m.transmission, to_string(m.emission_sides));
   }
   for (const Camera& c : model.cameras) print_camera(c);
   for (const Light& l : model.lights) print_light(l);
