@@ -4,21 +4,25 @@
 The job file is read as `farm render` reads it (camera, objects, OBJ/MTL materials, point lights,
 background, max_depth) and turned into the same scene in Mitsuba:
 
-  * Phong kd becomes a diffuse BSDF, two-sided like ours; Ke becomes an area emitter. Our emitters
-    shine from both faces (a model's winding does not decide whether its lamp shines), Mitsuba's
-    from the front only, so every emissive triangle gets a back-to-back twin 1e-4 behind it.
+  * Phong kd becomes a diffuse BSDF, two-sided like ours; Ke becomes an area emitter. Emitters
+    shine from their front face (the side the triangle's counter-clockwise winding faces) in both
+    renderers. Mitsuba has no two-sided area light, so an object whose job material says
+    "emission_sides": "both" gets a back-to-back twin of each emissive triangle 1e-4 behind it.
   * Our max_depth counts scattering events, Mitsuba's path segments: Mitsuba's is ours + 1.
   * A box pixel filter, as ours, and the `independent` sampler.
 
 Only what the reference scenes need is supported (OBJ models, diffuse + emissive materials,
-translate/rotate/scale); anything else is refused with a message rather than silently changed.
+translate/rotate/scale, a material override of emission_sides alone); anything else is refused
+with a message rather than silently changed.
 
 Set-up (a venv, since Mitsuba comes from PyPI, not Debian):
   python3 -m venv build/mitsuba-venv
   build/mitsuba-venv/bin/pip install -r tools/requirements-mitsuba.txt
-Reference image (what tests/data/reference/ holds):
+Reference images (what tests/data/reference/ holds):
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
-      --width 128 --height 128 --spp 8192 -o tests/data/reference/cornell_path_mitsuba.exr
+      --width 128 --height 128 --spp 4096 -o tests/data/reference/cornell_path_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/cornell_gap/cornell_gap.json \\
+      --spp 2048 --half -o tests/data/reference/cornell_gap_mitsuba.exr
 Throughput beside `farm bench path`:
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
       --width 512 --height 512 --spp 16 --threads 1 --bench
@@ -144,8 +148,10 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
     for i, obj in enumerate(scene_json["objects"]):
         if not obj["file"].lower().endswith(".obj"):
             raise RefusedScene(f"scene.objects[{i}].file: only OBJ models are supported")
-        if "material" in obj:
-            raise RefusedScene(f"scene.objects[{i}].material: overrides are not supported")
+        override = obj.get("material", {})
+        if set(override) - {"emission_sides"}:
+            raise RefusedScene(f"scene.objects[{i}].material: only emission_sides can be overridden here")
+        two_sided_emission = override.get("emission_sides", "front") == "both"
         groups, materials = parse_obj(os.path.join(folder, obj["file"]))
         to_world = transform_of(mi, obj)
         for name, triangles in groups.items():
@@ -154,13 +160,14 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
                 raise RefusedScene(f"{obj['file']}: material '{name}': only diffuse and emissive materials are supported")
             bsdf = {"type": "twosided", "bsdf": {"type": "diffuse",
                                                  "reflectance": {"type": "rgb", "value": m["Kd"]}}}
-            twins = [("front", False)] + ([("back", True)] if max(m["Ke"]) > 0 else [])
+            emits = max(m["Ke"]) > 0
+            twins = [("front", False)] + ([("back", True)] if emits and two_sided_emission else [])
             for side, flip in twins:
                 path = os.path.join(workdir, f"object{i}_{name}_{side}.obj")
                 write_triangles(path, triangles, flip=flip, offset=1e-4)
                 shape = {"type": "obj", "filename": path, "face_normals": True, "to_world": to_world,
                          "bsdf": bsdf}
-                if max(m["Ke"]) > 0:
+                if emits:
                     shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": m["Ke"]}}
                 scene[f"object{i}_{name}_{side}"] = shape
     return scene
@@ -173,9 +180,11 @@ def main():
     parser.add_argument("--width", type=int, help="image width (default: the job's)")
     parser.add_argument("--height", type=int, help="image height (default: the job's)")
     parser.add_argument("--spp", type=int, help="samples per pixel (default: the job's)")
+    parser.add_argument("--max-depth", type=int, help="scattering events, ours (default: the job's)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threads", type=int, default=0, help="render threads (0: all)")
     parser.add_argument("--variant", default="scalar_rgb")
+    parser.add_argument("--half", action="store_true", help="write the EXR as half floats (smaller)")
     parser.add_argument("--bench", action="store_true", help="print throughput as one JSON line")
     args = parser.parse_args()
 
@@ -191,6 +200,8 @@ def main():
     width = args.width or render.get("width", 640)
     height = args.height or render.get("height", 480)
     spp = args.spp or render.get("spp", 1)
+    if args.max_depth is not None:
+        job.setdefault("render", {})["max_depth"] = args.max_depth
     with tempfile.TemporaryDirectory() as workdir:
         try:
             scene = mi.load_dict(scene_of(mi, args.job, job, width, height, spp, args.seed, workdir))
@@ -210,6 +221,8 @@ def main():
               f"{seconds:.1f} s on {dr.thread_count()} threads ({samples / seconds / 1e6:.3f} Msamples/s)")
     if args.output:
         bitmap = mi.Bitmap(image)
+        if args.half:
+            bitmap = bitmap.convert(component_format=mi.Struct.Type.Float16)
         metadata = bitmap.metadata()  # written into the EXR header, so the file says what it is
         metadata["farm.job"] = os.path.basename(args.job)
         metadata["farm.spp"] = str(spp)

@@ -19,6 +19,7 @@ namespace {
 struct SurfaceAttributes {
   glm::vec3 view_position;
   glm::vec3 world_normal;
+  bool front_side;  // the camera sees the triangle's front face (for emission)
 };
 
 // Rasterizes the triangles of one bin into one region (a bin, or the part of it inside a tile)
@@ -63,7 +64,8 @@ class RegionRasterizer {
                        step1 = -(p0.y - p2.y) * kSubpixelScale,
                        step2 = -(p1.y - p0.y) * kSubpixelScale;
     const float inv_area = 1.0f / static_cast<float>(area);
-    const Material* material = frame_.materials[t.material];
+    const Material* material = frame_.materials[t.material & ~kBackFace];
+    const bool front_side = (t.material & kBackFace) == 0;
     const ClipVertex &a0 = s0.attributes, &a1 = s1.attributes, &a2 = s2.attributes;
 
     for (int y = y_begin; y <= y_end; ++y) {
@@ -87,6 +89,7 @@ class RegionRasterizer {
             (q0 * a0.view_position + q1 * a1.view_position + q2 * a2.view_position) * inv_q;
         attributes_[i].world_normal =
             (q0 * a0.world_normal + q1 * a1.world_normal + q2 * a2.world_normal) * inv_q;
+        attributes_[i].front_side = front_side;
       }
     }
   }
@@ -122,7 +125,8 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       const glm::vec3 to_eye = glm::normalize(frame.eye - world);
       glm::vec3 n = glm::normalize(hit.world_normal);
       if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: light the face we see
-      pixel += glm::vec4(shade_blinn_phong(*material, world, n, to_eye, scene.lights, scene.ambient), 1.0f);
+      pixel += glm::vec4(
+          shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights, scene.ambient), 1.0f);
       if (!write_aovs) continue;
       if (out.aovs().depth) out.depth(x, y) = -hit.view_position.z;
       if (out.aovs().normal) out.normal(x, y) = n;

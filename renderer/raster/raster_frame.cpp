@@ -49,6 +49,7 @@ class FrameBuilder {
       for (const Mesh& mesh : object.source->model->meshes) {
         ranges_.push_back({&object, &mesh, vertices, triangles});
         frame.materials.push_back(&object.source->materials.at(mesh.material));
+        mirrored_.push_back(glm::determinant(glm::mat3(object.model_to_world)) < 0.0f);
         vertices += mesh.positions.size();
         triangles += mesh.triangles.size();
       }
@@ -141,12 +142,15 @@ class FrameBuilder {
                      &p2 = vertex(chunk, i2).position;
     const std::int64_t area = edge_function(p0, p1, p2);
     if (area == 0) return;  // covers no sample
+    // Counter-clockwise seen from the front is clockwise on the y-down screen (area < 0), unless
+    // the object's transform mirrors it (the front is where the model's winding says).
+    const bool back_face = (area > 0) != static_cast<bool>(mirrored_[material]);
     if (area < 0) std::swap(i1, i2);
     ScreenTriangle t;
     t.v[0] = i0;
     t.v[1] = i1;
     t.v[2] = i2;
-    t.material = material;
+    t.material = material | (back_face ? kBackFace : 0u);
     const std::int64_t min_x = std::min({p0.x, p1.x, p2.x}), max_x = std::max({p0.x, p1.x, p2.x}),
                        min_y = std::min({p0.y, p1.y, p2.y}), max_y = std::max({p0.y, p1.y, p2.y});
     if (centres_only_) {
@@ -276,6 +280,7 @@ class FrameBuilder {
   bool centres_only_;  // spp 1: a triangle between pixel centres can be dropped here
   glm::mat4 view_{1.0f}, view_projection_{1.0f};
   std::vector<MeshRange> ranges_;
+  std::vector<std::uint8_t> mirrored_;  // per range: its object's transform flips handedness
   std::vector<SetupChunk> chunks_;
   std::vector<std::size_t> vertex_base_;
   std::vector<std::uint32_t> bin_cursor_;

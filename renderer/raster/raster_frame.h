@@ -39,9 +39,12 @@ inline constexpr std::uint32_t kClippedVertex = 0x80000000u;
 
 // A triangle ready to rasterize: positively oriented on the sample grid, non-degenerate, and
 // (when only pixel centres are sampled) covering at least the bounding box of one centre.
+// Marks a triangle's material index when the camera sees the triangle's back face.
+inline constexpr std::uint32_t kBackFace = 0x80000000u;
+
 struct ScreenTriangle {
   std::uint32_t v[3];            // RasterFrame::vertex() indices
-  std::uint32_t material;        // index into RasterFrame::materials
+  std::uint32_t material;        // index into RasterFrame::materials, | kBackFace if seen from behind
   int x0, y0, x1, y1;            // pixels whose samples it may cover, inclusive, in the image
 };
 

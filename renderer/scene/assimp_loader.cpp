@@ -57,6 +57,8 @@ Material convert_material(const aiMaterial& in) {
   colour(AI_MATKEY_COLOR_AMBIENT, m.ambient);
   colour(AI_MATKEY_COLOR_DIFFUSE, m.diffuse);
   colour(AI_MATKEY_COLOR_SPECULAR, m.specular);
+  // MTL and COLLADA have no way to say which side of a surface emits: front only, as
+  // emission_sides defaults (a job's material override can say "both").
   colour(AI_MATKEY_COLOR_EMISSIVE, m.emission);
   scalar(AI_MATKEY_SHININESS, m.shininess);
   scalar(AI_MATKEY_REFRACTI, m.ior);

@@ -1,6 +1,7 @@
 #pragma once
 // Blinn-Phong, the one shading function that `raster` and `whitted` share (DESIGN.md):
 //   ke + ka*ambient + sum over lights of (I/r^2) * (kd*max(0,n.l) + ks*max(0,n.h)^p)
+// where ke counts only on the emitting side(s) of the surface (Material::emitted), as in `path`.
 // Directional lights contribute I with no falloff. A ray tracer passes a visibility test so
 // shadowed lights drop out; the rasterizer has no shadows and sees every light.
 #include <cmath>
@@ -53,13 +54,14 @@ struct AllLightsVisible {
   bool operator()(const glm::vec3&, const LightIncidence&) const { return true; }
 };
 
-// `n` must face the viewer (flip back faces before calling); `visible(point, incidence)` decides
+// `n` must face the viewer (flip back faces before calling); `front_side` says whether the viewer
+// sees the surface's front face (its winding's side); `visible(point, incidence)` decides
 // shadowing.
 template <typename Visibility = AllLightsVisible>
 glm::vec3 shade_blinn_phong(const Material& m, const glm::vec3& point, const glm::vec3& n,
-                            const glm::vec3& to_eye, std::span<const Light> lights,
+                            const glm::vec3& to_eye, bool front_side, std::span<const Light> lights,
                             const glm::vec3& ambient, Visibility&& visible = {}) {
-  glm::vec3 color = m.emission + m.ambient * ambient;
+  glm::vec3 color = m.emitted(front_side) + m.ambient * ambient;
   for (const Light& light : lights) {
     const LightIncidence in = light_incidence(light, point);
     if (glm::dot(n, in.to_light) <= 0.0f) continue;

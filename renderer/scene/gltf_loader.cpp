@@ -98,6 +98,9 @@ Material convert_material(const tinygltf::Material& in) {
   const float r4 = roughness * roughness * roughness * roughness;
   m.shininess = r4 > 0.0f ? glm::clamp(2.0f / r4 - 2.0f, 1.0f, 10000.0f) : 10000.0f;
 
+  // A double-sided glTF material is meant to be seen from both sides: its emission shines from
+  // both too.
+  if (in.doubleSided) m.emission_sides = EmissionSides::Both;
   if (in.emissiveFactor.size() == 3) {
     m.emission = glm::vec3(in.emissiveFactor[0], in.emissiveFactor[1], in.emissiveFactor[2]);
   }

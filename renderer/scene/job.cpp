@@ -76,7 +76,8 @@ glm::vec3 parse_axis(const JsonValue& v) {
 
 MaterialOverride parse_material(const JsonValue& v) {
   const JsonObject obj = v.object(
-      {"ambient", "diffuse", "specular", "emission", "shininess", "ior", "transmission"});
+      {"ambient", "diffuse", "specular", "emission", "shininess", "ior", "transmission",
+       "emission_sides"});
   MaterialOverride m;
   if (auto x = obj.get("ambient")) m.ambient = x->vec3(kNonNegative);
   if (auto x = obj.get("diffuse")) m.diffuse = x->vec3(kNonNegative);
@@ -85,6 +86,12 @@ MaterialOverride parse_material(const JsonValue& v) {
   if (auto x = obj.get("shininess")) m.shininess = x->real(kNonNegative);
   if (auto x = obj.get("ior")) m.ior = x->real(kPositive);
   if (auto x = obj.get("transmission")) m.transmission = x->real(NumberRange::between(0.0, 1.0));
+  if (auto x = obj.get("emission_sides")) {
+    const std::string s = x->string();
+    const auto sides = emission_sides_from_string(s);
+    if (!sides) x->fail(fmt::format("unknown emission_sides '{}' (expected front or both)", shown(s)));
+    m.emission_sides = *sides;
+  }
   return m;
 }
 

@@ -3,8 +3,21 @@
 #include <glm/vec3.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace farm {
+
+// Which faces of an emissive surface shine (DESIGN.md conventions). Front: only the side the
+// triangle's counter-clockwise winding faces, the side its geometric normal points to, as in
+// pbrt's and Mitsuba's area lights. Both: either side (glTF's doubleSided, or a job override).
+enum class EmissionSides { Front, Both };
+
+inline std::string_view to_string(EmissionSides s) { return s == EmissionSides::Both ? "both" : "front"; }
+inline std::optional<EmissionSides> emission_sides_from_string(std::string_view s) {
+  if (s == "front") return EmissionSides::Front;
+  if (s == "both") return EmissionSides::Both;
+  return std::nullopt;
+}
 
 struct Material {
   std::string name = "default";
@@ -15,15 +28,23 @@ struct Material {
   float shininess = 5.0f;     // Phong exponent p
   float ior = 1.33f;
   float transmission = 0.0f;  // 0 opaque, 1 fully transmissive (MTL 1-d, glTF transmission)
+  EmissionSides emission_sides = EmissionSides::Front;
 
   // Shininess this high means a perfect mirror (DESIGN.md conventions).
   bool is_mirror() const { return shininess >= 1000.0f; }
+
+  // The radiance emitted towards a viewer on the front side of the surface (`front_side`: the
+  // viewer lies where the geometric normal points) or on its back side.
+  glm::vec3 emitted(bool front_side) const {
+    return front_side || emission_sides == EmissionSides::Both ? emission : glm::vec3(0.0f);
+  }
 };
 
 // The keys a job gives under `objects[i].material`; only those present replace the file's values.
 struct MaterialOverride {
   std::optional<glm::vec3> ambient, diffuse, specular, emission;
   std::optional<float> shininess, ior, transmission;
+  std::optional<EmissionSides> emission_sides;
 
   void apply_to(Material& m) const {
     if (ambient) m.ambient = *ambient;
@@ -33,9 +54,11 @@ struct MaterialOverride {
     if (shininess) m.shininess = *shininess;
     if (ior) m.ior = *ior;
     if (transmission) m.transmission = *transmission;
+    if (emission_sides) m.emission_sides = *emission_sides;
   }
   bool empty() const {
-    return !ambient && !diffuse && !specular && !emission && !shininess && !ior && !transmission;
+    return !ambient && !diffuse && !specular && !emission && !shininess && !ior && !transmission &&
+           !emission_sides;
   }
 };
 

@@ -19,7 +19,8 @@ Emitters::Emitters(const PreparedScene& scene) {
     const PreparedObject& object = scene.objects()[o];
     const ModelTriangles& mesh = *object.triangles;
     for (std::uint32_t t = 0; t < mesh.size(); ++t) {
-      const glm::vec3 le = object.source->materials[mesh.material[t]].emission;
+      const Material& material = object.source->materials[mesh.material[t]];
+      const glm::vec3 le = material.emission;
       // Non-finite emission (possible only in scenes built in code) is not sampled: it would
       // poison the whole table; paths that hit it are dropped and counted by the engine.
       const float l = luminance(le);
@@ -32,11 +33,17 @@ Emitters::Emitters(const PreparedScene& scene) {
       w.p0 = world(tri.x);
       w.e1 = world(tri.y) - w.p0;
       w.e2 = world(tri.z) - w.p0;
-      const glm::vec3 c = glm::cross(w.e1, w.e2);
-      w.area = 0.5f * glm::length(c);
+      w.area = 0.5f * glm::length(glm::cross(w.e1, w.e2));
       if (!(w.area > 0.0f)) continue;
-      w.normal = c / (2.0f * w.area);
+      // The front as a hit on this triangle sees it (complete_surface_hit): the model's winding
+      // normal carried by the inverse transpose, which keeps it on the same side of the surface
+      // under a mirroring transform (the world edges' cross product would flip there).
+      const glm::vec3& m0 = mesh.positions[tri.x];
+      w.normal = glm::normalize(object.normal_to_world *
+                                glm::cross(mesh.positions[tri.y] - m0, mesh.positions[tri.z] - m0));
+      if (!std::isfinite(w.normal.x)) continue;
       w.radiance = le;
+      w.two_sided = material.emission_sides == EmissionSides::Both;
       index_of_[(std::uint64_t{o} << 32) | t] = static_cast<std::uint32_t>(triangles_.size());
       triangles_.push_back(w);
       power.push_back(l * w.area);
@@ -64,6 +71,7 @@ EmitterSample Emitters::sample(float u_pick, float u1, float u2) const {
   out.position = t.p0 + b1 * t.e1 + b2 * t.e2;
   out.normal = t.normal;
   out.radiance = t.radiance;
+  out.two_sided = t.two_sided;
   out.pdf_area = probability_[i] / t.area;
   return out;
 }

@@ -1,8 +1,9 @@
 #pragma once
 // The scene's emissive triangles as area lights, in world space, chosen with probability
 // proportional to their power (luminance of the emitted radiance times area) and sampled
-// uniformly by area. Emission is two-sided: a model's winding does not decide whether its
-// lamp shines.
+// uniformly by area. A triangle shines from its front face (where its geometric normal points)
+// unless its material says both (Material::emission_sides); the choice of triangles ignores the
+// side, so a point picked on the back of a front-only emitter simply contributes nothing.
 #include <cstdint>
 #include <glm/vec3.hpp>
 #include <optional>
@@ -15,8 +16,9 @@ class PreparedScene;
 
 struct EmitterSample {
   glm::vec3 position{0.0f};
-  glm::vec3 normal{0.0f};     // unit, world
+  glm::vec3 normal{0.0f};     // unit, world: the geometric normal, the front side
   glm::vec3 radiance{0.0f};   // emitted radiance Le
+  bool two_sided = false;     // shines from the back too
   float pdf_area = 0.0f;      // density of this point per unit area (choice included)
 };
 
@@ -40,6 +42,7 @@ class Emitters {
     glm::vec3 normal;
     glm::vec3 radiance;
     float area;
+    bool two_sided;
   };
   std::vector<Triangle> triangles_;
   std::vector<float> cdf_;  // cdf_[i] = P(pick <= i)

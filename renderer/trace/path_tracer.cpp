@@ -102,7 +102,9 @@ class PathTracer {
       }
 
       // Emission met by BSDF sampling, weighted against next-event estimation's chance of it.
-      if (material.emission != glm::vec3(0.0f)) {
+      // A front-only emitter seen from behind is dark (its back is an ordinary surface).
+      const glm::vec3 le = material.emitted(glm::dot(hit.geometric_normal, wo_world) >= 0.0f);
+      if (le != glm::vec3(0.0f)) {
         float weight = 1.0f;
         if (!after_specular && next_event_estimation_) {
           const glm::vec3 d = hit.position - previous_position;
@@ -112,7 +114,7 @@ class PathTracer {
                                       : 0.0f;
           weight = power_heuristic(previous_pdf, light_pdf);
         }
-        result.radiance += beta * material.emission * weight;
+        result.radiance += beta * le * weight;
       }
       if (settings_.max_depth >= 0 && bounce >= settings_.max_depth) break;
 
@@ -165,7 +167,11 @@ class PathTracer {
       const glm::vec3 d = light.position - hit.position;
       const float dist2 = glm::dot(d, d);
       const glm::vec3 wi_world = d / std::sqrt(dist2);
-      const float cos_light = std::fabs(glm::dot(light.normal, wi_world));
+      // The light leaves the emitter along -wi_world: a point picked on the back of a front-only
+      // emitter sends nothing this way. The pick itself ignores the side, so its pdf (and the MIS
+      // weight, the same pdf BSDF sampling's hits use) is unchanged: unbiased either way.
+      const float cos_out = -glm::dot(light.normal, wi_world);
+      const float cos_light = light.two_sided ? std::fabs(cos_out) : cos_out;
       const glm::vec3 wi = frame.to_local(wi_world);
       const glm::vec3 f = bsdf.eval(wo, wi) * std::fabs(wi.z);
       if (cos_light > 0.0f && f != glm::vec3(0.0f) && visible(hit, light.position)) {

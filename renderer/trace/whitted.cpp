@@ -76,8 +76,9 @@ class WhittedTracer {
     if (facing_normal) *facing_normal = n;
     const glm::vec3& ng = hit.geometric_normal;
 
+    const bool front_side = glm::dot(hit.geometric_normal, to_eye) >= 0.0f;
     const glm::vec3 local = shade_blinn_phong(
-        m, hit.position, n, to_eye, scene_.lights, scene_.ambient,
+        m, hit.position, n, to_eye, front_side, scene_.lights, scene_.ambient,
         [&](const glm::vec3& p, const LightIncidence& in) { return light_visible(p, ng, in); });
     if (depth >= settings_.max_depth) return local;
 

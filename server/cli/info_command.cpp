@@ -5,7 +5,9 @@
 #include <glm/vec3.hpp>
 #include <memory>
 
+#include "renderer/prepared_scene.h"
 #include "renderer/scene/scene_builder.h"
+#include "renderer/trace/emitter_facing.h"
 #include "server/cli/job_file_options.h"
 
 namespace farm {
@@ -26,8 +28,20 @@ void print_light(const Light& l) {
   }
 }
 
+// A lamp whose winding is reversed shines away from everything and leaves the image dark.
+void warn_about_emitters_facing_away(Scene scene) {
+  const PreparedScene prepared(std::move(scene));
+  for (const EmitterFacingAway& e : find_emitters_facing_away(prepared)) {
+    fmt::print("  warning: object '{}' material '{}': {} of {} emissive triangles shine away from "
+               "the rest of the scene (only the front face shines: is the winding reversed? "
+               "\"emission_sides\": \"both\" in the job's material makes both faces shine)\n",
+               e.object, e.material, e.facing_away, e.checked);
+  }
+}
+
 void print_model(const std::filesystem::path& file) {
-  const Model model = load_model(file);
+  const auto shared = std::make_shared<const Model>(load_model(file));
+  const Model& model = *shared;
   const AABB b = model.bounds();
   fmt::print("model {}\n", file.string());
   fmt::print("  {} triangles, {} vertices, {} mesh(es), {} material(s)\n", model.triangle_count(),
@@ -39,12 +53,16 @@ void print_model(const std::filesystem::path& file) {
   }
   for (const Material& m : model.materials) {
     fmt::print("  material '{}': ka {} kd {} ks {} ke {} shininess {:.4g} ior {:.4g} "
-               "transmission {:.4g}\n",
+               "transmission {:.4g} emission_sides {}\n",
                m.name, vec(m.ambient), vec(m.diffuse), vec(m.specular), vec(m.emission),
-               m.shininess, m.ior, m.transmission);
+               m.shininess, m.ior, m.transmission, to_string(m.emission_sides));
   }
   for (const Camera& c : model.cameras) print_camera(c);
   for (const Light& l : model.lights) print_light(l);
+  // The model alone, in its own space.
+  Scene scene;
+  scene.objects.push_back(SceneObject{file.stem().string(), shared, glm::mat4(1.0f), model.materials});
+  warn_about_emitters_facing_away(std::move(scene));
 }
 
 void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
@@ -57,6 +75,7 @@ void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
     fmt::print("  object '{}': {} triangles from {}\n", o.name, o.model->triangle_count(),
                o.model->source.string());
   }
+  warn_about_emitters_facing_away(scene);
   print_camera(scene.camera);
   for (const Light& l : scene.lights) print_light(l);
   fmt::print("  render: engine {} {}x{} spp {} max_depth {} seed {} tile_size {} threads {} "

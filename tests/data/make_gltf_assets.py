@@ -11,7 +11,8 @@ Run from anywhere: python3 tests/data/make_gltf_assets.py. Layout, so tests can 
   node 4 "lamp"   at (0,4,0), KHR_lights_punctual point light 0: colour (1,0.5,0.25), intensity 20
   node 5 "sun"    rotated -90 deg about +X, so its -Z points down: directional light 1
   material 0 "emitter": base (0.8,0.2,0.1), metallic 0, roughness 0.5, emissive (1,0.5,0.25) x 4
-  material 1 "glass":   base (1,1,1), metallic 0, roughness 0, ior 1.5, transmission 0.9
+  material 1 "glass":   base (1,1,1), metallic 0, roughness 0, ior 1.5, transmission 0.9,
+                        doubleSided (material 0 is not: one-sided, glTF's default)
 """
 import base64
 import json
@@ -61,7 +62,7 @@ doc = {
                                   "metallicFactor": 0.0, "roughnessFactor": 0.5},
          "emissiveFactor": [1.0, 0.5, 0.25],
          "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}},
-        {"name": "glass",
+        {"name": "glass", "doubleSided": True,
          "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1],
                                   "metallicFactor": 0.0, "roughnessFactor": 0.0},
          "extensions": {"KHR_materials_ior": {"ior": 1.5},

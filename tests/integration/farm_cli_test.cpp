@@ -14,6 +14,7 @@
 
 #include "renderer/image/exr_io.h"
 #include "tests/support/farm_cli_fixture.h"
+#include "tests/support/job_specs.h"
 
 namespace farm {
 namespace {
@@ -121,6 +122,38 @@ TEST_F(FarmCliTest, InfoOfAJobListsObjectsAndSettings) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("2 object(s)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("engine raster"), std::string::npos) << r.output;
+}
+
+// The example Cornell box with its lamp's winding reversed: the lamp (1 cm under the ceiling)
+// then shines into the ceiling, and `farm info` says so, naming the object and material; the
+// model as shipped, or the flipped one whose job says "emission_sides": "both", draw no warning.
+TEST_F(FarmCliTest, InfoWarnsAboutALampThatShinesAwayFromTheScene) {
+  std::string obj = test::read_file(kSource / "jobs/assets/cornell_box.obj");
+  const std::string lamp_face = "f 61 62 63 64";
+  ASSERT_NE(obj.find(lamp_face), std::string::npos);
+  obj.replace(obj.find(lamp_face), lamp_face.size(), "f 64 63 62 61");
+  dir_.write("flipped.obj", obj);
+  fs::copy_file(kSource / "jobs/assets/cornell_box.mtl", dir_ / "cornell_box.mtl");
+  fs::copy_file(kSource / "jobs/assets/cornell_box.obj", dir_ / "cornell_box.obj");
+  const auto job = [&](const std::string& name, const std::string& file, const std::string& material) {
+    return dir_.write(name, R"({"version": 1, "scene": {"objects": [{"file": ")" + file + "\"" + material +
+                                R"(}]}, "render": {"engine": "path"}})");
+  };
+  const std::string warning = "warning: object 'flipped' material 'light': 2 of 2 emissive triangles shine away";
+
+  const auto flipped = run_command(farm("info " + shell_quote(job("flipped.json", "flipped.obj", "").string())));
+  ASSERT_EQ(flipped.exit_code, 0) << flipped.output;
+  EXPECT_NE(flipped.output.find(warning), std::string::npos) << flipped.output;
+  const auto model = run_command(farm("info " + shell_quote((dir_ / "flipped.obj").string())));
+  EXPECT_NE(model.output.find(warning), std::string::npos) << model.output;
+
+  const auto both = run_command(farm("info " + shell_quote(
+      job("both.json", "flipped.obj", R"(, "material": {"emission_sides": "both"})").string())));
+  ASSERT_EQ(both.exit_code, 0) << both.output;
+  EXPECT_EQ(both.output.find("warning"), std::string::npos) << both.output;
+  const auto shipped = run_command(farm("info " + shell_quote(job("shipped.json", "cornell_box.obj", "").string())));
+  ASSERT_EQ(shipped.exit_code, 0) << shipped.output;
+  EXPECT_EQ(shipped.output.find("warning"), std::string::npos) << shipped.output;
 }
 
 }  // namespace

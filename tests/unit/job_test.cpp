@@ -91,7 +91,8 @@ TEST_F(JobFiles, JobParse_FullJobKeepsEveryField) {
           "scale": [2, 0.5, -1],
           "material": { "ambient": [0.1, 0.2, 0.3], "diffuse": [0.8, 0.6, 0.4],
                         "specular": [0.5, 0.5, 0.5], "emission": [1, 2, 3],
-                        "shininess": 32, "ior": 1.5, "transmission": 0.25 } },
+                        "shininess": 32, "ior": 1.5, "transmission": 0.25,
+                        "emission_sides": "both" } },
         { "file": "assets/teapot.obj" }
       ],
       "camera": { "position": [2, 3, 4], "target": [0, 1, 0], "up": [0, 0, 1], "fov_y": 60,
@@ -122,7 +123,7 @@ TEST_F(JobFiles, JobParse_FullJobKeepsEveryField) {
   EXPECT_EQ(cow.transform.scale, glm::vec3(2, 0.5f, -1));
   ASSERT_TRUE(cow.material.ambient && cow.material.diffuse && cow.material.specular &&
               cow.material.emission && cow.material.shininess && cow.material.ior &&
-              cow.material.transmission);
+              cow.material.transmission && cow.material.emission_sides);
   EXPECT_EQ(*cow.material.ambient, glm::vec3(0.1f, 0.2f, 0.3f));
   EXPECT_EQ(*cow.material.diffuse, glm::vec3(0.8f, 0.6f, 0.4f));
   EXPECT_EQ(*cow.material.specular, glm::vec3(0.5f));
@@ -130,6 +131,7 @@ TEST_F(JobFiles, JobParse_FullJobKeepsEveryField) {
   EXPECT_EQ(*cow.material.shininess, 32.0f);
   EXPECT_EQ(*cow.material.ior, 1.5f);
   EXPECT_EQ(*cow.material.transmission, 0.25f);
+  EXPECT_EQ(*cow.material.emission_sides, EmissionSides::Both);
 
   const JobObject& teapot = job.scene.objects[1];
   EXPECT_EQ(teapot.file, asset("teapot.obj"));
@@ -497,6 +499,10 @@ const std::vector<BadJob> kBadJobs = {
     {"ZeroIor", object_with(R"("material": {"ior": 0})"), "scene.objects[0].material.ior", "> 0"},
     {"TransmissionAboveOne", object_with(R"("material": {"transmission": 1.5})"),
      "scene.objects[0].material.transmission", "<= 1"},
+    {"UnknownEmissionSides", object_with(R"("material": {"emission_sides": "back"})"),
+     "scene.objects[0].material.emission_sides", "unknown emission_sides 'back' (expected front or both)"},
+    {"EmissionSidesNotAString", object_with(R"("material": {"emission_sides": true})"),
+     "scene.objects[0].material.emission_sides", "expected a string, got a boolean (true)"},
     // camera, lights, colours
     {"CameraPositionEqualsTarget",
      job_with_scene_keys(R"("camera": {"position": [1, 2, 3], "target": [1, 2, 3]})"), "scene.camera",

@@ -287,7 +287,9 @@ TEST(LoaderGltf, MaterialsMapPbrAndExtensionsToPhong) {
     EXPECT_NEAR(emitter.shininess, 30.0f, 1e-3f);  // 2 / 0.5^4 - 2
     // ... which the path tracer turns back into glTF's GGX alpha = roughness^2.
     EXPECT_NEAR(Bsdf::roughness_from_shininess(emitter.shininess), 0.25f, 1e-5f);
+    EXPECT_EQ(emitter.emission_sides, EmissionSides::Front);  // glTF's doubleSided defaults to false
     const Material& glass = m.materials[1];
+    EXPECT_EQ(glass.emission_sides, EmissionSides::Both);  // doubleSided: seen, and shining, both ways
     EXPECT_FLOAT_EQ(glass.ior, 1.5f);
     EXPECT_FLOAT_EQ(glass.transmission, 0.9f);
     EXPECT_TRUE(glass.is_mirror());  // roughness 0

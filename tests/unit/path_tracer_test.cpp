@@ -29,14 +29,28 @@ double mean_red(const TileBuffer& image) {
   return sum / (static_cast<double>(r.width()) * r.height());
 }
 
-// A closed sphere of radius 3 that emits `le` and reflects `albedo` diffusely, seen from inside.
-PreparedScene furnace(float albedo, float le, const glm::vec3& eye, const glm::vec3& target) {
+// The model turned inside out: winding and normals reversed, so its front faces inwards.
+Model inside_out(Model model) {
+  for (Mesh& mesh : model.meshes) {
+    for (glm::uvec3& t : mesh.triangles) std::swap(t.y, t.z);
+    for (glm::vec3& n : mesh.normals) n = -n;
+  }
+  return model;
+}
+
+// A closed sphere of radius 3 that emits `le` and reflects `albedo` diffusely, seen from inside;
+// it shines from its front, so its winding faces inwards (or, with `sides` both, either way).
+PreparedScene furnace(float albedo, float le, const glm::vec3& eye, const glm::vec3& target,
+                      EmissionSides sides = EmissionSides::Front) {
   Material m;
   m.diffuse = glm::vec3(albedo);
   m.specular = glm::vec3(0.0f);
   m.emission = glm::vec3(le);
+  m.emission_sides = sides;
   Scene scene;
-  scene.objects.push_back(test::object_of(test::make_sphere(32, 64), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
+  Model sphere = test::make_sphere(32, 64);
+  if (sides == EmissionSides::Front) sphere = inside_out(std::move(sphere));
+  scene.objects.push_back(test::object_of(std::move(sphere), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f)), m));
   scene.camera.position = eye;
   scene.camera.target = target;
   scene.camera.far = 100;
@@ -46,11 +60,14 @@ PreparedScene furnace(float albedo, float le, const glm::vec3& eye, const glm::v
 // Inside a closed sphere that emits Le and reflects a fraction rho diffusely, every point sees
 // L = Le + rho * L, so L = Le / (1 - rho) everywhere.
 TEST(PathFurnace, ClosedEmissiveLambertianSphereConvergesToLeOverOneMinusAlbedo) {
-  const PreparedScene prepared = furnace(0.5f, 0.5f, {0.3f, -0.2f, 0.1f}, {1, 0.5f, -1});
-  const TileBuffer image = render_frame(prepared, path_settings(24, 24, 64));
-  EXPECT_NEAR(mean_red(image), 1.0, 0.02);
-  EXPECT_EQ(image.stats().invalid_samples, 0u);
-  EXPECT_EQ(image.stats().samples, 24u * 24u * 64u);
+  // Emitting inwards from its front, and from both faces of an outward winding: the same.
+  for (EmissionSides sides : {EmissionSides::Front, EmissionSides::Both}) {
+    const PreparedScene prepared = furnace(0.5f, 0.5f, {0.3f, -0.2f, 0.1f}, {1, 0.5f, -1}, sides);
+    const TileBuffer image = render_frame(prepared, path_settings(24, 24, 64));
+    EXPECT_NEAR(mean_red(image), 1.0, 0.02) << to_string(sides);
+    EXPECT_EQ(image.stats().invalid_samples, 0u);
+    EXPECT_EQ(image.stats().samples, 24u * 24u * 64u);
+  }
 }
 
 // A sphere under a uniform white sky of radiance 1, filling the whole view. Whatever a BSDF
@@ -362,6 +379,95 @@ TEST(PathVarianceAov, MatchesTheSpreadOfTheMeanOverSeedsAndFallsAsOneOverSpp) {
   EXPECT_GT(aov, 0.0);
   EXPECT_NEAR(spread / aov, 1.0, 0.2);
   EXPECT_NEAR(aov / aov_64, 4.0, 0.6);
+}
+
+// A lamp 1 above a floor, seen from the side and from below: `lamp` is the lamp's model (in its own space) and
+// `lamp_to_world` places it.
+PreparedScene lamp_over_floor(Model lamp, const glm::mat4& lamp_to_world, EmissionSides sides) {
+  Material floor;
+  floor.diffuse = glm::vec3(0.8f);
+  floor.specular = glm::vec3(0.0f);
+  Material light;
+  light.emission = glm::vec3(3.0f);
+  light.emission_sides = sides;
+  Scene scene;
+  scene.objects.push_back(test::object_of(test::make_quad({-3, 0, 3}, {3, 0, 3}, {3, 0, -3}, {-3, 0, -3}), glm::mat4(1.0f), floor));
+  scene.objects.push_back(test::object_of(std::move(lamp), lamp_to_world, light));
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {0, 0.7f, 3.5f};  // below the lamp: it sees the lamp's underside
+  scene.camera.target = {0, 0, 0};
+  scene.camera.fov_y_degrees = 40;
+  scene.camera.far = 50;
+  return PreparedScene(std::move(scene));
+}
+
+// Facing down (counter-clockwise seen from below) and facing up, at height 1.
+Model lamp_facing_down() { return test::make_quad({-0.5f, 1, -0.5f}, {0.5f, 1, -0.5f}, {0.5f, 1, 0.5f}, {-0.5f, 1, 0.5f}); }
+Model lamp_facing_up() { return test::make_quad({-0.5f, 1, 0.5f}, {0.5f, 1, 0.5f}, {0.5f, 1, -0.5f}, {-0.5f, 1, -0.5f}); }
+
+// The floor's direct light, by next-event estimation with MIS and by BSDF sampling alone.
+std::pair<double, double> direct_light_both_ways(const PreparedScene& scene) {
+  RenderSettings settings = path_settings(16, 16, 256);
+  settings.max_depth = 1;
+  RenderSettings bsdf_only = settings;
+  bsdf_only.spp = 2048;
+  bsdf_only.light_sampling = LightSampling::BsdfOnly;
+  return {mean_red(render_frame(scene, settings)), mean_red(render_frame(scene, bsdf_only))};
+}
+
+TEST(PathEmitterSides, ALampLightsFromItsFrontFaceOnlyUnlessItsMaterialSaysBoth) {
+  const auto [down_nee, down_bsdf] =
+      direct_light_both_ways(lamp_over_floor(lamp_facing_down(), glm::mat4(1.0f), EmissionSides::Front));
+  const auto [up_nee, up_bsdf] =
+      direct_light_both_ways(lamp_over_floor(lamp_facing_up(), glm::mat4(1.0f), EmissionSides::Front));
+  const auto [both_nee, both_bsdf] =
+      direct_light_both_ways(lamp_over_floor(lamp_facing_up(), glm::mat4(1.0f), EmissionSides::Both));
+  std::printf("floor under a lamp facing down: NEE+MIS %.4f, BSDF %.4f; facing up %.4f %.4f; "
+              "facing up, both sides %.4f %.4f\n",
+              down_nee, down_bsdf, up_nee, up_bsdf, both_nee, both_bsdf);
+  EXPECT_GT(down_nee, 0.05);
+  // The two strategies agree: the light sampler's back-facing picks add nothing, and the MIS
+  // weights of the hits BSDF sampling makes stay consistent with them.
+  EXPECT_NEAR(down_nee, down_bsdf, 0.03 * down_nee);
+  // The lamp's back lights nothing, and it is all the camera sees of the lamp.
+  EXPECT_EQ(up_nee, 0.0);
+  EXPECT_EQ(up_bsdf, 0.0);
+  // Both faces shining: the floor gets what the front-only lamp facing it gives.
+  EXPECT_NEAR(both_nee, down_nee, 0.03 * down_nee);
+  EXPECT_NEAR(both_bsdf, down_nee, 0.03 * down_nee);
+}
+
+TEST(PathEmitterSides, ALampSeenDirectlyIsDarkFromBehind) {
+  for (const bool flipped : {false, true}) {
+    Material light;
+    light.emission = {2.0f, 1.0f, 0.5f};
+    Scene scene;
+    scene.objects.push_back(test::object_of(flipped ? lamp_facing_up() : lamp_facing_down(), glm::mat4(1.0f), light));
+    scene.background = glm::vec3(0.0f);
+    scene.camera.position = {0, -1, 0.01f};  // below it, looking up
+    scene.camera.target = {0, 1, 0};
+    const PreparedScene prepared(std::move(scene));
+    RenderSettings settings = path_settings(8, 8, 4);
+    settings.max_depth = 0;
+    const TileBuffer image = render_frame(prepared, settings);
+    EXPECT_EQ(image.rgba(4, 4), flipped ? glm::vec4(0, 0, 0, 1) : glm::vec4(2, 1, 0.5f, 1)) << flipped;
+  }
+}
+
+// A transform that mirrors the model keeps the front on the same side of the surface (the
+// inverse-transpose normal), for the light sampler as for the hits: a model lamp facing up at
+// y = 0, mirrored upside down to y = 1, faces the floor and lights it as the unmirrored lamp
+// facing down does, by either strategy.
+TEST(PathEmitterSides, AMirroringTransformKeepsTheLampsFrontWhereItsWindingSays) {
+  const glm::mat4 mirror = glm::translate(glm::mat4(1.0f), glm::vec3(0, 1, 0)) *
+                           glm::scale(glm::mat4(1.0f), glm::vec3(1, -1, 1));
+  const Model model_facing_up = test::make_quad({-0.5f, 0, 0.5f}, {0.5f, 0, 0.5f}, {0.5f, 0, -0.5f}, {-0.5f, 0, -0.5f});
+  const auto [nee, bsdf] = direct_light_both_ways(lamp_over_floor(model_facing_up, mirror, EmissionSides::Front));
+  const auto [reference, unused] =
+      direct_light_both_ways(lamp_over_floor(lamp_facing_down(), glm::mat4(1.0f), EmissionSides::Front));
+  std::printf("mirrored lamp: NEE+MIS %.4f, BSDF %.4f, the lamp facing down %.4f\n", nee, bsdf, reference);
+  EXPECT_NEAR(nee, reference, 0.01 * reference);
+  EXPECT_NEAR(bsdf, reference, 0.03 * reference);
 }
 
 }  // namespace

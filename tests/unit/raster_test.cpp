@@ -216,6 +216,8 @@ bool same_bits(const TileBuffer& a, const TileBuffer& b) {
       if (std::memcmp(&da, &db, sizeof(float)) != 0) return false;
       if (a.aovs().normal && std::memcmp(&a.normal(x, y), &b.normal(x, y), sizeof(glm::vec3)) != 0)
         return false;
+      if (a.aovs().variance && std::memcmp(&a.variance(x, y), &b.variance(x, y), sizeof(glm::vec3)) != 0)
+        return false;
     }
   }
   return true;
@@ -239,7 +241,9 @@ TEST(RasterDepth, ExactTiesGoToTheTriangleEarlierInSceneOrder) {
 
 TEST(RasterRenderTile, AnyTilingAndThreadCountGivesTheSameBitsAsOnePiece) {
   // Single-threaded, one tile: the reference.
-  RenderSettings settings = raster_settings(123, 77, depth_and_normal());
+  AovSet aovs = depth_and_normal();
+  aovs.variance = true;  // zeros from the rasterizer, but they must merge like any channel
+  RenderSettings settings = raster_settings(123, 77, aovs);
   settings.spp = 2;
   const PreparedScene reference_scene(busy_scene());
   const TileBuffer whole = render_full(reference_scene, settings);

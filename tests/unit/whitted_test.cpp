@@ -149,7 +149,7 @@ TEST(WhittedRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
   scene.lights.push_back(Light{Light::Kind::Point, {3, 4, 2}, {}, glm::vec3(20.0f)});
   const PreparedScene prepared(std::move(scene));
   AovSet aovs;
-  aovs.depth = aovs.bvh_cost = true;
+  aovs.depth = aovs.bvh_cost = aovs.variance = true;
   RenderSettings settings = whitted_settings(67, 43, aovs);
   settings.spp = 2;
   const TileBuffer whole = test::render_full(prepared, settings);
@@ -162,7 +162,51 @@ TEST(WhittedRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
         for (int x = 0; x < 67; ++x) {
           ASSERT_EQ(whole.rgba(x, y), tiled.rgba(x, y)) << x << "," << y;
           ASSERT_EQ(whole.bvh_cost(x, y), tiled.bvh_cost(x, y));
+          ASSERT_EQ(tiled.variance(x, y), glm::vec3(0.0f));  // no Monte Carlo noise to report
         }
+    }
+  }
+}
+
+// Four emissive quads side by side in front of the camera, with no lights and no ambient, so a
+// pixel shows ke or nothing: facing the camera; facing away; facing away but shining from both
+// sides; and a quad wound facing away whose object is mirrored through its own plane, which turns
+// its front (where the model's winding says) towards the camera.
+TEST(CrossEngine, RasterAndWhittedShowEmissionOnlyFromTheEmittingSide) {
+  Material front, both;
+  front.emission = {2.0f, 1.0f, 0.5f};
+  both = front;
+  both.emission_sides = EmissionSides::Both;
+  const auto facing_camera = [](float x) {
+    return make_quad({x - 0.7f, -0.7f, 0}, {x + 0.7f, -0.7f, 0}, {x + 0.7f, 0.7f, 0}, {x - 0.7f, 0.7f, 0});
+  };
+  const auto facing_away = [](float x) {
+    return make_quad({x - 0.7f, 0.7f, 0}, {x + 0.7f, 0.7f, 0}, {x + 0.7f, -0.7f, 0}, {x - 0.7f, -0.7f, 0});
+  };
+  Scene scene;
+  scene.objects.push_back(object_of(facing_camera(-3), glm::mat4(1.0f), front));
+  scene.objects.push_back(object_of(facing_away(-1), glm::mat4(1.0f), front));
+  scene.objects.push_back(object_of(facing_away(1), glm::mat4(1.0f), both));
+  scene.objects.push_back(object_of(facing_away(3), glm::scale(glm::mat4(1.0f), {1, 1, -1}), front));
+  scene.ambient = glm::vec3(0.0f);
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {0, 0, 8};
+  scene.camera.target = {0, 0, 0};
+  scene.camera.far = 50;
+  const PreparedScene prepared(std::move(scene));
+  const glm::vec3 lit = front.emission, dark(0.0f);
+  const glm::vec3 expected[] = {lit, dark, lit, lit};
+  for (EngineKind engine : {EngineKind::Raster, EngineKind::Whitted}) {
+    for (int spp : {1, 4}) {  // pixel centres only, and supersampled (another raster set-up)
+      RenderSettings settings = whitted_settings(96, 32);
+      settings.engine = engine;
+      settings.spp = spp;
+      const TileBuffer image = render_frame(prepared, settings);
+      for (int i = 0; i < 4; ++i) {
+        const glm::ivec2 p = pixel_of(prepared.scene().camera, {-3.0f + 2.0f * static_cast<float>(i), 0, 0}, 96, 32);
+        EXPECT_EQ(image.rgba(p.x, p.y), glm::vec4(expected[i], 1.0f))
+            << to_string(engine) << " spp " << spp << ", quad " << i;
+      }
     }
   }
 }
