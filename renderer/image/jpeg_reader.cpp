@@ -8,25 +8,11 @@
 #include <stdexcept>
 #include <vector>
 
-// jpeglib.h needs FILE and size_t declared first.
-#include <jpeglib.h>
+#include "renderer/image/jpeg_error.h"
+
 
 namespace farm {
 namespace {
-
-// As in jpeg_writer.cpp: libjpeg's default error_exit ends the process; ours longjmps back below
-// the setjmp in decode(), whose frame holds nothing with a destructor.
-struct JpegError {
-  jpeg_error_mgr manager{};
-  std::jmp_buf jump{};
-  char message[JMSG_LENGTH_MAX] = "";
-};
-
-void on_jpeg_error(j_common_ptr cinfo) {
-  auto* error = static_cast<JpegError*>(cinfo->client_data);
-  (*cinfo->err->format_message)(cinfo, error->message);
-  std::longjmp(error->jump, 1);
-}
 
 void on_jpeg_message(j_common_ptr, int) {}  // warnings (a corrupt-data recovery) change nothing we report
 

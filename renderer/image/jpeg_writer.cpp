@@ -4,28 +4,15 @@
 
 #include <csetjmp>
 #include <cstddef>
-#include <cstdio>  // jpeglib.h needs FILE and size_t declared before it
-#include <jpeglib.h>
+#include <cstdio>
 #include <stdexcept>
+
+#include "renderer/image/jpeg_error.h"
 
 namespace farm {
 namespace {
 
 constexpr int kQuality = 98;
-
-// libjpeg's default error_exit ends the process. Ours longjmps back to encode() instead, the
-// message kept in plain storage for the C++ side to throw.
-struct JpegError {
-  jpeg_error_mgr manager{};
-  std::jmp_buf jump{};
-  char message[JMSG_LENGTH_MAX] = "";
-};
-
-void on_jpeg_error(j_common_ptr cinfo) {
-  auto* error = static_cast<JpegError*>(cinfo->client_data);
-  (*cinfo->err->format_message)(cinfo, error->message);
-  std::longjmp(error->jump, 1);
-}
 
 // Every libjpeg call that can fail happens in here, below the setjmp: a longjmp then skips only
 // libjpeg's own C frames and lands in a frame that holds nothing with a destructor. Returns false

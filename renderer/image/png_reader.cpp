@@ -9,20 +9,10 @@
 #include <stdexcept>
 #include <vector>
 
+#include "renderer/image/png_error.h"
+
 namespace farm {
 namespace {
-
-// As in png_writer.cpp: libpng's error handler longjmps back below a setjmp in a frame with
-// nothing to destroy; the message waits in plain storage for the C++ side to throw it.
-struct PngError {
-  char message[256] = "";
-};
-
-void on_png_error(png_structp png, png_const_charp message) {
-  auto* error = static_cast<PngError*>(png_get_error_ptr(png));
-  std::snprintf(error->message, sizeof error->message, "%s", message);
-  png_longjmp(png, 1);
-}
 
 void on_png_warning(png_structp, png_const_charp) {}  // a warning changes nothing we read
 

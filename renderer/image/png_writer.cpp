@@ -8,20 +8,10 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "renderer/image/png_error.h"
+
 namespace farm {
 namespace {
-
-// libpng reports an error by calling our handler, which must not return. It longjmps back to
-// encode(); the message waits here, in plain storage, for the C++ side to throw it.
-struct PngError {
-  char message[256] = "";
-};
-
-void on_png_error(png_structp png, png_const_charp message) {
-  auto* error = static_cast<PngError*>(png_get_error_ptr(png));
-  std::snprintf(error->message, sizeof error->message, "%s", message);
-  png_longjmp(png, 1);
-}
 
 // Every libpng call that can fail happens in here, below the setjmp: a longjmp then skips only
 // libpng's own C frames and lands in a frame that holds nothing with a destructor. Returns false
