@@ -22,7 +22,7 @@ h1 { margin-bottom: 0.2em; } .counts { color: #555; margin-bottom: 1.5em; }
 .status { font-weight: bold; margin-right: 0.6em; } .message { font-family: monospace; margin: 0.4em 0; }
 table { border-collapse: collapse; margin: 0.4em 0; } td { padding: 1px 10px 1px 0; font-family: monospace; }
 .images { display: flex; gap: 12px; flex-wrap: wrap; } figure { margin: 0; }
-figure img { max-width: 360px; image-rendering: pixelated; border: 1px solid #ddd; display: block; }
+figure img { width: 320px; height: auto; image-rendering: pixelated; border: 1px solid #ddd; display: block; }
 figcaption { color: #555; font-size: 12px; }
 .swap { position: relative; } .swap .ref { position: absolute; top: 0; left: 0; opacity: 0; }
 .swap:hover .ref { opacity: 1; }
