@@ -53,15 +53,15 @@ int channel_rank(const std::string& name) {
   return static_cast<int>(kFirst.size());
 }
 
-Image read_exr_channels(const fs::path& file) {
+Image read_exr_channels(const fs::path& file, int max_side) {
   try {
     Imf::InputFile in(file.c_str());
     const Imath::Box2i dw = in.header().dataWindow();
     const long long width = static_cast<long long>(dw.max.x) - dw.min.x + 1;
     const long long height = static_cast<long long>(dw.max.y) - dw.min.y + 1;
-    if (width < 1 || height < 1 || width > kMaxImageSide || height > kMaxImageSide) {
+    if (width < 1 || height < 1 || width > max_side || height > max_side) {
       throw InputError(fmt::format("{}: a {}x{} data window is outside 1..{} pixels a side", file.string(), width,
-                                   height, kMaxImageSide));
+                                   height, max_side));
     }
     std::vector<std::string> names;
     for (auto it = in.header().channels().begin(); it != in.header().channels().end(); ++it) {
@@ -124,7 +124,8 @@ Image make_image(int width, int height, std::vector<std::string> channels) {
   return image;
 }
 
-Image read_image(const fs::path& file) {
+Image read_image(const fs::path& file, int max_side) {
+  if (max_side <= 0 || max_side > kMaxImageSide) max_side = kMaxImageSide;
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) {
     throw InputError(fmt::format("{}: {}", file.string(), fs::exists(file, ec) ? "not a regular file" : "no such file"));
@@ -133,9 +134,9 @@ Image read_image(const fs::path& file) {
   if (!in) throw InputError(fmt::format("{}: cannot open for reading", file.string()));
   try {
     switch (sniff(in.get())) {
-      case Format::exr: return read_exr_channels(file);
-      case Format::png: return from_decoded(read_png(in.get(), file, kMaxImageSide));
-      case Format::jpeg: return from_decoded(read_jpeg(in.get(), file, kMaxImageSide));
+      case Format::exr: return read_exr_channels(file, max_side);
+      case Format::png: return from_decoded(read_png(in.get(), file, max_side));
+      case Format::jpeg: return from_decoded(read_jpeg(in.get(), file, max_side));
       case Format::unknown: break;
     }
   } catch (const InputError&) {

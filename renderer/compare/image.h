@@ -39,8 +39,9 @@ Image make_image(int width, int height, std::vector<std::string> channels);
 
 // Reads an EXR (every channel of its first part, as float), a PNG (8 or 16 bit) or a JPEG by
 // its contents, not its extension. Throws InputError naming the file on a missing or unreadable
-// file, and refuses images over job_limits' pixel bound.
-Image read_image(const std::filesystem::path& file);
+// file, and refuses images wider or taller than `max_side` (job_limits' bound by default)
+// before their pixels are decoded, so a hostile header cannot make it allocate gigabytes.
+Image read_image(const std::filesystem::path& file, int max_side = 0);
 
 // The colour channels a metric compares: R G B when present, else Y (grey). Empty when neither.
 std::vector<int> colour_channels(const Image& image);

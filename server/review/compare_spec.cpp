@@ -7,10 +7,17 @@
 
 namespace farm {
 
-CompareSettings read_compare_settings(const JsonValue& value, CompareSettings settings) {
+std::vector<std::string_view> compare_keys() {
   std::vector<std::string_view> keys = {"metric", "ssim_channels"};
   for (const ThresholdKey& key : threshold_keys()) keys.push_back(key.name);
-  const JsonObject object = value.object(keys);
+  return keys;
+}
+
+CompareSettings read_compare_settings(const JsonValue& value, CompareSettings settings) {
+  return read_compare_settings(value.object(compare_keys()), settings);
+}
+
+CompareSettings read_compare_settings(const JsonObject& object, CompareSettings settings) {
   if (auto m = object.get("metric")) {
     std::vector<std::string_view> names;
     for (Metric metric : kAllMetrics) names.push_back(to_string(metric));

@@ -16,7 +16,7 @@
 #include "server/client/scheduler_client.h"
 #include "server/common/job_state.h"
 #include "server/common/service_error.h"
-#include "server/embedded/embedded_farm.h"
+#include "server/review/job_renderer.h"
 
 namespace farm {
 namespace {
@@ -135,9 +135,7 @@ class Collector {
 
 void run_embedded(const RegressSuite& suite, const std::vector<std::size_t>& selected, const RegressOptions& options,
                   Collector& collector) {
-  EmbeddedFarmOptions farm_options;
-  farm_options.threads = options.threads;
-  EmbeddedFarm farm(farm_options);
+  JobRenderer renderer(std::nullopt, options.threads);
   std::atomic<std::size_t> next{0};
   const auto work = [&] {
     for (std::size_t i; (i = next++) < selected.size();) {
@@ -145,16 +143,12 @@ void run_embedded(const RegressSuite& suite, const std::vector<std::size_t>& sel
       const auto start = Clock::now();
       const TestFiles files = files_of(test, options.output_dir);
       try {
-        const EmbeddedResult result = farm.run_local(submission_of(suite, test, files));
-        if (result.job.state() != v1::JOB_STATE_SUCCEEDED) {
-          collector.add(selected[i], error_outcome(test, fmt::format("the render {}: {}", to_string(result.job.state()),
-                                                                     result.job.failure_reason()), start));
-          continue;
-        }
-        collector.add(selected[i], judge(test, files, options, start));
+        renderer.render(submission_of(suite, test, files), files.exr, files.preview);
       } catch (const std::exception& e) {
         collector.add(selected[i], error_outcome(test, e.what(), start));
+        continue;
       }
+      collector.add(selected[i], judge(test, files, options, start));
     }
   };
   std::vector<std::thread> threads;

@@ -10,49 +10,21 @@
 #include "renderer/scene/json_reader.h"
 #include "renderer/util/path_confinement.h"
 #include "server/review/compare_spec.h"
+#include "server/review/suite_file.h"
 
 namespace farm {
 namespace {
 
 namespace fs = std::filesystem;
 
-constexpr std::size_t kMaxSuiteBytes = 4 << 20;  // a suite lists jobs; megabytes of it are a mistake
 constexpr std::size_t kMaxTests = 10000;
-
-std::string read_suite_text(const fs::path& file) {
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) {
-    throw InputError(fmt::format("{}: {}", file.string(), fs::exists(file, ec) ? "not a regular file" : "no such file"));
-  }
-  if (fs::file_size(file, ec) > kMaxSuiteBytes) {
-    throw InputError(fmt::format("{}: larger than {} MiB; a suite file lists jobs", file.string(), kMaxSuiteBytes >> 20));
-  }
-  std::FILE* in = std::fopen(file.c_str(), "rb");
-  if (in == nullptr) throw InputError(fmt::format("{}: cannot open for reading", file.string()));
-  std::string text(kMaxSuiteBytes + 1, '\0');
-  text.resize(std::fread(text.data(), 1, text.size(), in));
-  std::fclose(in);
-  return text;
-}
-
-bool safe_name(const std::string& name) {
-  if (name.empty() || name.size() > 100 || name == "." || name == "..") return false;
-  for (char c : name)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') return false;
-  return true;
-}
-
-// A path relative to the suite's folder (or absolute), made absolute and normal.
-fs::path resolve(const fs::path& folder, const std::string& text) {
-  return fs::weakly_canonical(folder / fs::path(text));
-}
 
 // A file the suite writes or reads as a reference: it must lie inside the suite's folder, so a
 // suite cannot be made to overwrite (--update) or read files elsewhere.
 fs::path reference_inside(const JsonValue& value, const fs::path& folder) {
   const std::string text = value.string();
   if (text.empty()) value.fail("an empty path");
-  const fs::path path = resolve(folder, text);
+  const fs::path path = resolve_from(folder, text);
   if (!resolve_within(folder, path)) {
     value.fail(fmt::format("'{}' lies outside the suite's folder {}; references must be inside it", text, folder.string()));
   }
@@ -83,7 +55,7 @@ RegressSuite load_regress_suite(const fs::path& file) {
   RegressSuite suite;
   suite.file = fs::weakly_canonical(fs::absolute(file));
   suite.folder = suite.file.parent_path();
-  const std::string text = read_suite_text(file);
+  const std::string text = read_bounded_text(file);
   const std::string name = file.string();
   const nlohmann::json doc = parse_json_strict(text, name);
   const JsonValue root(doc, "", name);
@@ -91,16 +63,11 @@ RegressSuite load_regress_suite(const fs::path& file) {
   top.require("version").int32(1, 1);
   const JsonValue suite_name = top.require("name");
   suite.name = suite_name.string();
-  if (!safe_name(suite.name)) suite_name.fail("a name of letters, digits, '-', '_' and '.' (it names the report folder)");
+  if (!is_safe_name(suite.name)) suite_name.fail("a name of letters, digits, '-', '_' and '.' (it names the report folder)");
 
   fs::path references = suite.folder / "refs";
   if (auto r = top.get("references")) references = reference_inside(*r, suite.folder);
-  suite.asset_root = suite.folder;
-  if (auto a = top.get("asset_root")) {
-    suite.asset_root = resolve(suite.folder, a->string());
-    std::error_code ec;
-    if (!fs::is_directory(suite.asset_root, ec)) a->fail(fmt::format("{} is not a folder", suite.asset_root.string()));
-  }
+  suite.asset_root = read_folder(top.get("asset_root"), suite.folder);
   CompareSettings defaults;
   if (auto c = top.get("compare")) defaults = read_compare_settings(*c, defaults);
 
@@ -114,12 +81,9 @@ RegressSuite load_regress_suite(const fs::path& file) {
     RegressTest test;
     const JsonValue test_name = t.require("name");
     test.name = test_name.string();
-    if (!safe_name(test.name)) test_name.fail("a name of letters, digits, '-', '_' and '.' (it names the test's files)");
+    if (!is_safe_name(test.name)) test_name.fail("a name of letters, digits, '-', '_' and '.' (it names the test's files)");
     if (!names.insert(test.name).second) test_name.fail(fmt::format("a second test named '{}'", test.name));
-    const JsonValue job = t.require("job");
-    test.job = resolve(suite.folder, job.string());
-    std::error_code ec;
-    if (!fs::is_regular_file(test.job, ec)) job.fail(fmt::format("no job file at {}", test.job.string()));
+    test.job = read_job_path(t.require("job"), suite.folder);
     if (auto r = t.get("render")) test.render = read_render(*r);
     test.compare = defaults;
     if (auto c = t.get("compare")) test.compare = read_compare_settings(*c, defaults);
