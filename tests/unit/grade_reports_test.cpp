@@ -1,0 +1,250 @@
+// The grading reports (server/review: grades_csv, feedback_pages, gradescope_results,
+// class_summary, similar_submissions) over one class built by hand: a rubric of two file tasks
+// (one visible, one after_published) and a run task (hidden), five students, two of them with
+// hostile ids (a comma and a quote; <script>), one with <script> in its program's output; for
+// the cow task alice and bob hand in identical images, carol the same with one pixel changed,
+// dave a different one. The CSVs are read back by Python's csv module and the results.json files
+// checked against Gradescope's specification by jsonschema (tests/python/validate_json_schema.py).
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "renderer/compare/image.h"
+#include "server/review/grade_points.h"
+#include "server/review/grades_csv.h"
+#include "server/review/markup_escape.h"
+#include "server/review/student_folder.h"
+#include "tests/support/run_command.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kComma = "dave, \"the\" hacker";
+const std::string kScript = "<script>alert(1)</script>";
+const std::string kScriptOutput = "building...\n<script>alert('pwned')</script>\nsegfault & core dumped";
+
+std::string bytes_of(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A 32x24 picture: a gradient with a block whose place and colour depend on `seed`.
+Image picture(int seed) {
+  Image image = make_image(32, 24, {"R", "G", "B"});
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      image.at(x, y, 0) = static_cast<float>(x) / 31.0f;
+      image.at(x, y, 1) = static_cast<float>(y) / 23.0f;
+      image.at(x, y, 2) = 0.5f;
+      if (x >= 4 + seed * 5 && x < 12 + seed * 5 && y >= 6 && y < 16) {
+        image.at(x, y, 0) = 0.1f * static_cast<float>(seed);
+        image.at(x, y, 1) = 1.0f - 0.2f * static_cast<float>(seed);
+        image.at(x, y, 2) = 0.9f;
+      }
+    }
+  return image;
+}
+
+Image solid(float r, float g, float b) {
+  Image image = make_image(32, 24, {"R", "G", "B"});
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      image.at(x, y, 0) = r;
+      image.at(x, y, 1) = g;
+      image.at(x, y, 2) = b;
+    }
+  return image;
+}
+
+struct Spec {
+  std::string student;
+  double cow, teapot, program;
+};
+
+class GradeReportsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rubric_.name = "Lab 3 <shading> & co";
+    rubric_.file = dir_ / "rubric" / "rubric.json";
+    rubric_.folder = dir_ / "rubric";
+    GradeTask cow;
+    cow.name = "cow";
+    cow.points = 60;
+    cow.file = "cow.png";
+    GradeTask teapot;
+    teapot.name = "teapot";
+    teapot.points = 30;
+    teapot.file = "teapot.png";
+    teapot.visibility = Visibility::after_published;
+    GradeTask program;
+    program.name = "program";
+    program.points = 10;
+    program.run = RunSpec{};
+    program.visibility = Visibility::hidden;
+    rubric_.tasks = {cow, teapot, program};
+
+    const fs::path images = dir_ / "runner";
+    write_png_image(picture(0), images / "reference_cow.png");
+    write_png_image(solid(0.2f, 0.3f, 0.4f), images / "reference_teapot.png");
+    write_png_image(solid(1, 0, 0), images / "difference.png");
+    write_png_image(picture(1), images / "alice_cow.png");
+    write_png_image(picture(1), images / "bob_cow.png");  // the same pixels as alice's
+    Image near = picture(1);
+    near.at(20, 20, 0) += 0.3f;  // one pixel changed
+    write_png_image(near, images / "carol_cow.png");
+    write_png_image(picture(3), images / "dave_cow.png");
+    write_png_image(solid(0.9f, 0.1f, 0.1f), images / "script_cow.png");
+    // teapot: alice and dave hand in the reference itself (not listed as alike); the others differ.
+    write_png_image(solid(0.2f, 0.3f, 0.4f), images / "alice_teapot.png");
+    write_png_image(solid(0.2f, 0.3f, 0.4f), images / "dave_teapot.png");
+    write_png_image(solid(0.9f, 0.9f, 0.1f), images / "bob_teapot.png");
+    write_png_image(solid(0.1f, 0.9f, 0.9f), images / "carol_teapot.png");
+    write_png_image(solid(0.5f, 0.1f, 0.8f), images / "script_teapot.png");
+
+    const std::vector<Spec> specs = {{"alice", 60, 30, 10},
+                                     {"bob", 37.5, 12.25, 0},
+                                     {"carol", 45, 30, 5},
+                                     {kComma, 0, 30, 10},
+                                     {kScript, 20, 0, 0}};
+    const std::map<std::string, std::string> file_stem = {
+        {"alice", "alice"}, {"bob", "bob"}, {"carol", "carol"}, {kComma, "dave"}, {kScript, "script"}};
+    for (const Spec& spec : specs) {
+      StudentGrade s;
+      s.student = spec.student;
+      s.seconds = 3.25;
+      const std::string stem = file_stem.at(spec.student);
+      TaskGrade cow_grade;
+      cow_grade.task = "cow";
+      cow_grade.points = spec.cow;
+      cow_grade.max_points = 60;
+      cow_grade.reason = fmt::format("FLIP mean {}: 0.05 earns all 60 points, 0.25 none", 0.25 - spec.cow / 300);
+      cow_grade.compared = true;
+      cow_grade.result.metric = Metric::flip;
+      cow_grade.result.figures = {{"flip_mean", 0.25 - spec.cow / 300}};
+      cow_grade.student_png = images / (stem + "_cow.png");
+      cow_grade.reference_png = images / "reference_cow.png";
+      cow_grade.difference_png = images / "difference.png";
+      TaskGrade teapot_grade;
+      teapot_grade.task = "teapot";
+      teapot_grade.points = spec.teapot;
+      teapot_grade.max_points = 30;
+      teapot_grade.visibility = Visibility::after_published;
+      teapot_grade.reason = spec.teapot == 0 ? "teapot.png: expected <b>32x24</b>, got 800x600"
+                                             : fmt::format("PSNR {} dB", 20 + spec.teapot);
+      teapot_grade.student_png = images / (stem + "_teapot.png");
+      teapot_grade.reference_png = images / "reference_teapot.png";
+      TaskGrade program_grade;
+      program_grade.task = "program";
+      program_grade.points = spec.program;
+      program_grade.max_points = 10;
+      program_grade.visibility = Visibility::hidden;
+      program_grade.reason = spec.program == 0 ? "the program ran past its 60 s limit" : "the program wrote its image";
+      program_grade.program_output = spec.student == kScript ? kScriptOutput : std::string();
+      program_grade.seconds = 1.5;
+      s.tasks = {cow_grade, teapot_grade, program_grade};
+      grades_.students.push_back(s);
+    }
+    std::sort(grades_.students.begin(), grades_.students.end(),
+              [](const StudentGrade& a, const StudentGrade& b) { return a.student < b.student; });
+    grades_.rubric = &rubric_;
+    out_ = dir_ / "out";
+  }
+
+  // Runs the test venv's Python on a script of tests/python with `args`.
+  static test::CommandResult python(const std::string& script, const std::vector<std::string>& args) {
+    std::string command = fmt::format("{} {}", test::shell_quote(FARM_TEST_PYTHON),
+                                      test::shell_quote(fmt::format("{}/tests/python/{}", FARM_SOURCE_DIR, script)));
+    for (const std::string& a : args) command += fmt::format(" {}", test::shell_quote(a));
+    return test::run_command(fmt::format("{} 2>&1", command));
+  }
+
+  // A CSV file as Python's csv module reads it: rows of fields.
+  static std::vector<std::vector<std::string>> read_csv(const fs::path& file) {
+    const test::CommandResult r = test::run_command(fmt::format(
+        "{} -c {} {} 2>&1", test::shell_quote(FARM_TEST_PYTHON),
+        test::shell_quote("import csv, json, sys\n"
+                          "with open(sys.argv[1], newline='', encoding='utf-8') as f:\n"
+                          "    print(json.dumps(list(csv.reader(f, strict=True))))\n"),
+        test::shell_quote(file.string())));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(r.output).get<std::vector<std::vector<std::string>>>();
+  }
+
+  static std::string schema() { return std::string(FARM_TEST_DATA) + "/gradescope/results.schema.json"; }
+
+  test::TempDir dir_;
+  Rubric rubric_;
+  ClassGrades grades_;
+  fs::path out_;
+};
+
+TEST(GradePointsTest, PrintsUpToTwoDecimalsWithoutTrailingZeros) {
+  EXPECT_EQ(format_points(60), "60");
+  EXPECT_EQ(format_points(37.5), "37.5");
+  EXPECT_EQ(format_points(12.25), "12.25");
+  EXPECT_EQ(format_points(0), "0");
+  EXPECT_EQ(format_points(-0.001), "0");
+  EXPECT_EQ(format_points(33.333333), "33.33");
+  EXPECT_EQ(format_points(19.999), "20");
+  EXPECT_EQ(format_points(0.1 + 0.2), "0.3");
+  EXPECT_DOUBLE_EQ(round_points(0.1 + 0.2), 0.3);
+}
+
+TEST(StudentFolderTest, KeepsOrdinaryIdsAndNeverClimbsOut) {
+  EXPECT_EQ(student_folder_name("alice"), "alice");
+  EXPECT_EQ(student_folder_name(kComma), kComma);
+  EXPECT_EQ(student_folder_name(kScript), "<script>alert(1)<%2Fscript>");
+  EXPECT_EQ(student_folder_name("."), "%2E");
+  EXPECT_EQ(student_folder_name(".."), "%2E%2E");
+  EXPECT_EQ(student_folder_name("../etc"), "..%2Fetc");
+  EXPECT_EQ(student_folder_name("a\\b"), "a%5Cb");
+  EXPECT_EQ(student_folder_name("50%"), "50%25");
+  EXPECT_EQ(student_folder_name(std::string("a\nb\0c", 5)), "a%0Ab%00c");
+  // Injective: the escape character is escaped too, so no two ids share a folder.
+  EXPECT_NE(student_folder_name("%2E"), student_folder_name("."));
+  EXPECT_NE(student_folder_name("a%2Fb"), student_folder_name("a/b"));
+  EXPECT_THROW(student_folder_name(""), std::invalid_argument);
+  EXPECT_EQ(url_path_segment("dave, \"x\" 50%"), "dave%2C%20%22x%22%2050%25");
+}
+
+TEST_F(GradeReportsTest, GradesCsvQuotesHostileIdsAndParsesBack) {
+  const fs::path file = write_grades_csv(grades_, out_);
+  EXPECT_EQ(file, out_ / "grades.csv");
+  const std::string text = bytes_of(file);
+  EXPECT_NE(text.find("\"dave, \"\"the\"\" hacker\",0,30,10,40,100\r\n"), std::string::npos) << text;
+  const auto rows = read_csv(file);
+  ASSERT_EQ(rows.size(), 6u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"student", "cow", "teapot", "program", "total", "maximum"}));
+  // Sorted by id (bytes: '<' before letters).
+  EXPECT_EQ(rows[1], (std::vector<std::string>{kScript, "20", "0", "0", "20", "100"}));
+  EXPECT_EQ(rows[2], (std::vector<std::string>{"alice", "60", "30", "10", "100", "100"}));
+  EXPECT_EQ(rows[3], (std::vector<std::string>{"bob", "37.5", "12.25", "0", "49.75", "100"}));
+  EXPECT_EQ(rows[4], (std::vector<std::string>{"carol", "45", "30", "5", "80", "100"}));
+  EXPECT_EQ(rows[5], (std::vector<std::string>{kComma, "0", "30", "10", "40", "100"}));
+}
+
+TEST_F(GradeReportsTest, GradesCsvSortsStudentsAndLeavesMissingTasksEmpty) {
+  std::reverse(grades_.students.begin(), grades_.students.end());
+  grades_.students.back().tasks.pop_back();  // the <script> student has no program grade
+  const auto rows = read_csv(write_grades_csv(grades_, out_));
+  ASSERT_EQ(rows.size(), 6u);
+  EXPECT_EQ(rows[1], (std::vector<std::string>{kScript, "20", "0", "", "20", "100"}));
+  EXPECT_EQ(rows[2][0], "alice");
+  EXPECT_EQ(rows[5][0], kComma);
+}
+
+}  // namespace
+}  // namespace farm
