@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "renderer/compare/image.h"
+#include "server/review/feedback_pages.h"
 #include "server/review/grade_points.h"
 #include "server/review/grades_csv.h"
 #include "server/review/markup_escape.h"
@@ -191,6 +192,14 @@ class GradeReportsTest : public ::testing::Test {
   fs::path out_;
 };
 
+// Every regular file under `root`, as paths relative to it.
+std::set<std::string> files_under(const fs::path& root) {
+  std::set<std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(root))
+    if (entry.is_regular_file()) files.insert(fs::relative(entry.path(), root).string());
+  return files;
+}
+
 TEST(GradePointsTest, PrintsUpToTwoDecimalsWithoutTrailingZeros) {
   EXPECT_EQ(format_points(60), "60");
   EXPECT_EQ(format_points(37.5), "37.5");
@@ -244,6 +253,73 @@ TEST_F(GradeReportsTest, GradesCsvSortsStudentsAndLeavesMissingTasksEmpty) {
   EXPECT_EQ(rows[1], (std::vector<std::string>{kScript, "20", "0", "", "20", "100"}));
   EXPECT_EQ(rows[2][0], "alice");
   EXPECT_EQ(rows[5][0], kComma);
+}
+
+TEST_F(GradeReportsTest, FeedbackPagesAreSelfContainedAndEscaped) {
+  const std::vector<fs::path> pages = write_feedback_pages(grades_, out_);
+  ASSERT_EQ(pages.size(), 5u);
+  const fs::path out = fs::weakly_canonical(out_);
+  for (std::size_t i = 0; i < pages.size(); ++i) {
+    const StudentGrade& s = grades_.students[i];
+    const fs::path folder = out_ / "feedback" / student_folder_name(s.student);
+    EXPECT_EQ(pages[i], folder / "index.html");
+    ASSERT_TRUE(fs::is_regular_file(pages[i])) << pages[i];
+    const std::string html = bytes_of(pages[i]);
+    SCOPED_TRACE(s.student);
+    EXPECT_NE(html.find("<h1>Feedback: " + markup_escape(s.student) + "</h1>"), std::string::npos);
+    EXPECT_NE(html.find(fmt::format("<b>{} / 100</b>", format_points(points_total(s)))), std::string::npos);
+    for (const TaskGrade& t : s.tasks) {
+      EXPECT_NE(html.find(fmt::format("{} / {}", format_points(t.points), format_points(t.max_points))),
+                std::string::npos);
+      EXPECT_NE(html.find(markup_escape(t.reason)), std::string::npos) << t.reason;
+    }
+    EXPECT_NE(html.find(kHiddenTaskNote), std::string::npos);
+    EXPECT_NE(html.find("flip_mean"), std::string::npos);
+    // Nothing hostile comes through as markup; nothing is fetched from elsewhere.
+    EXPECT_EQ(html.find("<script"), std::string::npos);
+    EXPECT_EQ(html.find("<b>32x24"), std::string::npos);
+    EXPECT_EQ(html.find("http"), std::string::npos);
+    // Every picture the page shows is a file inside the student's folder.
+    const std::regex src(R"re(<img src="([^"]*)")re");
+    int images = 0;
+    for (auto m = std::sregex_iterator(html.begin(), html.end(), src); m != std::sregex_iterator(); ++m, ++images) {
+      const std::string name = (*m)[1];
+      EXPECT_EQ(name.find('/'), std::string::npos) << name;
+      EXPECT_TRUE(fs::is_regular_file(folder / name)) << name;
+    }
+    EXPECT_EQ(images, 5);  // cow: student, reference, difference; teapot: student, reference
+    EXPECT_TRUE(fs::is_regular_file(folder / "cow.student.png"));
+    EXPECT_TRUE(fs::is_regular_file(folder / "cow.reference.png"));
+    EXPECT_TRUE(fs::is_regular_file(folder / "cow.difference.png"));
+    EXPECT_TRUE(fs::is_regular_file(folder / "teapot.student.png"));
+    EXPECT_EQ(bytes_of(folder / "cow.student.png"), bytes_of(s.tasks[0].student_png));
+    // The folder lies inside the output folder, one level under feedback/.
+    EXPECT_EQ(fs::weakly_canonical(folder).parent_path(), out / "feedback");
+  }
+  // The program output shows, escaped, in a <pre>.
+  const std::string script_page = bytes_of(pages[0]);
+  EXPECT_NE(script_page.find("<pre>" + markup_escape(kScriptOutput) + "</pre>"), std::string::npos) << script_page;
+  EXPECT_NE(script_page.find("&lt;script&gt;alert(1)&lt;/script&gt;"), std::string::npos);
+  // Nothing was written outside out/feedback: five folders of an index and five pictures.
+  const std::set<std::string> files = files_under(out_);
+  EXPECT_EQ(files.size(), 5u * 6u);
+  for (const std::string& f : files) EXPECT_EQ(f.rfind("feedback/", 0), 0u) << f;
+  EXPECT_EQ(files_under(dir_.path()).size(), files.size() + 13u);  // + the runner's images
+}
+
+TEST_F(GradeReportsTest, FeedbackPageSaysWhenAnImageIsMissing) {
+  StudentGrade s = grades_.students[1];
+  s.tasks[0].student_png = dir_ / "runner" / "gone.png";
+  const fs::path page = write_feedback_page(s, nullptr, out_ / "one");
+  const std::string html = bytes_of(page);
+  EXPECT_NE(html.find("student image not available"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out_ / "one" / "cow.student.png"));
+  EXPECT_TRUE(fs::exists(out_ / "one" / "cow.reference.png"));
+}
+
+TEST_F(GradeReportsTest, FeedbackPagesRefuseTwoStudentsWithOneId) {
+  grades_.students.push_back(grades_.students.front());
+  EXPECT_THROW(write_feedback_pages(grades_, out_), std::invalid_argument);
 }
 
 }  // namespace
