@@ -22,6 +22,7 @@
 #include "renderer/compare/image.h"
 #include "server/review/feedback_pages.h"
 #include "server/review/grade_points.h"
+#include "server/review/gradescope_results.h"
 #include "server/review/grades_csv.h"
 #include "server/review/markup_escape.h"
 #include "server/review/student_folder.h"
@@ -320,6 +321,96 @@ TEST_F(GradeReportsTest, FeedbackPageSaysWhenAnImageIsMissing) {
 TEST_F(GradeReportsTest, FeedbackPagesRefuseTwoStudentsWithOneId) {
   grades_.students.push_back(grades_.students.front());
   EXPECT_THROW(write_feedback_pages(grades_, out_), std::invalid_argument);
+}
+
+TEST_F(GradeReportsTest, GradescopeResultsFollowTheSpecification) {
+  const std::vector<fs::path> files = write_gradescope_results(grades_, out_);
+  ASSERT_EQ(files.size(), 5u);
+  std::vector<std::string> args{schema()};
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    const StudentGrade& s = grades_.students[i];
+    EXPECT_EQ(files[i], out_ / "gradescope" / student_folder_name(s.student) / "results.json");
+    args.push_back(files[i].string());
+    const nlohmann::json j = nlohmann::json::parse(bytes_of(files[i]));
+    SCOPED_TRACE(s.student);
+    EXPECT_DOUBLE_EQ(j["score"].get<double>(), points_total(s));
+    EXPECT_DOUBLE_EQ(j["execution_time"].get<double>(), 3.25);
+    EXPECT_EQ(j["visibility"], "visible");
+    EXPECT_EQ(j["stdout_visibility"], "hidden");
+    EXPECT_EQ(j["output"], fmt::format("{} / 100 points over 3 tasks", format_points(points_total(s))));
+    ASSERT_EQ(j["tests"].size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const TaskGrade& t = s.tasks[k];
+      const nlohmann::json& test = j["tests"][k];
+      EXPECT_EQ(test["name"], t.task);
+      EXPECT_DOUBLE_EQ(test["score"].get<double>(), t.points);
+      EXPECT_DOUBLE_EQ(test["max_score"].get<double>(), t.max_points);
+      EXPECT_EQ(test["status"], t.points == t.max_points ? "passed" : "failed");
+      EXPECT_EQ(test["visibility"], gradescope_visibility(t.visibility));
+      EXPECT_EQ(test["output"].get<std::string>().rfind(t.reason, 0), 0u);
+      EXPECT_EQ(test["output_format"], "text");  // hostile text is never rendered as HTML
+    }
+    EXPECT_EQ(j["tests"][1]["visibility"], "after_published");
+    EXPECT_EQ(j["tests"][2]["visibility"], "hidden");
+  }
+  const std::string script_output = nlohmann::json::parse(bytes_of(files[0]))["tests"][2]["output"];
+  EXPECT_NE(script_output.find(kScriptOutput), std::string::npos);
+  const test::CommandResult r = python("validate_json_schema.py", args);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST_F(GradeReportsTest, GradescopeSingleResultsFileForTheContainer) {
+  StudentGrade s = grades_.students[2];  // bob
+  s.tasks[2].program_output = std::string("bad bytes \xff\xfe end");  // not UTF-8
+  const fs::path file = out_ / "autograder" / "results" / "results.json";
+  write_gradescope_results(s, file);
+  const nlohmann::json j = nlohmann::json::parse(bytes_of(file));
+  EXPECT_DOUBLE_EQ(j["score"].get<double>(), 49.75);
+  EXPECT_NE(j["tests"][2]["output"].get<std::string>().find("bad bytes \xEF\xBF\xBD"), std::string::npos);
+  const test::CommandResult r = python("validate_json_schema.py", {schema(), file.string()});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST_F(GradeReportsTest, GradescopeSchemaRejectsBrokenResults) {
+  const nlohmann::json good = gradescope_results_json(grades_.students[1]);
+  const auto write = [&](const std::string& name, const nlohmann::json& j) {
+    return dir_.write("broken/" + name + ".json", j.dump(2)).string();
+  };
+  nlohmann::json score_as_string = good;
+  score_as_string["score"] = "37.5";
+  nlohmann::json test_score_as_string = good;
+  test_score_as_string["tests"][0]["score"] = "60";
+  nlohmann::json unknown_status = good;
+  unknown_status["tests"][0]["status"] = "partial";
+  nlohmann::json unknown_visibility = good;
+  unknown_visibility["tests"][1]["visibility"] = "after_publish";
+  nlohmann::json no_score = good;  // neither a top-level score nor one on every test
+  no_score.erase("score");
+  no_score["tests"][1].erase("score");
+  nlohmann::json misspelt = good;
+  misspelt["tests"][0]["max_points"] = 60;
+  nlohmann::json bad_format = good;
+  bad_format["output_format"] = "markdown";
+  const std::vector<std::string> broken = {write("score_as_string", score_as_string),
+                                           write("test_score_as_string", test_score_as_string),
+                                           write("unknown_status", unknown_status),
+                                           write("unknown_visibility", unknown_visibility),
+                                           write("no_score", no_score),
+                                           write("misspelt", misspelt),
+                                           write("bad_format", bad_format)};
+  for (const std::string& file : broken) {
+    const test::CommandResult r = python("validate_json_schema.py", {schema(), file});
+    EXPECT_EQ(r.exit_code, 1) << file << "\n" << r.output;
+  }
+  // The same edits the specification allows pass: only the tests' scores, or only the top-level one.
+  nlohmann::json tests_only = good;
+  tests_only.erase("score");
+  nlohmann::json score_only = good;
+  score_only.erase("tests");
+  const test::CommandResult r =
+      python("validate_json_schema.py", {schema(), write("good", good), write("tests_only", tests_only),
+                                         write("score_only", score_only)});
+  EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
 }  // namespace
