@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "renderer/compare/image.h"
+#include "server/review/class_summary.h"
 #include "server/review/feedback_pages.h"
 #include "server/review/grade_points.h"
 #include "server/review/gradescope_results.h"
@@ -411,6 +412,60 @@ TEST_F(GradeReportsTest, GradescopeSchemaRejectsBrokenResults) {
       python("validate_json_schema.py", {schema(), write("good", good), write("tests_only", tests_only),
                                          write("score_only", score_only)});
   EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+TEST_F(GradeReportsTest, ClassSummaryHasTheFiguresAndTheHistogram) {
+  const fs::path page = write_class_summary(grades_, out_);
+  EXPECT_EQ(page, out_ / "summary.html");
+  const std::string html = bytes_of(page);
+  // totals 20, 100, 49.75, 80, 40: mean 57.95, median 49.75
+  EXPECT_NE(html.find("<td class=\"n\"><b>57.95</b></td><td class=\"n\"><b>49.75</b></td>"), std::string::npos)
+      << html;
+  // cow 20 60 37.5 45 0: mean 32.5, median 37.5; teapot 0 30 12.25 30 30: 20.45, 30; program: 5, 5
+  EXPECT_NE(html.find("<td>cow</td><td class=\"n\">60</td><td class=\"n\">32.5</td><td class=\"n\">37.5</td>"),
+            std::string::npos);
+  EXPECT_NE(html.find(">teapot <span class=\"hidden-note\">(hidden from students)</span></td><td class=\"n\">30</td>"
+                      "<td class=\"n\">20.45</td><td class=\"n\">30</td>"),
+            std::string::npos);
+  EXPECT_NE(html.find("<td class=\"n\">10</td><td class=\"n\">5</td><td class=\"n\">5</td>"), std::string::npos);
+  // Lost most: escaped ids linked to their feedback pages, and the reasons.
+  EXPECT_NE(html.find("<a href=\"feedback/dave%2C%20%22the%22%20hacker/index.html\">dave, &quot;the&quot; hacker</a>"),
+            std::string::npos);
+  EXPECT_NE(html.find("&lt;script&gt;alert(1)&lt;/script&gt;</a></td><td class=\"n\">0 / 30</td>"
+                      "<td class=\"reason\">teapot.png: expected &lt;b&gt;32x24&lt;/b&gt;, got 800x600</td>"),
+            std::string::npos);
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("http"), std::string::npos);
+  EXPECT_NE(html.find("<img src=\"summary-totals.png\""), std::string::npos);
+
+  // The histogram: bars for 20 (bin 2), 40 and 49.75 (bin 4), 80 (bin 8), 100 (bin 9, inclusive).
+  EXPECT_EQ(total_histogram(grades_), (std::vector<int>{0, 0, 1, 0, 2, 0, 0, 0, 1, 1}));
+  const Image histogram = read_image(out_ / "summary-totals.png");
+  ASSERT_EQ(histogram.width, kHistogramWidth);
+  ASSERT_EQ(histogram.height, kHistogramHeight);
+  const auto is_bar = [&](int x, int y) {
+    for (int c = 0; c < 3; ++c)
+      if (std::abs(histogram.at(x, y, c) - kHistogramBar[c]) > 0.5f / 255.0f) return false;
+    return true;
+  };
+  // Each bar's height, along the column through its middle (bins are 44 pixels from x = 30).
+  std::vector<int> heights;
+  for (int bin = 0; bin < kHistogramBins; ++bin) {
+    int height = 0;
+    for (int y = 0; y < histogram.height; ++y) height += is_bar(30 + bin * 44 + 22, y) ? 1 : 0;
+    heights.push_back(height);
+  }
+  EXPECT_GT(heights[4], 0);
+  EXPECT_EQ(heights[4], 2 * heights[2]);
+  EXPECT_EQ(heights[2], heights[8]);
+  EXPECT_EQ(heights[8], heights[9]);
+  EXPECT_EQ(heights[0] + heights[1] + heights[3] + heights[5] + heights[6] + heights[7], 0);
+}
+
+TEST(ClassSummaryTest, MedianOfOddAndEvenCounts) {
+  EXPECT_DOUBLE_EQ(median_of({3, 1, 2}), 2);
+  EXPECT_DOUBLE_EQ(median_of({4, 1, 3, 2}), 2.5);
+  EXPECT_DOUBLE_EQ(median_of({}), 0);
 }
 
 }  // namespace
