@@ -26,6 +26,7 @@
 #include "server/review/gradescope_results.h"
 #include "server/review/grades_csv.h"
 #include "server/review/markup_escape.h"
+#include "server/review/similar_submissions.h"
 #include "server/review/student_folder.h"
 #include "tests/support/run_command.h"
 #include "tests/support/temp_dir.h"
@@ -466,6 +467,43 @@ TEST(ClassSummaryTest, MedianOfOddAndEvenCounts) {
   EXPECT_DOUBLE_EQ(median_of({3, 1, 2}), 2);
   EXPECT_DOUBLE_EQ(median_of({4, 1, 3, 2}), 2.5);
   EXPECT_DOUBLE_EQ(median_of({}), 0);
+}
+
+TEST_F(GradeReportsTest, SimilarSubmissionsListsIdenticalAndNearlyIdenticalPairs) {
+  const std::vector<SimilarPair> pairs = write_similar_submissions(grades_, out_);
+  const auto rows = read_csv(out_ / "similar.csv");
+  ASSERT_EQ(rows.size(), pairs.size() + 1);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"task", "student_a", "student_b", "flip_mean", "identical"}));
+  std::map<std::pair<std::string, std::string>, std::vector<std::string>> listed;
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    ASSERT_EQ(rows[i].size(), 5u);
+    EXPECT_EQ(rows[i][0], "cow") << "teapot's alike images are the reference itself";
+    listed[{rows[i][1], rows[i][2]}] = rows[i];
+  }
+  const std::pair<std::string, std::string> identical{"alice", "bob"}, near_pair{"alice", "carol"};
+  ASSERT_TRUE(listed.count(identical));
+  EXPECT_EQ(listed[identical][3], "0");
+  EXPECT_EQ(listed[identical][4], "1");
+  ASSERT_TRUE(listed.count(near_pair));
+  EXPECT_EQ(listed[near_pair][4], "0");
+  const double near = std::stod(listed[near_pair][3]);
+  EXPECT_GT(near, 0.0);
+  EXPECT_LT(near, 0.01);
+  EXPECT_TRUE(listed.count(std::pair<std::string, std::string>{"bob", "carol"}));
+  EXPECT_EQ(listed.size(), 3u);  // dave's and the <script> student's images are like nobody's
+  EXPECT_EQ(rows[1][1], "alice");  // the identical pair first
+  EXPECT_EQ(rows[1][2], "bob");
+}
+
+TEST_F(GradeReportsTest, SimilarSubmissionsCanListReferenceMatchesAndSkipsMissingImages) {
+  grades_.students[1].tasks[0].student_png.clear();  // alice: no cow image
+  SimilarityOptions options;
+  options.skip_reference_matches = false;
+  const std::vector<SimilarPair> pairs = find_similar_submissions(grades_, options);
+  std::set<std::tuple<std::string, std::string, std::string>> listed;
+  for (const SimilarPair& p : pairs) listed.insert({p.task, p.student_a, p.student_b});
+  EXPECT_EQ(listed, (std::set<std::tuple<std::string, std::string, std::string>>{
+                        {"cow", "bob", "carol"}, {"teapot", "alice", kComma}}));
 }
 
 }  // namespace
