@@ -18,6 +18,9 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # XML (the COLLADA files a job's models name)
   libpugixml-dev
+  # the grading sandbox (server/review/sandbox.cpp): bwrap runs a student's program; setpriv,
+  # which drops it to a user of its own, comes with util-linux (essential, always installed)
+  bubblewrap
   # tests and benchmarks
   libgtest-dev libbenchmark-dev python3 python3-venv
   # the Python client test (stubs generated from proto/farm.proto by grpc_tools)
