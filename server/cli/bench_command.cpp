@@ -9,6 +9,7 @@
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
 #include "server/bench/flip_bench.h"
+#include "server/bench/grade_bench.h"
 #include "server/bench/regress_bench.h"
 #include "server/bench/render_bench.h"
 #include "server/bench/rt_bench.h"
@@ -184,6 +185,17 @@ void add_flip_bench(CLI::App& bench, CommandTable& commands) {
   add_runner(commands, flip, o, run_flip_bench);
 }
 
+void add_grade_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<GradeBenchOptions>();
+  CLI::App* grade = bench.add_subcommand(
+      "grade", "A synthetic class graded by a rubric on the embedded farm: references rendered once, then every "
+               "student");
+  grade->add_option("--rubric", o->rubric, "The rubric")->capture_default_str();
+  grade->add_option("--students", o->students, "Students in the class")->check(CLI::Range(1, 100000))->capture_default_str();
+  grade->add_option("--jobs", o->jobs, "Students at a time (0: one per core)")->check(CLI::Range(0, 256))->capture_default_str();
+  add_runner(commands, grade, o, run_grade_bench);
+}
+
 }  // namespace
 
 void add_bench_command(CLI::App& app, CommandTable& commands) {
@@ -196,6 +208,7 @@ void add_bench_command(CLI::App& app, CommandTable& commands) {
   add_render_bench(*bench, commands);
   add_regress_bench(*bench, commands);
   add_flip_bench(*bench, commands);
+  add_grade_bench(*bench, commands);
 }
 
 }  // namespace farm

@@ -14,6 +14,7 @@
 #include "server/cli/command_table.h"
 #include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
+#include "server/cli/grade_command.h"
 #include "server/cli/info_command.h"
 #include "server/cli/regress_command.h"
 #include "server/cli/render_command.h"
@@ -39,6 +40,7 @@ constexpr const char* kOverview =
     "  farm compare REF NEW  compare an image with its reference (exact, idiff threshold, PSNR, SSIM,\n"
     "                    FLIP, z-test): PASS / WARN / FAIL\n"
     "  farm regress SUITE render a regression suite, compare with references; JUnit, HTML report\n"
+    "  farm grade RUBRIC SUBMISSIONS  score a class's submissions against farm-rendered references\n"
     "  farm bench raster measure rasterizer speed and thread scaling\n"
     "  farm bench rt     compare our BVHs with Embree\n"
     "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
@@ -61,6 +63,7 @@ int main(int argc, char** argv) {
   farm::add_validate_command(app, commands);
   farm::add_compare_command(app, commands);
   farm::add_regress_command(app, commands);
+  farm::add_grade_command(app, commands);
   farm::add_bench_command(app, commands);
   farm::add_worker_command(app, commands);
   farm::add_scheduler_command(app, commands);
