@@ -177,7 +177,9 @@ FlipResult flip_ldr(const Image& reference, const Image& test, const FlipOptions
   FlipResult result;
   result.error_map = error_image(reference.width, reference.height);
   flip_detail::FlipPipeline pipeline(reference.width, reference.height, options.pixels_per_degree);
-  pipeline.run(source(views[0]), source(views[1]), result.error_map.values.data(), *threads);
+  const double pixels = static_cast<double>(reference.width) * static_cast<double>(reference.height);
+  result.complete = pipeline.run(source(views[0]), source(views[1]), result.error_map.values.data(), *threads,
+                                 options.stop_when_mean_exceeds * pixels);
   result.mean = mean_of(result.error_map.values);
   return result;
 }

@@ -6,6 +6,8 @@
 // distance) and a feature pipeline (edges and points of the achromatic channel), combined as
 // colour^(1 - feature). HDR-FLIP tone-maps both images at a range of exposures and keeps each
 // pixel's largest LDR-FLIP error.
+#include <limits>
+
 #include "renderer/compare/image.h"
 
 namespace farm {
@@ -21,10 +23,15 @@ struct FlipOptions {
   bool automatic_exposures = true;
   double start_exposure = 0.0, stop_exposure = 0.0;
   int exposure_count = 0;  // 0: max(2, ceil(stop - start)) as in the paper
+  // LDR only: a caller that only asks "is the mean at most this?" may let the evaluation stop
+  // once the errors summed so far put the mean above it. The result's mean is then above the
+  // bound but not the image's mean (`complete` false), and the map has zeros where it stopped.
+  double stop_when_mean_exceeds = std::numeric_limits<double>::infinity();
 };
 
 struct FlipResult {
   double mean = 0.0;           // the mean of the error map: the figure FLIP reports
+  bool complete = true;        // false when stop_when_mean_exceeds cut the evaluation short
   Image error_map;             // one channel "FLIP", values in [0, 1]
   double start_exposure = 0.0, stop_exposure = 0.0;  // HDR: the range used
   int exposure_count = 0;                            // HDR: how many exposures were evaluated

@@ -1,7 +1,9 @@
 #include "renderer/compare/flip_pipeline.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 
 #include "renderer/compare/flip_colour.h"
@@ -279,7 +281,8 @@ void FlipPipeline::run_band(const RowSource& reference, const RowSource& test, i
   }
 }
 
-void FlipPipeline::run(const RowSource& reference, const RowSource& test, float* error, ThreadPool& pool) {
+bool FlipPipeline::run(const RowSource& reference, const RowSource& test, float* error, ThreadPool& pool,
+                       double stop_above) {
   const int threads = pool.size();
   if (scratch_.size() < static_cast<std::size_t>(threads)) scratch_.resize(static_cast<std::size_t>(threads));
   for (auto& s : scratch_) {
@@ -287,15 +290,32 @@ void FlipPipeline::run(const RowSource& reference, const RowSource& test, float*
   }
   // A single thread takes the image as one band (nothing filtered twice); several threads take
   // four bands each, so that one slow thread does not hold up the rest, but no band is so short
-  // that its overlap dominates.
-  const int bands = threads == 1 ? 1 : std::min(4 * threads, std::max(1, height_ / (4 * pad_)));
+  // that its overlap dominates. A run that may stop early takes bands of about 32 rows, so that
+  // it can stop after a small part of the image.
+  const bool may_stop = std::isfinite(stop_above);
+  const int wanted = may_stop ? std::max(4 * threads, height_ / 32) : (threads == 1 ? 1 : 4 * threads);
+  const int bands = std::min(wanted, std::max(1, height_ / (4 * pad_)));
   const int band_rows = (height_ + bands - 1) / bands;
+  std::mutex sum_mutex;
+  double sum = 0.0;
+  std::atomic<bool> stopped{false};
   pool.parallel_for(static_cast<std::size_t>(bands), 1, [&](std::size_t begin, std::size_t end, int worker) {
     for (std::size_t band = begin; band < end; ++band) {
+      if (stopped.load(std::memory_order_relaxed)) return;
       const int y0 = static_cast<int>(band) * band_rows, y1 = std::min(height_, y0 + band_rows);
-      if (y0 < y1) run_band(reference, test, y0, y1, *scratch_[static_cast<std::size_t>(worker)], error);
+      if (y0 >= y1) continue;
+      run_band(reference, test, y0, y1, *scratch_[static_cast<std::size_t>(worker)], error);
+      if (!may_stop) continue;
+      double band_sum = 0.0;
+      const std::size_t from = static_cast<std::size_t>(y0) * static_cast<std::size_t>(width_);
+      const std::size_t to = static_cast<std::size_t>(y1) * static_cast<std::size_t>(width_);
+      for (std::size_t i = from; i < to; ++i) band_sum += error[i];
+      std::lock_guard lock(sum_mutex);
+      sum += band_sum;
+      if (sum > stop_above) stopped = true;
     }
   });
+  return !stopped;
 }
 
 }  // namespace farm::flip_detail

@@ -6,6 +6,7 @@
 // horizontal pass makes, per image, the row-filtered planes the two pipelines need; a vertical
 // pass completes the filters for one output row and turns each of its pixels into its FLIP error.
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -50,7 +51,11 @@ class FlipPipeline {
   ~FlipPipeline();
 
   // Writes the per-pixel FLIP error of `test` against `reference` to error[y * width + x].
-  void run(const RowSource& reference, const RowSource& test, float* error, ThreadPool& pool);
+  // With a finite `stop_above`, bands not yet started are skipped once the errors summed so far
+  // exceed it (their errors stay 0): for a caller that only asks whether the mean is below a
+  // bound. Returns whether every band ran.
+  bool run(const RowSource& reference, const RowSource& test, float* error, ThreadPool& pool,
+           double stop_above = std::numeric_limits<double>::infinity());
 
  private:
   struct Scratch;

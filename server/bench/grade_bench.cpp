@@ -11,6 +11,7 @@
 #include "server/bench/bench_support.h"
 #include "server/client/job_submission.h"
 #include "server/common/scene_hash.h"
+#include "server/review/grade_reports.h"
 #include "server/review/grade_runner.h"
 
 namespace farm {
@@ -71,6 +72,9 @@ void run_grade_bench(const GradeBenchOptions& o) {
   const Clock::time_point graded = Clock::now();
   const ClassGrades grades = grade_class(rubric, scratch.path() / "class", options);
   const double grading = seconds_since(graded);
+  const Clock::time_point reported = Clock::now();
+  write_grade_reports(grades, options.output_dir);
+  const double reports = seconds_since(reported);
   double total = 0.0;
   for (const StudentGrade& s : grades.students) total += s.total();
   fmt::print("farm bench grade ({} build, {} hardware threads): {} ({} image tasks), {} students\n", FARM_BUILD_TYPE,
@@ -79,7 +83,8 @@ void run_grade_bench(const GradeBenchOptions& o) {
   fmt::print("grading {} students        {:8.2f} s   ({:.1f} ms a student, mean score {:.1f} of {:g})\n", o.students,
              grading, 1000.0 * grading / std::max(1, o.students), total / static_cast<double>(std::max<std::size_t>(1, grades.students.size())),
              rubric.max_points());
-  fmt::print("in all                     {:8.2f} s\n", references + grading);
+  fmt::print("reports (csv, feedback, gradescope, summary, similar) {:6.2f} s\n", reports);
+  fmt::print("in all                     {:8.2f} s\n", references + grading + reports);
 }
 
 }  // namespace farm

@@ -1,7 +1,7 @@
 #pragma once
 // `farm bench grade`: a synthetic class (perfect, noisy, shifted and darker copies of the
 // references) graded by a rubric on the embedded farm: the time to render the references once,
-// then the time to grade every student.
+// then the time to grade every student and to write what `farm grade` writes.
 #include <filesystem>
 
 namespace farm {

@@ -1,5 +1,6 @@
 #include "server/review/grade_reports.h"
 
+#include "renderer/util/thread_pool.h"
 #include "server/review/class_summary.h"
 #include "server/review/feedback_pages.h"
 #include "server/review/grades_csv.h"
@@ -13,7 +14,10 @@ void write_grade_reports(const ClassGrades& grades, const std::filesystem::path&
   write_feedback_pages(grades, dir);
   write_gradescope_results(grades, dir);
   write_class_summary(grades, dir);
-  write_similar_submissions(grades, dir);
+  ThreadPool pool(0);  // FLIP of the pairs the prefilters leave, on every core
+  SimilarityOptions similarity;
+  similarity.pool = &pool;
+  write_similar_submissions(grades, dir, similarity);
 }
 
 }  // namespace farm

@@ -207,7 +207,10 @@ std::vector<SimilarPair> find_similar_submissions(const ClassGrades& grades, con
       if (pixel_distance(*a, *b) > options.pixel_tolerance) continue;
       // 4. FLIP on what is left.
       ++count.flip;
-      const double mean = flip_ldr(image_of(*a), image_of(*b), FlipOptions{}, options.pool).mean;
+      // Only "below the threshold?" matters: FLIP may stop once the mean is known to be above it.
+      FlipOptions flip_options;
+      flip_options.stop_when_mean_exceeds = options.flip_threshold;
+      const double mean = flip_ldr(image_of(*a), image_of(*b), flip_options, options.pool).mean;
       if (mean < options.flip_threshold)
         found.push_back({task, signatures[i].student, signatures[j].student, mean, false});
     }

@@ -334,7 +334,7 @@ TEST_F(FarmGradeTest, HostileProgramsScoreZeroWithTheirReasonAndTheRestOfTheClas
   EXPECT_EQ(std::stod(rows.at("honest").at(1)), 10.0) << run.output;
   const auto page = [&](const std::string& id) { return bytes_of(dir_ / "run-grades/feedback" / id / "index.html"); };
   const std::map<std::string, std::string> reasons = {
-      {"loop", "time limit"},         {"bomb", "processes"},          {"memory", "exited with code 1"},
+      {"loop", " time"} /* its wall or CPU time, whichever limit it meets first */, {"bomb", "processes"},          {"memory", "exited with code 1"},
       {"disk", "larger than"},        {"network", "exited with code"}, {"snoop", "exited with code"},
       {"nothing", "wrote nothing"},   {"garbage", "could not be read"}, {"broken-build", "the build failed"}};
   for (const auto& [id, words] : reasons) {
