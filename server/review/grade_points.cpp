@@ -23,11 +23,13 @@ std::string format_points(double points) {
   return text == "-0" ? "0" : text;
 }
 
-double points_total(const StudentGrade& student) {
-  double total = 0.0;
-  for (const TaskGrade& task : student.tasks) total += task.points;
-  return total;
+double StudentGrade::total() const {
+  double sum = 0.0;
+  for (const TaskGrade& task : tasks) sum += task.points;
+  return sum;
 }
+
+double points_total(const StudentGrade& student) { return student.total(); }
 
 double points_maximum(const StudentGrade& student) {
   double maximum = 0.0;

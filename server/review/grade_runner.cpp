@@ -210,12 +210,6 @@ StudentGrade grade_one(const Rubric& rubric, const std::map<fs::path, Reference>
 
 }  // namespace
 
-double StudentGrade::total() const {
-  double sum = 0.0;
-  for (const TaskGrade& t : tasks) sum += t.points;
-  return sum;
-}
-
 double score_points(const ScoreRule& rule, const CompareResult& result, double max_points, std::string& reason) {
   if (!rule.full) {
     const bool passed = result.verdict != Verdict::fail;

@@ -23,15 +23,7 @@ std::string test_output(const TaskGrade& t) {
 
 }  // namespace
 
-const char* gradescope_visibility(Visibility visibility) {
-  switch (visibility) {
-    case Visibility::visible: return "visible";
-    case Visibility::hidden: return "hidden";
-    case Visibility::after_due_date: return "after_due_date";
-    case Visibility::after_published: return "after_published";
-  }
-  return "visible";
-}
+std::string gradescope_visibility(Visibility visibility) { return std::string(to_string(visibility)); }
 
 nlohmann::ordered_json gradescope_results_json(const StudentGrade& student) {
   nlohmann::ordered_json tests = nlohmann::ordered_json::array();

@@ -20,6 +20,7 @@
 // visible). Scores are rounded to 2 decimals, as grades.csv prints them; the top-level score is
 // the sum of the test scores shown. tests/data/gradescope/results.schema.json checks the shape.
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -29,7 +30,7 @@
 namespace farm {
 
 // The visibility value Gradescope reads.
-const char* gradescope_visibility(Visibility visibility);
+std::string gradescope_visibility(Visibility visibility);  // the rubric's names are Gradescope's
 
 nlohmann::ordered_json gradescope_results_json(const StudentGrade& student);
 

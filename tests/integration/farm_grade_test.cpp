@@ -22,6 +22,7 @@
 #include "server/review/grade_rubric.h"
 #include "server/review/grade_runner.h"
 #include "tests/support/background_process.h"
+#include "tests/support/job_specs.h"
 #include "tests/support/image_pairs.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scheduler_client.h"
@@ -32,11 +33,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-
-std::string bytes_of(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 void write_bytes(const fs::path& file, const std::string& bytes) {
   fs::create_directories(file.parent_path());
@@ -114,7 +110,7 @@ class FarmGradeTest : public ::testing::Test {
     fs::create_directories(subs / "missing");
     write_bytes(subs / "missing" / "readme.txt", "forgot it");
     student("wrongsize", test::synthetic_reference(80, 60));
-    const std::string good = bytes_of(subs / "perfect" / "cornell.png");
+    const std::string good = test::read_file(subs / "perfect" / "cornell.png");
     write_bytes(subs / "corrupt" / "cornell.png", good.substr(0, good.size() / 3));
     write_bytes(subs / "huge" / "cornell.png", huge_png(good));
     // A link out of the folder, to a perfect image: if it were read, it would score full marks.
@@ -151,7 +147,7 @@ class FarmGradeTest : public ::testing::Test {
 // grades.csv as rows of cells by student (no quoting needed for these ids).
 std::map<std::string, std::vector<std::string>> csv_rows(const fs::path& file) {
   std::map<std::string, std::vector<std::string>> rows;
-  std::istringstream in(bytes_of(file));
+  std::istringstream in(test::read_file(file));
   for (std::string line; std::getline(in, line);) {
     if (!line.empty() && line.back() == '\r') line.pop_back();  // RFC 4180 ends records with CRLF
     std::vector<std::string> cells;
@@ -189,7 +185,7 @@ TEST_F(FarmGradeTest, EveryStudentGetsTheRubricsPointsAReasonAFeedbackPageAndRes
   EXPECT_EQ(rows.size(), 13u) << "a header and 12 students";
 
   // The reasons, in words a student understands, on their feedback pages.
-  const auto page = [&](const std::string& id) { return bytes_of(dir_ / "grades/feedback" / id / "index.html"); };
+  const auto page = [&](const std::string& id) { return test::read_file(dir_ / "grades/feedback" / id / "index.html"); };
   EXPECT_NE(page("missing").find("cornell.png is missing from the submission"), std::string::npos);
   EXPECT_NE(page("wrongsize").find("cornell.png: expected 96x72, got 80x60"), std::string::npos);
   EXPECT_NE(page("corrupt").find("cornell.png could not be read"), std::string::npos);
@@ -201,7 +197,7 @@ TEST_F(FarmGradeTest, EveryStudentGetsTheRubricsPointsAReasonAFeedbackPageAndRes
   EXPECT_EQ(page("escape").find(dir_.path().string()), std::string::npos) << "the grader's paths stay out of feedback";
 
   // Gradescope results for everyone, with each task's score.
-  const nlohmann::json results = nlohmann::json::parse(bytes_of(dir_ / "grades/gradescope/perfect/results.json"));
+  const nlohmann::json results = nlohmann::json::parse(test::read_file(dir_ / "grades/gradescope/perfect/results.json"));
   EXPECT_EQ(results["score"].get<double>(), 100.0);
   ASSERT_EQ(results["tests"].size(), 2u);
   EXPECT_EQ(results["tests"][1]["name"], "edges");
@@ -220,7 +216,7 @@ TEST_F(FarmGradeTest, EveryStudentGetsTheRubricsPointsAReasonAFeedbackPageAndRes
 
   // The identical pair is flagged for a person to look at; the perfect student and the one who
   // linked to a copy of the reference are not (the link was never read).
-  const std::string similar = bytes_of(dir_ / "grades/similar.csv");
+  const std::string similar = test::read_file(dir_ / "grades/similar.csv");
   EXPECT_NE(similar.find("twin-a,twin-b"), std::string::npos) << similar;
   EXPECT_EQ(similar.find("escape"), std::string::npos) << similar;
   EXPECT_TRUE(fs::exists(dir_ / "grades/summary.html"));
@@ -239,7 +235,7 @@ TEST_F(FarmGradeTest, TheSameClassThroughASchedulerWithTwoWorkersGivesTheSameCsv
   }
   const test::CommandResult remote = grade("remote", "--scheduler " + test::shell_quote(scheduler.address()));
   ASSERT_EQ(remote.exit_code, 0) << remote.output;
-  EXPECT_EQ(bytes_of(dir_ / "remote/grades.csv"), bytes_of(dir_ / "local/grades.csv"));
+  EXPECT_EQ(test::read_file(dir_ / "remote/grades.csv"), test::read_file(dir_ / "local/grades.csv"));
 }
 
 TEST_F(FarmGradeTest, InsideGradescopeTheOneSubmissionIsGradedIntoResultsJson) {
@@ -251,7 +247,7 @@ TEST_F(FarmGradeTest, InsideGradescopeTheOneSubmissionIsGradedIntoResultsJson) {
       fmt::format("grade {} --gradescope --gradescope-root {} 2>&1", test::shell_quote(rubric_.string()),
                   test::shell_quote(root.string()))));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json results = nlohmann::json::parse(bytes_of(root / "results" / "results.json"));
+  const nlohmann::json results = nlohmann::json::parse(test::read_file(root / "results" / "results.json"));
   const auto rows = [&] {
     EXPECT_EQ(grade("class").exit_code, 0);
     return csv_rows(dir_ / "class/grades.csv");
@@ -305,7 +301,7 @@ TEST_F(FarmGradeTest, HostileProgramsScoreZeroWithTheirReasonAndTheRestOfTheClas
              "time_limit_s": 3, "memory_mib": 256 }},
     "score": {{ "metric": "psnr", "full": 40, "zero": 20 }} }} ] }})", jobs));
   const fs::path subs = dir_ / "runs";
-  const std::string answer = bytes_of(dir_ / "subs" / "perfect" / "cornell.png");
+  const std::string answer = test::read_file(dir_ / "subs" / "perfect" / "cornell.png");
   const std::map<std::string, std::string> programs = {
       {"honest", "test -f \"$1\" && cp answer.png \"$2\""},
       {"loop", "while true; do :; done"},
@@ -332,7 +328,7 @@ TEST_F(FarmGradeTest, HostileProgramsScoreZeroWithTheirReasonAndTheRestOfTheClas
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const auto rows = csv_rows(dir_ / "run-grades/grades.csv");
   EXPECT_EQ(std::stod(rows.at("honest").at(1)), 10.0) << run.output;
-  const auto page = [&](const std::string& id) { return bytes_of(dir_ / "run-grades/feedback" / id / "index.html"); };
+  const auto page = [&](const std::string& id) { return test::read_file(dir_ / "run-grades/feedback" / id / "index.html"); };
   const std::map<std::string, std::string> reasons = {
       {"loop", " time"} /* its wall or CPU time, whichever limit it meets first */, {"bomb", "processes"},          {"memory", "exited with code 1"},
       {"disk", "larger than"},        {"network", "exited with code"}, {"snoop", "exited with code"},
@@ -343,6 +339,25 @@ TEST_F(FarmGradeTest, HostileProgramsScoreZeroWithTheirReasonAndTheRestOfTheClas
   }
   EXPECT_NE(page("memory").find("MemoryError"), std::string::npos) << "the program's output is on its page";
   EXPECT_NE(page("broken-build").find("missing semicolon"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace farm
+
+namespace farm {
+namespace {
+
+// The lab's rubric as shipped: it reads, its jobs exist, its asset root holds the shared cow.
+TEST(FarmGradeRubric, TheLabsRubricLoadsWithItsThreeImageTasks) {
+  const Rubric rubric = load_rubric(fs::path(FARM_SOURCE_DIR) / "jobs/grade/dandelion/rubric.json");
+  EXPECT_EQ(rubric.name, "dandelion");
+  ASSERT_EQ(rubric.tasks.size(), 3u);
+  EXPECT_EQ(rubric.max_points(), 100.0);
+  for (const GradeTask& task : rubric.tasks) {
+    EXPECT_TRUE(task.file.has_value()) << task.name;
+    EXPECT_EQ(task.score.compare.metric, Metric::flip) << task.name;
+  }
+  EXPECT_TRUE(fs::exists(rubric.asset_root / "shared/assets/dae/cow.dae")) << rubric.asset_root;
 }
 
 }  // namespace

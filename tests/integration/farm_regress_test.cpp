@@ -14,6 +14,7 @@
 #include <string>
 
 #include "tests/support/background_process.h"
+#include "tests/support/job_specs.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scheduler_client.h"
 #include "tests/support/temp_dir.h"
@@ -23,11 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-
-std::string bytes_of(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 std::string jobs_dir() { return std::string(FARM_SOURCE_DIR) + "/jobs"; }
 
@@ -66,7 +62,7 @@ class FarmRegressTest : public ::testing::Test {
 
   // Each test's status in a report's summary.json.
   static std::map<std::string, std::string> statuses(const fs::path& report) {
-    const nlohmann::json summary = nlohmann::json::parse(bytes_of(report / "summary.json"));
+    const nlohmann::json summary = nlohmann::json::parse(test::read_file(report / "summary.json"));
     std::map<std::string, std::string> out;
     for (const auto& t : summary["tests"]) out[t["name"].get<std::string>()] = t["status"].get<std::string>();
     return out;
@@ -107,7 +103,7 @@ TEST_F(FarmRegressTest, VerdictsExitCodeConsoleJunitAndReportThenUpdateWritesExa
   EXPECT_TRUE(j["properties"]["whitted-fail"].contains("would_pass.fail"));
 
   // The report: failures first, the images it shows, a summary with every test.
-  const std::string html = bytes_of(report / "index.html");
+  const std::string html = test::read_file(report / "index.html");
   ASSERT_FALSE(html.empty());
   EXPECT_LT(html.find("id=\"whitted-fail\""), html.find("id=\"cornell-warn\""));
   EXPECT_LT(html.find("id=\"cornell-warn\""), html.find("id=\"cornell-pass\""));
@@ -120,15 +116,15 @@ TEST_F(FarmRegressTest, VerdictsExitCodeConsoleJunitAndReportThenUpdateWritesExa
                                                                  {"torus-missing", "FAIL"}}));
 
   // --update: the failed and the missing reference are written, the others left byte for byte.
-  const std::string pass_before = bytes_of(refs_ / "cornell-pass.exr"), warn_before = bytes_of(refs_ / "cornell-warn.exr");
+  const std::string pass_before = test::read_file(refs_ / "cornell-pass.exr"), warn_before = test::read_file(refs_ / "cornell-warn.exr");
   const test::CommandResult update = regress(fmt::format("--report {} --update", test::shell_quote(report.string())));
   EXPECT_EQ(update.exit_code, 0) << update.output;
   EXPECT_NE(update.output.find("reference replaced: " + (refs_ / "whitted-fail.exr").string()), std::string::npos) << update.output;
   EXPECT_NE(update.output.find("reference created: " + (refs_ / "torus-missing.exr").string()), std::string::npos) << update.output;
-  EXPECT_EQ(bytes_of(refs_ / "cornell-pass.exr"), pass_before);
-  EXPECT_EQ(bytes_of(refs_ / "cornell-warn.exr"), warn_before);
-  EXPECT_EQ(bytes_of(refs_ / "whitted-fail.exr"), bytes_of(report / "images/whitted-fail.new.exr"));
-  EXPECT_EQ(bytes_of(refs_ / "torus-missing.exr"), bytes_of(report / "images/torus-missing.new.exr"));
+  EXPECT_EQ(test::read_file(refs_ / "cornell-pass.exr"), pass_before);
+  EXPECT_EQ(test::read_file(refs_ / "cornell-warn.exr"), warn_before);
+  EXPECT_EQ(test::read_file(refs_ / "whitted-fail.exr"), test::read_file(report / "images/whitted-fail.new.exr"));
+  EXPECT_EQ(test::read_file(refs_ / "torus-missing.exr"), test::read_file(report / "images/torus-missing.new.exr"));
   const test::CommandResult again = regress(fmt::format("--report {}", test::shell_quote(report.string())));
   EXPECT_EQ(again.exit_code, 0) << again.output;
   EXPECT_NE(again.output.find("4 passed, 0 failed, 1 with warnings\n"), std::string::npos) << again.output;
