@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "renderer/compare/image.h"
+#include "renderer/scene/input_error.h"
 #include "renderer/util/path_confinement.h"
 #include "server/client/job_submission.h"
 #include "server/common/scene_hash.h"
@@ -240,7 +241,9 @@ StudentGrade grade_submission(const Rubric& rubric, const fs::path& folder, cons
 ClassGrades grade_class(const Rubric& rubric, const fs::path& submissions, const GradeOptions& options,
                         const GradeEvents& events) {
   std::error_code ec;
-  if (!fs::is_directory(submissions, ec)) throw std::runtime_error(fmt::format("{}: not a folder", submissions.string()));
+  if (!fs::is_directory(submissions, ec)) {
+    throw InputError(fmt::format("{}: not a folder (SUBMISSIONS holds one folder per student)", submissions.string()));
+  }
   std::vector<std::string> ids;
   for (const fs::directory_entry& entry : fs::directory_iterator(submissions)) {
     // Every folder is a student, a link to one too (graded as nothing read); files are not.

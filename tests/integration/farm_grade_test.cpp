@@ -273,6 +273,12 @@ TEST(FarmGradeRubric, BadRubricsExitTwoNamingTheJsonPath) {
       {R"({"version": 1, "name": "r", "tasks": [{"name": "a", "points": 5, "job": "JOB", "run": {"command": []}, "score": {"metric": "psnr"}}]})",
        "tasks[0].run.command: a command needs at least the program to run"},
   };
+  const fs::path good = dir.write("good.json", R"({"version": 1, "name": "r", "tasks": [{"name": "a", "points": 5, "job": ")" +
+                                                     job + R"(", "file": "x.png", "score": {"metric": "flip"}}]})");
+  const test::CommandResult missing = test::run_command(test::farm_command(
+      fmt::format("grade {} {} 2>&1", test::shell_quote(good.string()), test::shell_quote((dir / "nowhere").string()))));
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("nowhere: not a folder"), std::string::npos) << missing.output;
   for (const auto& [text, message] : cases) {
     std::string rubric = text;
     rubric.replace(rubric.find("JOB"), 3, job);
