@@ -224,16 +224,9 @@ TEST_F(FarmGradeTest, EveryStudentGetsTheRubricsPointsAReasonAFeedbackPageAndRes
 
 TEST_F(FarmGradeTest, TheSameClassThroughASchedulerWithTwoWorkersGivesTheSameCsv) {
   ASSERT_EQ(grade("local").exit_code, 0);
-  test::SchedulerProcess scheduler(dir_ / "data", {});
-  ASSERT_FALSE(scheduler.address().empty()) << scheduler.process().output();
-  std::vector<std::unique_ptr<test::WorkerProcess>> workers;
-  for (const char* name : {"w1", "w2"}) {
-    workers.push_back(std::make_unique<test::WorkerProcess>(std::vector<std::string>{
-        "--threads", "1", "--cache-dir", (dir_ / name).string(), "--scheduler", scheduler.address()}));
-    ASSERT_TRUE(workers.back()->process().wait_for_line("registered with the scheduler", 20s))
-        << workers.back()->process().output();
-  }
-  const test::CommandResult remote = grade("remote", "--scheduler " + test::shell_quote(scheduler.address()));
+  const test::LocalFarm loopback = test::start_local_farm(dir_.path(), 2);
+  ASSERT_TRUE(loopback.problem.empty()) << loopback.problem;
+  const test::CommandResult remote = grade("remote", "--scheduler " + test::shell_quote(loopback.address()));
   ASSERT_EQ(remote.exit_code, 0) << remote.output;
   EXPECT_EQ(test::read_file(dir_ / "remote/grades.csv"), test::read_file(dir_ / "local/grades.csv"));
 }

@@ -141,18 +141,10 @@ TEST_F(FarmRegressTest, TheSameSuiteThroughASchedulerWithTwoWorkersGivesTheSameV
   const test::CommandResult embedded = regress(fmt::format("--report {} --jobs 2", test::shell_quote(local.string())));
   EXPECT_EQ(embedded.exit_code, 1) << embedded.output;
 
-  test::SchedulerProcess scheduler(dir_ / "data", {});
-  ASSERT_FALSE(scheduler.address().empty()) << scheduler.process().output();
-  std::vector<std::unique_ptr<test::WorkerProcess>> workers;
-  for (const char* name : {"w1", "w2"}) {
-    workers.push_back(std::make_unique<test::WorkerProcess>(std::vector<std::string>{
-        "--threads", "1", "--cache-dir", (dir_ / name).string(), "--scheduler", scheduler.address()}));
-    ASSERT_FALSE(workers.back()->address().empty()) << workers.back()->process().output();
-    ASSERT_TRUE(workers.back()->process().wait_for_line("registered with the scheduler", 20s))
-        << workers.back()->process().output();
-  }
+  const test::LocalFarm loopback = test::start_local_farm(dir_.path(), 2);
+  ASSERT_TRUE(loopback.problem.empty()) << loopback.problem;
   const test::CommandResult farm = regress(
-      fmt::format("--report {} --scheduler {}", test::shell_quote(remote.string()), test::shell_quote(scheduler.address())));
+      fmt::format("--report {} --scheduler {}", test::shell_quote(remote.string()), test::shell_quote(loopback.address())));
   EXPECT_EQ(farm.exit_code, 1) << farm.output;
   EXPECT_EQ(statuses(remote), statuses(local));
   EXPECT_EQ(statuses(remote).at("cornell-pass"), "PASS") << "the farm's EXR is bit-identical to the embedded one";

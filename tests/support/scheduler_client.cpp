@@ -29,6 +29,30 @@ SchedulerProcess::SchedulerProcess(const std::filesystem::path& data_dir,
       }()),
       address_(wait_for_listening(process_, "scheduler", kStartTimeout)) {}
 
+LocalFarm start_local_farm(const std::filesystem::path& dir, int workers) {
+  LocalFarm farm;
+  farm.scheduler = std::make_unique<SchedulerProcess>(dir / "data", std::vector<std::string>{});
+  if (farm.scheduler->address().empty()) {
+    farm.problem = "the scheduler did not start: ";
+    farm.problem += farm.scheduler->process().output();
+    return farm;
+  }
+  for (int i = 1; i <= workers; ++i) {
+    std::string cache = "w";
+    cache += std::to_string(i);
+    auto worker = std::make_unique<WorkerProcess>(
+        std::vector<std::string>{"--threads", "1", "--cache-dir", (dir / cache).string(), "--scheduler", farm.address()});
+    if (worker->address().empty() ||
+        !worker->process().wait_for_line("registered with the scheduler", std::chrono::seconds(20))) {
+      farm.problem = "a worker did not start and register: ";
+      farm.problem += worker->process().output();
+      return farm;
+    }
+    farm.workers.push_back(std::move(worker));
+  }
+  return farm;
+}
+
 std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(-1);

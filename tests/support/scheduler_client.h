@@ -28,6 +28,16 @@ class SchedulerProcess {
   std::string address_;
 };
 
+// A scheduler (data under dir/data) and `workers` one-thread workers registered with it (caches
+// under dir/w1, dir/w2, ...), as a user starts a small farm. `problem` says what did not start.
+struct LocalFarm {
+  std::unique_ptr<SchedulerProcess> scheduler;
+  std::vector<std::unique_ptr<WorkerProcess>> workers;
+  std::string problem;  // empty when all are up and registered
+  const std::string& address() const { return scheduler->address(); }
+};
+LocalFarm start_local_farm(const std::filesystem::path& dir, int workers);
+
 std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address);
 
 // Uploads each (path in the job, file on disk) the scheduler lacks.
