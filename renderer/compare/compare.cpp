@@ -80,8 +80,8 @@ CompareResult compare_images(const Image& reference, const Image& test, const Co
   }
   result.metric = settings.metric;
   // FLIP and the z-test make their own maps; every other metric shows |a - b| x16.
-  if (result.difference.pixel_count() == 0 && !colour_channels(reference).empty() &&
-      colour_channels(reference).size() == colour_channels(test).size()) {
+  const std::size_t colours = colour_channels(reference).size();
+  if (result.difference.pixel_count() == 0 && colours > 0 && colours == colour_channels(test).size()) {
     result.difference = absolute_difference_x16(reference, test);
   }
   return result;

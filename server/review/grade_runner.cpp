@@ -17,6 +17,7 @@
 #include "server/client/job_submission.h"
 #include "server/common/scene_hash.h"
 #include "server/review/job_renderer.h"
+#include "server/review/report_file.h"
 #include "server/review/student_program.h"
 
 namespace farm {
@@ -79,10 +80,7 @@ std::map<fs::path, Reference> render_references(const Rubric& rubric, const Grad
       fs::create_directories(target.parent_path());
       fs::copy_file(submission.files.at(asset.sha256()), target, fs::copy_options::overwrite_existing);
     }
-    std::FILE* f = std::fopen(ref.job_file.c_str(), "wb");
-    if (f == nullptr) throw std::runtime_error(fmt::format("{}: cannot write", ref.job_file.string()));
-    std::fwrite(submission.spec.job_json().data(), 1, submission.spec.job_json().size(), f);
-    std::fclose(f);
+    write_report_text(ref.job_file, submission.spec.job_json());
     ref.preview_image = std::make_shared<const Image>(read_image(ref.preview));
     ref.exr_image = std::make_shared<const Image>(read_image(ref.exr));
     ref.width = ref.preview_image->width;
@@ -92,12 +90,6 @@ std::map<fs::path, Reference> render_references(const Rubric& rubric, const Grad
     out.emplace(task.job, ref);
   }
   return out;
-}
-
-bool eight_bit(const fs::path& file) {
-  std::string ext = file.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
 }
 
 // The student's image at `path` (inside `root`), or the reason it cannot be used.
@@ -144,9 +136,11 @@ std::optional<Image> read_student_image(const fs::path& root, const fs::path& re
 
 // Compares the student's image with the reference and scores it; writes the pictures the
 // feedback shows under `work`.
-void judge(const GradeTask& task, const Image& student, const fs::path& student_file_name, const Reference& ref,
-           const fs::path& work, int compare_threads, TaskGrade& grade) {
-  const bool ldr = eight_bit(student_file_name) || student.display_referred;
+// An 8-bit image (read_image knows a PNG or JPEG by its contents) meets the reference's preview,
+// an EXR the linear EXR.
+void judge(const GradeTask& task, const Image& student, const Reference& ref, const fs::path& work,
+           int compare_threads, TaskGrade& grade) {
+  const bool ldr = student.display_referred;
   CompareSettings settings = task.score.compare;
   settings.threads = compare_threads;
   grade.result = compare_images(ldr ? *ref.preview_image : *ref.exr_image, student, settings);
@@ -174,7 +168,7 @@ TaskGrade grade_task(const GradeTask& task, const fs::path& folder, const Refere
       grade.reason = "the submission folder is a link; nothing in it was read";
     } else if (task.file) {
       if (auto image = read_student_image(folder, *task.file, ref, grade.reason)) {
-        judge(task, *image, *task.file, ref, work, compare_threads, grade);
+        judge(task, *image, ref, work, compare_threads, grade);
       }
     } else {
       const ProgramRun run = run_student_program(*task.run, folder, ref.job_folder, ref.job_file, work / task.name);
@@ -182,7 +176,7 @@ TaskGrade grade_task(const GradeTask& task, const fs::path& folder, const Refere
       if (!run.image_file) {
         grade.reason = run.reason;
       } else if (auto image = read_student_image(run.image_file->parent_path(), run.image_file->filename(), ref, grade.reason)) {
-        judge(task, *image, *run.image_file, ref, work, compare_threads, grade);
+        judge(task, *image, ref, work, compare_threads, grade);
       }
     }
   } catch (const std::exception& e) {

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
-#include "renderer/image/output_file.h"
 #include "server/review/markup_escape.h"
 #include "server/review/regress_summary.h"
+#include "server/review/report_file.h"
 
 namespace farm {
 namespace {
@@ -75,14 +75,6 @@ std::string test_section(const TestOutcome& o) {
   return html;
 }
 
-void write_text(const fs::path& file, const std::string& text) {
-  write_c_file_atomically(file, [&](std::FILE* out) {
-    if (std::fwrite(text.data(), 1, text.size(), out) != text.size()) {
-      throw std::runtime_error(fmt::format("{}: cannot write", file.string()));
-    }
-  });
-}
-
 }  // namespace
 
 void write_html_report(const RegressSuite& suite, const std::vector<TestOutcome>& outcomes, const fs::path& dir) {
@@ -98,8 +90,8 @@ void write_html_report(const RegressSuite& suite, const std::vector<TestOutcome>
                                  markup_escape(suite.file.string()));
   for (const TestOutcome* o : order) html += test_section(*o);
   html += "</body></html>\n";
-  write_text(dir / "index.html", html);
-  write_text(dir / "summary.json", summary_json(suite, outcomes).dump(2) + "\n");
+  write_report_text(dir / "index.html", html);
+  write_report_text(dir / "summary.json", summary_json(suite, outcomes).dump(2) + "\n");
 }
 
 }  // namespace farm

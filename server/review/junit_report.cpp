@@ -5,11 +5,10 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
-#include <fstream>
 
-#include "renderer/image/output_file.h"
 #include "server/review/markup_escape.h"
 #include "server/review/regress_summary.h"
+#include "server/review/report_file.h"
 
 namespace farm {
 namespace {
@@ -79,11 +78,7 @@ void write_junit_report(const RegressSuite& suite, const std::vector<TestOutcome
                      markup_escape(suite.file.string()));
   for (const TestOutcome& o : outcomes) xml += testcase(suite, o);
   xml += "  </testsuite>\n</testsuites>\n";
-  write_c_file_atomically(file, [&](std::FILE* out) {
-    if (std::fwrite(xml.data(), 1, xml.size(), out) != xml.size()) {
-      throw std::runtime_error(fmt::format("{}: cannot write", file.string()));
-    }
-  });
+  write_report_text(file, xml);
 }
 
 }  // namespace farm

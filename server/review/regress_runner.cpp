@@ -11,6 +11,7 @@
 
 #include "renderer/compare/image.h"
 #include "renderer/image/output_file.h"
+#include "renderer/image/preview.h"
 #include "renderer/scene/input_error.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
@@ -23,13 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-// An 8-bit reference is compared with the new preview (what a PNG holds), an EXR with the EXR.
-bool eight_bit(const fs::path& file) {
-  std::string ext = file.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg";
-}
 
 // Where one test's files go: the new EXR and preview it renders, and the report's pictures.
 struct TestFiles {
@@ -75,7 +69,9 @@ TestOutcome judge(const RegressTest& test, const TestFiles& files, const Regress
   out.name = test.name;
   out.settings = test.compare;
   out.reference = test.reference;
-  out.new_image = eight_bit(test.reference) ? files.preview : files.exr;
+  // An 8-bit reference (PNG or JPEG, by the names previews take) is compared with the new
+  // preview, an EXR with the EXR.
+  out.new_image = preview_format_supported(test.reference) ? files.preview : files.exr;
   try {
     const Image fresh = read_image(out.new_image);
     write_png_image(to_display(fresh), files.new_png);
