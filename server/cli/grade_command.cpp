@@ -59,7 +59,7 @@ int run_grade_command(const GradeCommandOptions& o) {
   ProgressBar bar(rubric.name, ProgressBar::stderr_is_terminal());
   GradeEvents events;
   events.graded = [&](const StudentGrade& s) {
-    if (ProgressBar::stderr_is_terminal()) fmt::print(stderr, "\r\x1b[K");
+    bar.clear();
     fmt::print("{}\n", student_line(s, rubric.max_points()));
     std::fflush(stdout);
   };

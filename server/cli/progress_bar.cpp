@@ -31,4 +31,12 @@ void ProgressBar::update(std::size_t done, std::size_t total) {
   drawn_ = true;
 }
 
+void ProgressBar::clear() {
+  if (!drawn_) return;
+  fmt::print(stderr, "\r\x1b[K");
+  std::fflush(stderr);
+  drawn_ = false;
+  last_permille_ = -1;
+}
+
 }  // namespace farm

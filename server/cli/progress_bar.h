@@ -13,6 +13,9 @@ class ProgressBar {
   ~ProgressBar();  // finishes the line if anything was drawn
 
   void update(std::size_t done, std::size_t total);
+  // Erases the bar's line, if drawn, so that a line of output can take its place; the next
+  // update draws the bar again below it.
+  void clear();
 
   static bool stderr_is_terminal();
 

@@ -54,7 +54,7 @@ int run_regress_command(const RegressCommandOptions& o) {
   ProgressBar bar(suite.name, ProgressBar::stderr_is_terminal());
   RegressEvents events;
   events.finished = [&](const TestOutcome& outcome) {
-    if (ProgressBar::stderr_is_terminal()) fmt::print(stderr, "\r\x1b[K");  // the bar's line, cleared
+    bar.clear();
     fmt::print("{}\n", outcome_line(outcome));
     std::fflush(stdout);
   };
