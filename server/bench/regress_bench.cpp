@@ -34,7 +34,7 @@ void run_regress_bench(const RegressBenchOptions& o) {
   setups[1].label = "(b) embedded farm, --jobs 2";
   setups[1].options.jobs = 2;
   setups[2].label = "(c) scheduler + 2 workers over loopback";
-  setups[2].options.scheduler = loopback.address();
+  setups[2].options.scheduler = SchedulerConnection{loopback.address(), {}};
   fmt::print("farm bench regress ({} build, {} hardware threads): {} ({} tests), {} workers of {} thread(s) in (c), "
              "median of {}\n",
              FARM_BUILD_TYPE, std::thread::hardware_concurrency(), o.suite.string(), suite.tests.size(), 2,

@@ -16,7 +16,7 @@ void add_cancel_command(CLI::App& app, CommandTable& commands) {
   CLI::App* cancel = app.add_subcommand("cancel", "Cancel a job: its queued tiles are dropped, running ones stopped");
   add_job_on_scheduler_options(*cancel, *o);
   commands.add(cancel, [o] {
-    SchedulerClient client(resolve_scheduler_address(o->scheduler));
+    SchedulerClient client(resolve_scheduler_connection(o->scheduler));
     const v1::Job job = client.cancel(o->job_id);
     fmt::print("job {}: {} ({})\n", job.job_id(), to_string(job.state()), progress_of(job));
     return 0;

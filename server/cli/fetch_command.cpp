@@ -21,7 +21,7 @@ struct FetchOptions {
 
 int run_fetch(const FetchOptions& o) {
   const std::string& job_id = o.target.job_id;
-  SchedulerClient client(resolve_scheduler_address(o.target.scheduler));
+  SchedulerClient client(resolve_scheduler_connection(o.target.scheduler));
   const v1::Job job = client.get(job_id);
   if (job.state() != v1::JOB_STATE_SUCCEEDED) {
     throw InputError(fmt::format("job {} is {}: nothing to fetch yet{}", job_id, to_string(job.state()),

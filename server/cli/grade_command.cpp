@@ -10,6 +10,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
 #include "server/cli/progress_bar.h"
+#include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
 #include "server/review/grade_reports.h"
 #include "server/review/grade_runner.h"
@@ -25,6 +26,7 @@ struct GradeCommandOptions {
   std::optional<fs::path> submissions;
   std::optional<fs::path> out;
   std::optional<std::string> scheduler;
+  SchedulerConnectionFlags identity;  // --token-file, --tls-*: used with --scheduler
   int jobs = 0;
   int threads = 0;
   bool gradescope = false;
@@ -43,7 +45,11 @@ int run_grade_command(const GradeCommandOptions& o) {
   GradeOptions options;
   options.jobs = o.jobs;
   options.threads = o.threads;
-  if (o.scheduler) options.scheduler = resolve_scheduler_address(*o.scheduler);
+  if (o.scheduler) {
+    SchedulerConnectionFlags flags = o.identity;
+    flags.address = *o.scheduler;
+    options.scheduler = resolve_scheduler_connection(flags);
+  }
 
   if (o.gradescope) {
     // Inside Gradescope's container: the one submission, the one results file.
@@ -81,6 +87,7 @@ void add_grade_command(CLI::App& app, CommandTable& commands) {
   grade->add_option("SUBMISSIONS", o->submissions, "A folder with one folder per student (its name is the student id)");
   grade->add_option("--out", o->out, "Where the grades go (default grades/<rubric name>/)");
   grade->add_option("--scheduler", o->scheduler, "Render the references on this scheduler (HOST:PORT)");
+  add_client_identity_options(*grade, o->identity);
   grade->add_option("--jobs", o->jobs, "Students graded at a time (default: one per core)")->check(CLI::Range(0, 256));
   grade->add_option("--threads", o->threads, "Embedded farm render threads (default: all cores)")
       ->check(CLI::Range(0, kMaxThreads));

@@ -14,6 +14,7 @@
 #include "server/cli/command_table.h"
 #include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
+#include "server/cli/token_command.h"
 #include "server/cli/grade_command.h"
 #include "server/cli/info_command.h"
 #include "server/cli/regress_command.h"
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
   farm::add_watch_command(app, commands);
   farm::add_cancel_command(app, commands);
   farm::add_fetch_command(app, commands);
+  farm::add_token_command(app, commands);
 
   try {
     app.parse(argc, argv);

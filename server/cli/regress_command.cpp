@@ -11,6 +11,7 @@
 
 #include "renderer/scene/job_limits.h"
 #include "server/cli/progress_bar.h"
+#include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
 #include "server/review/html_report.h"
 #include "server/review/junit_report.h"
@@ -29,6 +30,7 @@ struct RegressCommandOptions {
   int jobs = 1;
   int threads = 0;
   std::optional<std::string> scheduler;
+  SchedulerConnectionFlags identity;  // --token-file, --tls-*: used with --scheduler
   std::optional<fs::path> junit;
   std::optional<fs::path> report;
 };
@@ -48,7 +50,11 @@ int run_regress_command(const RegressCommandOptions& o) {
   options.update = !o.update ? ReferenceUpdate::none : (*o.update == "all" ? ReferenceUpdate::all : ReferenceUpdate::failed);
   options.jobs = o.jobs;
   options.threads = o.threads;
-  if (o.scheduler) options.scheduler = resolve_scheduler_address(*o.scheduler);
+  if (o.scheduler) {
+    SchedulerConnectionFlags flags = o.identity;
+    flags.address = *o.scheduler;
+    options.scheduler = resolve_scheduler_connection(flags);
+  }
   options.output_dir = o.report ? *o.report : fs::path("regress-report") / suite.name;
 
   ProgressBar bar(suite.name, ProgressBar::stderr_is_terminal());
@@ -90,6 +96,7 @@ void add_regress_command(CLI::App& app, CommandTable& commands) {
   regress->add_option("--scheduler", o->scheduler,
                       "Render on this scheduler instead (HOST:PORT, or $FARM_SCHEDULER when given empty): every job is "
                       "submitted up front and compared as it finishes");
+  add_client_identity_options(*regress, o->identity);
   regress->add_option("--junit", o->junit, "Write JUnit XML here");
   regress->add_option("--report", o->report, "The HTML report's folder (default regress-report/<suite name>/)");
   regress->footer("Exit codes: 0 every test passed (warnings pass), 1 a test failed or could not be rendered, "

@@ -12,6 +12,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "server/cli/log_level_option.h"
+#include "server/cli/server_security_flags.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
 
@@ -39,6 +40,9 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  // Every file is read and the listen policy applied before anything starts (after the signal
+  // mask: making credentials starts gRPC's threads, which must inherit it).
+  ServerSecurity security = make_server_security(o.security, o.listen, "farm scheduler");
 
   SchedulerOptions options;
   options.data_dir = o.data_dir;
@@ -50,23 +54,28 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
   SchedulerCore core(options);
   for (const std::string& address : o.workers) {
-    core.add_worker(std::make_shared<RemoteTileWorker>(address));
+    core.add_worker(std::make_shared<RemoteTileWorker>(
+        address, WorkerLink{security.outgoing, std::string(), &core.grants()}));
   }
 
-  SchedulerService service(core);
+  SchedulerAccess access{security.access, security.outgoing, o.max_priority};
+  SchedulerService service(core, std::move(access));
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(o.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(o.listen, security.credentials, &port);
   builder.SetMaxReceiveMessageSize(kMaxRequestBytes);
   builder.RegisterService(&service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) throw InputError(fmt::format("cannot listen on '{}'", o.listen));
 
+  print_security_warnings(security);
   fmt::print("scheduler listening on {}:{}\n", host_of(o.listen), port);
   fmt::print("  data dir {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
              o.data_dir.string(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
+  fmt::print("  {}, {}\n", security.access.requires_tokens() ? "tokens required" : "no tokens",
+             o.security.tls.has_certificate() ? (o.security.tls.ca.empty() ? "TLS" : "mTLS") : "plain text");
   std::fflush(stdout);
 
   int signal_number = 0;
@@ -85,7 +94,8 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       "scheduler", "Serve farm.v1.Scheduler: jobs in, tiles to workers, merged EXR + PNG out");
   s->add_option("--listen", o->listen,
                 "Address to serve on, HOST:PORT (port 0 picks a free port; the address is printed "
-                "as 'scheduler listening on HOST:PORT'); the clients' default is localhost:50051")
+                "as 'scheduler listening on HOST:PORT'); the clients' default is localhost:50051. "
+                "Beyond loopback it needs --tokens or --tls-ca, or --insecure")
       ->capture_default_str();
   s->add_option("--data-dir", o->data_dir,
                 "Folder for the job store (jobs.db, SQLite WAL), uploaded assets, finished tiles "
@@ -119,10 +129,18 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->check(CLI::Range(0.05, 3600.0))
       ->capture_default_str();
   s->add_flag("--float", o->float_exr, "Write 32-bit float EXRs instead of half");
+  add_server_security_flags(*s, o->security, "workers (give it a token with the scheduler role)");
+  s->add_option("--max-priority", o->max_priority,
+                "Highest job priority a caller without the admin role may ask for")
+      ->capture_default_str();
   s->footer("Jobs run in priority order, then in submission order. A finished job's tiles are "
             "merged into <data-dir>/results/<job>/ (EXR with the job's AOV layers + PNG "
             "preview), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
-            "flight go back to the queue.");
+            "flight go back to the queue.\n\nSecurity: it listens on loopback unless --listen says "
+            "otherwise. With --tokens, calls need a token: 'submit' callers see and act on their "
+            "own jobs, 'read' sees every job, 'admin' does everything, workers need 'worker' to "
+            "register and fetch the assets of the tiles they are given. The tokens file holds "
+            "only SHA-256 hashes of the tokens.");
   add_log_level_option(*s, "info");
   commands.add(s, [o] { return run_scheduler_command(*o); });
 }

@@ -6,11 +6,13 @@
 #include <vector>
 
 #include "server/cli/command_table.h"
+#include "server/common/listen_policy.h"
+#include "server/common/server_security.h"
 
 namespace farm {
 
 struct SchedulerCommandOptions {
-  std::string listen = "0.0.0.0:50051";  // host:port; port 0 = any free port
+  std::string listen = kDefaultSchedulerListen;  // host:port; port 0 = any free port
   std::filesystem::path data_dir;     // jobs.db, assets/, tiles/, results/
   std::vector<std::string> workers;   // static `farm worker` addresses
   double tile_deadline_s = 600;
@@ -19,6 +21,8 @@ struct SchedulerCommandOptions {
   int batch_ms = 200;
   double heartbeat_interval_s = 1;
   bool float_exr = false;
+  ServerSecurityOptions security;
+  int max_priority = 100;             // above this needs the admin role
 };
 
 // Prints "scheduler listening on HOST:PORT" once it accepts calls. InputError when the address

@@ -1,22 +1,30 @@
 #pragma once
-// Which scheduler, and which job on it, a client command talks to: --scheduler and the job id,
-// declared once for `farm submit`, `status`, `watch`, `cancel` and `fetch`. The address is
-// resolved by resolve_scheduler_address (server/client/scheduler_client.h).
+// Which scheduler, and which job on it, a client command talks to, and how it proves who it is:
+// --scheduler, --token-file, --tls-ca, --tls-cert, --tls-key and the job id, declared once for
+// `farm submit`, `status`, `watch`, `cancel`, `fetch`, `regress` and `grade`. The values are
+// resolved (environment, defaults) by resolve_scheduler_connection
+// (server/client/scheduler_connection.h).
 #include <CLI/CLI.hpp>
 
 #include <string>
 
+#include "server/client/scheduler_connection.h"
+
 namespace farm {
 
 struct JobOnScheduler {
-  std::string scheduler;  // empty: $FARM_SCHEDULER, else the default
+  SchedulerConnectionFlags scheduler;
   std::string job_id;
 };
 
-// Adds --scheduler HOST:PORT, bound to `address` (which must outlive the parse).
-void add_scheduler_address_option(CLI::App& command, std::string& address);
+// Adds --token-file, --tls-ca, --tls-cert and --tls-key, bound to `flags` (which must outlive the
+// parse); not --scheduler.
+void add_client_identity_options(CLI::App& command, SchedulerConnectionFlags& flags);
 
-// Adds the required job ID argument and --scheduler.
+// Adds --scheduler HOST:PORT and the identity options above.
+void add_scheduler_connection_options(CLI::App& command, SchedulerConnectionFlags& flags);
+
+// Adds the required job ID argument and the connection options.
 void add_job_on_scheduler_options(CLI::App& command, JobOnScheduler& target);
 
 }  // namespace farm

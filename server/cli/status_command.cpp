@@ -15,7 +15,7 @@ namespace {
 
 // job_id empty: list every job.
 int run_status(const JobOnScheduler& o) {
-  SchedulerClient client(resolve_scheduler_address(o.scheduler));
+  SchedulerClient client(resolve_scheduler_connection(o.scheduler));
   if (!o.job_id.empty()) {
     print_job(client.get(o.job_id));
     return 0;
@@ -41,7 +41,7 @@ void add_status_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<JobOnScheduler>();
   CLI::App* status = app.add_subcommand("status", "List the scheduler's jobs, or show one");
   status->add_option("id", o->job_id, "Job id (default: list all jobs)");
-  add_scheduler_address_option(*status, o->scheduler);
+  add_scheduler_connection_options(*status, o->scheduler);
   commands.add(status, [o] { return run_status(*o); });
 }
 

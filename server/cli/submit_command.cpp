@@ -20,7 +20,7 @@ namespace farm {
 namespace {
 
 struct SubmitOptions {
-  std::string scheduler;  // empty: $FARM_SCHEDULER or the default
+  SchedulerConnectionFlags scheduler;
   std::filesystem::path job_file;
   JobLoadOptions load;
   RenderOverrides overrides;
@@ -30,7 +30,7 @@ struct SubmitOptions {
 
 int run_submit(const SubmitOptions& o) {
   const JobSubmission submission = make_job_submission(o.job_file, o.load, o.overrides);
-  SchedulerClient client(resolve_scheduler_address(o.scheduler));
+  SchedulerClient client(resolve_scheduler_connection(o.scheduler));
   const std::size_t uploaded = client.upload_missing(submission);
   const v1::Job job = client.submit(submission, o.priority);
   fmt::print("{}\n", job.job_id());
@@ -54,7 +54,7 @@ void add_submit_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<SubmitOptions>();
   CLI::App* submit = app.add_subcommand("submit", "Send a job and its assets to a scheduler; prints the job id");
   add_job_file_options(*submit, o->job_file, o->load);
-  add_scheduler_address_option(*submit, o->scheduler);
+  add_scheduler_connection_options(*submit, o->scheduler);
   submit->add_flag("--wait", o->wait,
                    "Follow the job to its end, then download the EXR and preview to the job's "
                    "output paths (exit 1 if the job fails or is cancelled)");

@@ -15,7 +15,7 @@ void add_watch_command(CLI::App& app, CommandTable& commands) {
   add_job_on_scheduler_options(*watch, *o);
   watch->footer("Exit codes: 0 the job succeeded, 1 it failed or was cancelled.");
   commands.add(watch, [o] {
-    SchedulerClient client(resolve_scheduler_address(o->scheduler));
+    SchedulerClient client(resolve_scheduler_connection(o->scheduler));
     const v1::Job last = follow(client, o->job_id);
     print_job(last);
     return exit_code_of(last);

@@ -23,6 +23,8 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
 #include "server/cli/log_level_option.h"
+#include "server/cli/server_security_flags.h"
+#include "server/common/listen_policy.h"
 #include "server/cli/version.h"
 
 namespace farm {
@@ -45,10 +47,10 @@ std::string host_of(const std::string& address) {
 // A scheduler without RegisterWorker (UNIMPLEMENTED) is left alone: assets are all it serves.
 class Registration {
  public:
-  Registration(const std::string& scheduler, std::string address, int threads)
+  Registration(const std::string& scheduler, const ClientIdentity& identity, std::string address,
+               int threads)
       : address_(std::move(address)), threads_(threads),
-        stub_(v1::Scheduler::NewStub(
-            grpc::CreateChannel(scheduler, grpc::InsecureChannelCredentials()))),
+        stub_(v1::Scheduler::NewStub(open_channel(scheduler, identity))),
         thread_([this] { loop(); }) {}
   ~Registration() {
     {
@@ -67,6 +69,7 @@ class Registration {
 
   void loop() {
     std::string id;
+    std::string refusal;  // the last UNAUTHENTICATED or PERMISSION_DENIED message
     std::chrono::milliseconds interval(1000);
     while (true) {
       grpc::ClientContext context;
@@ -83,6 +86,15 @@ class Registration {
         v1::RegisterWorkerResponse response;
         const grpc::Status status = stub_->RegisterWorker(&context, request, &response);
         if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED) return;
+        if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED ||
+            status.error_code() == grpc::StatusCode::PERMISSION_DENIED) {
+          // Retried, since the operator may fix the tokens file; said again only when it changes.
+          if (status.error_message() != refusal) {
+            refusal = status.error_message();
+            fmt::print(stderr, "worker: the scheduler refused the registration: {}\n", refusal);
+            std::fflush(stderr);
+          }
+        }
         if (status.ok()) {
           id = response.worker_id();
           interval = std::chrono::milliseconds(std::max(50u, response.heartbeat_interval_ms()));
@@ -123,8 +135,8 @@ std::string advertised_address(const std::string& listen, int port) {
 
 }  // namespace
 
-int run_worker_command(const WorkerOptions& given) {
-  WorkerOptions options = given;
+int run_worker_command(const WorkerCommandOptions& command) {
+  WorkerOptions options = command.worker;
   if (options.cache_dir.empty()) {
     options.cache_dir = std::filesystem::temp_directory_path() / "farm-worker-cache";
   }
@@ -138,18 +150,24 @@ int run_worker_command(const WorkerOptions& given) {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  // Every file is read and the listen policy applied before anything starts (after the signal
+  // mask: making credentials starts gRPC's threads, which must inherit it).
+  const ServerSecurity security = make_server_security(command.security, options.listen, "farm worker");
+  options.access = security.access;
+  options.scheduler_identity = security.outgoing;
 
   WorkerService service(options);
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
+  builder.AddListeningPort(options.listen, security.credentials, &port);
   builder.SetMaxReceiveMessageSize(kMaxRequestBytes);
   builder.RegisterService(&service);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) throw InputError(fmt::format("cannot listen on '{}'", options.listen));
 
+  print_security_warnings(security);
   fmt::print("worker listening on {}:{}\n", host_of(options.listen), port);
   fmt::print("  {} render threads, cache {} (at most {} scenes, ~{} MiB){}\n", service.threads(),
              options.cache_dir.string(), options.max_scenes, options.cache_memory_mb,
@@ -157,8 +175,9 @@ int run_worker_command(const WorkerOptions& given) {
   std::fflush(stdout);
   std::unique_ptr<Registration> registration;
   if (!options.scheduler.empty()) {
-    registration = std::make_unique<Registration>(
-        options.scheduler, advertised_address(options.listen, port), service.threads());
+    registration = std::make_unique<Registration>(options.scheduler, security.outgoing,
+                                                  advertised_address(options.listen, port),
+                                                  service.threads());
   }
 
   int signal_number = 0;
@@ -172,13 +191,16 @@ int run_worker_command(const WorkerOptions& given) {
 }
 
 void add_worker_command(CLI::App& app, CommandTable& commands) {
-  auto o = std::make_shared<WorkerOptions>();
+  auto command = std::make_shared<WorkerCommandOptions>();
+  WorkerOptions* o = &command->worker;
+  o->listen = kDefaultWorkerListen;
   CLI::App* worker = app.add_subcommand(
       "worker", "Serve farm.v1.Worker (RenderTile) plus gRPC health and reflection");
   worker->add_option("--listen", o->listen,
                      "Address to serve on, HOST:PORT (port 0 picks a free port; the address is "
-                     "printed as 'worker listening on HOST:PORT')")
-      ->required();
+                     "printed as 'worker listening on HOST:PORT'). Beyond loopback it needs --tokens "
+                     "or --tls-ca, or --insecure")
+      ->capture_default_str();
   worker->add_option("--threads", o->threads, "Render threads shared by all calls (0 = all cores)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
@@ -200,8 +222,10 @@ void add_worker_command(CLI::App& app, CommandTable& commands) {
                  "sub-tiles shared with concurrent calls; a call stops when its client cancels "
                  "or its deadline passes. Scenes are prepared once per scene hash. SIGINT or "
                  "SIGTERM shut the worker down cleanly.");
+  add_server_security_flags(*worker, command->security,
+                            "the scheduler (give it a token with the worker role)");
   add_log_level_option(*worker, "info");
-  commands.add(worker, [o] { return run_worker_command(*o); });
+  commands.add(worker, [command] { return run_worker_command(*command); });
 }
 
 }  // namespace farm

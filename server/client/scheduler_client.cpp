@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 
-#include <cstdlib>
 #include <fstream>
 #include <stdexcept>
 
@@ -29,12 +28,6 @@ Response SchedulerClient::call(Method method, const Request& request, const char
   return response;
 }
 
-std::string resolve_scheduler_address(const std::string& flag) {
-  if (!flag.empty()) return flag;
-  if (const char* env = std::getenv("FARM_SCHEDULER"); env != nullptr && *env != '\0') return env;
-  return kDefaultSchedulerAddress;
-}
-
 void throw_for_status(const grpc::Status& status, const std::string& what, const std::string& address) {
   switch (status.error_code()) {
     case grpc::StatusCode::INVALID_ARGUMENT:
@@ -48,6 +41,11 @@ void throw_for_status(const grpc::Status& status, const std::string& what, const
           "{}: cannot reach the scheduler at {} ({}); is `farm scheduler` running there? "
           "(--scheduler ADDR or FARM_SCHEDULER say where)",
           what, address, status.error_message()));
+    case grpc::StatusCode::UNAUTHENTICATED:
+    case grpc::StatusCode::PERMISSION_DENIED:
+      throw ServiceError(status.error_code(),
+                         fmt::format("{}: the scheduler at {} refused ({}): {}", what, address,
+                                     status_code_name(status.error_code()), status.error_message()));
     default:
       throw std::runtime_error(fmt::format("{}: the scheduler at {} answered {}: {}", what, address,
                                            static_cast<int>(status.error_code()), status.error_message()));
@@ -65,9 +63,9 @@ std::string to_string(v1::JobState state) {
   }
 }
 
-SchedulerClient::SchedulerClient(std::string address)
-    : address_(std::move(address)),
-      stub_(v1::Scheduler::NewStub(grpc::CreateChannel(address_, grpc::InsecureChannelCredentials()))) {}
+SchedulerClient::SchedulerClient(SchedulerConnection connection)
+    : address_(std::move(connection.address)),
+      stub_(v1::Scheduler::NewStub(open_channel(address_, connection.identity))) {}
 
 std::size_t SchedulerClient::upload_missing(const JobSubmission& submission) {
   v1::HasAssetsRequest ask;

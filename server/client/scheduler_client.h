@@ -9,18 +9,16 @@
 
 #include "proto/farm.grpc.pb.h"
 #include "server/client/job_submission.h"
+#include "server/client/scheduler_connection.h"
 #include "server/common/job_state.h"
 
 namespace farm {
 
-// Where the scheduler is: the --scheduler value if given, else $FARM_SCHEDULER, else
-// kDefaultSchedulerAddress.
-inline constexpr const char* kDefaultSchedulerAddress = "localhost:50051";
-std::string resolve_scheduler_address(const std::string& flag);
-
 class SchedulerClient {
  public:
-  explicit SchedulerClient(std::string address);
+  explicit SchedulerClient(SchedulerConnection connection);
+  // A scheduler on this machine that asks for no token (tests, benchmarks).
+  explicit SchedulerClient(std::string address) : SchedulerClient(SchedulerConnection{std::move(address), {}}) {}
 
   const std::string& address() const { return address_; }
 
@@ -48,7 +46,8 @@ class SchedulerClient {
 };
 
 // Status codes that mean the request was wrong (exit code 2) become InputError; an unreachable
-// scheduler a ServiceError(UNAVAILABLE) that says where it was looked for; the rest a
+// scheduler a ServiceError(UNAVAILABLE) that says where it was looked for; a refused caller
+// (UNAUTHENTICATED, PERMISSION_DENIED) a ServiceError with the scheduler's reason; the rest a
 // runtime_error with the scheduler's message.
 [[noreturn]] void throw_for_status(const grpc::Status& status, const std::string& what,
                                    const std::string& address);

@@ -10,13 +10,14 @@
 #include <optional>
 #include <string>
 
+#include "server/client/scheduler_connection.h"
 #include "server/review/grade_outcome.h"
 #include "server/review/grade_rubric.h"
 
 namespace farm {
 
 struct GradeOptions {
-  std::optional<std::string> scheduler;  // render references there instead of the embedded farm
+  std::optional<SchedulerConnection> scheduler;  // render references there instead of the embedded farm
   int jobs = 0;                          // students graded at a time (0: one per core)
   int threads = 0;                       // embedded farm render threads (0: all cores)
   std::filesystem::path output_dir;      // references/ and work/ go here

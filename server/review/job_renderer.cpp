@@ -9,7 +9,7 @@
 
 namespace farm {
 
-JobRenderer::JobRenderer(std::optional<std::string> scheduler, int threads) : scheduler_(std::move(scheduler)) {
+JobRenderer::JobRenderer(std::optional<SchedulerConnection> scheduler, int threads) : scheduler_(std::move(scheduler)) {
   if (scheduler_) return;
   EmbeddedFarmOptions options;
   options.threads = threads;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "server/client/job_submission.h"
+#include "server/client/scheduler_connection.h"
 
 namespace farm {
 
@@ -15,7 +16,7 @@ class EmbeddedFarm;
 class JobRenderer {
  public:
   // `scheduler` empty: an embedded farm with `threads` render threads (0: all cores).
-  JobRenderer(std::optional<std::string> scheduler, int threads);
+  JobRenderer(std::optional<SchedulerConnection> scheduler, int threads);
   ~JobRenderer();
   JobRenderer(const JobRenderer&) = delete;
   JobRenderer& operator=(const JobRenderer&) = delete;
@@ -26,7 +27,7 @@ class JobRenderer {
   void render(JobSubmission submission, const std::filesystem::path& exr, const std::filesystem::path& preview);
 
  private:
-  std::optional<std::string> scheduler_;
+  std::optional<SchedulerConnection> scheduler_;
   std::unique_ptr<EmbeddedFarm> farm_;
 };
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "server/client/scheduler_connection.h"
 #include "server/review/regress_suite.h"
 #include "server/review/test_outcome.h"
 
@@ -20,7 +21,7 @@ struct RegressOptions {
   ReferenceUpdate update = ReferenceUpdate::none;
   int jobs = 1;                          // embedded farm: tests rendered at a time
   int threads = 0;                       // embedded farm: render threads (0: all cores)
-  std::optional<std::string> scheduler;  // render on this scheduler instead (all jobs submitted up front)
+  std::optional<SchedulerConnection> scheduler;  // render on this scheduler instead (all jobs submitted up front)
   std::filesystem::path output_dir;      // new images, report images: <output>/images
 };
 

@@ -75,7 +75,7 @@ void SchedulerCore::stop() {
 // ---- Jobs ----------------------------------------------------------------------------------------
 
 v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
-                              const std::shared_ptr<JobEventQueue>& watcher) {
+                              const std::shared_ptr<JobEventQueue>& watcher, const std::string& owner) {
   validate_asset_refs(spec);
   if (auto missing = missing_assets(spec, assets_); !missing.empty()) {
     throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
@@ -103,7 +103,7 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
   info->spec = std::make_shared<const v1::JobSpec>(spec);
   info->scene_hash = hash;
   info->job = std::make_shared<const Job>(std::move(m.job));
-  return queue_job(priority, watcher, std::move(info));
+  return queue_job(priority, watcher, std::move(info), owner);
 }
 
 v1::Job SchedulerCore::submit_validated(ValidatedJob job, int priority,
@@ -120,7 +120,7 @@ v1::Job SchedulerCore::submit_validated(ValidatedJob job, int priority,
 }
 
 v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
-                                 std::shared_ptr<JobInfo> info) {
+                                 std::shared_ptr<JobInfo> info, const std::string& owner) {
   const RenderSettings& r = info->job->render;
   NewJob job;
   job.id = new_job_id();
@@ -131,12 +131,14 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
   job.width = r.width;
   job.height = r.height;
   job.priority = priority;
+  job.owner = owner;
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
   v1::Job added = store_.add_job(job, unix_ms_now());
-  log_->info("job {} '{}' queued: {} {}x{}, {} tiles, priority {}", added.job_id(), added.name(),
-             added.engine(), added.width(), added.height(), added.tiles_total(), priority);
+  log_->info("job {} '{}' queued: {} {}x{}, {} tiles, priority {}{}", added.job_id(), added.name(),
+             added.engine(), added.width(), added.height(), added.tiles_total(), priority,
+             owner.empty() ? "" : ", owner " + owner);
   dispatcher_.work_queued();
   return added;
 }

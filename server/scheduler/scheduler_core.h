@@ -37,6 +37,7 @@
 #include "server/scheduler/running_jobs.h"
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
+#include "server/scheduler/asset_grants.h"
 #include "server/scheduler/tile_worker.h"
 #include "server/scheduler/worker_registry.h"
 
@@ -69,6 +70,8 @@ class SchedulerCore {
   void stop();
 
   const AssetStore& assets() const { return assets_; }
+  // The assets workers may fetch now (given to RemoteTileWorkers this core renders on).
+  AssetGrants& grants() { return grants_; }
   const JobStore& store() const { return store_; }
   const SchedulerOptions& options() const { return options_; }
 
@@ -76,8 +79,9 @@ class SchedulerCore {
   // ServiceError FAILED_PRECONDITION naming a missing asset; InputError for a bad job (the
   // message names the job file and the JSON path). A `watcher` is subscribed to the job before
   // it is queued, so it sees every event of the job (pass it to unwatch() when done).
+  // `owner` is recorded with the job: the name of the caller's token.
   v1::Job submit(const v1::JobSpec& spec, int priority = 0,
-                 const std::shared_ptr<JobEventQueue>& watcher = nullptr);
+                 const std::shared_ptr<JobEventQueue>& watcher = nullptr, const std::string& owner = {});
   // Queues a job its caller has validated (no asset check, no parse, no scene build here).
   v1::Job submit_validated(ValidatedJob job, int priority = 0,
                            const std::shared_ptr<JobEventQueue>& watcher = nullptr);
@@ -101,11 +105,12 @@ class SchedulerCore {
  private:
   // Adds a validated job to the store and the dispatch.
   v1::Job queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
-                    std::shared_ptr<JobInfo> info);
+                    std::shared_ptr<JobInfo> info, const std::string& owner = {});
 
   // Declared in the order they are built: each part is given the ones above it.
   SchedulerOptions options_;
   AssetStore assets_;
+  AssetGrants grants_;
   JobStore store_;
   std::shared_ptr<spdlog::logger> log_;
   std::unique_ptr<FrameAssembly> assembly_;

@@ -53,29 +53,48 @@ bool stream_file(const std::filesystem::path& file, grpc::ServerWriter<Chunk>* w
   return true;
 }
 
+const Roles kJobSubmitters = Role::submit | Role::admin;
+const Roles kJobReaders = Role::submit | Role::read | Role::admin;
+const Roles kAllJobReaders = Role::read | Role::admin;
+
 }  // namespace
 
-grpc::Status SchedulerService::SubmitJob(grpc::ServerContext*, const v1::SubmitJobRequest* request,
+v1::Job SchedulerService::visible_job(const Principal& who, const std::string& job_id, Roles any_job,
+                                      const char* rpc) const {
+  std::optional<v1::Job> job = core_.get_job(job_id);
+  if (!job) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("no job '{}'", job_id.substr(0, 80)));
+  if (!who.roles.any_of(any_job) && job->owner() != who.name) {
+    deny(who, fmt::format("{} job {}: it belongs to '{}'", rpc, job_id, job->owner()));
+  }
+  return std::move(*job);
+}
+
+grpc::Status SchedulerService::SubmitJob(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
                                          v1::SubmitJobResponse* response) {
   return guarded([&] {
-    *response->mutable_job() = core_.submit(request->job(), request->priority());
+    const Principal who = access_.access.require(*context, kJobSubmitters, "SubmitJob");
+    if (request->priority() > access_.max_priority && !who.roles.has(Role::admin)) {
+      deny(who, fmt::format("submit with priority {} (above {} needs the admin role)",
+                            request->priority(), access_.max_priority));
+    }
+    *response->mutable_job() = core_.submit(request->job(), request->priority(), nullptr, who.name);
     return grpc::Status::OK;
   });
 }
 
-grpc::Status SchedulerService::GetJob(grpc::ServerContext*, const v1::GetJobRequest* request,
+grpc::Status SchedulerService::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
                                       v1::Job* response) {
   return guarded([&] {
-    std::optional<v1::Job> job = core_.get_job(request->job_id());
-    if (!job) return not_found(request->job_id());
-    *response = std::move(*job);
+    const Principal who = access_.access.require(*context, kJobReaders, "GetJob");
+    *response = visible_job(who, request->job_id(), kAllJobReaders, "see");
     return grpc::Status::OK;
   });
 }
 
-grpc::Status SchedulerService::ListJobs(grpc::ServerContext*, const v1::ListJobsRequest* request,
+grpc::Status SchedulerService::ListJobs(grpc::ServerContext* context, const v1::ListJobsRequest* request,
                                         v1::ListJobsResponse* response) {
   return guarded([&] {
+    const Principal who = access_.access.require(*context, kJobReaders, "ListJobs");
     int size = request->page_size() <= 0 ? kDefaultPageSize : std::min(request->page_size(), kMaxPageSize);
     std::int64_t before = 0;
     if (!request->page_token().empty()) {
@@ -88,7 +107,9 @@ grpc::Status SchedulerService::ListJobs(grpc::ServerContext*, const v1::ListJobs
     }
     std::vector<v1::JobState> states;
     for (int s : request->states()) states.push_back(static_cast<v1::JobState>(s));
-    auto [jobs, next] = core_.store().list_jobs(states, size, before);
+    std::optional<std::string> owner;  // a submitter lists its own jobs
+    if (!who.roles.any_of(kAllJobReaders)) owner = who.name;
+    auto [jobs, next] = core_.store().list_jobs(states, size, before, owner);
     for (v1::Job& job : jobs) *response->add_jobs() = std::move(job);
     if (next > 0) response->set_next_page_token(std::to_string(next));
     return grpc::Status::OK;
@@ -99,6 +120,8 @@ grpc::Status SchedulerService::WatchJob(grpc::ServerContext* context,
                                         const v1::WatchJobRequest* request,
                                         grpc::ServerWriter<v1::JobEvent>* writer) {
   return guarded([&] {
+    const Principal who = access_.access.require(*context, kJobReaders, "WatchJob");
+    visible_job(who, request->job_id(), kAllJobReaders, "watch");
     // Subscribe before the snapshot, so no event falls between them.
     const std::shared_ptr<JobEventQueue> queue = core_.watch(request->job_id());
     struct Unwatch {
@@ -125,9 +148,11 @@ grpc::Status SchedulerService::WatchJob(grpc::ServerContext* context,
   });
 }
 
-grpc::Status SchedulerService::CancelJob(grpc::ServerContext*, const v1::CancelJobRequest* request,
+grpc::Status SchedulerService::CancelJob(grpc::ServerContext* context, const v1::CancelJobRequest* request,
                                          v1::CancelJobResponse* response) {
   return guarded([&] {
+    const Principal who = access_.access.require(*context, kJobSubmitters, "CancelJob");
+    visible_job(who, request->job_id(), Role::admin, "cancel");
     *response->mutable_job() = core_.cancel(request->job_id());
     return grpc::Status::OK;
   });
@@ -137,8 +162,8 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
                                          const v1::GetResultRequest* request,
                                          grpc::ServerWriter<v1::FileChunk>* writer) {
   return guarded([&] {
-    std::optional<v1::Job> job = core_.get_job(request->job_id());
-    if (!job) return not_found(request->job_id());
+    const Principal who = access_.access.require(*context, kJobReaders, "GetResult");
+    const std::optional<v1::Job> job = visible_job(who, request->job_id(), kAllJobReaders, "fetch");
     if (job->state() != v1::JOB_STATE_SUCCEEDED) {
       return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
                           fmt::format("job {} is {}, not done", job->job_id(),
@@ -165,10 +190,11 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
   });
 }
 
-grpc::Status SchedulerService::UploadAsset(grpc::ServerContext*,
+grpc::Status SchedulerService::UploadAsset(grpc::ServerContext* context,
                                            grpc::ServerReader<v1::UploadAssetRequest>* reader,
                                            v1::UploadAssetResponse* response) {
   return guarded([&] {
+    access_.access.require(*context, kJobSubmitters, "UploadAsset");
     v1::UploadAssetRequest part;
     if (!reader->Read(&part) || !part.has_header()) {
       throw InputError("UploadAsset: the first message must be an AssetHeader");
@@ -204,9 +230,10 @@ grpc::Status SchedulerService::UploadAsset(grpc::ServerContext*,
   });
 }
 
-grpc::Status SchedulerService::HasAssets(grpc::ServerContext*, const v1::HasAssetsRequest* request,
+grpc::Status SchedulerService::HasAssets(grpc::ServerContext* context, const v1::HasAssetsRequest* request,
                                          v1::HasAssetsResponse* response) {
   return guarded([&] {
+    access_.access.require(*context, kJobSubmitters, "HasAssets");
     for (const std::string& sha : request->sha256()) {
       if (!is_sha256_hex(sha)) {
         throw InputError(fmt::format("HasAssets: '{}' is not 64 lowercase hex digits", sha.substr(0, 80)));
@@ -221,9 +248,13 @@ grpc::Status SchedulerService::GetAsset(grpc::ServerContext* context,
                                         const v1::GetAssetRequest* request,
                                         grpc::ServerWriter<v1::AssetChunk>* writer) {
   return guarded([&] {
+    const Principal who = access_.access.require(*context, Role::worker | Role::admin, "GetAsset");
     if (!is_sha256_hex(request->sha256())) {
       throw InputError(fmt::format("GetAsset: '{}' is not 64 lowercase hex digits",
                                    request->sha256().substr(0, 80)));
+    }
+    if (!who.roles.has(Role::admin) && !core_.grants().allowed(who.name, request->sha256())) {
+      deny(who, fmt::format("fetch asset {}: no job given to it now reads it", request->sha256()));
     }
     if (!core_.assets().has(request->sha256())) {
       return grpc::Status(grpc::StatusCode::NOT_FOUND, "no asset " + request->sha256());
@@ -242,23 +273,31 @@ grpc::Status SchedulerService::GetAsset(grpc::ServerContext* context,
   });
 }
 
-grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext*,
+grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext* context,
                                               const v1::RegisterWorkerRequest* request,
                                               v1::RegisterWorkerResponse* response) {
   return guarded([&] {
+    const Principal who = access_.access.require(*context, Role::worker | Role::admin, "RegisterWorker");
     if (request->address().empty()) throw InputError("RegisterWorker: address is empty");
     std::string old;
     {
       std::lock_guard lock(mutex_);
-      if (auto it = registered_.find(request->address()); it != registered_.end()) old = it->second;
+      if (auto it = registered_.find(request->address()); it != registered_.end()) {
+        if (it->second.principal != who.name && !who.roles.has(Role::admin)) {
+          deny(who, fmt::format("register at {}: '{}' registered a worker there", request->address(),
+                                it->second.principal));
+        }
+        old = it->second.worker_id;
+      }
     }
     // A worker registering again at the same address restarted: its old calls are dead.
     if (!old.empty()) core_.remove_worker(old, "registered again (restarted)");
+    WorkerLink link{access_.worker_identity, who.name, &core_.grants()};
     const std::string id =
-        core_.add_worker(std::make_shared<RemoteTileWorker>(request->address()), true);
+        core_.add_worker(std::make_shared<RemoteTileWorker>(request->address(), std::move(link)), true);
     {
       std::lock_guard lock(mutex_);
-      registered_[request->address()] = id;
+      registered_[request->address()] = Registered{id, who.name};
     }
     response->set_worker_id(id);
     response->set_heartbeat_interval_ms(
@@ -267,9 +306,10 @@ grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext*,
   });
 }
 
-grpc::Status SchedulerService::Heartbeat(grpc::ServerContext*, const v1::HeartbeatRequest* request,
+grpc::Status SchedulerService::Heartbeat(grpc::ServerContext* context, const v1::HeartbeatRequest* request,
                                          v1::HeartbeatResponse* response) {
   return guarded([&] {
+    access_.access.require(*context, Role::worker | Role::admin, "Heartbeat");
     response->set_register_again(!core_.heartbeat(request->worker_id()));
     return grpc::Status::OK;
   });

@@ -20,20 +20,23 @@ void TileCancel::set_hook(std::function<void()> hook) {
   if (hook_ && cancelled_) hook_();
 }
 
-RemoteTileWorker::RemoteTileWorker(std::string address) : address_(std::move(address)) {
+RemoteTileWorker::RemoteTileWorker(std::string address, WorkerLink link)
+    : address_(std::move(address)), link_(std::move(link)) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(-1);
   // A dead worker should be noticed and retried quickly, not after gRPC's default backoff.
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
   args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 200);
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
-  channel_ = grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), args);
+  channel_ = open_channel(address_, link_.identity, args);
   stub_ = v1::Worker::NewStub(channel_);
 }
 
 grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request, RenderedTiles& result,
                                       std::chrono::system_clock::time_point deadline,
                                       TileCancel& cancel) {
+  std::optional<AssetGrants::Lease> lease;  // the worker may fetch the job's assets meanwhile
+  if (link_.grants) lease.emplace(link_.grants->grant(link_.worker_name, request.job()));
   grpc::ClientContext context;
   context.set_deadline(deadline);
   cancel.set_hook([&context] { context.TryCancel(); });

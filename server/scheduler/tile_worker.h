@@ -15,6 +15,8 @@
 
 #include "proto/farm.grpc.pb.h"
 #include "renderer/image/tile_buffer.h"
+#include "server/common/client_identity.h"
+#include "server/scheduler/asset_grants.h"
 
 namespace farm {
 
@@ -54,10 +56,18 @@ class TileWorker {
   virtual std::string describe() const = 0;  // for messages: the address, or "in-process"
 };
 
+// How the scheduler reaches a remote worker: as whom (its token and TLS), and the grants that
+// let the worker fetch the assets of the calls it is given.
+struct WorkerLink {
+  ClientIdentity identity;
+  std::string worker_name;        // the name it registered under; empty for a static worker
+  AssetGrants* grants = nullptr;  // null: no grants (a scheduler without tokens lets anyone fetch)
+};
+
 // A `farm worker` at host:port, through the generated farm.v1.Worker stub.
 class RemoteTileWorker final : public TileWorker {
  public:
-  explicit RemoteTileWorker(std::string address);
+  explicit RemoteTileWorker(std::string address, WorkerLink link = {});
   grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
                       std::chrono::system_clock::time_point deadline, TileCancel& cancel) override;
   bool probe(std::chrono::milliseconds timeout) override;
@@ -65,6 +75,7 @@ class RemoteTileWorker final : public TileWorker {
 
  private:
   std::string address_;
+  WorkerLink link_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::Worker::Stub> stub_;
 };

@@ -8,10 +8,9 @@
 
 namespace farm {
 
-AssetFetcher::AssetFetcher(const std::string& scheduler_address)
+AssetFetcher::AssetFetcher(const std::string& scheduler_address, const ClientIdentity& identity)
     : address_(scheduler_address),
-      stub_(v1::Scheduler::NewStub(
-          grpc::CreateChannel(scheduler_address, grpc::InsecureChannelCredentials()))) {}
+      stub_(v1::Scheduler::NewStub(open_channel(scheduler_address, identity))) {}
 
 void AssetFetcher::fetch(const v1::AssetRef& ref, const AssetStore& store,
                          std::chrono::milliseconds timeout) const {

@@ -7,12 +7,14 @@
 
 #include "proto/farm.grpc.pb.h"
 #include "server/common/asset_store.h"
+#include "server/common/client_identity.h"
 
 namespace farm {
 
 class AssetFetcher {
  public:
-  explicit AssetFetcher(const std::string& scheduler_address);
+  // `identity`: the worker's token and TLS for the scheduler.
+  AssetFetcher(const std::string& scheduler_address, const ClientIdentity& identity);
 
   // Downloads `ref` into `store`. ServiceError: FAILED_PRECONDITION when the scheduler does not
   // have it, UNAVAILABLE when it cannot be reached, DATA_LOSS when the bytes do not match.

@@ -106,7 +106,7 @@ TileRenderer::TileRenderer(const TileRendererOptions& options)
       cache_dir_(options.cache_dir),
       store_(options.blobs_dir),
       fetcher_(options.scheduler.empty() ? nullptr
-                                         : std::make_unique<AssetFetcher>(options.scheduler)),
+                                         : std::make_unique<AssetFetcher>(options.scheduler, options.scheduler_identity)),
       cache_({options.max_scenes, options.cache_memory_mb << 20}),
       pool_(options.threads) {}
 

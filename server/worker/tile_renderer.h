@@ -14,6 +14,7 @@
 #include "proto/farm.pb.h"
 #include "renderer/image/tile_buffer.h"
 #include "renderer/util/thread_pool.h"
+#include "server/common/client_identity.h"
 #include "server/common/asset_store.h"
 #include "server/common/log.h"
 #include "server/worker/asset_fetcher.h"
@@ -27,6 +28,7 @@ struct TileRendererOptions {
   std::filesystem::path blobs_dir;    // content-addressed assets (AssetStore)
   std::filesystem::path cache_dir;    // scenes/<scene hash>/ are laid out here
   std::string scheduler;              // host:port to fetch missing assets from; empty = none
+  ClientIdentity scheduler_identity;  // the worker's token and TLS for `scheduler`
   int threads = 0;                    // render threads; 0 = all hardware threads
   std::size_t max_scenes = 8;
   std::uint64_t cache_memory_mb = 4096;

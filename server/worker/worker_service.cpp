@@ -1,5 +1,7 @@
 #include "server/worker/worker_service.h"
 
+#include "server/common/service_error.h"
+
 namespace farm {
 
 namespace {
@@ -9,6 +11,7 @@ TileRendererOptions renderer_options(const WorkerOptions& o) {
   r.blobs_dir = o.cache_dir / "blobs";
   r.cache_dir = o.cache_dir;
   r.scheduler = o.scheduler;
+  r.scheduler_identity = o.scheduler_identity;
   r.threads = o.threads;
   r.max_scenes = o.max_scenes;
   r.cache_memory_mb = o.cache_memory_mb;
@@ -17,11 +20,17 @@ TileRendererOptions renderer_options(const WorkerOptions& o) {
 
 }  // namespace
 
-WorkerService::WorkerService(const WorkerOptions& options) : renderer_(renderer_options(options)) {}
+WorkerService::WorkerService(const WorkerOptions& options)
+    : access_(options.access), renderer_(renderer_options(options)) {}
 
 grpc::Status WorkerService::RenderTile(grpc::ServerContext* context,
                                        const v1::RenderTileRequest* request,
                                        v1::RenderTileResponse* response) {
+  try {
+    access_.require(*context, Role::scheduler | Role::admin, "RenderTile");
+  } catch (const std::exception&) {
+    return status_of_current_exception();
+  }
   RenderControl control;
   control.cancelled = [context] { return context->IsCancelled(); };
   control.deadline = context->deadline();

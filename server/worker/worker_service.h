@@ -12,6 +12,8 @@
 #include <string>
 
 #include "proto/farm.grpc.pb.h"
+#include "server/common/access_control.h"
+#include "server/common/client_identity.h"
 #include "server/worker/tile_renderer.h"
 
 namespace farm {
@@ -23,6 +25,9 @@ struct WorkerOptions {
   std::filesystem::path cache_dir;     // blobs/ and scenes/ live here
   std::size_t max_scenes = 8;          // prepared scenes kept in memory
   std::uint64_t cache_memory_mb = 4096;  // approximate memory budget of the prepared scenes
+  // Who may call RenderTile (roles scheduler or admin); default: anyone (loopback).
+  AccessControl access;
+  ClientIdentity scheduler_identity;     // token and TLS for the calls to `scheduler`
 };
 
 class WorkerService final : public v1::Worker::Service {
@@ -37,6 +42,7 @@ class WorkerService final : public v1::Worker::Service {
   TileRenderer& renderer() { return renderer_; }
 
  private:
+  AccessControl access_;
   TileRenderer renderer_;  // the handler's body, shared with the scheduler's in-process worker
 };
 

@@ -17,6 +17,7 @@
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/common/asset_store.h"
+#include "server/common/sha256.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
@@ -418,10 +419,15 @@ TEST_F(FarmSchedulerTest, PythonClientGeneratedFromTheProtoSubmitsAndFetches) {
   // Another language speaking the wire contract: tests/python/farm_client.py generates its stubs
   // from proto/farm.proto with grpc_tools (Debian's python3-grpc-tools) in a venv of this test,
   // uploads, submits, watches and fetches; the EXR it gets equals the one the C++ client fetches.
-  // Debian's own python3 (not one on PATH from elsewhere) has the python3-grpc* packages.
+  // Debian's own python3 (not one on PATH from elsewhere) has the python3-grpc* packages. The
+  // scheduler asks for tokens (#15): the script sends FARM_TOKEN, and is refused without it.
+  const std::string token = "python-client-token-0123456789", admin = "test-admin-token-0123456789";
+  const fs::path tokens = dir_ / "tokens.txt";
+  std::ofstream(tokens) << sha256_hex(token) << " py submit\n" << sha256_hex(admin) << " tests admin\n";
   auto worker = start_worker("w1", 2);
-  auto scheduler = start_scheduler({"--worker", worker->address()});
+  auto scheduler = start_scheduler({"--worker", worker->address(), "--tokens", tokens.string()});
   ASSERT_TRUE(stub_);
+  stub_ = test::scheduler_stub(scheduler->address(), ClientIdentity{admin, false, {}});
   const v1::JobSpec spec = cornell("raster", 48, 32, 1, 16);
   const fs::path job = dir_ / "job" / "cornell.json";
   fs::create_directories(job.parent_path());
@@ -439,7 +445,10 @@ TEST_F(FarmSchedulerTest, PythonClientGeneratedFromTheProtoSubmitsAndFetches) {
   for (const auto& [path, file] : test::cornell_assets()) {
     command += " --asset " + test::shell_quote(path + "=" + file.string());
   }
-  const test::CommandResult r = test::run_command(command);
+  const test::CommandResult refused = test::run_command(command);
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+  EXPECT_NE(refused.output.find("\"error\": \"UNAUTHENTICATED\""), std::string::npos) << refused.output;
+  const test::CommandResult r = test::run_command("FARM_TOKEN=" + token + " " + command);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("\"state\": \"JOB_STATE_SUCCEEDED\""), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("\"sha256_ok\": true"), std::string::npos) << r.output;

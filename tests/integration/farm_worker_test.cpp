@@ -342,7 +342,7 @@ TEST_F(FarmWorkerCliTest, HelpExplainsTheOptions) {
 }
 
 TEST_F(FarmWorkerCliTest, UnusableListenAddressExitsWith2) {
-  const auto r = test::run_command(farm("worker --listen 256.1.1.1:99999 --cache-dir " +
+  const auto r = test::run_command(farm("worker --insecure --listen 256.1.1.1:99999 --cache-dir " +
                                         test::shell_quote((dir_ / "c").string())));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("cannot listen"), std::string::npos) << r.output;

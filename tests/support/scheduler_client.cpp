@@ -54,10 +54,13 @@ LocalFarm start_local_farm(const std::filesystem::path& dir, int workers) {
 }
 
 std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address) {
+  return scheduler_stub(address, ClientIdentity{});
+}
+
+std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address, const ClientIdentity& identity) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(-1);
-  return v1::Scheduler::NewStub(
-      grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args));
+  return v1::Scheduler::NewStub(open_channel(address, identity, args));
 }
 
 grpc::Status upload_assets(v1::Scheduler::Stub& stub,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "proto/farm.grpc.pb.h"
+#include "server/common/client_identity.h"
 #include "tests/support/background_process.h"
 
 namespace farm::test {
@@ -39,6 +40,8 @@ struct LocalFarm {
 LocalFarm start_local_farm(const std::filesystem::path& dir, int workers);
 
 std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address);
+// A stub calling as `identity` (its token, its TLS files).
+std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address, const ClientIdentity& identity);
 
 // Uploads each (path in the job, file on disk) the scheduler lacks.
 grpc::Status upload_assets(v1::Scheduler::Stub& stub,

@@ -201,10 +201,11 @@ TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
     ASSERT_TRUE(store.batch_done("a", 1, 1, {}));
   }
   {
-    // Back to what version 1 had: no part column.
+    // Back to what version 1 had: no part column, no owner.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN part", "UPDATE schema_version SET version = 1"}) {
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
+                            "UPDATE schema_version SET version = 1"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
@@ -215,6 +216,32 @@ TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
   EXPECT_EQ(tiles[1].state, TileState::Done);
   EXPECT_EQ(tiles[1].part, 1u);  // its own file, as version 1 wrote it
   EXPECT_EQ(tiles[0].state, TileState::Queued);  // was running
+}
+
+TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
+  test::TempDir dir;
+  {
+    JobStore store(dir / "jobs.db");
+    store.add_job(make_job("old", 0, 1), 1);
+  }
+  {
+    // Back to what version 2 had: no owner column.
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN owner", "UPDATE schema_version SET version = 2"}) {
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    }
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "jobs.db");
+  EXPECT_EQ(store.get_job("old")->owner(), "");
+  NewJob mine = make_job("mine", 0, 1);
+  mine.owner = "alice";
+  store.add_job(mine, 2);
+  EXPECT_EQ(store.get_job("mine")->owner(), "alice");
+  EXPECT_EQ(store.list_jobs({}, 10, 0, std::string("alice")).first.size(), 1u);
+  EXPECT_EQ(store.list_jobs({}, 10, 0, std::string("bob")).first.size(), 0u);
+  EXPECT_EQ(store.list_jobs({}, 10, 0).first.size(), 2u);
 }
 
 TEST(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {

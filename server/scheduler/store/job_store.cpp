@@ -14,7 +14,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 2;
+constexpr int kSchemaVersion = 3;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
@@ -38,7 +38,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   tile_failures INTEGER NOT NULL DEFAULT 0,
   tiles_rendered INTEGER NOT NULL DEFAULT 0,
   stats BLOB NOT NULL DEFAULT x'',
-  validation TEXT NOT NULL DEFAULT ''
+  validation TEXT NOT NULL DEFAULT '',
+  owner TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -58,7 +59,7 @@ CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
 constexpr const char* kJobColumns =
     "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
     "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
-    "validation";
+    "validation, owner";
 
 const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
@@ -171,6 +172,7 @@ v1::Job job_from_row(const Stmt& s) {
   job.set_tiles_rendered(static_cast<std::uint32_t>(s.i64(16)));
   job.mutable_stats()->ParseFromString(s.blob(17));
   job.set_validation(s.text(18));
+  job.set_owner(s.text(19));
   return job;
 }
 
@@ -208,11 +210,15 @@ JobStore::JobStore(const std::filesystem::path& file) {
   }
   if (version == 0) {
     Stmt(db_, prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
-  } else if (version == 1) {
-    // Version 1 kept one file per tile: each done tile is its own part.
+  } else if (version == 1 || version == 2) {
     Transaction t(db_);
-    exec("ALTER TABLE tiles ADD COLUMN part INTEGER NOT NULL DEFAULT 0");
-    exec("UPDATE tiles SET part = idx");
+    if (version == 1) {
+      // Version 1 kept one file per tile: each done tile is its own part.
+      exec("ALTER TABLE tiles ADD COLUMN part INTEGER NOT NULL DEFAULT 0");
+      exec("UPDATE tiles SET part = idx");
+    }
+    // Version 3 records who submitted each job; older jobs had no owner.
+    exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
     exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
     t.commit();
   } else if (version != kSchemaVersion) {
@@ -256,11 +262,11 @@ v1::Job JobStore::add_job(const NewJob& j, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   Stmt(db_, prepared("INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, "
-                     "state, submitted_ms, tiles_total) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
+                     "state, submitted_ms, tiles_total, owner) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
       .bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
       .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
       .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
-      .bind(11, static_cast<std::int64_t>(j.tiles.size()))
+      .bind(11, static_cast<std::int64_t>(j.tiles.size())).bind(12, j.owner)
       .run();
   const std::int64_t seq = sqlite3_last_insert_rowid(db_);
   Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1) VALUES (?, ?, ?, ?, ?, ?)"));
@@ -304,23 +310,26 @@ std::optional<v1::JobSpec> JobStore::get_spec(const std::string& id) const {
 }
 
 std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
-    const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq) const {
+    const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq,
+    const std::optional<std::string>& owner) const {
   std::string where = before_seq > 0 ? fmt::format("seq < {}", before_seq) : "1";
   if (!states.empty()) {
     std::string in;
     for (v1::JobState s : states) in += fmt::format("{}{}", in.empty() ? "" : ", ", static_cast<int>(s));
     where += fmt::format(" AND state IN ({})", in);
   }
+  if (owner) where += " AND owner = ?2";
   std::lock_guard lock(mutex_);
   // Not cached: the text varies with the filter and the page.
   sqlite3_stmt* statement =
-      prepare(fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?", kJobColumns, where), 0);
+      prepare(fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?1", kJobColumns, where), 0);
   struct Finalize {
     sqlite3_stmt* s;
     ~Finalize() { sqlite3_finalize(s); }
   } finalize{statement};
   Stmt s(db_, statement);
   s.bind(1, limit + 1);
+  if (owner) s.bind(2, *owner);
   std::vector<v1::Job> jobs;
   std::int64_t last_seq = 0, next = 0;
   while (s.step()) {

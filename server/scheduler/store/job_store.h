@@ -4,13 +4,14 @@
 // store; open() puts tiles that were running back in the queue (their results were lost with the
 // process) and keeps done tiles done (their data is on disk, written before they were marked).
 //
-// Schema (version 2; a version 1 store is upgraded in place):
+// Schema (version 3; a version 1 or 2 store is upgraded in place):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
 //        priority, state (farm.v1.JobState), submitted_ms, started_ms, finished_ms (Unix ms, 0 =
 //        not yet), failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered,
-//        stats BLOB (farm.v1.TileStats, summed over done tiles), validation, render_seconds)
+//        stats BLOB (farm.v1.TileStats, summed over done tiles), validation, render_seconds,
+//        owner (version 3: the submitter's token name, '' without tokens))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them); PRIMARY KEY (job_seq, idx))
@@ -45,6 +46,7 @@ struct NewJob {
   std::string engine;
   int width = 0, height = 0;
   int priority = 0;
+  std::string owner;  // who submitted it: the name of the caller's token (empty: no tokens)
   std::vector<Rect> tiles;
 };
 
@@ -91,10 +93,11 @@ class JobStore {
 
   std::optional<v1::Job> get_job(const std::string& id) const;
   std::optional<v1::JobSpec> get_spec(const std::string& id) const;
-  // Newest first; `states` empty = all; starts below submission order `before_seq` (0 = newest).
-  // Returns the jobs and the seq to continue from (0 = no more).
+  // Newest first; `states` empty = all; starts below submission order `before_seq` (0 = newest);
+  // only `owner`'s jobs when given. Returns the jobs and the seq to continue from (0 = no more).
   std::pair<std::vector<v1::Job>, std::int64_t> list_jobs(const std::vector<v1::JobState>& states,
-                                                         int limit, std::int64_t before_seq) const;
+                                                         int limit, std::int64_t before_seq,
+                                                         const std::optional<std::string>& owner = {}) const;
   std::vector<TileRecord> tiles(const std::string& id) const;
   // Jobs QUEUED or RUNNING, in submission order.
   std::vector<std::string> active_jobs() const;
