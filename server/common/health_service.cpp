@@ -95,7 +95,9 @@ void HealthService::shutdown() {
     shut_down_ = true;
     for (Watcher* watcher : watchers_) {
       if (!watcher->end_with) watcher->end_with = shutting_down();
-      steps.emplace_back(watcher, next_step(*watcher));
+      const Step step = next_step(*watcher);
+      // One with nothing to do may be finished already, and gone as soon as the lock is released.
+      if (step != Step::None) steps.emplace_back(watcher, step);
     }
   }
   // Each step was decided under the lock and is the only one its watcher can take until the
