@@ -1,9 +1,7 @@
 #include "server/cli/scheduler_command.h"
 
 #include <fmt/format.h>
-#include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
-#include <grpcpp/health_check_service_interface.h>
 #include <signal.h>
 
 #include <chrono>
@@ -13,6 +11,7 @@
 #include "renderer/scene/input_error.h"
 #include "server/cli/log_level_option.h"
 #include "server/cli/server_security_flags.h"
+#include "server/common/farm_server.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
 
@@ -60,14 +59,12 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
 
   SchedulerAccess access{security.access, security.outgoing, o.max_priority};
   SchedulerService service(core, std::move(access));
-  grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(o.listen, security.credentials, &port);
   builder.SetMaxReceiveMessageSize(kMaxRequestBytes);
   builder.RegisterService(&service);
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  std::unique_ptr<FarmServer> server = FarmServer::start(builder, v1::Scheduler::service_full_name());
   if (!server || port == 0) throw InputError(fmt::format("cannot listen on '{}'", o.listen));
 
   print_security_warnings(security);

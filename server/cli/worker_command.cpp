@@ -1,9 +1,7 @@
 #include "server/cli/worker_command.h"
 
 #include <fmt/format.h>
-#include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
-#include <grpcpp/health_check_service_interface.h>
 #include <signal.h>
 
 #include <unistd.h>
@@ -26,6 +24,7 @@
 #include "server/cli/server_security_flags.h"
 #include "server/common/listen_policy.h"
 #include "server/cli/version.h"
+#include "server/common/farm_server.h"
 
 namespace farm {
 
@@ -157,14 +156,12 @@ int run_worker_command(const WorkerCommandOptions& command) {
   options.scheduler_identity = security.outgoing;
 
   WorkerService service(options);
-  grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(options.listen, security.credentials, &port);
   builder.SetMaxReceiveMessageSize(kMaxRequestBytes);
   builder.RegisterService(&service);
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  std::unique_ptr<FarmServer> server = FarmServer::start(builder, v1::Worker::service_full_name());
   if (!server || port == 0) throw InputError(fmt::format("cannot listen on '{}'", options.listen));
 
   print_security_warnings(security);

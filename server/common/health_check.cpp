@@ -1,38 +1,19 @@
 #include "server/common/health_check.h"
 
-#include <grpcpp/generic/generic_stub.h>
-
-#include <vector>
+#include "proto/health.grpc.pb.h"
 
 namespace farm {
 
 HealthCheck check_health(const std::shared_ptr<grpc::Channel>& channel,
                          std::chrono::system_clock::time_point deadline) {
-  grpc::GenericStub stub(channel);
+  const auto stub = grpc::health::v1::Health::NewStub(channel);
   grpc::ClientContext context;
   context.set_deadline(deadline);
-  // HealthCheckRequest{service: ""} encodes as no bytes.
-  grpc::Slice empty;
-  const grpc::ByteBuffer request(&empty, 1);
-  grpc::CompletionQueue queue;
-  auto call = stub.PrepareUnaryCall(&context, "/grpc.health.v1.Health/Check", request, &queue);
-  call->StartCall();
-  grpc::ByteBuffer reply;
+  const grpc::health::v1::HealthCheckRequest request;  // service "": the server as a whole
+  grpc::health::v1::HealthCheckResponse response;
   HealthCheck result;
-  call->Finish(&reply, &result.status, reinterpret_cast<void*>(1));
-  void* tag = nullptr;
-  bool ok = false;
-  queue.Next(&tag, &ok);  // the one event: Finish
-  queue.Shutdown();
-  while (queue.Next(&tag, &ok)) {
-  }
-  if (!result.status.ok()) return result;
-  // HealthCheckResponse{status = 1: enum} is the varint field tag 0x08, then the value.
-  std::vector<grpc::Slice> slices;
-  if (!reply.Dump(&slices).ok()) return result;
-  std::string bytes;
-  for (const grpc::Slice& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
-  if (bytes.size() == 2 && bytes[0] == '\x08') result.serving_status = static_cast<unsigned char>(bytes[1]);
+  result.status = stub->Check(&context, request, &response);
+  if (result.status.ok()) result.serving_status = response.status();
   return result;
 }
 

@@ -1,7 +1,6 @@
 #pragma once
-// A client of grpc.health.v1.Health/Check, the standard liveness call that both farm servers
-// answer. Debian ships no health.proto to generate a stub from, so the call is made through the
-// generic stub with the two messages encoded by hand (they are one optional field each).
+// A client of grpc.health.v1.Health/Check (proto/health.proto), the standard liveness call that
+// both farm servers answer (server/common/health_service.h).
 #include <grpcpp/grpcpp.h>
 
 #include <chrono>
