@@ -29,8 +29,9 @@ void print_job(const v1::Job& job) {
   fmt::print("job {} '{}': {}, {}\n", job.job_id(), job.name(), to_string(job.state()), progress_of(job));
   fmt::print("  {} engine, {}x{}, scene {}\n", job.engine(), job.width(), job.height(),
              job.scene_hash().substr(0, 16));
-  fmt::print("  submitted {}, started {}, finished {}\n", local_time(job.submitted_at()),
-             local_time(job.started_at()), local_time(job.finished_at()));
+  fmt::print("  submitted {}{}, started {}, finished {}\n", local_time(job.submitted_at()),
+             job.owner().empty() ? "" : " by " + job.owner(), local_time(job.started_at()),
+             local_time(job.finished_at()));
   if (job.tile_failures() > 0) fmt::print("  tile retries: {}\n", job.tile_failures());
   if (!job.failure_reason().empty()) fmt::print("  failure: {}\n", job.failure_reason());
   const v1::TileStats& s = job.stats();

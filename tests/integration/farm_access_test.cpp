@@ -13,6 +13,7 @@
 #include "proto/farm.grpc.pb.h"
 #include "server/common/job_state.h"
 #include "server/common/sha256.h"
+#include "server/common/token_table.h"
 #include "tests/support/background_process.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/run_command.h"
@@ -276,6 +277,32 @@ TEST_F(FarmAccessTest, ClientCommandsSendTheTokenFromAFileOrTheEnvironment) {
       "FARM_TOKEN=" + kTokens.at("w1") + " " + test::farm_command("status" + at) + " 2>&1");
   EXPECT_EQ(wrong.exit_code, 1) << wrong.output;
   EXPECT_NE(wrong.output.find("PERMISSION_DENIED"), std::string::npos) << wrong.output;
+}
+
+// `farm token` prints a new token and the tokens-file line that grants it.
+TEST_F(FarmAccessTest, FarmTokenMakesATokenAndTheLineThatGrantsIt) {
+  auto make = [&](const std::string& name) {
+    const fs::path err = dir / (name + ".err");
+    const test::CommandResult r = test::run_command(
+        "(" + test::farm_command("token " + name + " --roles read,submit") + " 2>" + test::shell_quote(err.string()) + ")");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    std::string token = r.output;
+    while (!token.empty() && token.back() == '\n') token.pop_back();
+    const std::string message = test::read_file(err);
+    const std::size_t line = message.rfind('\n', message.size() - 2);
+    return std::make_pair(token, message.substr(line + 1));
+  };
+  const auto [token, line] = make("carol");
+  const auto [other, other_line] = make("dave");
+  EXPECT_NE(token, other);
+  EXPECT_EQ(line.find(token), std::string::npos) << "the line holds only the hash";
+  const TokenTable table = TokenTable::load(dir.write("made.txt", line + other_line));
+  const auto carol = table.find(token);
+  ASSERT_TRUE(carol);
+  EXPECT_EQ(carol->name, "carol");
+  EXPECT_EQ(to_string(carol->roles), "submit,read");
+  EXPECT_EQ(table.find(other)->name, "dave");
+  EXPECT_EQ(test::run_command(test::farm_command("token eve --roles root")).exit_code, 2);
 }
 
 // Loopback by default; beyond it, authentication or --insecure.
