@@ -5,12 +5,11 @@
 
 #include <array>
 #include <memory>
-#include <sstream>
 #include <string>
 
-#include "renderer/scene/input_error.h"
 #include "server/common/access_roles.h"
 #include "server/common/sha256.h"
+#include "server/common/token_table.h"
 
 namespace farm {
 namespace {
@@ -32,17 +31,7 @@ std::string random_token() {
 }
 
 int run_token(const TokenOptions& o) {
-  Roles roles;
-  std::istringstream list(o.roles);
-  for (std::string name; std::getline(list, name, ',');) {
-    Role role{};
-    if (!parse_role(name, role)) {
-      throw InputError(fmt::format("--roles: unknown role '{}' (roles: submit, read, admin, worker, "
-                                   "scheduler)", name));
-    }
-    roles = roles | role;
-  }
-  if (roles.empty()) throw InputError("--roles: give at least one role");
+  const Roles roles = parse_roles(o.roles, "--roles");
   const std::string token = random_token();
   fmt::print("{}\n", token);
   fmt::print(stderr,
@@ -61,13 +50,7 @@ void add_token_command(CLI::App& app, CommandTable& commands) {
   token->add_option("NAME", o->name, "Who holds it (1-64 of A-Z a-z 0-9 . _ - @); jobs record it as their owner")
       ->required()
       ->check([](const std::string& name) -> std::string {
-        if (name.empty() || name.size() > 64) return "1 to 64 characters";
-        for (char c : name) {
-          const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' ||
-                          c == '-' || c == '@';
-          if (!ok) return "only A-Z a-z 0-9 . _ - @";
-        }
-        return {};
+        return is_principal_name(name) ? "" : "1 to 64 of A-Z a-z 0-9 . _ - @";
       });
   token->add_option("--roles", o->roles,
                     "Comma-separated: submit (own jobs), read (every job), admin (everything), "

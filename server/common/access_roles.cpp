@@ -1,7 +1,11 @@
 #include "server/common/access_roles.h"
 
+#include <fmt/format.h>
+
 #include <array>
 #include <utility>
+
+#include "renderer/scene/input_error.h"
 
 namespace farm {
 namespace {
@@ -24,6 +28,22 @@ bool parse_role(std::string_view name, Role& role) {
     }
   }
   return false;
+}
+
+Roles parse_roles(std::string_view list, std::string_view where) {
+  Roles roles;
+  while (true) {
+    const std::size_t comma = list.find(',');
+    const std::string_view name = list.substr(0, comma);
+    Role role{};
+    if (!parse_role(name, role)) {
+      throw InputError(fmt::format("{}: unknown role '{}' (roles: submit, read, admin, worker, scheduler)",
+                                   where, name.substr(0, 40)));
+    }
+    roles = roles | role;
+    if (comma == std::string_view::npos) return roles;
+    list.remove_prefix(comma + 1);
+  }
 }
 
 std::string to_string(Roles roles) {

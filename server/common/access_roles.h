@@ -34,8 +34,11 @@ class Roles {
 
 constexpr Roles operator|(Role a, Role b) { return Roles(a) | Roles(b); }
 
-// "submit", "read", ...; nullopt-like: false when `name` is no role.
+// "submit", "read", ...; false when `name` is no role.
 bool parse_role(std::string_view name, Role& role);
+// "submit,read": the roles of a comma-separated list. InputError naming `where` and the first
+// unknown role, or for an empty list.
+Roles parse_roles(std::string_view list, std::string_view where);
 // "submit,read" in the order of the enum.
 std::string to_string(Roles roles);
 

@@ -16,7 +16,9 @@ namespace {
 constexpr std::size_t kMaxNameLength = 64;
 constexpr std::size_t kMaxTokenFileBytes = 1 << 20;
 
-bool is_name(std::string_view s) {
+}  // namespace
+
+bool is_principal_name(std::string_view s) {
   if (s.empty() || s.size() > kMaxNameLength) return false;
   for (char c : s) {
     const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
@@ -25,8 +27,6 @@ bool is_name(std::string_view s) {
   }
   return true;
 }
-
-}  // namespace
 
 bool well_formed_token(std::string_view token) {
   if (token.size() < 16 || token.size() > 512) return false;
@@ -64,21 +64,11 @@ TokenTable TokenTable::load(const std::filesystem::path& file) {
                                    "lowercase hex digits (the file never holds the token itself)",
                                    where));
     }
-    if (!is_name(name)) {
+    if (!is_principal_name(name)) {
       throw InputError(fmt::format("{}: name '{}' must be 1 to {} of A-Z a-z 0-9 . _ - @", where,
                                    name.substr(0, 80), kMaxNameLength));
     }
-    Roles roles;
-    std::istringstream list(roles_text);
-    for (std::string role_name; std::getline(list, role_name, ',');) {
-      Role role{};
-      if (!parse_role(role_name, role)) {
-        throw InputError(fmt::format("{}: unknown role '{}' (roles: submit, read, admin, worker, "
-                                     "scheduler)", where, role_name.substr(0, 40)));
-      }
-      roles = roles | role;
-    }
-    if (roles.empty()) throw InputError(fmt::format("{}: no roles", where));
+    const Roles roles = parse_roles(roles_text, where);
     if (!names.insert(name).second) throw InputError(fmt::format("{}: name '{}' is listed twice", where, name));
     if (!table.by_hash_.emplace(digest, Principal{name, roles}).second) {
       throw InputError(fmt::format("{}: the same token is listed twice", where));

@@ -43,6 +43,9 @@ class TokenTable {
 // neither is given. InputError when the file cannot be read or the token is malformed.
 std::string read_client_token(const std::filesystem::path& token_file);
 
+// True for a name a token may have: 1 to 64 of A-Z a-z 0-9 . _ - @ (jobs record it as their owner).
+bool is_principal_name(std::string_view name);
+
 // True for a token a client may send: 16 to 512 printable ASCII characters, no spaces.
 bool well_formed_token(std::string_view token);
 
