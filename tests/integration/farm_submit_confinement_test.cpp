@@ -1,7 +1,7 @@
 // `farm submit` and `farm render` from the command line, with a model that names a file it may not
 // (`..` out of the asset root, an absolute path, a link out, a FIFO, a folder): exit code 2, the
 // model and the path named, the target never opened, and nothing sent: the scheduler holds no job
-// and not the secret's bytes.
+// and not the secret's bytes. And an AssetRef whose size is not its file's is refused.
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
@@ -11,9 +11,13 @@
 #include <vector>
 
 #include "proto/farm.grpc.pb.h"
+#include "renderer/scene/input_error.h"
+#include "server/client/job_submission.h"
+#include "server/client/scheduler_client.h"
 #include "server/common/sha256.h"
 #include "tests/support/confinement_fixtures.h"
 #include "tests/support/farm_cli_fixture.h"
+#include "tests/support/job_specs.h"
 #include "tests/support/scheduler_client.h"
 
 namespace farm {
@@ -119,6 +123,33 @@ TEST_P(FarmSubmitConfinement, RenderExitsWith2NamingModelAndPath) {
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryEscape, FarmSubmitConfinement, ::testing::ValuesIn(all_cases()), case_name);
+
+// The client's AssetRefs carry the size of the bytes it hashed and uploads; one that says
+// otherwise (a client of another make, or a file changed under it) is refused by the scheduler,
+// and the client reports it as bad input (exit 2 in `farm submit`) naming the path.
+TEST(FarmSubmitAssetSizes, ASubmissionWhoseAssetRefSizeDiffersFromItsFileIsRefusedNamingThePath) {
+  test::TempDir dir;
+  dir.write("root/models/plain.mtl", test::plain_mtl());
+  dir.write("root/models/tri.obj", test::triangle_obj("plain.mtl"));
+  const fs::path job = dir.write("root/job.json", R"({"version": 1, "scene": {"objects": [{"file": "models/tri.obj"}]},
+                                                     "render": {"width": 8, "height": 8}})");
+  auto scheduler = std::make_unique<test::SchedulerProcess>(dir / "data", std::vector<std::string>{});
+  ASSERT_FALSE(scheduler->address().empty()) << scheduler->process().output();
+  SchedulerClient client(scheduler->address());
+  JobSubmission submission = make_job_submission(job, {}, {});
+  for (const v1::AssetRef& ref : submission.spec.assets()) {
+    EXPECT_EQ(ref.size(), test::read_file(dir / "root" / ref.path()).size()) << ref.path();
+  }
+  EXPECT_EQ(client.upload_missing(submission), 2u);
+  ASSERT_EQ(submission.spec.assets(0).path(), "models/plain.mtl");
+  submission.spec.mutable_assets(0)->set_size(submission.spec.assets(0).size() + 7);
+  try {
+    client.submit(submission, 0);
+    ADD_FAILURE() << "a spec with a wrong size was accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "asset 'models/plain.mtl'")) << e.what();
+  }
+}
 
 }  // namespace
 }  // namespace farm
