@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "renderer/scene/confined_io_system.h"
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/loaders.h"
 
@@ -144,9 +145,12 @@ std::optional<Light> convert_light(const aiLight& in, const glm::mat4& node_to_r
 
 }  // namespace
 
-Model load_with_assimp(const std::filesystem::path& file) {
-  const std::string name = file.string();
+Model load_with_assimp(const ModelFile& file) {
+  const std::string name = file.name.string();
   Assimp::Importer importer;
+  // Owned by the importer, which outlives every use of it here.
+  auto* io = new ConfinedIOSystem(file);
+  importer.SetIOHandler(io);
   // Points and lines cannot be rendered as surfaces; drop them instead of keeping split meshes.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -155,15 +159,18 @@ Model load_with_assimp(const std::filesystem::path& file) {
                               aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(name, kFlags);
+    scene = importer.ReadFile(file.file.resolved.string(), kFlags);
   } catch (const std::exception& e) {  // Assimp catches its own; this is for allocation failures
     throw InputError(name + ": " + e.what());
   }
+  // Before anything else: the importer may have carried on without the file (an OBJ does without
+  // its material library), and a model that names a file it may not read is refused.
+  if (!io->refusal().empty()) throw InputError(name + ": " + io->refusal());
   if (scene == nullptr) throw InputError(name + ": " + importer.GetErrorString());
   if (scene->mRootNode == nullptr) throw InputError(name + ": the file has no scene hierarchy");
 
   Model model;
-  model.source = file;
+  model.source = file.name;
   for (unsigned i = 0; i < scene->mNumMaterials; ++i) {
     model.materials.push_back(convert_material(*scene->mMaterials[i]));
   }

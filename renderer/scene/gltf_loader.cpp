@@ -27,33 +27,43 @@
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/loaders.h"
-#include "renderer/util/path_confinement.h"
 
 namespace farm {
 namespace {
 
-// ---- File access: external buffers must lie in the model's own folder --------------------------
+// ---- File access: every file tinygltf reads is confined ----------------------------------------
 
-// A job's model files are confined to its asset root; a .gltf could otherwise reach past that with
-// a buffer uri such as "../../secret" or "/etc/passwd". tinygltf reads every file through these.
-struct Confinement {
-  std::filesystem::path folder;  // canonical folder of the .gltf/.glb
+// A .gltf could reach past the asset root with a buffer or image uri such as "../../secret",
+// "/etc/passwd" or a FIFO. tinygltf reads the model and every file it names through these, and
+// confine_loader_path decides; the first refusal is kept, so that the load fails naming it even
+// where tinygltf carries on (an image it cannot read is only a warning to it).
+struct GltfFiles {
+  const ModelFile& model;
+  std::string refusal;
 
-  bool allows(const std::string& path) const { return resolve_within(folder, path).has_value(); }
+  ConfinedFile confine(const std::string& path) {
+    ConfinedFile c = confine_loader_path(model, path);
+    if (c.refused() && refusal.empty()) refusal = c.reason;
+    return c;
+  }
 };
 
-// Existence is answered truthfully so that a refused file fails in the read, with the reason.
-bool file_exists(const std::string& path, void*) { return tinygltf::FileExists(path, nullptr); }
+// True unless nothing is there, so that a refused file fails in the read, with the reason.
+bool file_exists(const std::string& path, void* user) {
+  return static_cast<GltfFiles*>(user)->confine(path).verdict != Confinement::missing;
+}
 
 std::string no_expansion(const std::string& path, void*) { return path; }
 
 bool confined_read(std::vector<unsigned char>* out, std::string* err, const std::string& path,
                    void* user) {
-  if (!static_cast<const Confinement*>(user)->allows(path)) {
-    if (err) *err += path + " lies outside the model's folder";
-    return false;
-  }
-  return tinygltf::ReadWholeFile(out, err, path, nullptr);
+  auto* files = static_cast<GltfFiles*>(user);
+  const ConfinedFile c = files->confine(path);
+  std::string why;
+  if (c.allowed() && read_confined(c, *out, &why)) return true;
+  if (c.allowed() && files->refusal.empty()) files->refusal = why;
+  if (err) *err += (c.allowed() ? why : c.reason.empty() ? path + ": no such file" : c.reason) + "\n";
+  return false;
 }
 
 bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
@@ -511,37 +521,37 @@ std::string trimmed(std::string s) {
 
 }  // namespace
 
-Model load_gltf(const std::filesystem::path& file) {
-  const std::string name = file.string();
-  std::error_code ec;
-  Confinement confinement{std::filesystem::weakly_canonical(file, ec).parent_path()};
-  if (ec) throw InputError(name + ": " + ec.message());
+Model load_gltf(const ModelFile& file) {
+  const std::string name = file.name.string();
+  GltfFiles files{file, {}};
 
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks(
-      {&file_exists, &no_expansion, &confined_read, &refuse_write, &confinement});
+      {&file_exists, &no_expansion, &confined_read, &refuse_write, &files});
   loader.SetImageLoader(&skip_image, nullptr);
 
   tinygltf::Model gltf;
   std::string err, warn;
   bool ok = false;
   try {
-    std::string ext = file.extension().string();
+    std::string ext = file.name.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     const bool binary = ext == ".glb";
-    ok = binary ? loader.LoadBinaryFromFile(&gltf, &err, &warn, name)
-                : loader.LoadASCIIFromFile(&gltf, &err, &warn, name);
+    const std::string path = file.file.resolved.string();
+    ok = binary ? loader.LoadBinaryFromFile(&gltf, &err, &warn, path)
+                : loader.LoadASCIIFromFile(&gltf, &err, &warn, path);
   } catch (const std::exception& e) {  // allocation failures on absurd sizes
     throw InputError(name + ": " + e.what());
   }
+  if (!files.refusal.empty()) throw InputError(name + ": " + files.refusal);
   if (!ok) {
     std::string message = name + ": " + (err.empty() ? "not a valid glTF file" : trimmed(err));
     if (!warn.empty()) message += " (" + trimmed(warn) + ")";
     throw InputError(message);
   }
   // Warnings alone (an unreadable texture, say) do not stop the load: we use no textures.
-  return GltfReader(file, gltf).read();
+  return GltfReader(file.name, gltf).read();
 }
 
 }  // namespace farm

@@ -14,7 +14,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/json_reader.h"
-#include "renderer/util/path_confinement.h"
+#include "renderer/util/confined_file.h"
 
 namespace farm {
 
@@ -30,6 +30,7 @@ const NumberRange kPositive = NumberRange::above(0.0);
 
 struct Context {
   fs::path job_dir;     // absolute
+  fs::path job_file;    // in job_dir with its symlinks resolved: what model paths are relative to
   fs::path asset_root;  // absolute, symlinks resolved
 };
 
@@ -42,27 +43,13 @@ std::string shown(const std::string& s) {
 fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
   const std::string written = v.string();
   if (written.empty()) v.fail("expected a file path, got an empty string");
-  if (written.find('\0') != std::string::npos) v.fail("file path contains a NUL character");
-
-  const fs::path as_written(written);
-  const fs::path candidate = as_written.is_absolute() ? as_written : ctx.job_dir / as_written;
-  // weakly_canonical resolves `..` and every symlink along the existing part of the path, so
-  // the containment test below sees where the file really is.
-  std::error_code ec;
-  const fs::path resolved = fs::weakly_canonical(candidate, ec);
-  if (ec) v.fail(fmt::format("cannot resolve '{}': {}", shown(written), ec.message()));
-  // Containment is checked before existence, so probing outside the root reveals nothing.
-  if (!lies_within(ctx.asset_root, resolved)) {
-    v.fail(fmt::format("'{}' lies outside the asset root '{}'", shown(written),
-                       ctx.asset_root.string()));
-  }
-  const fs::file_status status = fs::status(resolved, ec);
-  if (ec && ec != std::errc::no_such_file_or_directory) {
-    v.fail(fmt::format("cannot access '{}': {}", shown(written), ec.message()));
-  }
-  if (!fs::exists(status)) v.fail(fmt::format("no such file '{}'", shown(written)));
-  if (!fs::is_regular_file(status)) v.fail(fmt::format("'{}' is not a regular file", shown(written)));
-  return resolved;
+  // A person writes a job on their own machine: an absolute path is fine if it lies in the root
+  // (a submission rewrites it relative to the root before it travels).
+  const ConfinedFile file =
+      confine_file(ctx.asset_root, ctx.job_file, written, ReferenceForm::relative_or_absolute);
+  if (file.verdict == Confinement::missing) v.fail(fmt::format("no such file '{}'", shown(written)));
+  if (!file.allowed()) v.fail(file.reason);
+  return file.resolved;
 }
 
 // Unit axis, computed in double so tiny but non-zero float axes still normalise.
@@ -316,10 +303,14 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
     ctx.asset_root = fs::weakly_canonical(root, ec);
     if (ec) throw InputError(fmt::format("{}: cannot resolve the asset root '{}': {}", file,
                                          root.string(), ec.message()));
+    const fs::path job_dir = fs::weakly_canonical(ctx.job_dir, ec);
+    if (ec) throw InputError(fmt::format("{}: cannot resolve its folder: {}", file, ec.message()));
+    ctx.job_file = job_dir / (path.empty() ? fs::path("job.json") : path.filename());
   }
 
   Job job;
   job.path = path;
+  job.asset_root = ctx.asset_root;
   job.name = default_name(path);
   if (auto x = top.get("name")) job.name = parse_name(*x);
   job.scene = parse_scene(top.require("scene"), ctx);

@@ -38,6 +38,9 @@ struct JobOutput {
 
 struct Job {
   std::filesystem::path path;     // the job file
+  // Absolute, symlinks resolved: every file the job reads, and every file its models name, lies
+  // in here (renderer/util/confined_file.h).
+  std::filesystem::path asset_root;
   std::string name;
   JobScene scene;
   RenderSettings render;          // includes the output AOVs

@@ -12,6 +12,13 @@
 
 namespace farm {
 
+ConfinedFile confine_loader_path(const ModelFile& model, const std::string& path) {
+  const std::string folder = model.file.resolved.parent_path().string();
+  const std::string prefix = folder == "/" ? folder : folder + "/";
+  const std::string reference = path.rfind(prefix, 0) == 0 ? path.substr(prefix.size()) : path;
+  return confine_file(model.root, model.file.resolved, reference);
+}
+
 void bake_node_transform(Mesh& mesh, const glm::mat4& node_to_root) {
   for (glm::vec3& p : mesh.positions) p = glm::vec3(node_to_root * glm::vec4(p, 1.0f));
 

@@ -6,12 +6,28 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 
+#include <string>
+
 #include "renderer/scene/model.h"
+#include "renderer/util/confined_file.h"
 
 namespace farm {
 
-Model load_with_assimp(const std::filesystem::path& file);  // .dae .obj .ply
-Model load_gltf(const std::filesystem::path& file);         // .gltf .glb
+// A model file as load_model hands it to a loader: checked by confine_file, with the root that
+// every file it names is confined to.
+struct ModelFile {
+  std::filesystem::path name;  // as the caller named it: for messages and Model::source
+  ConfinedFile file;           // allowed: file.resolved is what is read
+  std::filesystem::path root;  // canonical
+};
+
+Model load_with_assimp(const ModelFile& model);  // .dae .obj .ply
+Model load_gltf(const ModelFile& model);         // .gltf .glb
+
+// A file the loader libraries ask for, confined to the model's root. Assimp and tinygltf join the
+// model's folder and the reference as written ("/m/" + "../x.mtl", "/m/" + "/etc/passwd"), so what
+// follows the folder is the reference; any other path is taken as a reference in itself.
+ConfinedFile confine_loader_path(const ModelFile& model, const std::string& path);
 
 // Moves a mesh from its node's space into the file's root space: positions by `node_to_root`,
 // normals by its inverse transpose. Under a mirroring transform each triangle's corners are

@@ -25,7 +25,12 @@ struct Model {
 };
 
 // Loads .dae/.obj/.ply (Assimp) and .gltf/.glb (tinygltf). Throws InputError naming the file and
-// what is wrong with it; never crashes on malformed input.
+// what is wrong with it; never crashes on malformed input. The model and every file it names (an
+// OBJ's material libraries, a glTF's buffers and images) must lie in `asset_root` as
+// renderer/util/confined_file.h says: a reference that is absolute, leads out, or names no
+// regular file is an InputError naming the model and the reference, and is never opened.
+Model load_model(const std::filesystem::path& file, const std::filesystem::path& asset_root);
+// The same with the model's own folder as the root (`farm info`, benchmarks).
 Model load_model(const std::filesystem::path& file);
 
 }  // namespace farm

@@ -1,8 +1,7 @@
-// load_model: checks that the file is there and readable, then hands it to the loader for its
-// extension. Every failure is an InputError that names the file.
+// load_model: checks that the file lies in the root and is a regular file, then hands it to the
+// loader for its extension. Every failure is an InputError that names the file.
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <string>
 #include <system_error>
 
@@ -13,33 +12,27 @@
 namespace farm {
 namespace {
 
+namespace fs = std::filesystem;
+
 constexpr const char* kSupported = ".dae .obj .ply .gltf .glb";
 
-std::string lowercase_extension(const std::filesystem::path& file) {
+std::string lowercase_extension(const fs::path& file) {
   std::string ext = file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
-void require_readable_file(const std::filesystem::path& file) {
+fs::path resolved_folder(const fs::path& folder) {
   std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (ec || !std::filesystem::exists(status)) {
-    throw InputError(file.string() + ": model file not found");
-  }
-  if (!std::filesystem::is_regular_file(status)) {
-    throw InputError(file.string() + ": not a regular file");
-  }
-  // The importers report an unreadable file with messages that do not always name it.
-  if (!std::ifstream(file, std::ios::binary)) {
-    throw InputError(file.string() + ": model file cannot be read");
-  }
+  fs::path resolved = fs::weakly_canonical(fs::absolute(folder), ec);
+  if (ec) throw InputError(folder.string() + ": cannot resolve: " + ec.message());
+  return resolved;
 }
 
 }  // namespace
 
-Model load_model(const std::filesystem::path& file) {
+Model load_model(const fs::path& file, const fs::path& asset_root) {
   const std::string ext = lowercase_extension(file);
   const bool assimp = ext == ".dae" || ext == ".obj" || ext == ".ply";
   const bool gltf = ext == ".gltf" || ext == ".glb";
@@ -47,8 +40,18 @@ Model load_model(const std::filesystem::path& file) {
     throw InputError(file.string() + ": unsupported model format '" + ext +
                      "' (supported: " + kSupported + ")");
   }
-  require_readable_file(file);
-  return assimp ? load_with_assimp(file) : load_gltf(file);
+  ModelFile model{file, {}, resolved_folder(asset_root)};
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(file, ec);
+  model.file = confine_file(model.root, absolute, absolute.string(), ReferenceForm::relative_or_absolute);
+  if (model.file.verdict == Confinement::missing) throw InputError(file.string() + ": model file not found");
+  if (!model.file.allowed()) throw InputError(file.string() + ": " + model.file.reason);
+  return assimp ? load_with_assimp(model) : load_gltf(model);
+}
+
+Model load_model(const fs::path& file) {
+  // The folder the model really lies in: `farm info link.obj` reads what the link points at.
+  return load_model(file, resolved_folder(fs::absolute(file)).parent_path());
 }
 
 }  // namespace farm

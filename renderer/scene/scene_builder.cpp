@@ -56,7 +56,10 @@ Scene build_scene(const Job& job) {
     std::shared_ptr<const Model>& model = models[o.file];
     if (!model) {
       try {
-        model = std::make_shared<const Model>(load_model(o.file));
+        // Confined to the job's asset root; a job put together in code may have none, and then
+        // each model's own folder is its root.
+        model = std::make_shared<const Model>(job.asset_root.empty() ? load_model(o.file)
+                                                                     : load_model(o.file, job.asset_root));
       } catch (const InputError& e) {
         throw InputError(fmt::format("{}: scene.objects[{}].file: {}", job.path.string(), i,
                                      e.what()));

@@ -1,7 +1,7 @@
 #pragma once
 // The one rule for "this file lies inside that folder", wherever a path from outside must stay
-// within a root: a job's model files (its asset root), a glTF's buffers and images (the model's
-// folder), the files a submission sends (its asset root). Paths are resolved first
+// within a root. Files named by a job or a model go through confine_file (confined_file.h), which
+// builds on this; suites and rubrics use it for their own files. Paths are resolved first
 // (weakly_canonical: `..` and every symlink along the existing part of the path), so neither
 // `..` nor a symlink leads out; folders compare component-wise, so /assets2 is not inside /assets.
 #include <filesystem>

@@ -1,11 +1,15 @@
 #include "server/client/job_submission.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <array>
+#include <cerrno>
+#include <cstring>
 #include <nlohmann/json.hpp>
 
 #include "renderer/scene/input_error.h"
-#include "renderer/util/path_confinement.h"
+#include "renderer/util/confined_file.h"
 #include "server/client/model_dependencies.h"
 #include "server/common/sha256.h"
 
@@ -56,6 +60,38 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
   return doc.dump(2) + "\n";
 }
 
+struct Digest {
+  std::string sha256;
+  std::uint64_t size = 0;
+};
+
+Digest digest_of(const ConfinedFile& file, const std::string& path) {
+  std::string why;
+  const int fd = file.allowed() ? open_confined(file, &why) : -1;
+  if (fd < 0) {
+    throw InputError(fmt::format("{}: cannot read '{}': {}", file.named.string(), path,
+                                 file.allowed() ? why : file.reason));
+  }
+  Sha256 hash;
+  Digest digest;
+  std::array<char, 1 << 16> buffer;
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      throw InputError(fmt::format("{}: cannot read: {}", file.named.string(), std::strerror(err)));
+    }
+    if (n == 0) break;
+    hash.update(buffer.data(), static_cast<std::size_t>(n));
+    digest.size += static_cast<std::uint64_t>(n);
+  }
+  ::close(fd);
+  digest.sha256 = hash.finish_hex();
+  return digest;
+}
+
 }  // namespace
 
 JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions& load,
@@ -66,40 +102,37 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   out.job = parse_job(text, job_file, load);
   apply_overrides(out.job, overrides);
   const fs::path job_dir = fs::weakly_canonical(fs::absolute(job_file).parent_path());
-  const fs::path root = load.asset_root.empty() ? job_dir : fs::weakly_canonical(fs::absolute(load.asset_root));
+  const fs::path& root = out.job.asset_root;  // what parse_job confined the models to
 
   const bool as_written = job_dir == root && !any_override(overrides);
   out.spec.set_job_json(as_written ? text : rewritten_job_text(text, out.job, root, overrides));
   out.spec.set_file_name(job_file.filename().string());
 
-  std::map<std::string, fs::path> by_path;  // spec path -> file
-  const auto add = [&](const fs::path& file, const fs::path& model) {
-    // Two conditions, both needed: the file must really lie in the root (resolved, so no symlink
-    // leads out), and it must be named under the root as the model names it (lexically, since a
-    // worker lays the files out by the names the models use, symlinks or not).
-    const fs::path relative = file.lexically_relative(root);
-    if (!resolve_within(root, file) || relative.empty() || *relative.begin() == "..") {
-      throw InputError(fmt::format("{}: references {}, which lies outside the asset root {} (give "
-                                   "--asset-root a folder that holds both)",
-                                   model.string(), file.string(), root.string()));
-    }
-    by_path.emplace(relative.generic_string(), file);
+  std::map<std::string, fs::path> by_path;  // spec path -> the file to read (resolved)
+  const auto add = [&](const ConfinedFile& file) {
+    // confine_file allowed it: it lies in the root, resolved (no symlink leads out) and as named.
+    // It goes under the name the model uses, since a worker lays the files out by those names.
+    by_path.emplace(file.named.lexically_relative(root).generic_string(), file.resolved);
   };
   // Objects that share a model (a field of 100 cows is one cow.dae) share one scan of it.
-  ModelDependencyScanner scanner;
+  ModelDependencyScanner scanner(root);
   for (const JobObject& object : out.job.scene.objects) {
-    add(object.file, job_file);
-    for (const fs::path& dependency : scanner.dependencies(object.file)) add(dependency, object.file);
+    // parse_job confined the model to the root already: the path is resolved and inside.
+    by_path.emplace(object.file.lexically_relative(root).generic_string(), object.file);
+    for (const ConfinedFile& dependency : scanner.dependencies(object.file)) add(dependency);
   }
   out.files_scanned = scanner.files_scanned();
-  // by_path holds each file once, so each is hashed once.
+  // by_path holds each file once, so each is hashed once. Read through the same gate again: a file
+  // swapped for a FIFO or a link since it was scanned is refused, not waited on or followed.
   for (const auto& [path, file] : by_path) {
+    const ConfinedFile checked = confine_file(root, file, file.string(), ReferenceForm::relative_or_absolute);
+    const Digest digest = digest_of(checked, path);
     v1::AssetRef* ref = out.spec.add_assets();
     ref->set_path(path);
-    ref->set_sha256(sha256_file_hex(file));
+    ref->set_sha256(digest.sha256);
+    ref->set_size(digest.size);  // the bytes hashed, so size and hash always describe one file
     ++out.files_hashed;
-    ref->set_size(fs::file_size(file));
-    out.files.emplace(ref->sha256(), file);
+    out.files.emplace(ref->sha256(), checked.resolved);
   }
   return out;
 }

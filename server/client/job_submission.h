@@ -28,8 +28,9 @@ struct JobSubmission {
   std::size_t files_hashed = 0;
 };
 
-// Throws InputError (naming the file and the place) for a bad job or a model that references a
-// file outside the asset root.
+// Throws InputError (naming the file and the place) for a bad job or a model with a reference
+// that confine_file refuses (renderer/util/confined_file.h): nothing refused is read or sent.
+// Every AssetRef's size is the count of the bytes its hash was computed over.
 JobSubmission make_job_submission(const std::filesystem::path& job_file, const JobLoadOptions& load,
                                   const RenderOverrides& overrides);
 

@@ -1,5 +1,7 @@
 #include "server/client/model_dependencies.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
@@ -8,8 +10,8 @@
 #include <sstream>
 #include <string>
 
+#include "renderer/scene/input_error.h"
 #include "server/client/collada_images.h"
-#include "server/common/read_whole_file.h"
 
 namespace farm {
 namespace {
@@ -43,39 +45,27 @@ std::string percent_decode(const std::string& uri) {
   return out;
 }
 
-// A reference as a file next to `model`, if it names a local file that exists.
-void add_reference(const fs::path& model, std::string reference, std::vector<fs::path>& out) {
-  reference = trim(reference);
-  if (reference.empty() || reference.rfind("data:", 0) == 0) return;
-  if (reference.rfind("file://", 0) == 0) reference = reference.substr(7);
-  if (reference.find("://") != std::string::npos) return;  // http and the like: never fetched
-  std::replace(reference.begin(), reference.end(), '\\', '/');
-  const fs::path file = (model.parent_path() / percent_decode(reference)).lexically_normal();
-  std::error_code ec;
-  if (fs::is_regular_file(file, ec)) out.push_back(file);
-}
-
-// OBJ: `mtllib a.mtl [b.mtl ...]`.
-std::vector<fs::path> obj_material_libraries(const fs::path& model, const std::string& text) {
+// OBJ: `mtllib a.mtl [b.mtl ...]`, the names as written.
+std::vector<std::string> obj_material_libraries(const std::string& text) {
   std::istringstream lines(text);
   std::string line;
-  std::vector<fs::path> libraries;
+  std::vector<std::string> libraries;
   while (std::getline(lines, line)) {
     std::istringstream words(line);
     std::string key;
     words >> key;
     if (key != "mtllib") continue;
     std::string name;
-    while (words >> name) add_reference(model, name, libraries);
+    while (words >> name) libraries.push_back(name);
   }
   return libraries;
 }
 
 // MTL: map_Kd, bump, disp, ... whose last word is the file.
-std::vector<fs::path> mtl_maps(const fs::path& library, const std::string& text) {
+std::vector<std::string> mtl_maps(const std::string& text) {
   std::istringstream lines(text);
   std::string line;
-  std::vector<fs::path> out;
+  std::vector<std::string> out;
   while (std::getline(lines, line)) {
     std::istringstream words(line);
     std::string key, word, last;
@@ -83,96 +73,136 @@ std::vector<fs::path> mtl_maps(const fs::path& library, const std::string& text)
     std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
     if (key.rfind("map_", 0) != 0 && key != "bump" && key != "disp" && key != "decal" && key != "refl") continue;
     while (words >> word) last = word;
-    add_reference(library, last, out);
+    out.push_back(last);
   }
   return out;
 }
 
-void gltf_json_dependencies(const fs::path& model, const std::string& json_text, std::vector<fs::path>& out) {
+// glTF: the uris of buffers and images.
+void gltf_json_uris(const std::string& json_text, std::vector<std::string>& out) {
   const nlohmann::json doc = nlohmann::json::parse(json_text, nullptr, false);
   if (!doc.is_object()) return;  // the loader reports the syntax error with its position
   for (const char* key : {"buffers", "images"}) {
     if (!doc.contains(key) || !doc[key].is_array()) continue;
     for (const auto& item : doc[key]) {
       if (item.is_object() && item.contains("uri") && item["uri"].is_string()) {
-        add_reference(model, item["uri"].get<std::string>(), out);
+        out.push_back(item["uri"].get<std::string>());
       }
     }
   }
 }
 
 // GLB: a 12-byte header, then chunks; the first is the JSON.
-void glb_dependencies(const fs::path& model, const std::string& bytes, std::vector<fs::path>& out) {
+void glb_uris(const std::string& bytes, std::vector<std::string>& out) {
   if (bytes.size() < 20) return;
   std::uint32_t length = 0, type = 0;
   std::memcpy(&length, bytes.data() + 12, 4);
   std::memcpy(&type, bytes.data() + 16, 4);
   if (type != 0x4E4F534Au || 20 + static_cast<std::size_t>(length) > bytes.size()) return;  // "JSON"
-  gltf_json_dependencies(model, bytes.substr(20, length), out);
+  gltf_json_uris(bytes.substr(20, length), out);
 }
 
-void sort_unique(std::vector<fs::path>& paths) {
-  std::sort(paths.begin(), paths.end());
-  paths.erase(std::unique(paths.begin(), paths.end()), paths.end());
+void sort_unique(std::vector<ConfinedFile>& files) {
+  const auto by_name = [](const ConfinedFile& a, const ConfinedFile& b) { return a.named < b.named; };
+  std::sort(files.begin(), files.end(), by_name);
+  files.erase(std::unique(files.begin(), files.end(),
+                          [](const ConfinedFile& a, const ConfinedFile& b) { return a.named == b.named; }),
+              files.end());
 }
 
 }  // namespace
 
-const std::vector<fs::path>& ModelDependencyScanner::dependencies(const fs::path& model) {
+ModelDependencyScanner::ModelDependencyScanner(fs::path asset_root)
+    : root_(fs::weakly_canonical(fs::absolute(asset_root))) {}
+
+std::optional<ConfinedFile> ModelDependencyScanner::reference(const fs::path& model, const fs::path& referrer,
+                                                              std::string written) const {
+  written = trim(written);
+  if (written.empty() || written.rfind("data:", 0) == 0) return std::nullopt;
+  if (written.rfind("file://", 0) == 0) written = written.substr(7);
+  if (written.find("://") != std::string::npos) return std::nullopt;  // http and the like: never fetched
+  std::replace(written.begin(), written.end(), '\\', '/');
+  ConfinedFile file = confine_file(root_, referrer, percent_decode(written));
+  if (file.allowed()) return file;
+  if (file.verdict == Confinement::missing) return std::nullopt;
+  // Named by the model, or by a material library the model names.
+  std::string message = referrer == model ? file.message : model.string() + ": " + file.message;
+  if (file.verdict == Confinement::outside) message += " (give --asset-root a folder that holds both)";
+  throw InputError(message);
+}
+
+const std::vector<ConfinedFile>& ModelDependencyScanner::dependencies(const fs::path& model) {
   const fs::path key = model.lexically_normal();
   if (const auto found = models_.find(key); found != models_.end()) return found->second;
   // Stored only once the scan succeeded: a file that could not be read is not remembered as
   // having no dependencies.
-  Paths found = scan_model(key);
+  Files found = scan_model(key);
   sort_unique(found);
-  found.erase(std::remove(found.begin(), found.end(), key), found.end());
+  std::erase_if(found, [&](const ConfinedFile& f) { return f.named == key; });
   return models_.emplace(key, std::move(found)).first->second;
 }
 
-std::string ModelDependencyScanner::read(const fs::path& file, const char* what) {
-  std::string bytes = read_whole_file(file, what);
+std::string ModelDependencyScanner::read(const ConfinedFile& file, const char* what) {
+  std::string bytes, why;
+  if (!read_confined(file, bytes, &why)) {
+    throw InputError(fmt::format("{}: cannot read the {}: {}", file.named.string(), what, why));
+  }
   ++files_scanned_;
   return bytes;
 }
 
-ModelDependencyScanner::Paths ModelDependencyScanner::scan_model(const fs::path& model) {
+ModelDependencyScanner::Files ModelDependencyScanner::scan_model(const fs::path& model) {
+  // The model itself, as the job named it (job paths may be absolute).
+  const ConfinedFile self = confine_file(root_, model, model.string(), ReferenceForm::relative_or_absolute);
+  if (self.verdict == Confinement::missing) throw InputError(model.string() + ": cannot read the model file");
+  if (!self.allowed()) throw InputError(model.string() + ": " + self.reason);
   const std::string ext = lower_extension(model);
-  Paths out;
-  if (ext == ".obj") {
-    out = scan_obj(model);
-  } else if (ext == ".gltf") {
-    gltf_json_dependencies(model, read(model, "model file"), out);
+  if (ext == ".obj") return scan_obj(model, read(self, "model file"));
+  std::vector<std::string> uris;
+  if (ext == ".gltf") {
+    gltf_json_uris(read(self, "model file"), uris);
   } else if (ext == ".glb") {
-    glb_dependencies(model, read(model, "model file"), out);
+    glb_uris(read(self, "model file"), uris);
   } else if (ext == ".dae") {
-    for (const std::string& uri : collada_image_uris(read(model, "model file"))) {
-      add_reference(model, uri, out);
-    }
+    uris = collada_image_uris(read(self, "model file"));
+  }
+  Files out;
+  for (const std::string& uri : uris) {
+    if (auto file = reference(model, model, uri)) out.push_back(std::move(*file));
   }
   return out;
 }
 
-ModelDependencyScanner::Paths ModelDependencyScanner::scan_obj(const fs::path& model) {
-  Paths out = obj_material_libraries(model, read(model, "model file"));
+ModelDependencyScanner::Files ModelDependencyScanner::scan_obj(const fs::path& model, const std::string& text) {
+  Files out;
+  for (const std::string& name : obj_material_libraries(text)) {
+    if (auto library = reference(model, model, name)) out.push_back(std::move(*library));
+  }
   const std::size_t libraries = out.size();
   for (std::size_t i = 0; i < libraries; ++i) {
-    const Paths& maps = material_library_maps(out[i]);
+    const Files& maps = material_library_maps(model, ConfinedFile(out[i]));
     out.insert(out.end(), maps.begin(), maps.end());
   }
   return out;
 }
 
-const ModelDependencyScanner::Paths& ModelDependencyScanner::material_library_maps(const fs::path& library) {
-  if (const auto found = material_libraries_.find(library); found != material_libraries_.end()) {
+const ModelDependencyScanner::Files& ModelDependencyScanner::material_library_maps(const fs::path& model,
+                                                                                  const ConfinedFile& library) {
+  if (const auto found = material_libraries_.find(library.named); found != material_libraries_.end()) {
     return found->second;
   }
-  Paths maps = mtl_maps(library, read(library, "material library"));
-  return material_libraries_.emplace(library, std::move(maps)).first->second;
+  Files maps;
+  for (const std::string& name : mtl_maps(read(library, "material library"))) {
+    if (auto map = reference(model, library.named, name)) maps.push_back(std::move(*map));
+  }
+  return material_libraries_.emplace(library.named, std::move(maps)).first->second;
 }
 
-std::vector<fs::path> model_dependencies(const fs::path& model) {
-  ModelDependencyScanner scanner;
-  return scanner.dependencies(model);
+std::vector<ConfinedFile> model_dependencies(const fs::path& model) {
+  std::error_code ec;
+  const fs::path resolved = fs::weakly_canonical(fs::absolute(model), ec);
+  ModelDependencyScanner scanner(resolved.parent_path());
+  return scanner.dependencies(resolved);
 }
 
 }  // namespace farm

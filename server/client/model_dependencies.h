@@ -6,8 +6,11 @@
 #include <cstddef>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "renderer/util/confined_file.h"
 
 namespace farm {
 
@@ -16,32 +19,46 @@ namespace farm {
 // library: a scanner remembers what each file references, so a submission reads each model and
 // library once however many objects use it. What it remembers is never re-checked, so a scanner
 // lives as long as one submission, not longer.
+//
+// Every reference passes confine_file (renderer/util/confined_file.h), the gate the loaders use on
+// the scheduler and the workers, before anything reads it: a reference that is absolute, leads
+// out of the asset root, or names no regular file is an InputError naming the model and the
+// reference, and that file is neither read nor sent.
 class ModelDependencyScanner {
  public:
-  // Absolute, normalised paths of the existing files `model` references (not `model` itself),
-  // sorted, without duplicates. The first call for a path reads the file; later calls return
-  // what it found. Throws InputError naming the model when it cannot be read.
-  const std::vector<std::filesystem::path>& dependencies(const std::filesystem::path& model);
+  // `asset_root`: the folder every model and every file they name must lie in.
+  explicit ModelDependencyScanner(std::filesystem::path asset_root);
+
+  // The existing files `model` references (not `model` itself), allowed by confine_file: `named`
+  // as the model names them (the path a farm lays them out at), `resolved` to read. Sorted by
+  // name, without duplicates. The first call for a path reads the file; later calls return what it
+  // found. Throws InputError naming the model when it cannot be read or a reference is refused.
+  const std::vector<ConfinedFile>& dependencies(const std::filesystem::path& model);
 
   // Files read so far to find references: models and the OBJ material libraries they name.
   std::size_t files_scanned() const { return files_scanned_; }
 
  private:
-  using Paths = std::vector<std::filesystem::path>;
+  using Files = std::vector<ConfinedFile>;
 
-  std::string read(const std::filesystem::path& file, const char* what);
-  Paths scan_model(const std::filesystem::path& model);
-  Paths scan_obj(const std::filesystem::path& model);
+  std::string read(const ConfinedFile& file, const char* what);
+  Files scan_model(const std::filesystem::path& model);
+  Files scan_obj(const std::filesystem::path& model, const std::string& text);
   // The maps an MTL file names; kept apart from models_ because a library is read as MTL
   // whatever its extension.
-  const Paths& material_library_maps(const std::filesystem::path& library);
+  const Files& material_library_maps(const std::filesystem::path& model, const ConfinedFile& library);
+  // A reference as written in `referrer`: nullopt when it names no local file or no file that
+  // exists; InputError when refused.
+  std::optional<ConfinedFile> reference(const std::filesystem::path& model, const std::filesystem::path& referrer,
+                                        std::string written) const;
 
-  std::map<std::filesystem::path, Paths> models_;
-  std::map<std::filesystem::path, Paths> material_libraries_;
+  std::filesystem::path root_;
+  std::map<std::filesystem::path, Files> models_;
+  std::map<std::filesystem::path, Files> material_libraries_;
   std::size_t files_scanned_ = 0;
 };
 
-// The same for one model, with nothing remembered.
-std::vector<std::filesystem::path> model_dependencies(const std::filesystem::path& model);
+// The same for one model, with nothing remembered, confined to the folder it lies in.
+std::vector<ConfinedFile> model_dependencies(const std::filesystem::path& model);
 
 }  // namespace farm

@@ -131,6 +131,19 @@ void validate_asset_refs(const v1::JobSpec& spec) {
   }
 }
 
+void check_asset_sizes(const v1::JobSpec& spec, const AssetStore& store) {
+  for (const v1::AssetRef& ref : spec.assets()) {
+    if (!store.has(ref.sha256())) continue;
+    std::error_code ec;
+    const std::uintmax_t size = fs::file_size(store.path_of(ref.sha256()), ec);
+    if (ec) continue;  // gone since: missing_assets' concern
+    if (size != ref.size()) {
+      throw InputError(fmt::format("asset '{}' (sha256 {}): the job says {} bytes, the file has {}",
+                                   shown(ref.path()), ref.sha256(), ref.size(), size));
+    }
+  }
+}
+
 std::vector<v1::AssetRef> missing_assets(const v1::JobSpec& spec, const AssetStore& store) {
   std::vector<v1::AssetRef> missing;
   std::set<std::string> seen;
@@ -144,6 +157,7 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
                                     const AssetStore& store, const fs::path& cache_dir) {
   if (!is_sha256_hex(scene_hash)) throw InputError(fmt::format("bad scene hash '{}'", shown(scene_hash)));
   validate_asset_refs(spec);
+  check_asset_sizes(spec, store);
   std::set<fs::path> asset_paths;
   for (const v1::AssetRef& ref : spec.assets()) asset_paths.insert(checked_relative_path(ref));
   const std::string job_name = job_file_name(spec, asset_paths);

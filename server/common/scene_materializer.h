@@ -28,6 +28,10 @@ class MissingAssetsError : public std::runtime_error {
 // 64 lowercase hex digits.
 void validate_asset_refs(const v1::JobSpec& spec);
 
+// InputError naming the asset's path when a blob the store holds is not as long as the AssetRef
+// says (AssetRef.size must match the bytes). Blobs the store lacks are left to missing_assets.
+void check_asset_sizes(const v1::JobSpec& spec, const AssetStore& store);
+
 // The spec's assets whose blobs the store lacks (each hash once).
 std::vector<v1::AssetRef> missing_assets(const v1::JobSpec& spec, const AssetStore& store);
 
@@ -37,8 +41,8 @@ struct MaterializedScene {
 };
 
 // Lays out (once; the folder appears complete or not at all) and parses. InputError for bad asset
-// refs or a bad job (messages name spec.file_name, never the cache folder); MissingAssetsError
-// when a blob is absent. Safe to call concurrently, also from several processes on one cache.
+// refs, sizes that differ from the blobs', or a bad job (messages name spec.file_name, never the
+// cache folder); MissingAssetsError when a blob is absent. Safe to call concurrently, also from several processes on one cache.
 MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& scene_hash,
                                     const AssetStore& store,
                                     const std::filesystem::path& cache_dir);

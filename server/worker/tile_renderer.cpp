@@ -8,7 +8,9 @@
 #include <chrono>
 #include <condition_variable>
 #include <exception>
+#include <map>
 #include <mutex>
+#include <string_view>
 
 #include "renderer/engine.h"
 #include "renderer/render_frame.h"
@@ -97,6 +99,20 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
   r.stats += stats;
   r.cpu_ms += cpu_ms;
   if (failure && !r.failure) r.failure = failure;
+}
+
+// InputError naming the asset when inline bytes are not as long as the spec's AssetRef says.
+void check_inline_sizes(const v1::JobSpec& spec, const v1::RenderTileRequest& request) {
+  if (request.assets().empty()) return;
+  std::map<std::string_view, const v1::InlineAsset*> inline_by_hash;
+  for (const v1::InlineAsset& asset : request.assets()) inline_by_hash.emplace(asset.sha256(), &asset);
+  for (const v1::AssetRef& ref : spec.assets()) {
+    const auto it = inline_by_hash.find(ref.sha256());
+    if (it == inline_by_hash.end() || it->second->data().size() == ref.size()) continue;
+    throw InputError(fmt::format("inline asset '{}' (sha256 {}): {} bytes, the job says {}",
+                                 ref.path().substr(0, 200), ref.sha256().substr(0, 64),
+                                 it->second->data().size(), ref.size()));
+  }
 }
 
 }  // namespace
@@ -190,7 +206,9 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
                           request->scene_hash().substr(0, 64), hash)};
     }
 
-    // Files sent along by a scheduler we cannot fetch from: verified, then kept like fetched ones.
+    // Files sent along by a scheduler we cannot fetch from: verified (their size against the
+    // spec's, their hash), then kept like fetched ones.
+    check_inline_sizes(spec, *request);
     for (const v1::InlineAsset& asset : request->assets()) {
       if (!store_.has(asset.sha256())) store_.put(asset.sha256(), asset.data());
     }

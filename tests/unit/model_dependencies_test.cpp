@@ -17,6 +17,14 @@ namespace {
 namespace fs = std::filesystem;
 using test::TempDir;
 
+// The files found, by the names the model uses.
+std::vector<fs::path> names(const std::vector<ConfinedFile>& files) {
+  std::vector<fs::path> out;
+  for (const ConfinedFile& f : files) out.push_back(f.named);
+  return out;
+}
+std::vector<fs::path> model_dependencies(const fs::path& model) { return names(farm::model_dependencies(model)); }
+
 TEST(ModelDependencies, ObjMaterialLibrariesAndTheirMapsThatExist) {
   TempDir dir;
   std::ofstream(dir / "a.mtl") << "newmtl m\nKd 1 1 1\nmap_Kd -s 1 1 1 tex/wood.png\nmap_Ks missing.png\n";
@@ -59,7 +67,9 @@ TEST(ModelDependencies, Collada14And15ImagesFoundAsXmlAndDecodedAsUris) {
     fs::create_directories((dir / name).parent_path());
     std::ofstream(dir / name) << "png";
   }
-  const std::string absolute = "file://" + (dir / "abs.png").generic_string();
+  // A file URI with an absolute path is refused (ModelDependencies.AbsoluteReferencesAreRefused);
+  // a relative reference through a folder and back is the file it leads to.
+  const std::string absolute = "tex/../abs.png";
   std::ofstream(dir / "m.dae")
       << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
          "<COLLADA xmlns=\"http://www.collada.org/2008/03/COLLADASchema\" version=\"1.5.0\">\n"
@@ -111,18 +121,18 @@ TEST(ModelDependencyScanner, ReadsEachModelAndMaterialLibraryOnce) {
   std::ofstream(dir / "shared.mtl") << "newmtl m\nmap_Kd wood.png\n";
   std::ofstream(dir / "a.obj") << "mtllib shared.mtl\n";
   std::ofstream(dir / "b.obj") << "mtllib shared.mtl shared.mtl\n";  // named twice, read once
-  ModelDependencyScanner scanner;
+  ModelDependencyScanner scanner(dir.path());
   const std::vector<fs::path> expected{(dir / "shared.mtl").lexically_normal(), (dir / "wood.png").lexically_normal()};
   for (int i = 0; i < 100; ++i) {
-    EXPECT_EQ(scanner.dependencies(dir / "a.obj"), expected);
-    EXPECT_EQ(scanner.dependencies(dir / "./b.obj"), expected);  // the same file, however written
+    EXPECT_EQ(names(scanner.dependencies(dir / "a.obj")), expected);
+    EXPECT_EQ(names(scanner.dependencies(dir / "./b.obj")), expected);  // the same file, however written
   }
   EXPECT_EQ(scanner.files_scanned(), 3u);
 }
 
 TEST(ModelDependencyScanner, AModelThatCannotBeReadIsNotRememberedAsHavingNone) {
   TempDir dir;
-  ModelDependencyScanner scanner;
+  ModelDependencyScanner scanner(dir.path());
   EXPECT_THROW(scanner.dependencies(dir / "m.obj"), InputError);
   std::ofstream(dir / "m.obj") << "v 0 0 0\n";
   EXPECT_TRUE(scanner.dependencies(dir / "m.obj").empty());

@@ -1,5 +1,5 @@
-// The one containment rule (renderer/util/path_confinement.h) that job files, glTF buffers and
-// submissions all use: `..` and symlinks cannot lead out, and a sibling sharing a prefix is out.
+// The one containment rule (renderer/util/path_confinement.h) that confine_file, suites and
+// rubrics build on: `..` and symlinks cannot lead out, and a sibling sharing a prefix is out.
 #include "renderer/util/path_confinement.h"
 
 #include <gtest/gtest.h>

@@ -1,0 +1,190 @@
+// The scheduler validates a job by loading its models from its own copy of the job's files
+// (<data>/scenes/<scene hash>/). A raw SubmitJob, from no client of ours, may carry a model that
+// names a file past that folder: an OBJ's `mtllib ../../../elsewhere/secret.mtl`, an absolute path,
+// a glTF buffer or image, a folder. Each must be INVALID_ARGUMENT naming the model and the path,
+// with nothing opened; and an AssetRef whose size differs from its blob's is refused too.
+//
+// Links and FIFOs cannot come from a spec (assets are laid out as plain files), so those cases put
+// them into the scene folder beforehand, as something else on the machine could: the loader must
+// refuse them all the same, and a FIFO must never make SubmitJob wait.
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "proto/farm.grpc.pb.h"
+#include "server/common/scene_hash.h"
+#include "server/common/sha256.h"
+#include "tests/support/confinement_fixtures.h"
+#include "tests/support/job_specs.h"
+#include "tests/support/scheduler_client.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using test::Escape;
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+enum class Reference { obj_mtllib, gltf_buffer, gltf_image };
+
+const char* to_string(Reference r) {
+  switch (r) {
+    case Reference::obj_mtllib: return "ObjMtllib";
+    case Reference::gltf_buffer: return "GltfBuffer";
+    case Reference::gltf_image: return "GltfImage";
+  }
+  return "?";
+}
+
+struct ServerCase {
+  Reference reference;
+  Escape escape;
+};
+
+std::string case_name(const ::testing::TestParamInfo<ServerCase>& info) {
+  return std::string(to_string(info.param.reference)) + "_" + test::to_string(info.param.escape);
+}
+
+std::vector<ServerCase> all_cases() {
+  std::vector<ServerCase> cases;
+  for (Reference r : {Reference::obj_mtllib, Reference::gltf_buffer, Reference::gltf_image}) {
+    for (Escape e : test::kAllEscapes) cases.push_back({r, e});
+  }
+  return cases;
+}
+
+// SubmitJob with a deadline well past the FifoReleaser's grace: a scheduler stuck on a FIFO is
+// released, accepts the job, and the test fails on that.
+grpc::Status submit(v1::Scheduler::Stub& stub, const v1::JobSpec& spec) {
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 120s);
+  v1::SubmitJobRequest request;
+  *request.mutable_job() = spec;
+  v1::SubmitJobResponse response;
+  return stub.SubmitJob(&context, request, &response);
+}
+
+class SchedulerJob : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scheduler_ = std::make_unique<test::SchedulerProcess>(dir_ / "data", std::vector<std::string>{});
+    ASSERT_FALSE(scheduler_->address().empty()) << scheduler_->process().output();
+    stub_ = test::scheduler_stub(scheduler_->address());
+  }
+
+  // The job: one model whose reference is `reference`, with the files the spec carries.
+  v1::JobSpec crafted_spec(Reference kind, const std::string& reference) {
+    files_.clear();
+    if (kind == Reference::obj_mtllib) {
+      model_ = "tri.obj";
+      files_.emplace_back(model_, dir_.write("files/tri.obj", test::triangle_obj(reference)));
+    } else {
+      model_ = "tri.gltf";
+      files_.emplace_back("tri.bin", dir_.write("files/tri.bin", test::triangle_bin()));
+      files_.emplace_back(model_, dir_.write("files/tri.gltf", kind == Reference::gltf_buffer
+                                                                   ? test::triangle_gltf(reference)
+                                                                   : test::triangle_gltf("tri.bin", reference)));
+    }
+    return test::make_job_spec(R"({"version": 1, "scene": {"objects": [{"file": ")" + model_ + R"("}]}})",
+                               files_, "job.json");
+  }
+
+  test::TempDir dir_;
+  std::unique_ptr<test::SchedulerProcess> scheduler_;
+  std::unique_ptr<v1::Scheduler::Stub> stub_;
+  std::string model_;
+  std::vector<std::pair<std::string, fs::path>> files_;
+};
+
+class SchedulerConfinement : public SchedulerJob, public ::testing::WithParamInterface<ServerCase> {};
+
+TEST_P(SchedulerConfinement, RawSubmitJobIsInvalidArgumentNamingModelAndPathWithNothingOpened) {
+  ASSERT_TRUE(stub_);
+  const ServerCase c = GetParam();
+  const fs::path secret = dir_.write("elsewhere/secret.mtl", test::secret_mtl());
+  const std::string name = "link.dat";
+  // The scene folder is <data>/scenes/<hash>: `..` three times reaches dir_, whatever the hash.
+  const std::string reference = c.escape == Escape::dot_dot    ? "../../../elsewhere/secret.mtl"
+                                : c.escape == Escape::absolute ? secret.string()
+                                                               : name;
+  v1::JobSpec spec = crafted_spec(c.reference, reference);
+  if (c.escape == Escape::directory) {
+    // Straight from a spec: the folder of another asset.
+    files_.emplace_back(name + "/placeholder.txt", dir_.write("files/placeholder.txt", "x"));
+    spec = test::make_job_spec(spec.job_json(), files_, "job.json");
+  }
+  ASSERT_TRUE(test::upload_assets(*stub_, files_).ok());
+
+  const fs::path scene = dir_ / "data/scenes" / scene_hash(spec);
+  fs::path target = secret;  // the folder of the directory case appears only as the job is laid out
+  std::vector<fs::path> fifos;
+  if (c.escape == Escape::symlink_out || c.escape == Escape::fifo) {
+    // The scene folder as the scheduler would lay it out, plus the link or the FIFO.
+    fs::create_directories(scene);
+    for (const auto& [path, file] : files_) fs::copy_file(file, scene / path);
+    test::make_escape(c.escape, scene, secret, name);
+  }
+  if (c.escape == Escape::fifo) {
+    target = scene / name;
+    fifos.push_back(target);
+  }
+  test::OpenWatch watch(target);
+  ASSERT_TRUE(watch.watching()) << target;
+  const test::FifoReleaser releaser(fifos, 20s);
+
+  const grpc::Status status = submit(*stub_, spec);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  const std::string& message = status.error_message();
+  EXPECT_TRUE(contains(message, model_ + ": '" + reference + "'")) << message;
+  EXPECT_TRUE(contains(message, "job.json: scene.objects[0].file: ")) << message;
+  EXPECT_FALSE(contains(message, test::kSecretMarker)) << message;
+  EXPECT_FALSE(contains(message, (dir_ / "data").string())) << "the scheduler's folders are not shown: " << message;
+  EXPECT_FALSE(watch.opened()) << target << " was opened";
+  EXPECT_FALSE(releaser.released_a_reader()) << "SubmitJob waited on the FIFO";
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryReferenceAndEscape, SchedulerConfinement, ::testing::ValuesIn(all_cases()), case_name);
+
+// What is allowed stays allowed: the same model naming a library beside it is accepted.
+TEST_F(SchedulerJob, AModelNamingAFileInsideItsJobIsAccepted) {
+  ASSERT_TRUE(stub_);
+  v1::JobSpec spec = crafted_spec(Reference::obj_mtllib, "plain.mtl");
+  files_.emplace_back("plain.mtl", dir_.write("files/plain.mtl", test::plain_mtl()));
+  spec = test::make_job_spec(spec.job_json(), files_, "job.json");
+  ASSERT_TRUE(test::upload_assets(*stub_, files_).ok());
+  const grpc::Status status = submit(*stub_, spec);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+}
+
+// AssetRef.size must be the blob's: larger or smaller, the job is refused naming the asset.
+TEST_F(SchedulerJob, AnAssetRefWhoseSizeDiffersFromTheBlobIsInvalidArgumentNamingThePath) {
+  ASSERT_TRUE(stub_);
+  v1::JobSpec spec = crafted_spec(Reference::obj_mtllib, "plain.mtl");
+  files_.emplace_back("plain.mtl", dir_.write("files/plain.mtl", test::plain_mtl()));
+  spec = test::make_job_spec(spec.job_json(), files_, "job.json");
+  ASSERT_TRUE(test::upload_assets(*stub_, files_).ok());
+  for (const std::int64_t delta : {1, -1}) {
+    v1::JobSpec lying = spec;
+    v1::AssetRef& ref = *lying.mutable_assets(1);
+    ASSERT_EQ(ref.path(), "plain.mtl");
+    ref.set_size(static_cast<std::uint64_t>(static_cast<std::int64_t>(ref.size()) + delta));
+    const grpc::Status status = submit(*stub_, lying);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+    EXPECT_TRUE(contains(status.error_message(), "asset 'plain.mtl'")) << status.error_message();
+    EXPECT_TRUE(contains(status.error_message(), std::to_string(ref.size()) + " bytes")) << status.error_message();
+  }
+  EXPECT_TRUE(submit(*stub_, spec).ok());  // the truthful spec still goes
+}
+
+}  // namespace
+}  // namespace farm
