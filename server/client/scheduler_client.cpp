@@ -1,7 +1,12 @@
 #include "server/client/scheduler_client.h"
 
 #include <fmt/format.h>
+#include <fcntl.h>
 #include <grpcpp/grpcpp.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 
 #include <fstream>
 #include <stdexcept>
@@ -74,22 +79,34 @@ std::size_t SchedulerClient::upload_missing(const JobSubmission& submission) {
   for (const std::string& sha : missing.missing()) {
     const auto it = submission.files.find(sha);
     if (it == submission.files.end()) continue;
-    std::ifstream in(it->second, std::ios::binary);
-    if (!in) throw InputError(fmt::format("{}: cannot read the asset", it->second.string()));
+    // The file was confined and hashed when the submission was made; opened again here without
+    // following a link or waiting on a FIFO, in case it was swapped since (the scheduler checks
+    // the bytes against the hash).
+    const int fd = ::open(it->second.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    struct stat st {};
+    if (fd < 0 || ::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+      if (fd >= 0) ::close(fd);
+      throw InputError(fmt::format("{}: cannot read the asset (no longer a regular file)", it->second.string()));
+    }
+    struct Close {
+      int fd;
+      ~Close() { ::close(fd); }
+    } close_fd{fd};
     grpc::ClientContext context;
     v1::UploadAssetResponse response;
     auto writer = stub_->UploadAsset(&context, &response);
     v1::UploadAssetRequest header;
     header.mutable_header()->set_sha256(sha);
-    header.mutable_header()->set_size(fs::file_size(it->second));
+    header.mutable_header()->set_size(static_cast<std::uint64_t>(st.st_size));
     bool open = writer->Write(header);
     std::string buffer(kChunkBytes, '\0');
-    while (open && in) {
-      in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-      const auto got = static_cast<std::size_t>(in.gcount());
+    while (open) {
+      const ssize_t got = ::read(fd, buffer.data(), buffer.size());
+      if (got < 0 && errno == EINTR) continue;
+      if (got < 0) throw InputError(fmt::format("{}: cannot read the asset", it->second.string()));
       if (got == 0) break;
       v1::UploadAssetRequest chunk;
-      chunk.set_data(buffer.data(), got);
+      chunk.set_data(buffer.data(), static_cast<std::size_t>(got));
       open = writer->Write(chunk);
     }
     writer->WritesDone();
