@@ -1,5 +1,9 @@
 #include "server/scheduler/tile_worker.h"
 
+#include <list>
+#include <map>
+#include <utility>
+
 #include "server/common/health_check.h"
 
 namespace farm {
@@ -20,16 +24,59 @@ void TileCancel::set_hook(std::function<void()> hook) {
   if (hook_ && cancelled_) hook_();
 }
 
-RemoteTileWorker::RemoteTileWorker(std::string address) : address_(std::move(address)) {
+namespace {
+
+std::shared_ptr<grpc::Channel> make_channel(const std::string& address) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(-1);
   // A dead worker should be noticed and retried quickly, not after gRPC's default backoff.
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 200);
   args.SetInt(GRPC_ARG_MIN_RECONNECT_BACKOFF_MS, 200);
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
-  channel_ = grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), args);
-  stub_ = v1::Worker::NewStub(channel_);
+  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
 }
+
+// One channel per worker address, whatever number of times a worker registers there. gRPC (1.51,
+// Debian 12) keeps a connection's transport when its channel is destroyed mid-connection, some
+// kilobytes each time: a worker registering again and again, each time with a channel of its
+// own, grew the scheduler without bound. So the channel of an address outlives its worker while
+// the address is among the last few used, and is handed to the next worker there.
+class ChannelPool {
+ public:
+  std::shared_ptr<grpc::Channel> get(const std::string& address) {
+    std::lock_guard lock(mutex_);
+    std::shared_ptr<grpc::Channel> channel;
+    if (auto it = channels_.find(address); it != channels_.end()) channel = it->second.lock();
+    if (channel) {
+      // The worker is back: connect now rather than when the backoff of its last failure ends.
+      grpc::experimental::ChannelResetConnectionBackoff(channel.get());
+    } else {
+      channel = make_channel(address);
+      std::erase_if(channels_, [](const auto& entry) { return entry.second.expired(); });
+      channels_[address] = channel;
+    }
+    std::erase_if(recent_, [&](const auto& entry) { return entry.first == address; });
+    recent_.emplace_front(address, channel);
+    if (recent_.size() > kRecent) recent_.pop_back();
+    return channel;
+  }
+
+ private:
+  static constexpr std::size_t kRecent = 16;
+  std::mutex mutex_;
+  std::map<std::string, std::weak_ptr<grpc::Channel>> channels_;  // every address in use
+  std::list<std::pair<std::string, std::shared_ptr<grpc::Channel>>> recent_;  // most recent first
+};
+
+ChannelPool& channel_pool() {
+  static ChannelPool pool;
+  return pool;
+}
+
+}  // namespace
+
+RemoteTileWorker::RemoteTileWorker(std::string address)
+    : address_(std::move(address)), channel_(channel_pool().get(address_)), stub_(v1::Worker::NewStub(channel_)) {}
 
 grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request, RenderedTiles& result,
                                       std::chrono::system_clock::time_point deadline,
@@ -41,6 +88,8 @@ grpc::Status RemoteTileWorker::render(const v1::RenderTileRequest& request, Rend
   cancel.set_hook(nullptr);
   return status;
 }
+
+bool RemoteTileWorker::connected() { return channel_->GetState(true) == GRPC_CHANNEL_READY; }
 
 bool RemoteTileWorker::probe(std::chrono::milliseconds timeout) {
   // Connected is not enough: a stopped or hung process still accepts connections. It must answer.
