@@ -19,6 +19,7 @@ struct SchedulerCommandOptions {
   int batch_ms = 200;
   double heartbeat_interval_s = 1;
   bool float_exr = false;
+  double verify_fraction = 0;  // SchedulerOptions::verify_fraction
 };
 
 // Prints "scheduler listening on HOST:PORT" once it accepts calls. InputError when the address
