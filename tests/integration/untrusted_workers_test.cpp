@@ -7,16 +7,19 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
 #include "renderer/image/exr_io.h"
+#include "server/common/asset_store.h"
 #include "tests/support/background_process.h"
 #include "tests/support/fake_worker.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -121,6 +124,14 @@ class UntrustedWorkersTest : public ::testing::Test {
     return test::make_job_spec(job.dump(2), test::cornell_assets(), "cornell.json");
   }
 
+  // A fake worker whose cache holds the Cornell box's files already: no call of it is refused
+  // for want of them (which would be a TileFailed naming it before any lie).
+  std::unique_ptr<test::FakeWorker> fake_worker(const std::string& name, test::Lie lie = test::Lie::None) {
+    const AssetStore blobs(dir_ / name / "blobs");
+    for (const auto& [path, file] : test::cornell_assets()) blobs.add(test::read_file(file));
+    return std::make_unique<test::FakeWorker>(dir_ / name, lie);
+  }
+
   void start_scheduler(std::vector<std::string> args) {
     scheduler_ = std::make_unique<test::SchedulerProcess>(dir_ / "data", args);
     ASSERT_FALSE(scheduler_->address().empty()) << scheduler_->process().output();
@@ -132,9 +143,31 @@ class UntrustedWorkersTest : public ::testing::Test {
     v1::Job job;
     const grpc::Status status = test::submit(*stub_, spec, job);
     EXPECT_TRUE(status.ok()) << status.error_message();
-    // Every event of the job, from now until it is final.
-    watcher_ = std::thread([this, id = job.job_id()] { events_ = test::watch_job(*stub_, id, 180s); });
+    // Every event of the job from the watch's start until the job is final. Events published
+    // before WatchJob subscribes are not sent: workers that must be seen wait (hold_after) until
+    // watching() says the snapshot came.
+    watcher_ = std::thread([this, id = job.job_id()] {
+      grpc::ClientContext context;
+      context.set_deadline(std::chrono::system_clock::now() + 180s);
+      v1::WatchJobRequest request;
+      request.set_job_id(id);
+      auto reader = stub_->WatchJob(&context, request);
+      v1::JobEvent event;
+      while (reader->Read(&event)) {
+        std::lock_guard lock(events_mutex_);
+        events_.push_back(event);
+      }
+      reader->Finish();
+    });
     return job.job_id();
+  }
+
+  // Waits for the watch's snapshot: every event from now on is seen.
+  bool watching() {
+    return eventually([&] {
+      std::lock_guard lock(events_mutex_);
+      return !events_.empty();
+    });
   }
 
   // Waits for the job to end; its events are in events_ after this.
@@ -192,7 +225,8 @@ class UntrustedWorkersTest : public ::testing::Test {
   std::unique_ptr<test::SchedulerProcess> scheduler_;
   std::unique_ptr<v1::Scheduler::Stub> stub_;
   std::thread watcher_;
-  std::vector<v1::JobEvent> events_;
+  std::mutex events_mutex_;
+  std::vector<v1::JobEvent> events_;  // read without the mutex once watcher_ is joined
 };
 
 // Replies a worker can send that no engine ever makes. Each is refused before anything of it is
@@ -210,13 +244,16 @@ TEST_F(UntrustedWorkersTest, MalformedRepliesNeverReachTheImageAndTheirWorkersAr
   std::vector<std::unique_ptr<test::FakeWorker>> liars;
   std::vector<std::string> args{"--float", "--batch-ms", "0", "--max-attempts", "20"};
   for (const auto& [lie, what] : lies) {
-    liars.push_back(std::make_unique<test::FakeWorker>(dir_ / test::to_string(lie), lie));
+    liars.push_back(fake_worker(test::to_string(lie), lie));
     ASSERT_FALSE(liars.back()->address().empty());
+    liars.back()->hold_after(0);  // until the job is watched
     args.insert(args.end(), {"--worker", liars.back()->address()});
   }
   ASSERT_NO_FATAL_FAILURE(start_scheduler(args));
   const v1::JobSpec spec = job_spec();
   const std::string id = submit(spec);
+  ASSERT_TRUE(watching());
+  for (const auto& liar : liars) liar->release();
 
   // Every liar gets tiles (the job cannot finish without an honest worker) and is caught.
   const auto caught = [&](std::size_t i) { return liars[i]->lies_told() > 0 && quarantined(liars[i]->address()); };
@@ -240,7 +277,8 @@ TEST_F(UntrustedWorkersTest, MalformedRepliesNeverReachTheImageAndTheirWorkersAr
     EXPECT_LE(liars[i]->calls_answered(), 2) << to_string(lies[i].first);
     const std::vector<std::string> reasons = failures_of(liars[i]->address());
     ASSERT_FALSE(reasons.empty()) << to_string(lies[i].first) << " is named in no TileFailed event";
-    EXPECT_NE(reasons.front().find(liars[i]->address()), std::string::npos) << reasons.front();
+    EXPECT_NE(reasons.front().find(liars[i]->address() + " sent a result no engine makes"), std::string::npos)
+        << reasons.front();
     EXPECT_NE(reasons.front().find(lies[i].second), std::string::npos) << reasons.front();
   }
 }
@@ -249,12 +287,15 @@ TEST_F(UntrustedWorkersTest, MalformedRepliesNeverReachTheImageAndTheirWorkersAr
 // caught later (here: a NaN), what it rendered for unfinished jobs is thrown away and rendered
 // again, so the image is still bit-identical to `farm render`.
 TEST_F(UntrustedWorkersTest, ForgedPixelsKeptBeforeTheirWorkerWasCaughtAreRenderedAgain) {
-  test::FakeWorker liar(dir_ / "liar", test::Lie::FlippedBits);
+  const auto fake = fake_worker("liar", test::Lie::FlippedBits);
+  test::FakeWorker& liar = *fake;
   ASSERT_FALSE(liar.address().empty());
-  liar.hold_after(1);  // one forged reply, then the others wait
+  liar.hold_after(0);  // until the job is watched
   ASSERT_NO_FATAL_FAILURE(start_scheduler({"--float", "--batch-ms", "0", "--worker", liar.address()}));
   const v1::JobSpec spec = job_spec();
   const std::string id = submit(spec);
+  ASSERT_TRUE(watching());
+  liar.hold_after(1);  // one forged reply, then the others wait
   ASSERT_TRUE(test::wait_for_job(*stub_, id, [](const v1::Job& j) { return j.tiles_done() >= 1; }, 60s))
       << scheduler_->process().output();
   liar.set_lie(test::Lie::NaN);
@@ -279,8 +320,8 @@ TEST_F(UntrustedWorkersTest, ForgedPixelsKeptBeforeTheirWorkerWasCaughtAreRender
 // worker's, a third opinion decides, and the liar is quarantined. The honest workers wait until
 // the liar has answered, so that it certainly takes part.
 TEST_F(UntrustedWorkersTest, SpotChecksCatchAWorkerWhosePixelsOnlyLookRight) {
-  test::FakeWorker liar(dir_ / "liar", test::Lie::FlippedBits);
-  test::FakeWorker honest1(dir_ / "honest1"), honest2(dir_ / "honest2");
+  const auto fakes = std::array{fake_worker("liar", test::Lie::FlippedBits), fake_worker("honest1"), fake_worker("honest2")};
+  test::FakeWorker &liar = *fakes[0], &honest1 = *fakes[1], &honest2 = *fakes[2];
   ASSERT_FALSE(liar.address().empty() || honest1.address().empty() || honest2.address().empty());
   honest1.hold_after(0);
   honest2.hold_after(0);
@@ -289,6 +330,7 @@ TEST_F(UntrustedWorkersTest, SpotChecksCatchAWorkerWhosePixelsOnlyLookRight) {
                                            honest2.address()}));
   const v1::JobSpec spec = job_spec();
   const std::string id = submit(spec);
+  ASSERT_TRUE(watching());
   ASSERT_TRUE(eventually([&] { return liar.lies_told() > 0; })) << scheduler_->process().output();
   honest1.release();
   honest2.release();
@@ -343,6 +385,16 @@ TEST_F(UntrustedWorkersTest, AThousandRegistrationsLeaveThreadsAndMemoryFlat) {
   EXPECT_LE(end.threads, warm.threads + 16);
   EXPECT_LT(end.vm_size_kb - warm.vm_size_kb, 512 * 1024);
   EXPECT_LT(end.vm_rss_kb - warm.vm_rss_kb, 64 * 1024);
+}
+
+// The flag is documented where users look, and a fraction outside [0, 1] is bad input.
+TEST(FarmSchedulerVerifyFraction, IsInTheHelpAndOutOfRangeValuesAreRefused) {
+  const test::CommandResult help = test::run_command(test::farm_command("scheduler --help"));
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("--verify-fraction"), std::string::npos) << help.output;
+  const test::CommandResult bad = test::run_command(test::farm_command("scheduler --data-dir /nonexistent --verify-fraction 1.5"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--verify-fraction"), std::string::npos) << bad.output;
 }
 
 }  // namespace

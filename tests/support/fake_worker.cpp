@@ -130,8 +130,11 @@ FakeWorker::~FakeWorker() {
 }
 
 void FakeWorker::hold_after(int n) {
-  std::lock_guard lock(mutex_);
-  hold_after_ = n;
+  {
+    std::lock_guard lock(mutex_);
+    hold_after_ = n;
+  }
+  released_.notify_all();
 }
 
 void FakeWorker::release() {
