@@ -51,6 +51,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.batch_target = std::chrono::milliseconds(o.batch_ms);
   options.heartbeat_interval = ms(o.heartbeat_interval_s);
   options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
+  options.verify_fraction = o.verify_fraction;
   SchedulerCore core(options);
   for (const std::string& address : o.workers) {
     core.add_worker(std::make_shared<RemoteTileWorker>(
@@ -124,6 +125,13 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
   s->add_option("--heartbeat-interval", o->heartbeat_interval_s,
                 "Seconds between registered workers' heartbeats; one silent for 3 is dropped")
       ->check(CLI::Range(0.05, 3600.0))
+      ->capture_default_str();
+  s->add_option("--verify-fraction", o->verify_fraction,
+                "Spot checks: this fraction of each job's tiles (at least one when above 0, given "
+                "a second worker) is rendered again on another worker and must come back "
+                "bit-identical; a worker whose pixels differ, by a third worker's judgement, is "
+                "quarantined and its results for unfinished jobs are rendered again")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   s->add_flag("--float", o->float_exr, "Write 32-bit float EXRs instead of half");
   add_server_security_flags(*s, o->security, "workers (give it a token with the scheduler role)");

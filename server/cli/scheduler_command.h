@@ -21,6 +21,7 @@ struct SchedulerCommandOptions {
   int batch_ms = 200;
   double heartbeat_interval_s = 1;
   bool float_exr = false;
+  double verify_fraction = 0;  // SchedulerOptions::verify_fraction
   ServerSecurityOptions security;
   int max_priority = 100;             // above this needs the admin role
 };

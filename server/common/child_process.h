@@ -31,6 +31,7 @@ class ChildProcess {
   std::string output() const;
 
   void send_signal(int signal);
+  pid_t pid() const { return pid_; }  // for /proc/PID: what the child costs in threads and memory
   // The exit code (128 + signal for a killed child), or nullopt if it is still running after
   // `timeout`. Output keeps being drained meanwhile.
   std::optional<int> wait_exit(std::chrono::milliseconds timeout);

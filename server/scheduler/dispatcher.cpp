@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <random>
 
 #include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "server/common/service_error.h"
+#include "server/common/tile_codec.h"
+#include "server/common/tile_result_check.h"
 
 namespace farm {
 
@@ -24,6 +27,20 @@ v1::TileRect to_proto(const Rect& r) {
 }
 
 std::string describe(const TileBatch& batch) { return describe_tiles(batch.first, batch.count); }
+std::string describe(const TileSpan& span) { return describe_tiles(span.first, span.count); }
+
+// Pixels rendered in this process come as a buffer; a spot check compares encoded tiles.
+void encode_pixels(RenderedTiles& result) {
+  if (!result.pixels) return;
+  encode_tile(*result.pixels, *result.response.mutable_tile());
+  result.pixels.reset();
+}
+
+// The scheduler's secret for choosing which tiles are checked (spot_checks.h).
+std::uint64_t random_key() {
+  std::random_device device;
+  return (static_cast<std::uint64_t>(device()) << 32) ^ device();
+}
 
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
@@ -35,9 +52,24 @@ constexpr auto kIdleWait = std::chrono::milliseconds(500);
 struct Dispatcher::InFlight {
   TileBatch batch;
   std::string worker_id;
+  // Set: the call renders `batch` (part of another worker's batch) for this spot check.
+  std::shared_ptr<SpotCheck> check;
   std::shared_ptr<TileCancel> cancel = std::make_shared<TileCancel>();
   CancelReason reason = CancelReason::None;  // under Dispatcher::mutex_, with reason_text
   std::string reason_text;
+};
+
+// A batch whose reply waits, its tiles still running in the store on its worker, until another
+// worker's rendering of its chosen span agrees. Under Dispatcher::mutex_ while in checks_.
+struct Dispatcher::SpotCheck {
+  TileBatch batch;
+  TileSpan span;
+  RenderedTiles reply;            // the batch's worker's, kept if the check agrees
+  std::vector<Opinion> opinions;  // opinions[0]: the batch's worker's pixels of the span
+  std::set<std::string> asked;    // workers that rendered it or failed to: not asked again
+  bool queued = true;             // waiting for a slot (false: a call renders it)
+
+  const Opinion& own() const { return opinions.front(); }
 };
 
 Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& parts)
@@ -49,7 +81,8 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       events_(parts.events),
       workers_(parts.workers),
       finisher_(parts.finisher),
-      log_(parts.log) {}
+      log_(parts.log),
+      chooser_(options.verify_fraction, random_key()) {}
 
 Dispatcher::~Dispatcher() { stop(); }
 
@@ -63,24 +96,53 @@ void Dispatcher::cancel_calls_locked(Which&& which, CancelReason reason, const s
   }
 }
 
+void Dispatcher::drop_checks_locked(const std::string& job_id) {
+  checks_.remove_if([&](const std::shared_ptr<SpotCheck>& c) { return c->batch.job_id == job_id; });
+}
+
+bool Dispatcher::holds_check_locked(const std::shared_ptr<SpotCheck>& check) const {
+  return std::find(checks_.begin(), checks_.end(), check) != checks_.end();
+}
+
 void Dispatcher::stop() {
   std::vector<std::thread> threads;
+  std::list<std::shared_ptr<SpotCheck>> checks;
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
     cancel_calls_locked([](const InFlight&) { return true; }, CancelReason::Stopping);
-    threads.swap(threads_);
+    for (auto& [id, t] : threads_) threads.push_back(std::move(t));
+    threads_.clear();
+    for (std::thread& t : exited_) threads.push_back(std::move(t));
+    exited_.clear();
+    checks.swap(checks_);
   }
   work_.notify_all();
   for (std::thread& t : threads) t.join();
+  for (const auto& c : checks) store_.batch_requeue(c->batch.job_id, c->batch.first, c->batch.count, c->own().worker_id);
 }
 
 void Dispatcher::start_slots(const std::shared_ptr<WorkerEntry>& w) {
-  std::lock_guard lock(mutex_);
-  if (stopping_) return;
-  for (int i = 0; i < std::max(1, options_.tiles_per_worker); ++i) {
-    threads_.emplace_back([this, w] { slot_loop(w); });
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return;
+    // Started under the lock: a slot that ends at once finds its handle in threads_.
+    for (int i = 0; i < std::max(1, options_.tiles_per_worker); ++i) {
+      std::thread t([this, w] { slot_main(w); });
+      const std::thread::id id = t.get_id();
+      threads_.emplace(id, std::move(t));
+    }
   }
+  join_exited();
+}
+
+void Dispatcher::join_exited() {
+  std::vector<std::thread> exited;
+  {
+    std::lock_guard lock(mutex_);
+    exited.swap(exited_);
+  }
+  for (std::thread& t : exited) t.join();
 }
 
 void Dispatcher::work_queued() { work_.notify_all(); }
@@ -91,6 +153,7 @@ v1::Job Dispatcher::cancel_job(const std::string& job_id) {
   v1::Job after = store_.cancel_job(job_id, unix_ms_now());
   cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; },
                       CancelReason::JobCancelled);
+  drop_checks_locked(job_id);
   return after;
 }
 
@@ -100,17 +163,71 @@ void Dispatcher::worker_left(const std::string& worker_id, const std::string& re
     cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },
                         CancelReason::WorkerLeft, reason);
   }
+  settle_stranded();
+  work_.notify_all();
+}
+
+void Dispatcher::quarantine(const std::string& worker_id, const std::string& worker, const std::string& reason) {
+  // The registry first: from now on no slot claims for the worker, and every call it has in
+  // flight is in in_flight_, cancelled below.
+  if (!workers_.quarantine(worker_id, reason)) return;
+  {
+    std::lock_guard lock(mutex_);
+    cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },
+                        CancelReason::Quarantined, reason);
+    for (auto it = checks_.begin(); it != checks_.end();) {
+      SpotCheck& c = **it;
+      if (c.own().worker_id == worker_id) {
+        it = checks_.erase(it);  // its batch: the store takes the tiles back below
+        continue;
+      }
+      std::erase_if(c.opinions, [&](const Opinion& o) { return o.worker_id == worker_id; });
+      ++it;
+    }
+  }
+  // Its tiles running (calls, batches held for a check) and its done tiles of running jobs go
+  // back to the queue in one transaction: a result of it that is being kept right now either
+  // finds its tiles no longer running, or is taken back here.
+  for (const TileBatch& b : store_.quarantine_worker(worker_id)) {
+    assembly_.discard(b.job_id, b.first);
+    const std::string why =
+        fmt::format("the result of worker {} is discarded and rendered again: the worker is quarantined ({})",
+                    worker, reason);
+    log_.warn("job {} {}: {}", b.job_id, describe(b), why);
+    events_.publish(b.job_id, [&](v1::JobEvent& event) {
+      v1::TileFailed& f = *event.mutable_tile_failed();
+      f.set_tile_index(b.first);
+      f.set_tile_count(b.count);
+      f.set_worker(worker);
+      f.set_reason(why);
+      f.set_will_retry(true);
+    });
+  }
+  settle_stranded();
   work_.notify_all();
 }
 
 // ---- Slots ---------------------------------------------------------------------------------------
 
+void Dispatcher::slot_main(const std::shared_ptr<WorkerEntry>& w) {
+  slot_loop(w);
+  std::lock_guard lock(mutex_);
+  // stop() may have taken the handle already, to join it itself.
+  if (auto it = threads_.find(std::this_thread::get_id()); it != threads_.end()) {
+    exited_.push_back(std::move(it->second));
+    threads_.erase(it);
+  }
+}
+
 void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
   while (workers_.await_up(*w)) {
     const std::shared_ptr<InFlight> call = claim(*w);
     if (!call) {
-      std::lock_guard lock(mutex_);
-      if (stopping_) return;
+      {
+        std::lock_guard lock(mutex_);
+        if (stopping_) return;
+      }
+      join_exited();  // an idle moment: the slots of workers that left are joined
       continue;  // no work yet, or the worker went down: await_up says which
     }
     RenderedTiles result;
@@ -123,9 +240,21 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
 
 std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
   std::unique_lock lock(mutex_);
-  // Checked under this lock, with the claim: a worker removed (or marked down) after this point
-  // finds the call in flight and cancels it.
+  // Checked under this lock, with the claim: a worker removed, quarantined (or marked down) after
+  // this point finds the call in flight and cancels it.
   if (stopping_ || !workers_.available(w)) return nullptr;
+  // A batch waiting for a spot check goes first: its job cannot finish before it.
+  for (const std::shared_ptr<SpotCheck>& c : checks_) {
+    if (!c->queued || c->asked.contains(w.id)) continue;
+    c->queued = false;
+    c->asked.insert(w.id);
+    auto call = std::make_shared<InFlight>();
+    call->batch = TileBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
+    call->worker_id = w.id;
+    call->check = c;
+    in_flight_.insert(call);
+    return call;
+  }
   std::optional<TileBatch> batch;
   try {
     batch = store_.claim_next_batch(w.id, unix_ms_now(), [this](const std::string& job_id, int queued) {
@@ -197,35 +326,234 @@ void Dispatcher::handle_result(WorkerEntry& w, const InFlight& call, const grpc:
     reason = call.reason;
     reason_text = call.reason_text;
   }
+  if (call.check) {
+    handle_check_result(w, call, status, reason, result);
+    return;
+  }
   if (reason == CancelReason::JobCancelled) return;  // the job is final; its tiles stay as they were
-  if (status.ok()) {
-    keep(w, call.batch, result);
-  } else if (reason == CancelReason::Stopping) {
-    store_.batch_requeue(call.batch.job_id, call.batch.first, call.batch.count);
+  if (status.ok() && reason != CancelReason::Quarantined) {
+    accept(w, call, result);
+  } else if (reason == CancelReason::Stopping || reason == CancelReason::Quarantined) {
+    store_.batch_requeue(call.batch.job_id, call.batch.first, call.batch.count, w.id);
+    work_.notify_all();
   } else {
     failed(w, call, status, reason, reason_text);
   }
 }
 
-void Dispatcher::keep(const WorkerEntry& w, const TileBatch& batch, RenderedTiles& result) {
-  const v1::TileStats& stats = result.response.stats();
+std::optional<RenderSettings> Dispatcher::settings_of(const TileBatch& batch) {
+  try {
+    return jobs_.get(batch.job_id)->job->render;
+  } catch (const std::exception& e) {
+    log_.error("job {} {}: {}", batch.job_id, describe(batch), e.what());
+    return std::nullopt;
+  }
+}
+
+void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result) {
+  const TileBatch& batch = call.batch;
+  const std::string worker = w.worker->describe();
+  const std::optional<RenderSettings> settings = settings_of(batch);
+  if (!settings) {
+    store_.batch_requeue(batch.job_id, batch.first, batch.count, w.id);
+    return;
+  }
+  // Pixels from this process were rendered here; a reply from anywhere else is checked before
+  // anything of it is kept.
+  if (!result.pixels) {
+    if (const std::string problem = check_tile_reply(result.response, *settings, batch.rect); !problem.empty()) {
+      const std::string why = fmt::format("worker {} sent a result no engine makes: {}", worker, problem);
+      fail_batch(w.id, worker, batch, why + "; the worker is quarantined", options_.max_attempts);
+      quarantine(w.id, worker, why);
+      return;
+    }
+  }
+  if (chooser_.enabled()) {
+    std::optional<TileSpan> span;
+    if (const std::optional<v1::Job> job = store_.get_job(batch.job_id)) {
+      span = chooser_.span(batch, job->tiles_total(), *settings);
+    }
+    // With no other worker to ask, there is nobody to check against: kept as it is.
+    if (span && workers_.any_available_except({w.id})) {
+      auto check = std::make_shared<SpotCheck>();
+      check->batch = batch;
+      check->span = *span;
+      encode_pixels(result);
+      check->opinions.push_back({w.id, worker, crop_tile(result.response.tile(), span->rect)});
+      check->reply = std::move(result);
+      check->asked.insert(w.id);
+      {
+        std::lock_guard lock(mutex_);
+        if (stopping_) {
+          store_.batch_requeue(batch.job_id, batch.first, batch.count, w.id);
+          return;
+        }
+        checks_.push_back(check);
+      }
+      log_.debug("job {} {}: held for a spot check of {}", batch.job_id, describe(batch), describe(*span));
+      settle_stranded();
+      work_.notify_all();
+      return;
+    }
+  }
+  keep(w.id, worker, batch, result);
+}
+
+void Dispatcher::handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
+                                     CancelReason reason, RenderedTiles& result) {
+  const std::shared_ptr<SpotCheck>& check = call.check;
+  if (reason == CancelReason::JobCancelled || reason == CancelReason::Stopping) return;  // dropped already
+  const std::string worker = w.worker->describe();
+  const TileBatch& batch = check->batch;
+  std::string problem;
+  const bool answered = status.ok() && reason != CancelReason::Quarantined;
+  if (answered && !result.pixels) {
+    const std::optional<RenderSettings> settings = settings_of(batch);
+    if (!settings) return;
+    problem = check_tile_reply(result.response, *settings, check->span.rect);
+  }
+  if (!answered || !problem.empty()) {
+    // No opinion from this worker: the check waits for another.
+    if (!problem.empty()) {
+      quarantine(w.id, worker, fmt::format("worker {} sent a result no engine makes: {}", worker, problem));
+    } else if (reason == CancelReason::None) {
+      log_.warn("job {} {}: checking it on worker {} failed: {}: {}", batch.job_id, describe(check->span), worker,
+                status_code_name(status.error_code()), status.error_message());
+      if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) workers_.mark_down(w, std::chrono::milliseconds(0));
+      if (status.error_code() == grpc::StatusCode::UNAVAILABLE) workers_.mark_down(w, options_.probe_interval);
+    }
+    {
+      std::lock_guard lock(mutex_);
+      check->queued = true;
+    }
+    settle_stranded();
+    work_.notify_all();
+    return;
+  }
+  encode_pixels(result);
+  Opinion opinion{w.id, worker, std::move(*result.response.mutable_tile())};
+  Judgement j;
+  std::string own_worker;
+  {
+    std::lock_guard lock(mutex_);
+    if (!holds_check_locked(check)) return;  // its batch's worker was quarantined, or its job ended
+    j = judge(check->opinions, opinion);
+    own_worker = check->own().worker;
+    if (j.outcome == Judgement::Outcome::NeedAnother) {
+      check->queued = true;  // back in the queue: from here on others may touch it
+    } else {
+      checks_.remove(check);  // out of checks_, it is this thread's alone
+    }
+  }
+  switch (j.outcome) {
+    case Judgement::Outcome::NeedAnother:
+      log_.warn("job {} {}: workers {} and {} rendered it differently; a third worker decides", batch.job_id,
+                describe(check->span), own_worker, worker);
+      settle_stranded();
+      work_.notify_all();
+      return;
+    case Judgement::Outcome::NoAgreement: {
+      std::string names;
+      for (const Opinion& o : check->opinions) names += (names.empty() ? "" : ", ") + o.worker;
+      fail_batch(check->own().worker_id, check->own().worker, batch,
+                 fmt::format("spot check of {}: workers {} rendered it three different ways", describe(check->span), names),
+                 options_.max_attempts);
+      return;
+    }
+    case Judgement::Outcome::Agreed:
+      settle(*check, j, opinion);
+      return;
+  }
+}
+
+void Dispatcher::settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing) {
+  const TileBatch& batch = check.batch;
+  const Opinion& agreed = check.opinions[j.agreed_with];
+  if (j.agreed_with == 0) {
+    log_.debug("job {} {}: spot check passed ({} and {} agree)", batch.job_id, describe(check.span), agreed.worker,
+               agreeing.worker);
+    keep(check.own().worker_id, check.own().worker, batch, check.reply);
+  }
+  for (std::size_t k : j.wrong) {
+    const Opinion& o = check.opinions[k];
+    const std::string why = fmt::format("spot check of {} of job {}: its pixels differ from the ones workers {} and {} rendered",
+                                        describe(check.span), batch.job_id, agreed.worker, agreeing.worker);
+    if (k == 0) {
+      // The batch's own worker: the batch is rendered again.
+      fail_batch(o.worker_id, o.worker, batch, fmt::format("worker {}: {}; the worker is quarantined", o.worker, why),
+                 options_.max_attempts);
+    } else {
+      const std::string kept = fmt::format("worker {}: {}; the worker is quarantined, the tiles are kept as {} rendered them",
+                                           o.worker, why, check.own().worker);
+      log_.warn("job {} {}: {}", batch.job_id, describe(check.span), kept);
+      events_.publish(batch.job_id, [&](v1::JobEvent& event) {
+        v1::TileFailed& f = *event.mutable_tile_failed();
+        f.set_tile_index(check.span.first);
+        f.set_tile_count(check.span.count);
+        f.set_worker(o.worker);
+        f.set_reason(kept);
+        f.set_will_retry(false);
+      });
+    }
+    quarantine(o.worker_id, o.worker, fmt::format("worker {}: {}", o.worker, why));
+  }
+}
+
+void Dispatcher::settle_stranded() {
+  std::vector<std::shared_ptr<SpotCheck>> stranded;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = checks_.begin(); it != checks_.end();) {
+      if ((*it)->queued && !workers_.any_available_except((*it)->asked)) {
+        stranded.push_back(*it);
+        it = checks_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  for (const std::shared_ptr<SpotCheck>& c : stranded) {
+    if (c->opinions.size() == 1) {
+      log_.warn("job {} {}: kept unchecked: no worker but {} is there to check it on", c->batch.job_id,
+                describe(c->batch), c->own().worker);
+      keep(c->own().worker_id, c->own().worker, c->batch, c->reply);
+    } else {
+      std::string names;
+      for (const Opinion& o : c->opinions) names += (names.empty() ? "" : " and ") + o.worker;
+      fail_batch(c->own().worker_id, c->own().worker, c->batch,
+                 fmt::format("spot check of {}: workers {} rendered it differently and no other worker is there "
+                             "to decide",
+                             describe(c->span), names),
+                 options_.max_attempts);
+    }
+  }
+}
+
+void Dispatcher::keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                      RenderedTiles& result) {
+  const v1::TileStats stats = result.response.stats();
   try {
     // The data first, then the mark: a done tile always has its data.
     assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(), batch.first, result);
-    if (!store_.batch_done(batch.job_id, batch.first, batch.count, stats)) return;
+    if (!store_.batch_done(batch.job_id, batch.first, batch.count, stats, worker_id)) {
+      // The job ended, or the tiles were taken back (the worker quarantined meanwhile).
+      assembly_.discard(batch.job_id, batch.first);
+      work_.notify_all();
+      return;
+    }
     measured(batch, stats);
     events_.publish(batch.job_id, [&](v1::JobEvent& event) {
       v1::TileFinished& f = *event.mutable_tile_finished();
       f.set_tile_index(batch.first);
       f.set_tile_count(batch.count);
       *f.mutable_rect() = to_proto(batch.rect);
-      f.set_worker(w.worker->describe());
+      f.set_worker(worker);
       *f.mutable_stats() = stats;
     });
     finisher_.finish_if_complete(batch.job_id);
   } catch (const std::exception& e) {
     log_.error("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
-    store_.batch_requeue(batch.job_id, batch.first, batch.count);
+    store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
     work_.notify_all();
   }
 }
@@ -245,6 +573,7 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
   const std::string worker = w.worker->describe();
   std::string why;
   int max_attempts = options_.max_attempts;
+  bool went_down = false;
   if (reason == CancelReason::WorkerLeft) {
     why = fmt::format("worker {} left: {}", worker, reason_text);
   } else if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
@@ -254,16 +583,28 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
     // Slow or hung? It gets no more tiles until it answers a health check: a hung one would
     // otherwise take tile after tile to its deadline.
     workers_.mark_down(w, std::chrono::milliseconds(0));
+    went_down = true;
   } else {
     why = fmt::format("worker {}: {}: {}", worker, status_code_name(status.error_code()), status.error_message());
     // A job every worker must refuse: retrying only wastes the farm's time.
     if (status.error_code() == grpc::StatusCode::INVALID_ARGUMENT) max_attempts = 1;
-    if (status.error_code() == grpc::StatusCode::UNAVAILABLE) workers_.mark_down(w, options_.probe_interval);
+    if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
+      workers_.mark_down(w, options_.probe_interval);
+      went_down = true;
+    }
   }
+  fail_batch(w.id, worker, batch, why, max_attempts);
+  if (went_down) settle_stranded();  // a check that only this worker could have taken
+}
+
+void Dispatcher::fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                            const std::string& why, int max_attempts) {
   log_.warn("job {} {}: {}", batch.job_id, describe(batch), why);
-  const v1::JobState before = store_.get_job(batch.job_id)->state();
+  const std::optional<v1::Job> job = store_.get_job(batch.job_id);
+  if (!job) return;
+  const v1::JobState before = job->state();
   const TileFailure failure =
-      store_.batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now());
+      store_.batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now(), worker_id);
   events_.publish(batch.job_id, [&](v1::JobEvent& event) {
     v1::TileFailed& f = *event.mutable_tile_failed();
     f.set_tile_index(batch.first);
@@ -275,10 +616,11 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
   if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
     log_.error("job {} failed: {}", batch.job_id, failure.job.failure_reason());
     {
-      // Its other tiles in flight are of no use now.
+      // Its other tiles in flight, and its batches waiting for a check, are of no use now.
       std::lock_guard lock(mutex_);
-      cancel_calls_locked([&](const InFlight& other) { return other.batch.job_id == batch.job_id && &other != &call; },
+      cancel_calls_locked([&](const InFlight& other) { return other.batch.job_id == batch.job_id; },
                           CancelReason::JobCancelled);
+      drop_checks_locked(batch.job_id);
     }
     events_.publish_state(failure.job, before);
     finisher_.release(batch.job_id);

@@ -13,14 +13,30 @@
 // cannot be reached, or misses a deadline, is marked down in the registry until it answers a
 // probe. A job whose tiles are all done goes to the Finisher.
 //
-// Lock: Dispatcher::mutex_ guards stopping_, threads_ and the calls in flight (each one's cancel
-// reason). A batch is claimed, and a job cancelled in the store, under it, so that cancel_job(),
-// worker_left() and stop() see every call a slot has started, and no slot claims for a worker
-// the registry has removed. Taken under it: the job store's lock and, within that (the store
-// asking for a batch size), the worker registry's and RunningJobs'; the registry's also directly
-// (is the worker available?), and each call's TileCancel. None of those is held while it is
-// taken; results are handled, events published and jobs finished without it.
+// Workers are not trusted. A reply that came over the wire is checked (tile_result_check.h)
+// before anything of it is stored: one that fails the check fails its batch, naming the worker
+// and what is wrong, and the worker is quarantined. With --verify-fraction, batches holding
+// chosen tiles wait, not done, for a second worker's rendering of the chosen part
+// (spot_checks.h): bit-identical, the batch is kept; different, a third worker decides and the
+// worker that disagrees with it is quarantined. A quarantined worker gets no more tiles, its calls
+// in flight are cancelled, and what it rendered for jobs still running is rendered again
+// (JobStore::quarantine_worker), each batch announced as a TileFailed event naming it.
+//
+// A worker's slots are started when it is first up (WorkerRegistry's on_first_up) and end when
+// it is removed or quarantined; a slot that ended is joined by the next slot started, by an idle
+// slot, or by stop(), so workers coming and going leave no threads behind.
+//
+// Lock: Dispatcher::mutex_ guards stopping_, the slot threads, the calls in flight (each one's
+// cancel reason) and the batches waiting for a spot check. A batch is claimed, and a job
+// cancelled in the store, under it, so that cancel_job(), worker_left(), quarantine() and stop()
+// see every call a slot has started, and no slot claims for a worker the registry has removed or
+// quarantined. Taken under it: the job store's lock and, within that (the store asking for a
+// batch size), the worker registry's and RunningJobs'; the registry's also directly (is the
+// worker available?), and each call's TileCancel. None of those is held while it is taken;
+// results are handled, workers quarantined, events published and jobs finished without it.
 #include <condition_variable>
+#include <list>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -37,6 +53,7 @@
 #include "server/scheduler/job_events.h"
 #include "server/scheduler/running_jobs.h"
 #include "server/scheduler/scheduler_options.h"
+#include "server/scheduler/spot_checks.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/tile_worker.h"
 #include "server/scheduler/worker_registry.h"
@@ -71,29 +88,58 @@ class Dispatcher {
   v1::Job cancel_job(const std::string& job_id);
   // Cancels the worker's calls in flight: their tiles are retried on others (an attempt counted).
   void worker_left(const std::string& worker_id, const std::string& reason);
-  // Cancels every call in flight, their tiles queued again without an attempt counted, and joins
-  // the slots. Idempotent.
+  // The worker (its address `worker`) gets no more tiles: its calls in flight are cancelled and
+  // their tiles queued again, and its results for jobs still running are thrown away and rendered
+  // again. Logged, and announced to each such job as TileFailed. Nothing when it is quarantined
+  // already or unknown.
+  void quarantine(const std::string& worker_id, const std::string& worker, const std::string& reason);
+  // Cancels every call in flight, their tiles queued again without an attempt counted (and the
+  // batches waiting for a spot check), and joins the slots. Idempotent.
   void stop();
 
  private:
   // Why a call in flight was cancelled by the scheduler, which decides what becomes of its tiles.
-  enum class CancelReason { None, JobCancelled, WorkerLeft, Stopping };
+  enum class CancelReason { None, JobCancelled, WorkerLeft, Quarantined, Stopping };
   struct InFlight;
+  struct SpotCheck;
 
+  // A slot's thread: slot_loop, then its handle goes to exited_ to be joined.
+  void slot_main(const std::shared_ptr<WorkerEntry>& w);
   void slot_loop(const std::shared_ptr<WorkerEntry>& w);
-  // The next batch for `w`, in flight from now on; null when there was none (after a wait).
+  void join_exited();
+  // The next batch for `w` (or a batch to check), in flight from now on; null when there was
+  // none (after a wait).
   std::shared_ptr<InFlight> claim(const WorkerEntry& w);
   int batch_size(const std::string& job_id, int queued_tiles) const;  // called back by claim
   grpc::Status render(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   void handle_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
                      RenderedTiles& result);
-  void keep(const WorkerEntry& w, const TileBatch& batch, RenderedTiles& result);
+  // An OK reply to a batch: checked, then kept or held for a spot check.
+  void accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
+  // The reply of a call that checks another worker's batch.
+  void handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
+                           CancelReason reason, RenderedTiles& result);
+  // What `j` (an agreement) decides about `check`, which is no longer in checks_.
+  void settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing);
+  // Settles the checks that no available worker is left to take: kept unchecked with one opinion,
+  // failed with two that differ.
+  void settle_stranded();
+  void keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+            RenderedTiles& result);
   void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
+  // Counts a failed attempt on the batch (running on worker_id) with `why`, tells the job's
+  // watchers, and fails the job at max_attempts.
+  void fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                  const std::string& why, int max_attempts);
+  // The settings of the batch's job; nullopt (logged) when the job is gone.
+  std::optional<RenderSettings> settings_of(const TileBatch& batch);
   // Cancels the calls in flight that `which` picks, for `reason`.
   template <typename Which>
   void cancel_calls_locked(Which&& which, CancelReason reason, const std::string& text = {});
+  void drop_checks_locked(const std::string& job_id);
+  bool holds_check_locked(const std::shared_ptr<SpotCheck>& check) const;
 
   const SchedulerOptions& options_;
   JobStore& store_;
@@ -104,11 +150,14 @@ class Dispatcher {
   WorkerRegistry& workers_;
   Finisher& finisher_;
   spdlog::logger& log_;
+  SpotCheckChooser chooser_;
   mutable std::mutex mutex_;
   std::condition_variable work_;  // a job queued, a batch back in the queue, stopping
   bool stopping_ = false;
-  std::vector<std::thread> threads_;  // slots of every worker ever added
+  std::map<std::thread::id, std::thread> threads_;  // slots running
+  std::vector<std::thread> exited_;                 // slots that ended, not joined yet
   std::set<std::shared_ptr<InFlight>> in_flight_;
+  std::list<std::shared_ptr<SpotCheck>> checks_;    // batches waiting for a spot check
 };
 
 }  // namespace farm

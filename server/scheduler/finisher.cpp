@@ -62,6 +62,13 @@ void Finisher::merge(const std::string& job_id) {
     const std::string validation = check_against_embree(*info);
     if (info->merged) info->merged(std::move(film));
     after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
+    if (!is_final(after.state())) {
+      // A worker was quarantined while the frame was merged, and some of its tiles taken back:
+      // they are being rendered again, and the job is merged once they are done.
+      log_.warn("job {}: merge abandoned, {} of its {} tiles are to be rendered again", job_id,
+                after.tiles_total() - after.tiles_done(), after.tiles_total());
+      return;
+    }
     log_.info("job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(), parts.size());
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, fmt::format("merging the tiles: {}", e.what()),

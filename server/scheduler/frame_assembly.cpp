@@ -70,8 +70,21 @@ void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, 
   check_fits(buffer, frame, job_id, part);
   f->film.paste(buffer);  // batches are disjoint: concurrent pastes touch different pixels
   std::lock_guard lock(f->mutex);
-  f->film.stats() += decode_stats(tiles.response.stats());
-  f->parts.push_back(part);
+  f->parts.emplace_back(part, decode_stats(tiles.response.stats()));
+}
+
+void InMemoryAssembly::discard(const std::string& job_id, std::uint32_t part) {
+  std::shared_ptr<Film> f;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = films_.find(job_id);
+    if (it == films_.end()) return;
+    f = it->second;
+  }
+  std::lock_guard lock(f->mutex);
+  // The oldest paste of the part: one pasted again since is the one that stays.
+  const auto it = std::find_if(f->parts.begin(), f->parts.end(), [&](const auto& p) { return p.first == part; });
+  if (it != f->parts.end()) f->parts.erase(it);
 }
 
 TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
@@ -84,7 +97,12 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
   }
   if (!f) throw std::runtime_error(fmt::format("job {}: no tiles were kept for it", job_id));
   std::lock_guard lock(f->mutex);
-  std::vector<std::uint32_t> kept = f->parts;
+  std::vector<std::uint32_t> kept;
+  RenderStats stats;
+  for (const auto& [part, part_stats] : f->parts) {
+    kept.push_back(part);
+    stats += part_stats;
+  }
   std::sort(kept.begin(), kept.end());
   std::vector<std::uint32_t> wanted = parts;
   std::sort(wanted.begin(), wanted.end());
@@ -93,6 +111,7 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
     throw std::runtime_error(fmt::format("job {}: {} batches kept in memory, the job store lists {}",
                                          job_id, kept.size(), wanted.size()));
   }
+  f->film.stats() = stats;
   return std::move(f->film);
 }
 

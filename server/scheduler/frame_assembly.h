@@ -39,6 +39,9 @@ class FrameAssembly {
                               const std::vector<std::uint32_t>& parts) = 0;
   // Forgets the job (done, failed or cancelled).
   virtual void remove_job(const std::string& job_id) = 0;
+  // The part's tiles are no longer done (their worker was quarantined, or the store refused
+  // them): whatever replaces them is added under its own part, maybe the same number.
+  virtual void discard(const std::string& job_id, std::uint32_t part) = 0;
 };
 
 class TileFileAssembly final : public FrameAssembly {
@@ -49,6 +52,10 @@ class TileFileAssembly final : public FrameAssembly {
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<std::uint32_t>& parts) override;
   void remove_job(const std::string& job_id) override { files_.remove_job(job_id); }
+  // Nothing to do: assemble() reads only the parts the store lists for done tiles, and a part
+  // rendered again is written over the old file. Deleting the file here could delete its
+  // replacement, written meanwhile under the same part.
+  void discard(const std::string&, std::uint32_t) override {}
 
  private:
   TileResults files_;
@@ -61,12 +68,15 @@ class InMemoryAssembly final : public FrameAssembly {
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<std::uint32_t>& parts) override;
   void remove_job(const std::string& job_id) override;
+  void discard(const std::string& job_id, std::uint32_t part) override;
 
  private:
   struct Film {
-    std::mutex mutex;                  // guards stats and parts; pastes are of disjoint rects
+    std::mutex mutex;  // guards parts; pastes are of disjoint rects
     TileBuffer film;
-    std::vector<std::uint32_t> parts;  // pasted so far
+    // Pasted so far, in order, with their statistics. A part discarded and pasted again is
+    // listed twice until the older one is discarded: the newer pixels are the ones in the film.
+    std::vector<std::pair<std::uint32_t, RenderStats>> parts;
   };
   std::mutex mutex_;
   std::map<std::string, std::shared_ptr<Film>> films_;

@@ -50,7 +50,9 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
       jobs_(store_, assets_, options_.data_dir),
       events_(store_),
       finisher_(options_, store_, *assembly_, jobs_, events_, *log_),
-      workers_(options_, *log_, [this](const std::string& id, const std::string& reason) { remove_worker(id, reason); }),
+      workers_(
+          options_, *log_, [this](const std::string& id, const std::string& reason) { remove_worker(id, reason); },
+          [this](const std::shared_ptr<WorkerEntry>& w) { dispatcher_.start_slots(w); }),
       dispatcher_(options_, {.store = store_,
                              .assets = assets_,
                              .assembly = *assembly_,
@@ -178,9 +180,9 @@ void SchedulerCore::unwatch(const std::string& job_id, const std::shared_ptr<Job
 // ---- Workers -------------------------------------------------------------------------------------
 
 std::string SchedulerCore::add_worker(std::shared_ptr<TileWorker> worker, bool registered) {
-  const std::shared_ptr<WorkerEntry> entry = workers_.add(std::move(worker), registered);
-  dispatcher_.start_slots(entry);
-  return entry->id;
+  // Its slots start once the registry's prober finds it up: a worker that never answers costs
+  // no threads.
+  return workers_.add(std::move(worker), registered)->id;
 }
 
 void SchedulerCore::remove_worker(const std::string& worker_id, const std::string& reason) {
@@ -190,5 +192,7 @@ void SchedulerCore::remove_worker(const std::string& worker_id, const std::strin
 bool SchedulerCore::heartbeat(const std::string& worker_id) { return workers_.heartbeat(worker_id); }
 
 std::size_t SchedulerCore::worker_count() const { return workers_.count(); }
+
+std::vector<WorkerStatus> SchedulerCore::workers() const { return workers_.workers(); }
 
 }  // namespace farm

@@ -7,8 +7,9 @@
 // parts, one concept each:
 //   JobEvents       WatchJob subscriptions, events published in the store's order (job_events.h)
 //   RunningJobs     each running job parsed once, and its measured tile cost (running_jobs.h)
-//   WorkerRegistry  the workers, up or down, probes and heartbeats (worker_registry.h)
-//   Dispatcher      slots, claiming and sizing batches, calls in flight, results (dispatcher.h)
+//   WorkerRegistry  the workers, up or down or quarantined, probes and heartbeats (worker_registry.h)
+//   Dispatcher      slots, claiming and sizing batches, calls in flight, results checked and
+//                   spot-checked, quarantines (dispatcher.h)
 //   Finisher        merging, writing and checking a finished job's frame (finisher.h)
 //
 // Locks: each part has its own mutex, and its header says what it guards. A part holds its lock
@@ -23,6 +24,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <spdlog/logger.h>
 
@@ -101,6 +103,8 @@ class SchedulerCore {
   void remove_worker(const std::string& worker_id, const std::string& reason);
   bool heartbeat(const std::string& worker_id);  // false: unknown worker (register again)
   std::size_t worker_count() const;
+  // Every worker now: up or down, and quarantined with the reason.
+  std::vector<WorkerStatus> workers() const;
 
  private:
   // Adds a validated job to the store and the dispatch.

@@ -23,6 +23,9 @@ struct SchedulerOptions {
   std::chrono::milliseconds probe_interval = std::chrono::seconds(1);
   std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
+  // Spot checks: this fraction of each job's tiles (at least one when > 0) is rendered again on
+  // another worker and compared bit for bit before it is kept (spot_checks.h). 0: none.
+  double verify_fraction = 0.0;
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
   // What the scheduler logs on stderr unless the operator chose a level (set_log_level): a
   // server logs info and up, the embedded farm of `farm render` only warnings and errors.

@@ -53,6 +53,9 @@ class TileWorker {
   // Waits up to `timeout` for the worker to answer: a down or suspect worker is probed with this
   // before it gets tiles again.
   virtual bool probe(std::chrono::milliseconds timeout) = 0;
+  // Does not block: false while the worker cannot be reached at all (no connection yet; a remote
+  // worker is asked to connect), so that nobody waits on a probe that cannot succeed.
+  virtual bool connected() { return true; }
   virtual std::string describe() const = 0;  // for messages: the address, or "in-process"
 };
 
@@ -71,6 +74,7 @@ class RemoteTileWorker final : public TileWorker {
   grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
                       std::chrono::system_clock::time_point deadline, TileCancel& cancel) override;
   bool probe(std::chrono::milliseconds timeout) override;
+  bool connected() override;
   std::string describe() const override { return address_; }
 
  private:

@@ -9,8 +9,20 @@ namespace farm {
 
 using Clock = WorkerEntry::Clock;
 
-WorkerRegistry::WorkerRegistry(const SchedulerOptions& options, spdlog::logger& log, Silent on_silent)
-    : options_(options), log_(log), on_silent_(std::move(on_silent)), monitor_([this] { monitor_loop(); }) {}
+namespace {
+// The prober's first look again at a worker with no connection; it doubles up to a quarter of
+// the probe interval.
+constexpr std::chrono::milliseconds kFirstRetry(5);
+}  // namespace
+
+WorkerRegistry::WorkerRegistry(const SchedulerOptions& options, spdlog::logger& log, Silent on_silent,
+                               FirstUp on_first_up)
+    : options_(options),
+      log_(log),
+      on_silent_(std::move(on_silent)),
+      on_first_up_(std::move(on_first_up)),
+      monitor_([this] { monitor_loop(); }),
+      prober_([this] { prober_loop(); }) {}
 
 WorkerRegistry::~WorkerRegistry() { stop(); }
 
@@ -20,19 +32,30 @@ void WorkerRegistry::stop() {
     stopping_ = true;
   }
   changed_.notify_all();
+  probe_.notify_all();
   if (monitor_.joinable()) monitor_.join();
+  if (prober_.joinable()) prober_.join();
 }
 
 std::shared_ptr<WorkerEntry> WorkerRegistry::add(std::shared_ptr<TileWorker> worker, bool registered) {
   auto entry = std::make_shared<WorkerEntry>();
   entry->worker = std::move(worker);
   entry->registered = registered;
+  entry->retry = kFirstRetry;
+  std::string quarantined;
   {
     std::lock_guard lock(mutex_);
     entry->id = fmt::format("w{}-{}", ++next_id_, entry->worker->describe());
+    if (auto it = quarantined_addresses_.find(entry->worker->describe()); it != quarantined_addresses_.end()) {
+      entry->quarantined = true;
+      entry->quarantine_reason = it->second;
+      quarantined = it->second;
+    }
     workers_.emplace(entry->id, entry);
   }
+  probe_.notify_all();
   log_.info("worker {} added{}", entry->id, registered ? " (registered)" : "");
+  if (!quarantined.empty()) log_.warn("worker {} quarantined: its address was quarantined before: {}", entry->id, quarantined);
   return entry;
 }
 
@@ -64,42 +87,129 @@ std::size_t WorkerRegistry::count() const {
 
 bool WorkerRegistry::await_up(WorkerEntry& w) {
   std::unique_lock lock(mutex_);
-  const auto gone = [&] { return stopping_ || w.removed; };
-  while (!gone() && w.down) {
-    if (Clock::now() < w.probe_after) {
-      changed_.wait_until(lock, w.probe_after, gone);
-      continue;
-    }
-    lock.unlock();
-    const bool up = w.worker->probe(options_.probe_interval);
-    lock.lock();
-    if (!up) {
-      changed_.wait_for(lock, options_.probe_interval / 4, gone);
-      continue;
-    }
-    // Each of the worker's slots probes it; the first to hear an answer says so.
-    if (w.down) log_.info("worker {} is up", w.id);
-    w.down = false;
-  }
+  const auto gone = [&] { return stopping_ || w.removed || w.quarantined; };
+  changed_.wait(lock, [&] { return gone() || !w.down; });
   return !gone();
 }
 
 bool WorkerRegistry::available(const WorkerEntry& w) const {
   std::lock_guard lock(mutex_);
-  return !stopping_ && !w.removed && !w.down;
+  return !stopping_ && !w.removed && !w.down && !w.quarantined;
+}
+
+bool WorkerRegistry::any_available_except(const std::set<std::string>& ids) const {
+  std::lock_guard lock(mutex_);
+  if (stopping_) return false;
+  for (const auto& [id, w] : workers_) {
+    if (!w->down && !w->quarantined && !ids.contains(id)) return true;
+  }
+  return false;
 }
 
 void WorkerRegistry::mark_down(WorkerEntry& w, std::chrono::milliseconds wait) {
-  std::lock_guard lock(mutex_);
-  w.down = true;
-  w.probe_after = Clock::now() + wait;
+  {
+    std::lock_guard lock(mutex_);
+    w.down = true;
+    w.probe_after = Clock::now() + wait;
+    w.retry = kFirstRetry;
+  }
+  probe_.notify_all();
+}
+
+bool WorkerRegistry::quarantine(const std::string& worker_id, const std::string& reason) {
+  {
+    std::lock_guard lock(mutex_);
+    auto it = workers_.find(worker_id);
+    if (it == workers_.end() || it->second->quarantined) return false;
+    it->second->quarantined = true;
+    it->second->quarantine_reason = reason;
+    quarantined_addresses_[it->second->worker->describe()] = reason;
+  }
+  log_.error("worker {} quarantined: {}", worker_id, reason);
+  changed_.notify_all();
+  return true;
 }
 
 int WorkerRegistry::slots_up() const {
   std::lock_guard lock(mutex_);
   int slots = 0;
-  for (const auto& [id, w] : workers_) slots += w->down ? 0 : std::max(1, options_.tiles_per_worker);
+  for (const auto& [id, w] : workers_) slots += w->down || w->quarantined ? 0 : std::max(1, options_.tiles_per_worker);
   return slots;
+}
+
+std::vector<WorkerStatus> WorkerRegistry::workers() const {
+  std::lock_guard lock(mutex_);
+  std::vector<WorkerStatus> out;
+  for (const auto& [id, w] : workers_) {
+    out.push_back({.id = id,
+                   .address = w->worker->describe(),
+                   .registered = w->registered,
+                   .up = !w->down,
+                   .quarantined = w->quarantined,
+                   .quarantine_reason = w->quarantine_reason});
+  }
+  return out;
+}
+
+void WorkerRegistry::prober_loop() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    const Clock::time_point now = Clock::now();
+    Clock::time_point next = now + options_.probe_interval;
+    std::vector<std::shared_ptr<WorkerEntry>> due;
+    for (const auto& [id, w] : workers_) {
+      if (!w->down || w->quarantined) continue;
+      if (w->probe_after <= now) {
+        due.push_back(w);
+      } else {
+        next = std::min(next, w->probe_after);
+      }
+    }
+    if (due.empty()) {
+      probe_.wait_until(lock, next);
+      continue;
+    }
+    // Probes run without the lock; one that connected but does not answer waits probe_interval.
+    lock.unlock();
+    enum class Outcome { NoConnection, NoAnswer, Up };
+    std::vector<Outcome> outcomes;
+    for (const auto& w : due) {
+      if (!w->worker->connected()) {
+        outcomes.push_back(Outcome::NoConnection);
+      } else {
+        outcomes.push_back(w->worker->probe(options_.probe_interval) ? Outcome::Up : Outcome::NoAnswer);
+      }
+    }
+    lock.lock();
+    std::vector<std::shared_ptr<WorkerEntry>> first_up;
+    const Clock::time_point after = Clock::now();
+    for (std::size_t i = 0; i < due.size(); ++i) {
+      WorkerEntry& w = *due[i];
+      if (w.removed || !w.down) continue;
+      switch (outcomes[i]) {
+        case Outcome::NoConnection:
+          w.probe_after = after + w.retry;
+          w.retry = std::min(w.retry * 2, std::max(kFirstRetry, std::chrono::milliseconds(options_.probe_interval / 4)));
+          break;
+        case Outcome::NoAnswer:
+          w.probe_after = after + options_.probe_interval / 4;
+          break;
+        case Outcome::Up:
+          log_.info("worker {} is up", w.id);
+          w.down = false;
+          if (!w.slots_started && !w.quarantined) {
+            w.slots_started = true;
+            first_up.push_back(due[i]);
+          }
+          break;
+      }
+    }
+    changed_.notify_all();
+    if (first_up.empty()) continue;
+    lock.unlock();
+    for (const auto& w : first_up) on_first_up_(w);
+    lock.lock();
+  }
 }
 
 void WorkerRegistry::monitor_loop() {

@@ -2,15 +2,23 @@
 // The workers a scheduler renders on, and whether each can take tiles now.
 //
 // A worker starts down: it is probed (TileWorker::probe) before its first tile, and again after a
-// call that says it is unreachable or too slow (mark_down). A static worker (`--worker`) is never
-// dropped, only probed while down; a registered one (RegisterWorker) heartbeats, and the monitor
-// thread hands one that stays silent for missed_heartbeats intervals to `on_silent` (the core
-// removes it and requeues its tiles).
+// call that says it is unreachable or too slow (mark_down). One prober thread probes every worker
+// that is down: one with no connection at all is only asked to connect and looked at again soon
+// (TileWorker::connected, which does not block), so a thousand unreachable addresses cost it no
+// waiting. The first time a worker is up, `on_first_up` starts its slots (the dispatcher's
+// threads): a worker that never answers has none. A static worker (`--worker`) is never dropped,
+// only probed while down; a registered one (RegisterWorker) heartbeats, and the monitor thread
+// hands one that stays silent for missed_heartbeats intervals to `on_silent` (the core removes it
+// and requeues its tiles).
+//
+// A quarantined worker (its reply broke the rules of tile_result_check.h, or a spot check found
+// its pixels wrong) stays listed, with the reason, but gets no more tiles, and its slots end. Its
+// address stays quarantined for the life of the process: registering again does not clear it.
 //
 // Lock: WorkerRegistry::mutex_ guards the map, every entry's state (WorkerEntry's fields below
-// the line) and stopping_. Nothing else is locked under it: probes and on_silent run without it.
-// The dispatcher takes it under its own lock and the job store's (claiming, batch sizing),
-// never the other way round.
+// the line), the quarantined addresses and stopping_. Nothing else is locked under it: probes,
+// on_first_up and on_silent run without it. The dispatcher takes it under its own lock and the
+// job store's (claiming, batch sizing), never the other way round.
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -18,8 +26,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <spdlog/logger.h>
 
@@ -37,18 +47,35 @@ struct WorkerEntry {
   // ---- Under WorkerRegistry::mutex_:
   bool removed = false;
   bool down = true;  // probed before the first tile
+  bool quarantined = false;
+  std::string quarantine_reason;
+  bool slots_started = false;  // on_first_up was called for it
   // A worker that just failed is left alone this long before it is probed: its channel may
   // still look connected for a moment after the process died.
   Clock::time_point probe_after = Clock::now();
+  // How long the prober leaves a worker with no connection before it looks again: short at
+  // first (a worker just started connects within milliseconds), longer while it stays away.
+  std::chrono::milliseconds retry{0};
   Clock::time_point last_heartbeat = Clock::now();
+};
+
+// A worker as the registry sees it now (SchedulerCore::workers()).
+struct WorkerStatus {
+  std::string id;
+  std::string address;  // TileWorker::describe()
+  bool registered = false;
+  bool up = false;
+  bool quarantined = false;
+  std::string quarantine_reason;
 };
 
 class WorkerRegistry {
  public:
   using Silent = std::function<void(const std::string& worker_id, const std::string& reason)>;
+  using FirstUp = std::function<void(const std::shared_ptr<WorkerEntry>& worker)>;
 
-  // Starts the monitor thread: it cannot call `on_silent` before a registered worker is added.
-  WorkerRegistry(const SchedulerOptions& options, spdlog::logger& log, Silent on_silent);
+  // Starts the monitor and the prober: they call nothing before a worker is added.
+  WorkerRegistry(const SchedulerOptions& options, spdlog::logger& log, Silent on_silent, FirstUp on_first_up);
   ~WorkerRegistry();  // stop()
   WorkerRegistry(const WorkerRegistry&) = delete;
   WorkerRegistry& operator=(const WorkerRegistry&) = delete;
@@ -59,31 +86,43 @@ class WorkerRegistry {
   bool heartbeat(const std::string& worker_id);  // false: unknown worker (register again)
   std::size_t count() const;
 
-  // Blocks while `w` is down, probing it every probe_interval until it answers. False once it is
-  // removed or the registry stops: its slots end.
+  // Blocks while `w` is down (the prober probes it). False once it is removed or quarantined, or
+  // the registry stops: its slots end.
   bool await_up(WorkerEntry& w);
-  // Up, not removed, and the registry not stopping: `w` may be handed a batch.
+  // Up, not removed, not quarantined, and the registry not stopping: `w` may be handed a batch.
   bool available(const WorkerEntry& w) const;
+  // Whether a worker other than `ids` is available now (one to check another's pixels).
+  bool any_available_except(const std::set<std::string>& ids) const;
   // `w` gets no more tiles until it answers a probe, tried no sooner than `wait` from now.
   void mark_down(WorkerEntry& w, std::chrono::milliseconds wait);
+  // The worker gets no more tiles, and neither does a worker registering later at its address.
+  // False when it is unknown or quarantined already.
+  bool quarantine(const std::string& worker_id, const std::string& reason);
   // Calls the workers that are up take at once: tiles_per_worker each.
   int slots_up() const;
+  std::vector<WorkerStatus> workers() const;
 
-  // Ends the monitor and every await_up. Idempotent.
+  // Ends the monitor, the prober and every await_up. Idempotent.
   void stop();
 
  private:
   void monitor_loop();
+  void prober_loop();
 
   const SchedulerOptions& options_;
   spdlog::logger& log_;
   Silent on_silent_;
+  FirstUp on_first_up_;
   mutable std::mutex mutex_;
-  std::condition_variable changed_;  // a worker removed, or stopping
+  std::condition_variable changed_;  // a worker up, removed or quarantined, or stopping
+  std::condition_variable probe_;    // wakes the prober: a worker added or marked down, or stopping
   bool stopping_ = false;
   std::uint64_t next_id_ = 0;
   std::map<std::string, std::shared_ptr<WorkerEntry>> workers_;
-  std::thread monitor_;  // declared last: started once the fields above exist
+  std::map<std::string, std::string> quarantined_addresses_;  // address -> why
+  // Declared last: started once the fields above exist.
+  std::thread monitor_;
+  std::thread prober_;
 };
 
 }  // namespace farm

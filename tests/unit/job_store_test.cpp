@@ -265,3 +265,79 @@ TEST(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {
 
 }  // namespace
 }  // namespace farm
+
+namespace farm {
+namespace {
+
+// A quarantined worker's results for running jobs are not kept: its done tiles go back to the
+// queue with their stats taken out, and so do the tiles it has running. Finished jobs and other
+// workers' tiles are left alone.
+TEST(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  store.add_job(make_job("a", 0, 4), 1);
+  store.add_job(make_job("done", -1, 1), 1);
+  v1::TileStats stats;
+  stats.set_samples(10);
+  stats.set_render_ms(5.0);
+  const BatchSize two = [](const std::string&, int) { return 2; };
+  auto liar = store.claim_next_batch("liar", 2, two);      // a: tiles 0 and 1
+  auto honest = store.claim_next_batch("honest", 2);       // a: tile 2
+  auto running = store.claim_next_batch("liar", 2);        // a: tile 3
+  ASSERT_TRUE(liar && honest && running);
+  ASSERT_EQ(liar->count, 2u);
+  ASSERT_TRUE(store.batch_done("a", liar->first, liar->count, stats, "liar"));
+  ASSERT_TRUE(store.batch_done("a", honest->first, 1, stats, "honest"));
+  auto finished = store.claim_next_batch("liar", 3);
+  ASSERT_TRUE(finished && finished->job_id == "done");
+  ASSERT_TRUE(store.batch_done("done", 0, 1, stats, "liar"));
+  ASSERT_EQ(store.finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(store.get_job("a")->stats().samples(), 20u);
+
+  const std::vector<TileBatch> taken = store.quarantine_worker("liar");
+  ASSERT_EQ(taken.size(), 1u);
+  EXPECT_EQ(taken[0].job_id, "a");
+  EXPECT_EQ(taken[0].first, 0u);
+  EXPECT_EQ(taken[0].count, 2u);
+  EXPECT_EQ(taken[0].rect, (Rect{0, 0, 32, 16}));
+  const v1::Job a = *store.get_job("a");
+  EXPECT_EQ(a.tiles_done(), 1u);
+  EXPECT_EQ(a.tiles_rendered(), 3u);  // results accepted over the job's life
+  EXPECT_EQ(a.stats().samples(), 10u);
+  EXPECT_EQ(a.stats().render_ms(), 5.0);
+  const std::vector<TileRecord> tiles = store.tiles("a");
+  EXPECT_EQ(tiles[0].state, TileState::Queued);
+  EXPECT_EQ(tiles[1].state, TileState::Queued);
+  EXPECT_EQ(tiles[2].state, TileState::Done);
+  EXPECT_EQ(tiles[3].state, TileState::Queued);  // was running on the liar
+  EXPECT_EQ(tiles[3].attempts, 0);
+  // Its answer for tile 3, late, is refused; the finished job stays as it was.
+  EXPECT_FALSE(store.batch_done("a", 3, 1, stats, "liar"));
+  EXPECT_EQ(store.get_job("done")->tiles_done(), 1u);
+  EXPECT_TRUE(store.quarantine_worker("liar").empty());
+}
+
+// A late answer from a worker whose tiles were taken back does not touch the worker that has
+// them now; the job succeeds only while every tile is done.
+TEST(JobStoreTest, BatchOperationsActOnlyOnTheirWorkersTilesAndSuccessNeedsEveryTileDone) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  store.add_job(make_job("a", 0, 2), 1);
+  auto first = store.claim_next_batch("w1", 2);
+  ASSERT_TRUE(first);
+  store.batch_requeue("a", first->first, 1, "w1");
+  auto again = store.claim_next_batch("w2", 3);
+  ASSERT_TRUE(again && again->first == first->first);
+  store.batch_requeue("a", first->first, 1, "w1");  // w1's, late: w2 keeps the tile
+  EXPECT_FALSE(store.batch_failed("a", first->first, 1, "late", 3, 4, "w1").will_retry);
+  EXPECT_EQ(store.tiles("a")[0].state, TileState::Running);
+  EXPECT_FALSE(store.batch_done("a", first->first, 1, {}, "w1"));
+  EXPECT_TRUE(store.batch_done("a", first->first, 1, {}, "w2"));
+  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_RUNNING);
+  auto last = store.claim_next_batch("w2", 6);
+  ASSERT_TRUE(last && store.batch_done("a", last->first, 1, {}, "w2"));
+  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_SUCCEEDED);
+}
+
+}  // namespace
+}  // namespace farm

@@ -54,6 +54,12 @@ CREATE TABLE IF NOT EXISTS tiles (
   PRIMARY KEY (job_seq, idx)
 );
 CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
+CREATE TABLE IF NOT EXISTS parts (
+  job_seq INTEGER NOT NULL REFERENCES jobs (seq),
+  part INTEGER NOT NULL,
+  stats BLOB NOT NULL,
+  PRIMARY KEY (job_seq, part)
+);
 )sql";
 
 constexpr const char* kJobColumns =
@@ -176,6 +182,18 @@ v1::Job job_from_row(const Stmt& s) {
   return job;
 }
 
+// The counters and times of `t` taken out of `sum` again (threads, a maximum, stays).
+void subtract_stats(v1::TileStats& sum, const v1::TileStats& t) {
+  const auto less = [](std::uint64_t a, std::uint64_t b) { return a > b ? a - b : 0; };
+  sum.set_samples(less(sum.samples(), t.samples()));
+  sum.set_invalid_samples(less(sum.invalid_samples(), t.invalid_samples()));
+  sum.set_fragments(less(sum.fragments(), t.fragments()));
+  sum.set_rays(less(sum.rays(), t.rays()));
+  sum.set_render_ms(std::max(0.0, sum.render_ms() - t.render_ms()));
+  sum.set_cpu_ms(std::max(0.0, sum.cpu_ms() - t.cpu_ms()));
+  sum.set_prepare_ms(std::max(0.0, sum.prepare_ms() - t.prepare_ms()));
+}
+
 void add_stats(v1::TileStats& sum, const v1::TileStats& t) {
   sum.set_samples(sum.samples() + t.samples());
   sum.set_invalid_samples(sum.invalid_samples() + t.invalid_samples());
@@ -217,7 +235,9 @@ JobStore::JobStore(const std::filesystem::path& file) {
       exec("ALTER TABLE tiles ADD COLUMN part INTEGER NOT NULL DEFAULT 0");
       exec("UPDATE tiles SET part = idx");
     }
-    // Version 3 records who submitted each job; older jobs had no owner.
+    // Version 3 records who submitted each job (older jobs have no owner), and adds parts
+    // (kSchema made it): the stats of each batch, so that a batch thrown away is taken out of its
+    // job's stats. Parts done before have none, and stay counted.
     exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
     exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
     t.commit();
@@ -427,21 +447,22 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
 }
 
 std::optional<std::int64_t> JobStore::running_batch_locked(const std::string& job_id, std::uint32_t first,
-                                                           std::uint32_t count) const {
+                                                           std::uint32_t count, const std::string& worker) const {
   Stmt find(db_, prepared(fmt::format(
                      "SELECT j.seq, COUNT(*) FROM jobs j JOIN tiles t ON t.job_seq = j.seq WHERE j.id = ? "
-                     "AND j.state IN {} AND t.idx >= ? AND t.idx < ? AND t.state = 1 GROUP BY j.seq",
+                     "AND j.state IN {} AND t.idx >= ? AND t.idx < ? AND t.state = 1 "
+                     "AND (? = '' OR t.worker = ?) GROUP BY j.seq",
                      kActiveSql)));
-  find.bind(1, job_id).bind(2, first).bind(3, static_cast<std::int64_t>(first) + count);
+  find.bind(1, job_id).bind(2, first).bind(3, static_cast<std::int64_t>(first) + count).bind(4, worker).bind(5, worker);
   if (!find.step() || find.i64(1) != count) return std::nullopt;
   return find.i64(0);
 }
 
 bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
-                          const v1::TileStats& stats) {
+                          const v1::TileStats& stats, const std::string& worker) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
-  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count);
+  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count, worker);
   if (!seq) return false;
   v1::TileStats sum;
   {
@@ -455,16 +476,19 @@ bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::u
   Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done + ?, tiles_rendered = tiles_rendered + ?, "
                      "stats = ? WHERE seq = ?"))
       .bind(1, count).bind(2, count).bind_blob(3, sum.SerializeAsString()).bind(4, *seq).run();
+  Stmt(db_, prepared("INSERT OR REPLACE INTO parts (job_seq, part, stats) VALUES (?, ?, ?)"))
+      .bind(1, *seq).bind(2, first).bind_blob(3, stats.SerializeAsString()).run();
   t.commit();
   return true;
 }
 
 TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
-                                   const std::string& reason, int max_attempts, std::int64_t now_ms) {
+                                   const std::string& reason, int max_attempts, std::int64_t now_ms,
+                                   const std::string& worker) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   TileFailure result;
-  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count);
+  const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count, worker);
   if (!seq) {
     result.job = load_job_locked(job_id);
     return result;
@@ -493,21 +517,78 @@ TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t firs
   return result;
 }
 
-void JobStore::batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count) {
+void JobStore::batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                             const std::string& worker) {
   std::lock_guard lock(mutex_);
   Stmt(db_, prepared("UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND idx >= ? AND idx < ? "
-                     "AND job_seq = (SELECT seq FROM jobs WHERE id = ?)"))
-      .bind(1, first).bind(2, static_cast<std::int64_t>(first) + count).bind(3, job_id).run();
+                     "AND job_seq = (SELECT seq FROM jobs WHERE id = ?) AND (? = '' OR worker = ?)"))
+      .bind(1, first).bind(2, static_cast<std::int64_t>(first) + count).bind(3, job_id).bind(4, worker)
+      .bind(5, worker).run();
+}
+
+std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  // The done batches first (a batch is the tiles of one part), with what they added to the job.
+  std::vector<TileBatch> discarded;
+  std::vector<std::int64_t> seqs;
+  {
+    Stmt s(db_, prepared(fmt::format(
+                    "SELECT j.seq, j.id, t.part, COUNT(*), MIN(t.x0), MIN(t.y0), MAX(t.x1), MAX(t.y1) "
+                    "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE t.worker = ? AND t.state = 2 "
+                    "AND j.state IN {} GROUP BY j.seq, t.part ORDER BY j.seq, t.part",
+                    kActiveSql)));
+    s.bind(1, worker);
+    while (s.step()) {
+      TileBatch b;
+      b.job_id = s.text(1);
+      b.first = static_cast<std::uint32_t>(s.i64(2));
+      b.count = static_cast<std::uint32_t>(s.i64(3));
+      b.rect = {s.i32(4), s.i32(5), s.i32(6), s.i32(7)};
+      seqs.push_back(s.i64(0));
+      discarded.push_back(std::move(b));
+    }
+  }
+  for (std::size_t i = 0; i < discarded.size(); ++i) {
+    const std::int64_t seq = seqs[i];
+    const TileBatch& b = discarded[i];
+    v1::TileStats sum, part;
+    {
+      Stmt s(db_, prepared("SELECT stats FROM jobs WHERE seq = ?"));
+      s.bind(1, seq);
+      if (s.step()) sum.ParseFromString(s.blob(0));
+    }
+    {
+      Stmt s(db_, prepared("SELECT stats FROM parts WHERE job_seq = ? AND part = ?"));
+      s.bind(1, seq).bind(2, b.first);
+      if (s.step()) part.ParseFromString(s.blob(0));
+    }
+    subtract_stats(sum, part);
+    Stmt(db_, prepared("UPDATE tiles SET state = 0, worker = '' WHERE job_seq = ? AND part = ? AND state = 2 AND worker = ?"))
+        .bind(1, seq).bind(2, b.first).bind(3, worker).run();
+    Stmt(db_, prepared("DELETE FROM parts WHERE job_seq = ? AND part = ?")).bind(1, seq).bind(2, b.first).run();
+    Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done - ?, stats = ? WHERE seq = ?"))
+        .bind(1, b.count).bind_blob(2, sum.SerializeAsString()).bind(3, seq).run();
+  }
+  // Its calls in flight and its results waiting for a spot check: nothing of them is kept.
+  Stmt(db_, prepared(fmt::format("UPDATE tiles SET state = 0, worker = '' WHERE worker = ? AND state = 1 "
+                                 "AND job_seq IN (SELECT seq FROM jobs WHERE state IN {})",
+                                 kActiveSql)))
+      .bind(1, worker).run();
+  t.commit();
+  return discarded;
 }
 
 v1::Job JobStore::finish_job(const std::string& id, v1::JobState state, const std::string& reason,
                              const std::string& validation, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
+  // SUCCEEDED only while every tile is still done: a quarantine may have taken some back while
+  // the frame was being merged.
   Stmt(db_, prepared(fmt::format("UPDATE jobs SET state = ?, failure_reason = ?, validation = ?, "
-                                 "finished_ms = ? WHERE id = ? AND state IN {}",
+                                 "finished_ms = ? WHERE id = ? AND state IN {} AND (? = 0 OR tiles_done = tiles_total)",
                                  kActiveSql)))
       .bind(1, static_cast<int>(state)).bind(2, reason).bind(3, validation).bind(4, now_ms)
-      .bind(5, id).run();
+      .bind(5, id).bind(6, state == v1::JOB_STATE_SUCCEEDED ? 1 : 0).run();
   return load_job_locked(id);
 }
 

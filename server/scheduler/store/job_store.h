@@ -15,6 +15,7 @@
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them); PRIMARY KEY (job_seq, idx))
+//   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 // Tiles go out in batches: consecutive tiles of one row of the job's grid, rendered by one call
 // as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
 // The store is one connection behind a mutex, its statements prepared once.
@@ -110,20 +111,31 @@ class JobStore {
   std::optional<TileBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                             const BatchSize& batch_size = {});
 
+  // The batch operations below act only on tiles running on `worker` (the id claim_next_batch was
+  // given; empty: any), so that a late answer from a worker whose tiles were taken back never
+  // touches tiles another worker has claimed since.
+  //
   // The batch's data is on disk (TileResults part `first`): marks its tiles done and adds its
   // stats, if they are all still running on an active job (false otherwise: the job was
   // cancelled or failed, or the tiles were requeued).
   bool batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
-                  const v1::TileStats& stats);
+                  const v1::TileStats& stats, const std::string& worker = {});
   // Counts a failed attempt on each of the batch's tiles. Below max_attempts they are queued
   // again; at max_attempts the job FAILS with `reason`. Nothing happens (will_retry false, job as
   // it is) unless the batch is running on an active job.
   TileFailure batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
-                           const std::string& reason, int max_attempts, std::int64_t now_ms);
+                           const std::string& reason, int max_attempts, std::int64_t now_ms,
+                           const std::string& worker = {});
   // Puts a running batch back in the queue without counting an attempt (a shutdown, not a failure).
-  void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count);
+  void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                     const std::string& worker = {});
+  // Nothing `worker` rendered for a job still running is kept: its done tiles of active jobs are
+  // queued again (their stats taken out of their jobs'; tiles_rendered keeps counting them) and
+  // so are the tiles running on it. One transaction. Returns the done batches it took back.
+  std::vector<TileBatch> quarantine_worker(const std::string& worker);
 
-  // Final states. Each is a no-op (returns the job as it is) when the job is already final.
+  // Final states. Each is a no-op (returns the job as it is) when the job is already final, and
+  // SUCCEEDED also when not every tile is done (quarantine_worker took some back).
   v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
                      const std::string& validation, std::int64_t now_ms);
   v1::Job cancel_job(const std::string& id, std::int64_t now_ms);
@@ -136,7 +148,7 @@ class JobStore {
   std::optional<v1::Job> find_job_locked(const std::string& id) const;
   // The job's seq when the batch's tiles are all running on an active job.
   std::optional<std::int64_t> running_batch_locked(const std::string& job_id, std::uint32_t first,
-                                                   std::uint32_t count) const;
+                                                   std::uint32_t count, const std::string& worker) const;
 
   mutable std::mutex mutex_;
   sqlite3* db_ = nullptr;
