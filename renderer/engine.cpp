@@ -24,18 +24,21 @@ void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, T
 
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out) {
+  // A flag that never stops the render: the tile always comes back complete.
+  static_cast<void>(render_tile(scene, settings, tile, out, CancelFlag::never()));
+}
+
+StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                       TileBuffer& out, const CancelFlag& cancel) {
   const Rect image{0, 0, settings.width, settings.height};
   const Rect clipped = tile.intersect(image);
   switch (settings.engine) {
     case EngineKind::Raster:
-      raster::render_tile(scene, settings, clipped, out);
-      return;
+      return raster::render_tile(scene, settings, clipped, out, cancel);
     case EngineKind::Whitted:
-      whitted::render_tile(scene, settings, clipped, out);
-      return;
+      return whitted::render_tile(scene, settings, clipped, out, cancel);
     case EngineKind::Path:
-      path::render_tile(scene, settings, clipped, out);
-      return;
+      return path::render_tile(scene, settings, clipped, out, cancel);
   }
   throw InputError(fmt::format("render.engine: unknown engine {}", static_cast<int>(settings.engine)));
 }

@@ -1,10 +1,12 @@
 #pragma once
 // The one entry point every engine implements (DESIGN.md, "The engine contract"):
-//   render_tile(prepared scene, settings, tile rectangle, output buffer)
-// A pure function of its inputs: a pixel's value never depends on tiling or threads.
+//   render_tile(prepared scene, settings, tile rectangle, output buffer[, cancel flag])
+// A pure function of its inputs: a pixel's value never depends on tiling or threads, nor on
+// whether a cancel flag was passed (one that never stops the render changes no bit).
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
+#include "renderer/util/cancel_flag.h"
 #include "renderer/util/thread_pool.h"
 
 namespace farm {
@@ -18,5 +20,12 @@ void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, T
 // settings' AOVs. Throws InputError for an engine this build cannot run.
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out);
+
+// The same, stopping early when `cancel` asks: every engine polls it every few samples (ray
+// engines) or triangles and bin passes (rasterizer), so it stops within milliseconds whatever the
+// spp or the tile size. Returns StopReason::None when the tile is complete; otherwise why it
+// stopped, with `out` holding no pixels (discard_pixels(): only the stats of the work done).
+[[nodiscard]] StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings,
+                                     const Rect& tile, TileBuffer& out, const CancelFlag& cancel);
 
 }  // namespace farm

@@ -33,6 +33,12 @@ void TileBuffer::reset(const Rect& rect, const AovSet& aovs) {
   std::fill(variance_.begin(), variance_.end(), glm::vec3(0.0f));
 }
 
+void TileBuffer::discard_pixels() {
+  const RenderStats done = stats_;
+  reset_for_overwrite(Rect{}, aovs_);
+  stats_ = done;
+}
+
 void TileBuffer::paste(const TileBuffer& tile) {
   const Rect overlap = rect_.intersect(tile.rect());
   if (overlap.empty()) return;

@@ -51,6 +51,10 @@ class TileBuffer {
   // the threads that paste into them.
   void reset_for_overwrite(const Rect& rect, const AovSet& aovs);
 
+  // What a render that was stopped leaves: no pixels (an empty rect, so that nothing half-written
+  // can be pasted, merged or sent), only the stats of the work it did.
+  void discard_pixels();
+
   const Rect& rect() const { return rect_; }
   const AovSet& aovs() const { return aovs_; }
 

@@ -12,6 +12,11 @@
 namespace farm::raster {
 namespace {
 
+// Triangles drawn into a bin between looks at the cancel flag. A triangle covers at most the
+// bin's 32x32 pixels, so this bounds the work between looks to well under a millisecond; a sample
+// pass (clearing, drawing and shading a bin) counts as this many, so each pass looks once.
+constexpr int kTrianglesPerPoll = 256;
+
 // What the z-buffer keeps per pixel: the nearest surface so far. Shading waits until every
 // triangle is in (deferred), so each pixel is shaded once however deep the overdraw. The
 // interpolated attributes are only valid where `material` is set, so clearing a region touches
@@ -149,31 +154,40 @@ void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, T
       frame_key(settings), [&] { return build_raster_frame(scene, settings, &pool); });
 }
 
-void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
-                 TileBuffer& out) {
+StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                       TileBuffer& out, const CancelFlag& cancel) {
   const auto frame = scene.frame_cache().get_or_build<RasterFrame>(
       frame_key(settings), [&] { return build_raster_frame(scene, settings, nullptr); });
-  render_tile_from_frame(*frame, scene, settings, tile, out);
+  return render_tile_from_frame(*frame, scene, settings, tile, out, cancel);
 }
 
-void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene,
-                            const RenderSettings& settings, const Rect& requested, TileBuffer& out) {
+StopReason render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene,
+                                  const RenderSettings& settings, const Rect& requested,
+                                  TileBuffer& out, const CancelFlag& cancel) {
   const Rect tile = requested.intersect(Rect{0, 0, frame.width, frame.height});
   // The variance AOV stays at the zeros reset() writes: the rasterizer is deterministic, so its
   // pixel has no Monte Carlo noise to report.
   out.reset(tile, settings.aovs);
-  if (tile.empty()) return;
+  if (tile.empty()) return StopReason::None;
   const int samples = std::max(1, settings.spp);
   RegionRasterizer raster(frame);
+  CancelPoll poll(cancel, kTrianglesPerPoll);
+  const auto stop = [&] {  // the tile is dropped, never half-written
+    out.stats().fragments += raster.fragments();
+    out.discard_pixels();
+    return cancel.reason();
+  };
   for (int by = tile.y0 / kBinSize; by <= (tile.y1 - 1) / kBinSize; ++by) {
     for (int bx = tile.x0 / kBinSize; bx <= (tile.x1 - 1) / kBinSize; ++bx) {
       const Rect region = frame.bin_rect(bx, by).intersect(tile);
       const std::size_t bin = static_cast<std::size_t>(by) * frame.bins_x + bx;
       // One pass per sample position; pass 0 is the pixel centre and also feeds the AOVs.
       for (int s = 0; s < samples; ++s) {
+        if (poll(kTrianglesPerPoll)) return stop();
         raster.begin(region, sample_offset(s));
         const std::uint32_t first = frame.bin_start[bin], last = frame.bin_start[bin + 1];
         for (std::uint32_t i = first; i < last; ++i) {
+          if (poll()) return stop();
           // The triangles of a bin sit far apart in memory: fetch ahead to hide the latency.
           if (i + 8 < last) __builtin_prefetch(frame.bin_triangles[i + 8]);
           if (i + 4 < last) frame.prefetch_vertices(*frame.bin_triangles[i + 4]);
@@ -189,6 +203,7 @@ void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) out.rgba(x, y) *= inv;
   }
+  return StopReason::None;
 }
 
 }  // namespace farm::raster

@@ -10,6 +10,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/raster/raster_frame.h"
 #include "renderer/render_settings.h"
+#include "renderer/util/cancel_flag.h"
 #include "renderer/util/thread_pool.h"
 
 namespace farm::raster {
@@ -17,12 +18,15 @@ namespace farm::raster {
 // Builds the frame set-up on `pool` and caches it in the prepared scene for the tiles that follow.
 void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool);
 
-// Renders one tile; uses the cached frame set-up, building it on this thread if missing.
-void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
-                 TileBuffer& out);
+// Renders one tile; uses the cached frame set-up, building it on this thread if missing. Polls
+// `cancel` every few hundred triangles drawn and at every sample pass over a bin; see
+// farm::render_tile for what a stopped render leaves.
+StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                       TileBuffer& out, const CancelFlag& cancel);
 
 // Renders one tile from an explicit frame set-up (benchmarks time the two halves separately).
-void render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene,
-                            const RenderSettings& settings, const Rect& requested, TileBuffer& out);
+StopReason render_tile_from_frame(const RasterFrame& frame, const PreparedScene& scene,
+                                  const RenderSettings& settings, const Rect& requested,
+                                  TileBuffer& out, const CancelFlag& cancel = CancelFlag::never());
 
 }  // namespace farm::raster

@@ -15,6 +15,10 @@ namespace farm::path {
 namespace {
 
 constexpr int kRouletteStart = 3;  // bounces traced in full before Russian roulette may stop
+// Path segments (closest-hit rays, each with its shadow rays) traced between looks at the cancel
+// flag: tens of microseconds of work, so a cancelled tile stops within a millisecond whatever its
+// spp, and the look (a clock read when there is a deadline) costs nothing measurable.
+constexpr int kSegmentsPerPoll = 32;
 
 // An orthonormal frame around a unit normal (Duff et al. 2017), for the BSDF's local space.
 struct Frame {
@@ -62,9 +66,9 @@ class SampleVariance {
 class PathTracer {
  public:
   PathTracer(const PreparedScene& scene, const RenderSettings& settings,
-             const SceneIntersector& intersector, const Emitters& emitters)
+             const SceneIntersector& intersector, const Emitters& emitters, CancelPoll& poll)
       : scene_(scene), settings_(settings), intersector_(intersector), emitters_(emitters),
-        next_event_estimation_(settings.light_sampling == LightSampling::NeeMis) {}
+        poll_(poll), next_event_estimation_(settings.light_sampling == LightSampling::NeeMis) {}
 
   struct Result {
     glm::vec3 radiance{0.0f};
@@ -76,6 +80,8 @@ class PathTracer {
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
 
+  // Ends the path early, its value meaningless, once poll_ says stop (the caller checks
+  // poll_.stopped() and drops the tile).
   Result trace(Ray ray, const SampleKey& key) const {
     Result result;
     glm::vec3 beta(1.0f);
@@ -86,6 +92,7 @@ class PathTracer {
     const auto next = [&] { return sample_uniform(key, dim++); };
 
     for (int bounce = 0;; ++bounce) {
+      if (poll_()) break;
       SurfaceHit hit;
       ++rays_;
       if (!intersector_.closest_hit(ray, hit)) {
@@ -212,20 +219,22 @@ class PathTracer {
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
   const Emitters& emitters_;
+  CancelPoll& poll_;  // counts path segments; the caller's, so that it sees a stop too
   bool next_event_estimation_;
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
 };
 
 }  // namespace
 
-void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
-                 TileBuffer& out) {
+StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                       TileBuffer& out, const CancelFlag& cancel) {
   out.reset(tile, settings.aovs);
-  if (tile.empty()) return;
+  if (tile.empty()) return StopReason::None;
   const auto intersector = cached_scene_intersector(scene, settings.accel);
   const auto emitters = scene.frame_cache().get_or_build<Emitters>(
       "emitters", [&] { return std::make_shared<const Emitters>(scene); });
-  const PathTracer tracer(scene, settings, *intersector, *emitters);
+  CancelPoll poll(cancel, kSegmentsPerPoll);
+  const PathTracer tracer(scene, settings, *intersector, *emitters, poll);
   const Camera& camera = scene.scene().camera;
   const int samples = std::max(1, settings.spp);
 
@@ -243,6 +252,11 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
                                            static_cast<float>(y) + sample_uniform(key, 1),
                                            settings.width, settings.height);
         const PathTracer::Result r = tracer.trace(ray, key);
+        if (poll.stopped()) {  // r is a path cut short: the tile is dropped, never half-written
+          out.stats().rays += tracer.rays_traced();
+          out.discard_pixels();
+          return cancel.reason();
+        }
         ++out.stats().samples;
         // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
         // counts it as a 0 too.
@@ -265,6 +279,7 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
     }
   }
   out.stats().rays += tracer.rays_traced();
+  return StopReason::None;
 }
 
 }  // namespace farm::path

@@ -7,10 +7,12 @@
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
+#include "renderer/util/cancel_flag.h"
 
 namespace farm::path {
 
-void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
-                 TileBuffer& out);
+// Polls `cancel` every few camera samples; see farm::render_tile for what a stopped render leaves.
+StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                       TileBuffer& out, const CancelFlag& cancel);
 
 }  // namespace farm::path

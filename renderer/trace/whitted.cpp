@@ -13,11 +13,15 @@
 namespace farm::whitted {
 namespace {
 
+// Closest-hit rays (camera rays and their reflections and refractions, each with its shadow rays)
+// traced between looks at the cancel flag: well under a millisecond of work.
+constexpr int kRaysPerPoll = 64;
+
 class WhittedTracer {
  public:
   WhittedTracer(const PreparedScene& scene, const RenderSettings& settings,
-                const SceneIntersector& intersector)
-      : scene_(scene.scene()), settings_(settings), intersector_(intersector) {}
+                const SceneIntersector& intersector, CancelPoll& poll)
+      : scene_(scene.scene()), settings_(settings), intersector_(intersector), poll_(poll) {}
 
   struct Primary {
     glm::vec3 color{0.0f};
@@ -29,9 +33,11 @@ class WhittedTracer {
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
 
-  // The first hit is returned too, for the AOVs.
+  // The first hit is returned too, for the AOVs. Once poll_ says stop, the rays not yet traced
+  // are skipped and the colour is meaningless (the caller checks poll_.stopped(), drops the tile).
   Primary trace_primary(const Ray& ray, TraversalStats* stats) const {
     Primary p;
+    if (poll_()) return p;
     ++rays_;
     if (!intersector_.closest_hit(ray, p.surface, stats)) {
       p.color = scene_.background;
@@ -44,6 +50,8 @@ class WhittedTracer {
 
  private:
   glm::vec3 trace(const Ray& ray, int depth) const {
+    // A deep max_depth through glass doubles the rays at every level: looked at here too.
+    if (poll_()) return glm::vec3(0.0f);
     SurfaceHit hit;
     ++rays_;
     if (!intersector_.closest_hit(ray, hit, nullptr)) return scene_.background;
@@ -113,20 +121,22 @@ class WhittedTracer {
   const Scene& scene_;
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
+  CancelPoll& poll_;  // counts closest-hit rays; the caller's, so that it sees a stop too
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
 };
 
 }  // namespace
 
-void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
-                 TileBuffer& out) {
+StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
+                       TileBuffer& out, const CancelFlag& cancel) {
   // The variance AOV stays at the zeros reset() writes: a Whitted pixel is no Monte Carlo
   // estimate of the light reaching it (its extra samples only antialias), so there is no noise
   // in it to report.
   out.reset(tile, settings.aovs);
-  if (tile.empty()) return;
+  if (tile.empty()) return StopReason::None;
   const auto intersector = cached_scene_intersector(scene, settings.accel);
-  const WhittedTracer tracer(scene, settings, *intersector);
+  CancelPoll poll(cancel, kRaysPerPoll);
+  const WhittedTracer tracer(scene, settings, *intersector, poll);
   const Camera& camera = scene.scene().camera;
   const int samples = std::max(1, settings.spp);
 
@@ -144,6 +154,11 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
                                            settings.width, settings.height);
         TraversalStats stats;
         const WhittedTracer::Primary p = tracer.trace_primary(ray, s == 0 ? &stats : nullptr);
+        if (poll.stopped()) {  // the tile is dropped, never half-written
+          out.stats().rays += tracer.rays_traced();
+          out.discard_pixels();
+          return cancel.reason();
+        }
         sum += glm::vec4(p.color, p.hit ? 1.0f : 0.0f);
         if (s != 0) continue;
         if (out.aovs().bvh_cost) out.bvh_cost(x, y) = static_cast<float>(stats.cost());
@@ -157,6 +172,7 @@ void render_tile(const PreparedScene& scene, const RenderSettings& settings, con
     }
   }
   out.stats().rays += tracer.rays_traced();
+  return StopReason::None;
 }
 
 }  // namespace farm::whitted

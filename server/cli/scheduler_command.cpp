@@ -12,6 +12,7 @@
 #include "server/cli/log_level_option.h"
 #include "server/cli/server_security_flags.h"
 #include "server/common/farm_server.h"
+#include "server/common/server_shutdown.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
 
@@ -19,7 +20,11 @@ namespace farm {
 
 namespace {
 
-constexpr auto kShutdownGrace = std::chrono::seconds(2);
+// Calls in flight get this long to finish after SIGINT/SIGTERM before they are cancelled; a call
+// still running kShutdownUnwind later (a SubmitJob loading a huge model, which cannot be
+// interrupted) is abandoned: the scheduler is gone within 2 s.
+constexpr auto kShutdownGrace = std::chrono::milliseconds(1400);
+constexpr auto kShutdownUnwind = std::chrono::milliseconds(400);
 constexpr int kMaxRequestBytes = 64 << 20;
 
 std::string host_of(const std::string& address) {
@@ -80,9 +85,17 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   sigwait(&signals, &signal_number);
   fmt::print("scheduler: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
   std::fflush(stdout);
-  server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
-  core.stop();
-  server->Wait();
+  const bool drained = shut_down_within(*server, kShutdownGrace, kShutdownUnwind);
+  core.stop();  // calls to workers cancelled, their tiles queued again in the store
+  if (!drained) {
+    // Safe to leave mid-call. The job store is SQLite in WAL mode, which a process that dies in
+    // the middle of a transaction leaves as it was before it (the next open rolls the unfinished
+    // transaction back): an abandoned SubmitJob has queued its job entirely or not at all, and
+    // its client was never told OK. Every file (assets, laid-out scenes, tiles, results) is written
+    // under a temporary name and renamed into place, so none is left half-written.
+    fmt::print("scheduler: calls still running after the grace period, exiting without them\n");
+    exit_abandoning_calls(0);
+  }
   return 0;
 }
 

@@ -25,13 +25,17 @@
 #include "server/common/listen_policy.h"
 #include "server/cli/version.h"
 #include "server/common/farm_server.h"
+#include "server/common/server_shutdown.h"
 
 namespace farm {
 
 namespace {
 
-// Calls in flight get this long to finish after SIGINT/SIGTERM before they are cancelled.
-constexpr auto kShutdownGrace = std::chrono::seconds(2);
+// Calls in flight get this long to finish after SIGINT/SIGTERM before they are cancelled; a
+// cancelled render stops within milliseconds, and a call still running kShutdownUnwind later
+// (preparing a scene, which cannot be interrupted) is abandoned: the worker is gone within 2 s.
+constexpr auto kShutdownGrace = std::chrono::milliseconds(1400);
+constexpr auto kShutdownUnwind = std::chrono::milliseconds(400);
 // A request carries the job file (at most 16 MiB) and, for a worker without --scheduler, the
 // job's files inline (RenderTileRequest.assets).
 constexpr int kMaxRequestBytes = 1 << 30;
@@ -182,8 +186,12 @@ int run_worker_command(const WorkerCommandOptions& command) {
   fmt::print("worker: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
   std::fflush(stdout);
   registration.reset();
-  server->Shutdown(std::chrono::system_clock::now() + kShutdownGrace);
-  server->Wait();
+  if (!shut_down_within(*server, kShutdownGrace, kShutdownUnwind)) {
+    // Safe to leave mid-call: the worker's files (blobs, laid-out scenes) are written under a
+    // temporary name and renamed into place, and the scheduler sends an abandoned tile again.
+    fmt::print("worker: calls still running after the grace period, exiting without them\n");
+    exit_abandoning_calls(0);
+  }
   return 0;
 }
 

@@ -27,10 +27,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Sub-tiles are the unit of parallelism and of cancellation: small enough that a 64x64 tile keeps
-// 16 threads busy and a cancelled call stops within milliseconds, large enough that per-tile
-// engine overhead stays negligible. Pixels do not depend on the split (the engine contract).
+// Sub-tiles are the unit of parallelism: small enough that a 64x64 tile keeps 16 threads busy,
+// large enough that per-tile engine overhead stays negligible. Cancellation reaches inside them:
+// the engines poll the call's CancelFlag every few samples or triangles. Pixels do not depend on
+// the split (the engine contract).
 constexpr int kSubTile = 16;
+// How often the waiting handler looks at its client (IsCancelled); the deadline needs no look,
+// the render threads check it themselves.
 constexpr auto kPollInterval = std::chrono::milliseconds(10);
 // 48 bytes a pixel with every AOV; keeps a reply far below protobuf's 2 GiB message limit.
 constexpr std::int64_t kMaxRectPixels = std::int64_t{4096} * 4096;
@@ -40,20 +43,25 @@ double ms_since(Clock::time_point t) {
 }
 
 // Why a call ended early: the caller's deadline passed, or it (or the server) cancelled.
-grpc::Status stopped(const RenderControl& control) {
-  if (control.deadline <= std::chrono::system_clock::now()) {
+grpc::Status stopped(const CancelFlag& flag) {
+  if (flag.reason() == StopReason::Deadline) {
     return {grpc::StatusCode::DEADLINE_EXCEEDED, "deadline exceeded while rendering"};
   }
   return {grpc::StatusCode::CANCELLED, "cancelled while rendering"};
 }
 
 // One RenderTile call's sub-tiles in flight. Shared with the pool's work, so a call that returns
-// early (cancelled) leaves the chunks still running a live buffer to finish.
+// early (cancelled) leaves the chunks still running a live buffer and flag until they stop.
 struct RectRender {
+  explicit RectRender(CancelFlag::Clock::time_point deadline) : flag(deadline) {}
+
   std::shared_ptr<const CachedScene> scene;
   std::vector<Rect> subs;
   TileBuffer out;
-  std::atomic<bool> stop{false};
+  // The call's: cancelled by the handler when its client goes away (or a sub-tile fails); the
+  // deadline is the client's. The engines poll it.
+  CancelFlag flag;
+  std::atomic<std::size_t> complete{0};  // sub-tiles rendered to the end and pasted into `out`
 
   std::mutex mutex;  // guards the three below
   RenderStats stats;
@@ -65,7 +73,7 @@ struct RectRender {
 // bin (walking the bin's triangles), which 16x16 pieces of its 32x32 bins would pay four times:
 // it renders the job's own tiles whole (a batch's rect is a run of them) when the call holds at
 // least one per render thread. The ray engines have no per-tile set-up worth sparing and keep the
-// small pieces, which balance well and stop quickly when a call is cancelled.
+// small pieces, which balance well.
 int sub_tile_size(const RenderSettings& settings, const Rect& rect, int threads) {
   if (settings.engine != EngineKind::Raster) return kSubTile;
   const int tile = std::max(settings.tile_size, 1);
@@ -81,24 +89,30 @@ double thread_cpu_ms() {
 
 void render_sub_tile(RectRender& r, const Rect& sub) {
   RenderStats stats;
-  std::exception_ptr failure;
   const double cpu_start = thread_cpu_ms();
-  if (!r.stop.load(std::memory_order_relaxed)) {
+  if (!r.flag.stop_requested()) {
     try {
       TileBuffer tile;
-      render_tile(r.scene->prepared, r.scene->job.render, sub, tile);
-      r.out.paste(tile);  // sub-tiles are disjoint: no lock needed
+      // A stopped sub-tile comes back without pixels and is never pasted: `out` is incomplete
+      // then, and the call says CANCELLED or DEADLINE_EXCEEDED instead of sending it.
+      if (render_tile(r.scene->prepared, r.scene->job.render, sub, tile, r.flag) == StopReason::None) {
+        r.out.paste(tile);  // sub-tiles are disjoint: no lock needed
+        r.complete.fetch_add(1);
+      }
       stats = tile.stats();
     } catch (...) {
-      failure = std::current_exception();
-      r.stop = true;
+      {
+        // Recorded before the flag stops the others, so the handler reports this, not a cancel.
+        std::lock_guard lock(r.mutex);
+        if (!r.failure) r.failure = std::current_exception();
+      }
+      r.flag.cancel();
     }
   }
   const double cpu_ms = thread_cpu_ms() - cpu_start;
   std::lock_guard lock(r.mutex);
   r.stats += stats;
   r.cpu_ms += cpu_ms;
-  if (failure && !r.failure) r.failure = failure;
 }
 
 // InputError naming the asset when inline bytes are not as long as the spec's AssetRef says.
@@ -193,9 +207,11 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
                                        v1::TileStats& stats, const RenderControl& control) {
   const Clock::time_point start = Clock::now();
   const v1::RenderTileRequest* request = &req;
+  auto r = std::make_shared<RectRender>(CancelFlag::steady_deadline(control.deadline));
+  // The client's cancel becomes the flag's, which the render threads see.
   const auto is_stopped = [&] {
-    return (control.cancelled && control.cancelled()) ||
-           control.deadline <= std::chrono::system_clock::now();
+    if (control.cancelled && control.cancelled()) r->flag.cancel();
+    return r->flag.stop_requested();
   };
   try {
     const v1::JobSpec& spec = request->job();
@@ -215,7 +231,7 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
 
     const SceneCache::Lookup lookup = cache_.get(
         hash, [&] { return prepare(spec, hash); }, is_stopped);
-    if (!lookup.scene || is_stopped()) return stopped(control);
+    if (!lookup.scene || is_stopped()) return stopped(r->flag);
     const double prepare_ms = lookup.hit ? 0.0 : ms_since(start);
     const RenderSettings& settings = lookup.scene->job.render;
 
@@ -237,7 +253,7 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
     // The engine's per-frame set-up (the rasterizer's transformed and binned triangles) on all
     // render threads, once per frame: the sub-tiles then find it built.
     prepare_frame(lookup.scene->prepared, settings, pool_);
-    auto r = std::make_shared<RectRender>();
+    if (is_stopped()) return stopped(r->flag);
     r->scene = lookup.scene;
     r->out.reset_for_overwrite(rect, settings.aovs);
     r->subs = split_into_tiles(rect.width(), rect.height(), sub_tile_size(settings, rect, pool_.size()));
@@ -246,15 +262,22 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
         pool_.start(r->subs.size(), 1, [r](std::size_t begin, std::size_t end, int) {
           for (std::size_t i = begin; i < end; ++i) render_sub_tile(*r, r->subs[i]);
         });
-    while (!work->wait_for(kPollInterval)) {
+    bool finished = false;
+    while (!(finished = work->wait_for(kPollInterval))) {
       if (is_stopped()) {
-        r->stop = true;  // sub-tiles not started are skipped; the pool moves on at once
+        // Sub-tiles not started are skipped; those rendering see the flag within a few samples
+        // and return without pasting. The pool is free again in a millisecond or so.
         work->cancel();
-        return stopped(control);
+        break;
       }
     }
+    {
+      std::lock_guard lock(r->mutex);
+      if (r->failure) std::rethrow_exception(r->failure);
+    }
+    // Only a tile whose every sub-tile ran to the end is sent: never a half-rendered one.
+    if (!finished || r->complete.load() != r->subs.size()) return stopped(r->flag);
     // Every sub-tile has finished: r is ours alone now.
-    if (r->failure) std::rethrow_exception(r->failure);
     pixels = std::move(r->out);
     encode_stats(r->stats, stats);
     stats.set_render_ms(ms_since(render_start));

@@ -37,7 +37,9 @@ struct TileRendererOptions {
   LogLevel log_level = LogLevel::info;
 };
 
-// How a caller stops a render: polled every few milliseconds while sub-tiles render.
+// How a caller stops a render. `cancelled` is polled every few milliseconds while the call
+// waits, and a stop is passed on to the render threads through the call's CancelFlag
+// (renderer/util/cancel_flag.h), which they poll every few samples, with the deadline in it.
 struct RenderControl {
   std::function<bool()> cancelled;                        // true = stop (CANCELLED)
   std::chrono::system_clock::time_point deadline =        // passed = stop (DEADLINE_EXCEEDED)

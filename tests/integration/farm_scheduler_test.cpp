@@ -6,15 +6,19 @@
 #include <signal.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <numbers>
+#include <thread>
 
 #include "renderer/image/exr_io.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/common/asset_store.h"
 #include "server/common/sha256.h"
@@ -370,6 +374,122 @@ TEST_F(FarmSchedulerTest, CancelStopsTheJobQuicklyAndTheWorkerServesTheNextJob) 
   while (reader->Read(&chunk)) {
   }
   EXPECT_EQ(reader->Finish().error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+}
+
+// A job of one tile that no worker finishes in a test's lifetime (2^20 samples a pixel, the most
+// a job may ask for). The worker has one render thread: were the cancelled render still running,
+// the next job's tile would wait behind it until the 600 s tile deadline.
+TEST_F(FarmSchedulerTest, CancellingAHugeSppJobFreesTheWorkerForTheNextJob) {
+  auto worker = start_worker("w1", 1);
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  const v1::Job huge = submit_ok(cornell("path", 16, 16, kMaxSpp, 16));
+  ASSERT_TRUE(test::wait_for_job(*stub_, huge.job_id(),
+                                 [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
+  std::this_thread::sleep_for(500ms);  // into the render (an earlier cancel proves less, never fails)
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 10s);
+  v1::CancelJobRequest request;
+  request.set_job_id(huge.job_id());
+  v1::CancelJobResponse response;
+  ASSERT_TRUE(stub_->CancelJob(&context, request, &response).ok());
+
+  const v1::Job small = submit_ok(cornell("raster", 32, 32, 1, 16));
+  const auto small_done = test::wait_for_job(*stub_, small.job_id(), done, 30s);
+  ASSERT_TRUE(small_done) << "the worker is still rendering the cancelled job\n" << worker->process().output();
+  EXPECT_EQ(small_done->state(), v1::JOB_STATE_SUCCEEDED) << small_done->failure_reason();
+}
+
+// SIGTERM while the only worker renders hours of tiles: the scheduler cancels its calls and exits
+// 0; the worker stops rendering (a call to it comes back), and the restarted scheduler finds the
+// tiles queued again, none of them done (nothing half-rendered was accepted).
+TEST_F(FarmSchedulerTest, SigtermWhileAWorkerRendersHugeTilesQueuesThemAgainAndFreesTheWorker) {
+  auto worker = start_worker("w1", 1);
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  const v1::Job huge = submit_ok(cornell("path", 32, 32, kMaxSpp, 16));
+  ASSERT_TRUE(test::wait_for_job(*stub_, huge.job_id(),
+                                 [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
+  std::this_thread::sleep_for(500ms);
+  scheduler->process().send_signal(SIGTERM);
+  const std::optional<int> code = scheduler->process().wait_exit(15s);
+  ASSERT_TRUE(code.has_value()) << "scheduler still running after SIGTERM\n" << scheduler->process().output();
+  EXPECT_EQ(*code, 0) << scheduler->process().output();
+
+  // The worker's one render thread is free: a small tile straight to it comes back.
+  auto worker_stub = v1::Worker::NewStub(grpc::CreateChannel(worker->address(), grpc::InsecureChannelCredentials()));
+  v1::RenderTileRequest tile;
+  *tile.mutable_job() = cornell("raster", 16, 16, 1, 16);
+  tile.mutable_rect()->set_x1(16);
+  tile.mutable_rect()->set_y1(16);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 30s);
+  v1::RenderTileResponse rendered;
+  const grpc::Status status = worker_stub->RenderTile(&context, tile, &rendered);
+  EXPECT_TRUE(status.ok()) << "the worker is still rendering the abandoned tiles: " << status.error_message();
+
+  auto restarted = start_scheduler({});  // no workers: the job stays as the store kept it
+  ASSERT_TRUE(stub_);
+  const auto resumed = test::get_job(*stub_, huge.job_id());
+  ASSERT_TRUE(resumed);
+  EXPECT_FALSE(done(*resumed)) << v1::JobState_Name(resumed->state());
+  EXPECT_EQ(resumed->tiles_done(), 0u);
+}
+
+// A model whose loading takes minutes in little memory: Assimp triangulates each polygon by ear
+// clipping, quadratic in its vertices, and a face may have 32767 of them.
+void write_slow_model(const fs::path& file) {
+  constexpr int kVertices = 32000, kFaces = 24;
+  std::ofstream out(file);
+  for (int i = 0; i < kVertices; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / kVertices, r = i % 2 == 0 ? 1.0 : 0.6;  // a star: concave
+    out << "v " << r * std::cos(a) << ' ' << r * std::sin(a) << " 0\n";
+  }
+  std::string face = "f";
+  for (int i = 1; i <= kVertices; ++i) face += ' ' + std::to_string(i);
+  for (int f = 0; f < kFaces; ++f) out << face << '\n';
+}
+
+// SubmitJob validates by loading the models, which cannot be interrupted: SIGTERM in the middle
+// of loading a huge one used to wait for the load to finish. Now the call is abandoned after the
+// grace period and the scheduler exits 0; the store holds no trace of the job, and the client
+// was never told it was queued.
+TEST_F(FarmSchedulerTest, SigtermWhileSubmitJobLoadsAHugeModelExitsWithoutQueueingIt) {
+  auto scheduler = start_scheduler({});
+  ASSERT_TRUE(stub_);
+  const fs::path model = dir_ / "slow.obj";
+  write_slow_model(model);
+  const std::vector<std::pair<std::string, fs::path>> files{{"slow.obj", model}};
+  ASSERT_TRUE(test::upload_assets(*stub_, files).ok());
+  const v1::JobSpec spec = test::make_job_spec(
+      R"({"version": 1, "name": "slow", "scene": {"objects": [{"file": "slow.obj"}]},
+          "render": {"engine": "raster", "width": 16, "height": 16}})",
+      files, "slow.json");
+
+  grpc::Status submitted;
+  std::thread submit([&] {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + 600s);
+    v1::SubmitJobRequest request;
+    *request.mutable_job() = spec;
+    v1::SubmitJobResponse response;
+    submitted = stub_->SubmitJob(&context, request, &response);
+  });
+  std::this_thread::sleep_for(1s);  // into the load
+  scheduler->process().send_signal(SIGTERM);
+  const std::optional<int> code = scheduler->process().wait_exit(20s);
+  submit.join();
+  ASSERT_TRUE(code.has_value()) << "scheduler still running after SIGTERM\n" << scheduler->process().output();
+  EXPECT_EQ(*code, 0) << scheduler->process().output();
+  EXPECT_FALSE(submitted.ok()) << "the model loaded before SIGTERM: make it slower";
+
+  auto restarted = start_scheduler({});
+  ASSERT_TRUE(stub_);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 10s);
+  v1::ListJobsResponse jobs;
+  ASSERT_TRUE(stub_->ListJobs(&context, v1::ListJobsRequest(), &jobs).ok());
+  EXPECT_EQ(jobs.jobs_size(), 0);
 }
 
 TEST_F(FarmSchedulerTest, BadJobsAreRejectedAtSubmitAndTheFarmKeepsServing) {

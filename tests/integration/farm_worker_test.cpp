@@ -10,12 +10,14 @@
 #include <future>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "proto/farm.grpc.pb.h"
 #include "renderer/engine.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/job.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/common/asset_store.h"
 #include "server/common/health_check.h"
@@ -84,10 +86,10 @@ void expect_bit_identical(const v1::TileData& got, const v1::TileData& want, con
 class FarmWorkerTest : public ::testing::Test {
  protected:
   // A worker fetching assets from a fake scheduler that has the Cornell box's files.
-  std::unique_ptr<test::WorkerProcess> start_worker_with_scheduler() {
+  std::unique_ptr<test::WorkerProcess> start_worker_with_scheduler(int threads = 2) {
     for (const auto& [path, file] : test::cornell_assets()) scheduler_.add_asset(test::read_file(file));
     auto worker = std::make_unique<test::WorkerProcess>(std::vector<std::string>{
-        "--threads", "2", "--scheduler", scheduler_.address(), "--cache-dir",
+        "--threads", std::to_string(threads), "--scheduler", scheduler_.address(), "--cache-dir",
         (dir_ / "cache").string()});
     EXPECT_FALSE(worker->address().empty()) << worker->process().output();
     return worker;
@@ -319,6 +321,107 @@ TEST_F(FarmWorkerTest, DeadlineStopsTheRenderAndTheWorkerStaysResponsive) {
   const grpc::Status after = render(*stub, tile_request(quick, {0, 0, 16, 16}), response, 60s);
   EXPECT_TRUE(after.ok()) << after.error_message();
   EXPECT_LT(std::chrono::steady_clock::now() - start, 30s);
+}
+
+// Tiles no worker finishes in a test's lifetime, one per engine: the most samples a job may ask
+// for (2^20 a pixel; raster and whitted supersample), over rects that make hours of work even
+// for the cheap rasterizer.
+struct HugeTile {
+  const char* engine;
+  int size;
+};
+constexpr HugeTile kHugeTiles[] = {{"raster", 256}, {"whitted", 64}, {"path", 16}};
+
+v1::JobSpec huge_spec(const HugeTile& t) { return test::cornell_job_spec(t.engine, t.size, t.size, kMaxSpp); }
+
+// Prepares the scene of `spec` on the worker, so that a call after it starts rendering at once.
+// The call itself is cut short by its deadline (the scene is prepared and cached all the same);
+// the worker's log line says when the scene is ready.
+void prepare_scene(v1::Worker::Stub& stub, test::WorkerProcess& worker, const v1::JobSpec& spec) {
+  v1::RenderTileResponse response;
+  render(stub, tile_request(spec, {0, 0, 1, 1}), response, 200ms);
+  EXPECT_TRUE(worker.process().wait_for_line("scene " + scene_hash(spec).substr(0, 12), 60s))
+      << worker.process().output();
+}
+
+// One RenderTile call on a thread of its own, cancellable from the test.
+class CallInFlight {
+ public:
+  CallInFlight(v1::Worker::Stub& stub, const v1::RenderTileRequest& request) {
+    context_.set_deadline(std::chrono::system_clock::now() + 600s);
+    thread_ = std::thread([this, &stub, request] {
+      v1::RenderTileResponse response;
+      status_ = stub.RenderTile(&context_, request, &response);
+    });
+  }
+  ~CallInFlight() { finish(); }
+  void cancel() { context_.TryCancel(); }
+  grpc::Status finish() {
+    if (thread_.joinable()) thread_.join();
+    return status_;
+  }
+
+ private:
+  grpc::ClientContext context_;
+  grpc::Status status_;
+  std::thread thread_;
+};
+
+// The worker has one render thread: were a stopped render still running on it, the small call
+// after it would wait behind hours of work.
+TEST_F(FarmWorkerTest, HugeSppStopsAtTheDeadlineForEveryEngineAndTheWorkerServesTheNextCall) {
+  auto worker = start_worker_with_scheduler(1);
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  const v1::JobSpec quick = test::cornell_job_spec("raster", 16, 16, 1);
+  for (const HugeTile& huge : kHugeTiles) {
+    const v1::JobSpec spec = huge_spec(huge);
+    prepare_scene(*stub, *worker, spec);
+    v1::RenderTileResponse response;
+    const grpc::Status late = render(*stub, tile_request(spec, {0, 0, huge.size, huge.size}), response, 1s);
+    EXPECT_EQ(late.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << huge.engine << ": " << late.error_message();
+    const grpc::Status next = render(*stub, tile_request(quick, {0, 0, 16, 16}), response, 30s);
+    EXPECT_TRUE(next.ok()) << huge.engine << ": the worker is still busy with the late tile: "
+                           << next.error_message() << "\n" << worker->process().output();
+  }
+}
+
+TEST_F(FarmWorkerTest, HugeSppCancelledMidTileFreesTheWorkerForEveryEngine) {
+  auto worker = start_worker_with_scheduler(1);
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  const v1::JobSpec quick = test::cornell_job_spec("raster", 16, 16, 1);
+  for (const HugeTile& huge : kHugeTiles) {
+    const v1::JobSpec spec = huge_spec(huge);
+    prepare_scene(*stub, *worker, spec);
+    CallInFlight call(*stub, tile_request(spec, {0, 0, huge.size, huge.size}));
+    std::this_thread::sleep_for(500ms);  // into the render (an earlier cancel proves less, never fails)
+    call.cancel();
+    EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::CANCELLED) << huge.engine;
+    v1::RenderTileResponse response;
+    const grpc::Status next = render(*stub, tile_request(quick, {0, 0, 16, 16}), response, 30s);
+    EXPECT_TRUE(next.ok()) << huge.engine << ": the worker is still busy with the cancelled tile: "
+                           << next.error_message() << "\n" << worker->process().output();
+  }
+}
+
+// SIGTERM in the middle of hours of rendering: the call is cancelled after the grace period, the
+// render stops, and the worker exits 0 (it used to render on, deaf to SIGTERM, until kill -9).
+TEST_F(FarmWorkerTest, SigtermWhileRenderingHugeSppExitsWithCode0) {
+  auto worker = start_worker_with_scheduler(1);
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  const v1::JobSpec spec = huge_spec({"path", 16});
+  prepare_scene(*stub, *worker, spec);
+  CallInFlight call(*stub, tile_request(spec, {0, 0, 16, 16}));
+  std::this_thread::sleep_for(500ms);
+  worker->process().send_signal(SIGTERM);
+  // The bound is generous for a loaded machine; the worker takes about 1.5 s (README).
+  const std::optional<int> code = worker->process().wait_exit(15s);
+  ASSERT_TRUE(code.has_value()) << "worker still running after SIGTERM\n" << worker->process().output();
+  EXPECT_EQ(*code, 0) << worker->process().output();
+  const grpc::Status status = call.finish();
+  EXPECT_FALSE(status.ok()) << "a render of hours cannot have finished";
 }
 
 TEST_F(FarmWorkerTest, SigtermShutsTheWorkerDownCleanly) {
