@@ -59,6 +59,8 @@ class Registration {
     {
       std::lock_guard lock(mutex_);
       stop_ = true;
+      // A call to a scheduler that does not answer would hold the shutdown for its deadline.
+      if (call_) call_->TryCancel();
     }
     wake_.notify_all();
     thread_.join();
@@ -77,6 +79,19 @@ class Registration {
     while (true) {
       grpc::ClientContext context;
       context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+      {
+        std::lock_guard lock(mutex_);
+        if (stop_) return;
+        call_ = &context;
+      }
+      // Cleared before `context` goes: the destructor cancels only a call still in flight.
+      struct Clear {
+        Registration& r;
+        ~Clear() {
+          std::lock_guard lock(r.mutex_);
+          r.call_ = nullptr;
+        }
+      } clear{*this};
       if (id.empty()) {
         v1::RegisterWorkerRequest request;
         request.set_address(address_);
@@ -121,6 +136,7 @@ class Registration {
   std::mutex mutex_;
   std::condition_variable wake_;
   bool stop_ = false;
+  grpc::ClientContext* call_ = nullptr;  // the call in flight, under mutex_
   std::thread thread_;
 };
 

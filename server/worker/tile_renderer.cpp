@@ -229,8 +229,16 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
       if (!store_.has(asset.sha256())) store_.put(asset.sha256(), asset.data());
     }
 
-    const SceneCache::Lookup lookup = cache_.get(
-        hash, [&] { return prepare(spec, hash); }, is_stopped);
+    const SceneCache::Lookup lookup = [&] {
+      try {
+        return cache_.get(hash, [&] { return prepare(spec, hash); }, is_stopped);
+      } catch (const ServiceError& e) {
+        // A concurrent call without the files failed the preparation this one waited on, while
+        // this one brought them inline: with every file here now, prepare again.
+        if (e.code() != grpc::StatusCode::FAILED_PRECONDITION || !missing_assets(spec, store_).empty()) throw;
+        return cache_.get(hash, [&] { return prepare(spec, hash); }, is_stopped);
+      }
+    }();
     if (!lookup.scene || is_stopped()) return stopped(r->flag);
     const double prepare_ms = lookup.hit ? 0.0 : ms_since(start);
     const RenderSettings& settings = lookup.scene->job.render;
