@@ -35,33 +35,8 @@ using test::Escape;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-enum class Reference { obj_mtllib, gltf_buffer, gltf_image };
-
-const char* to_string(Reference r) {
-  switch (r) {
-    case Reference::obj_mtllib: return "ObjMtllib";
-    case Reference::gltf_buffer: return "GltfBuffer";
-    case Reference::gltf_image: return "GltfImage";
-  }
-  return "?";
-}
-
-struct ServerCase {
-  Reference reference;
-  Escape escape;
-};
-
-std::string case_name(const ::testing::TestParamInfo<ServerCase>& info) {
-  return std::string(to_string(info.param.reference)) + "_" + test::to_string(info.param.escape);
-}
-
-std::vector<ServerCase> all_cases() {
-  std::vector<ServerCase> cases;
-  for (Reference r : {Reference::obj_mtllib, Reference::gltf_buffer, Reference::gltf_image}) {
-    for (Escape e : test::kAllEscapes) cases.push_back({r, e});
-  }
-  return cases;
-}
+using Reference = test::ModelReference;
+using ServerCase = test::ConfinementCase;
 
 // SubmitJob with a deadline well past the FifoReleaser's grace: a scheduler stuck on a FIFO is
 // released, accepts the job, and the test fails on that.
@@ -84,17 +59,9 @@ class SchedulerJob : public ::testing::Test {
 
   // The job: one model whose reference is `reference`, with the files the spec carries.
   v1::JobSpec crafted_spec(Reference kind, const std::string& reference) {
-    files_.clear();
-    if (kind == Reference::obj_mtllib) {
-      model_ = "tri.obj";
-      files_.emplace_back(model_, dir_.write("files/tri.obj", test::triangle_obj(reference)));
-    } else {
-      model_ = "tri.gltf";
-      files_.emplace_back("tri.bin", dir_.write("files/tri.bin", test::triangle_bin()));
-      files_.emplace_back(model_, dir_.write("files/tri.gltf", kind == Reference::gltf_buffer
-                                                                   ? test::triangle_gltf(reference)
-                                                                   : test::triangle_gltf("tri.bin", reference)));
-    }
+    test::CraftedModel crafted = test::craft_model(dir_, kind, reference);
+    model_ = crafted.model;
+    files_ = std::move(crafted.files);
     return test::make_job_spec(R"({"version": 1, "scene": {"objects": [{"file": ")" + model_ + R"("}]}})",
                                files_, "job.json");
   }
@@ -153,7 +120,8 @@ TEST_P(SchedulerConfinement, RawSubmitJobIsInvalidArgumentNamingModelAndPathWith
   EXPECT_FALSE(releaser.released_a_reader()) << "SubmitJob waited on the FIFO";
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryReferenceAndEscape, SchedulerConfinement, ::testing::ValuesIn(all_cases()), case_name);
+INSTANTIATE_TEST_SUITE_P(EveryReferenceAndEscape, SchedulerConfinement, ::testing::ValuesIn(test::all_confinement_cases()),
+                         test::confinement_case_name);
 
 // What is allowed stays allowed: the same model naming a library beside it is accepted.
 TEST_F(SchedulerJob, AModelNamingAFileInsideItsJobIsAccepted) {

@@ -130,4 +130,40 @@ FifoReleaser::~FifoReleaser() {
   thread_.join();
 }
 
+const char* to_string(ModelReference reference) {
+  switch (reference) {
+    case ModelReference::obj_mtllib: return "ObjMtllib";
+    case ModelReference::gltf_buffer: return "GltfBuffer";
+    case ModelReference::gltf_image: return "GltfImage";
+  }
+  return "?";
+}
+
+std::vector<ConfinementCase> all_confinement_cases() {
+  std::vector<ConfinementCase> cases;
+  for (ModelReference r : {ModelReference::obj_mtllib, ModelReference::gltf_buffer, ModelReference::gltf_image}) {
+    for (Escape e : kAllEscapes) cases.push_back({r, e});
+  }
+  return cases;
+}
+
+std::string confinement_case_name(const ::testing::TestParamInfo<ConfinementCase>& info) {
+  return std::string(to_string(info.param.reference)) + "_" + to_string(info.param.escape);
+}
+
+CraftedModel craft_model(const TempDir& dir, ModelReference kind, const std::string& reference) {
+  CraftedModel m;
+  if (kind == ModelReference::obj_mtllib) {
+    m.model = "tri.obj";
+    m.files.emplace_back(m.model, dir.write("files/tri.obj", triangle_obj(reference)));
+  } else {
+    m.model = "tri.gltf";
+    m.files.emplace_back("tri.bin", dir.write("files/tri.bin", triangle_bin()));
+    m.files.emplace_back(m.model, dir.write("files/tri.gltf", kind == ModelReference::gltf_buffer
+                                                                  ? triangle_gltf(reference)
+                                                                  : triangle_gltf("tri.bin", reference)));
+  }
+  return m;
+}
+
 }  // namespace farm::test

@@ -10,6 +10,10 @@
 #include <thread>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include "tests/support/temp_dir.h"
+
 namespace farm::test {
 
 // In the secret's material name: had the secret been read, this would turn up somewhere.
@@ -37,6 +41,25 @@ enum class Escape {
 inline constexpr Escape kAllEscapes[] = {Escape::dot_dot, Escape::absolute, Escape::symlink_out, Escape::fifo,
                                          Escape::directory};
 const char* to_string(Escape escape);
+
+// Which reference of which model tries to escape, and the cases every component is tried with.
+enum class ModelReference { obj_mtllib, gltf_buffer, gltf_image };
+const char* to_string(ModelReference reference);
+struct ConfinementCase {
+  ModelReference reference;
+  Escape escape;
+};
+std::vector<ConfinementCase> all_confinement_cases();  // every reference with every escape
+// "ObjMtllib_DotDot": the name of a parameterized test's case.
+std::string confinement_case_name(const ::testing::TestParamInfo<ConfinementCase>& info);
+
+// The files of a job of one model whose `kind` reference is `reference` (a glTF's other reference
+// is its own tri.bin), written under `dir`/files: (path in the job, file on disk), the model first.
+struct CraftedModel {
+  std::string model;  // "tri.obj" or "tri.gltf"
+  std::vector<std::pair<std::string, std::filesystem::path>> files;
+};
+CraftedModel craft_model(const TempDir& dir, ModelReference kind, const std::string& reference);
 
 // Makes what `escape` needs and returns the reference a model in `model_dir` writes for it: the
 // secret (secret_mtl) at `secret`, outside the root, `..` components enough to climb from

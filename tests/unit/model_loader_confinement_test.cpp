@@ -24,26 +24,8 @@ using test::Escape;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
-// Which reference of which model tries to escape.
-enum class Reference { obj_mtllib, gltf_buffer, gltf_image };
-
-const char* to_string(Reference r) {
-  switch (r) {
-    case Reference::obj_mtllib: return "ObjMtllib";
-    case Reference::gltf_buffer: return "GltfBuffer";
-    case Reference::gltf_image: return "GltfImage";
-  }
-  return "?";
-}
-
-struct LoaderCase {
-  Reference reference;
-  Escape escape;
-};
-
-std::string case_name(const ::testing::TestParamInfo<LoaderCase>& info) {
-  return std::string(to_string(info.param.reference)) + "_" + test::to_string(info.param.escape);
-}
+using Reference = test::ModelReference;
+using LoaderCase = test::ConfinementCase;
 
 // root/job.json, root/models/<model> naming the escape; elsewhere/secret.mtl beside the root.
 class LoaderConfinement : public ::testing::TestWithParam<LoaderCase> {
@@ -113,15 +95,8 @@ TEST_P(LoaderConfinement, BuildSceneOfAJobRefusesItNamingJobObjectModelAndPath) 
   EXPECT_FALSE(releaser.released_a_reader());
 }
 
-std::vector<LoaderCase> all_cases() {
-  std::vector<LoaderCase> cases;
-  for (Reference r : {Reference::obj_mtllib, Reference::gltf_buffer, Reference::gltf_image}) {
-    for (Escape e : test::kAllEscapes) cases.push_back({r, e});
-  }
-  return cases;
-}
-
-INSTANTIATE_TEST_SUITE_P(EveryReferenceAndEscape, LoaderConfinement, ::testing::ValuesIn(all_cases()), case_name);
+INSTANTIATE_TEST_SUITE_P(EveryReferenceAndEscape, LoaderConfinement, ::testing::ValuesIn(test::all_confinement_cases()),
+                         test::confinement_case_name);
 
 // What stays allowed: files inside the root, also through a link that stays inside, and `..` that
 // climbs to a folder of the root.
