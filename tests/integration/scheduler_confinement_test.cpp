@@ -93,21 +93,11 @@ TEST_P(SchedulerConfinement, RawSubmitJobIsInvalidArgumentNamingModelAndPathWith
   ASSERT_TRUE(test::upload_assets(*stub_, files_).ok());
 
   const fs::path scene = dir_ / "data/scenes" / scene_hash(spec);
-  fs::path target = secret;  // the folder of the directory case appears only as the job is laid out
-  std::vector<fs::path> fifos;
-  if (c.escape == Escape::symlink_out || c.escape == Escape::fifo) {
-    // The scene folder as the scheduler would lay it out, plus the link or the FIFO.
-    fs::create_directories(scene);
-    for (const auto& [path, file] : files_) fs::copy_file(file, scene / path);
-    test::make_escape(c.escape, scene, secret, name);
-  }
-  if (c.escape == Escape::fifo) {
-    target = scene / name;
-    fifos.push_back(target);
-  }
+  const test::PlacedEscape placed = test::place_escape_in_scene(c.escape, scene, files_, secret, name);
+  const fs::path& target = placed.target;
   test::OpenWatch watch(target);
   ASSERT_TRUE(watch.watching()) << target;
-  const test::FifoReleaser releaser(fifos, 20s);
+  const test::FifoReleaser releaser(placed.fifos, 20s);
 
   const grpc::Status status = submit(*stub_, spec);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();

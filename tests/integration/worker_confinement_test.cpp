@@ -114,21 +114,11 @@ TEST_P(WorkerConfinement, RawRenderTileIsInvalidArgumentNamingModelAndPathWithNo
     spec = remade_spec();
   }
   const fs::path scene = dir_ / "cache/scenes" / scene_hash(spec);
-  fs::path target = secret;  // the folder of the directory case appears only as the job is laid out
-  std::vector<fs::path> fifos;
-  if (c.escape == Escape::symlink_out || c.escape == Escape::fifo) {
-    // The scene folder as the worker would lay it out, plus the link or the FIFO.
-    fs::create_directories(scene);
-    for (const auto& [path, file] : files_) fs::copy_file(file, scene / path);
-    test::make_escape(c.escape, scene, secret, name);
-  }
-  if (c.escape == Escape::fifo) {
-    target = scene / name;
-    fifos.push_back(target);
-  }
+  const test::PlacedEscape placed = test::place_escape_in_scene(c.escape, scene, files_, secret, name);
+  const fs::path& target = placed.target;
   test::OpenWatch watch(target);
   ASSERT_TRUE(watch.watching()) << target;
-  const test::FifoReleaser releaser(fifos, 20s);
+  const test::FifoReleaser releaser(placed.fifos, 20s);
 
   v1::RenderTileResponse response;
   const grpc::Status status = render(*stub_, spec, inline_files(), response);

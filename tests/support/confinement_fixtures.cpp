@@ -166,4 +166,21 @@ CraftedModel craft_model(const TempDir& dir, ModelReference kind, const std::str
   return m;
 }
 
+PlacedEscape place_escape_in_scene(Escape escape, const std::filesystem::path& scene,
+                                   const std::vector<std::pair<std::string, std::filesystem::path>>& files,
+                                   const std::filesystem::path& secret, const std::string& name) {
+  // The folder of the directory case appears only as the server lays the job out.
+  PlacedEscape placed{secret, {}};
+  if (escape == Escape::symlink_out || escape == Escape::fifo) {
+    std::filesystem::create_directories(scene);
+    for (const auto& [path, file] : files) std::filesystem::copy_file(file, scene / path);
+    make_escape(escape, scene, secret, name);
+  }
+  if (escape == Escape::fifo) {
+    placed.target = scene / name;
+    placed.fifos.push_back(placed.target);
+  }
+  return placed;
+}
+
 }  // namespace farm::test

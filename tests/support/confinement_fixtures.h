@@ -61,6 +61,17 @@ struct CraftedModel {
 };
 CraftedModel craft_model(const TempDir& dir, ModelReference kind, const std::string& reference);
 
+// A server's copy of a job (its `scene` folder, laid out from `files`) with the link or FIFO that
+// `escape` needs placed in it beforehand: a spec cannot carry those. Returns what a read through
+// the escape would open (the secret, or the FIFO) and the FIFOs to release.
+struct PlacedEscape {
+  std::filesystem::path target;
+  std::vector<std::filesystem::path> fifos;
+};
+PlacedEscape place_escape_in_scene(Escape escape, const std::filesystem::path& scene,
+                                   const std::vector<std::pair<std::string, std::filesystem::path>>& files,
+                                   const std::filesystem::path& secret, const std::string& name);
+
 // Makes what `escape` needs and returns the reference a model in `model_dir` writes for it: the
 // secret (secret_mtl) at `secret`, outside the root, `..` components enough to climb from
 // `model_dir` to `secret`'s folder, a link, a FIFO or a folder named `name` in `model_dir`.
