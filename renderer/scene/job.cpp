@@ -22,7 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr std::uintmax_t kMaxJobFileBytes = 16u << 20;  // job files are small; refuse to slurp huge ones
 constexpr std::size_t kMaxShownText = 64;
 
 const NumberRange kNonNegative = NumberRange::at_least(0.0);
@@ -268,6 +267,10 @@ std::string parse_name(const JsonValue& v) {
   const std::string name = v.string();
   if (name.empty()) v.fail("expected a non-empty name");
   if (name == "." || name == "..") v.fail(fmt::format("'{}' is not a usable name", name));
+  if (name.size() > kMaxNameBytes) {
+    v.fail(fmt::format("a name of {} bytes; at most {} (it names the result files)", name.size(),
+                       kMaxNameBytes));
+  }
   for (char c : name) {
     if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20) {
       v.fail(fmt::format("'{}' must not contain '/', '\\' or control characters", shown(name)));

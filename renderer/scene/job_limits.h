@@ -3,7 +3,17 @@
 // and the command line's overrides (--width, --spp, --threads, ...) check against the same
 // constants, so a value one of them accepts the other accepts too.
 
+#include <cstddef>
+#include <cstdint>
+
 namespace farm {
+
+// The job file's text: job files are small (the models are separate files); `farm render`,
+// `farm submit` and the scheduler's SubmitJob refuse bigger ones before parsing them.
+inline constexpr std::uint64_t kMaxJobFileBytes = std::uint64_t{16} << 20;
+// name: it names the result files (out/<name>.exr, the scheduler's results/<job>/<name>.exr and
+// their temporary siblings), and a file name has at most 255 bytes on every usual file system.
+inline constexpr std::size_t kMaxNameBytes = 200;
 
 // render.width and render.height: a 16384 x 16384 film of RGBA floats is already 4 GiB.
 inline constexpr int kMaxImageSide = 16384;

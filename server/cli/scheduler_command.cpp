@@ -57,6 +57,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.heartbeat_interval = ms(o.heartbeat_interval_s);
   options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
   options.verify_fraction = o.verify_fraction;
+  options.limits = o.limits;
   SchedulerCore core(options);
   for (const std::string& address : o.workers) {
     core.add_worker(std::make_shared<RemoteTileWorker>(
@@ -159,6 +160,28 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
             "own jobs, 'read' sees every job, 'admin' does everything, workers need 'worker' to "
             "register and fetch the assets of the tiles they are given. The tokens file holds "
             "only SHA-256 hashes of the tokens.");
+  s->add_option("--max-job-bytes", o->limits.max_job_bytes,
+                "Largest job text (JobSpec.job_json) SubmitJob takes, in bytes (RESOURCE_EXHAUSTED above)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{kMaxRequestBytes} - (1 << 20)))
+      ->capture_default_str();
+  s->add_option("--max-tiles-per-job", o->limits.max_tiles_per_job,
+                "Most work units (tiles) of one job: ceil(width/tile_size) x ceil(height/tile_size)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 28))
+      ->capture_default_str();
+  s->add_option("--max-work", o->limits.max_work,
+                "Most width x height x spp x path length (1 for raster, max_depth + 1 for the ray "
+                "engines, unbounded counted as 17) of one job")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  s->add_option("--max-embree-rays", o->limits.max_embree_rays,
+                "Most validate.embree_rays of one job (traced in the scheduler at merge)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{1} << 40))
+      ->capture_default_str();
+  s->add_option("--max-asset-bytes", o->limits.max_asset_bytes, "Largest asset file, in bytes")
+      ->capture_default_str();
+  s->add_option("--max-job-asset-bytes", o->limits.max_job_asset_bytes,
+                "Most bytes of one job's assets together")
+      ->capture_default_str();
   add_log_level_option(*s, "info");
   commands.add(s, [o] { return run_scheduler_command(*o); });
 }

@@ -8,6 +8,7 @@
 #include "server/cli/command_table.h"
 #include "server/common/listen_policy.h"
 #include "server/common/server_security.h"
+#include "server/scheduler/submit_limits.h"
 
 namespace farm {
 
@@ -24,6 +25,7 @@ struct SchedulerCommandOptions {
   double verify_fraction = 0;  // SchedulerOptions::verify_fraction
   ServerSecurityOptions security;
   int max_priority = 100;             // above this needs the admin role
+  SubmitLimits limits;                // SchedulerOptions::limits
 };
 
 // Prints "scheduler listening on HOST:PORT" once it accepts calls. InputError when the address

@@ -78,6 +78,9 @@ void SchedulerCore::stop() {
 
 v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
                               const std::shared_ptr<JobEventQueue>& watcher, const std::string& owner) {
+  // What a request may start is checked before it starts anything: the text before it is
+  // parsed, the tiles, samples and rays before a model is loaded or a tile stored.
+  check_spec_limits(spec, options_.limits);
   validate_asset_refs(spec);
   if (auto missing = missing_assets(spec, assets_); !missing.empty()) {
     throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
@@ -86,6 +89,7 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
   }
   const std::string hash = scene_hash(spec);
   MaterializedScene m = materialize_scene(spec, hash, assets_, options_.data_dir);
+  check_job_limits(m.job, spec, options_.limits);
   Scene scene;
   try {
     // What `farm render` does before rendering: models load, the scene builds.

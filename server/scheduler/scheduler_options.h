@@ -10,6 +10,7 @@
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene.h"
 #include "server/common/log.h"
+#include "server/scheduler/submit_limits.h"
 
 namespace farm {
 
@@ -26,6 +27,8 @@ struct SchedulerOptions {
   // Spot checks: this fraction of each job's tiles (at least one when > 0) is rendered again on
   // another worker and compared bit for bit before it is kept (spot_checks.h). 0: none.
   double verify_fraction = 0.0;
+  // The work one SubmitJob may start (submit_limits.h); over a limit is RESOURCE_EXHAUSTED.
+  SubmitLimits limits;
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
   // What the scheduler logs on stderr unless the operator chose a level (set_log_level): a
   // server logs info and up, the embedded farm of `farm render` only warnings and errors.

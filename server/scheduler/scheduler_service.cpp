@@ -16,7 +16,6 @@ namespace {
 constexpr std::size_t kChunk = 1 << 20;
 constexpr int kDefaultPageSize = 50;
 constexpr int kMaxPageSize = 1000;
-constexpr std::uint64_t kMaxAssetBytes = std::uint64_t{4} << 30;
 
 // Runs `body`, mapping the farm's exceptions to statuses (as the worker does).
 template <typename F>
@@ -204,9 +203,9 @@ grpc::Status SchedulerService::UploadAsset(grpc::ServerContext* context,
       throw InputError(fmt::format("UploadAsset: sha256 '{}' is not 64 lowercase hex digits",
                                    header.sha256().substr(0, 80)));
     }
-    if (header.size() > kMaxAssetBytes) {
+    if (const std::uint64_t limit = core_.options().limits.max_asset_bytes; header.size() > limit) {
       throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                         fmt::format("asset of {} bytes: at most {}", header.size(), kMaxAssetBytes));
+                         fmt::format("asset of {} bytes: at most {} (--max-asset-bytes)", header.size(), limit));
     }
     response->set_sha256(header.sha256());
     response->set_size(header.size());

@@ -10,6 +10,7 @@
 #include <exception>
 #include <map>
 #include <mutex>
+#include <set>
 #include <string_view>
 
 #include "renderer/engine.h"
@@ -113,6 +114,20 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
   std::lock_guard lock(r.mutex);
   r.stats += stats;
   r.cpu_ms += cpu_ms;
+}
+
+// InputError naming the hash of an inline file the spec does not list: a worker keeps the files
+// sent with a call, so one the job never reads would only fill its disk.
+void check_inline_referenced(const v1::JobSpec& spec, const v1::RenderTileRequest& request) {
+  if (request.assets().empty()) return;
+  std::set<std::string_view> referenced;
+  for (const v1::AssetRef& ref : spec.assets()) referenced.insert(ref.sha256());
+  for (const v1::InlineAsset& asset : request.assets()) {
+    if (referenced.contains(asset.sha256())) continue;
+    throw InputError(fmt::format("inline asset sha256 '{}' ({} bytes) is none of the job's assets; "
+                                 "the call's files were not kept",
+                                 asset.sha256().substr(0, 64), asset.data().size()));
+  }
 }
 
 // InputError naming the asset when inline bytes are not as long as the spec's AssetRef says.
@@ -224,6 +239,7 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
 
     // Files sent along by a scheduler we cannot fetch from: verified (their size against the
     // spec's, their hash), then kept like fetched ones.
+    check_inline_referenced(spec, *request);
     check_inline_sizes(spec, *request);
     for (const v1::InlineAsset& asset : request->assets()) {
       if (!store_.has(asset.sha256())) store_.put(asset.sha256(), asset.data());

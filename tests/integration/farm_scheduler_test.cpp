@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -533,6 +534,98 @@ TEST_F(FarmSchedulerTest, BadJobsAreRejectedAtSubmitAndTheFarmKeepsServing) {
   grpc::ClientContext context;
   v1::Job job;
   EXPECT_EQ(stub_->GetJob(&context, unknown, &job).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+// Requests that would start more work than one job should (measured at an older HEAD: 16384x16384
+// at tile_size 1 made the scheduler unresponsive at 4.4 GB; 4096x4096 at tile_size 1 took 51 s to
+// submit and 2.1 GB of database; embree_rays 1e12 grew it by 170 MB/s at the merge; a 50 MB job
+// text was accepted and sent with every tile; a 300-byte name rendered every tile, then failed at
+// the merge) are refused at submit with a message naming the limit and the value, nothing of
+// them is stored, and the next honest job renders.
+TEST_F(FarmSchedulerTest, WorkBombsAreRefusedAtSubmitAndTheFarmKeepsServing) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address()});
+  ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  const auto expect_refused = [&](const v1::JobSpec& spec, grpc::StatusCode code,
+                                  const std::vector<std::string>& needles) {
+    v1::Job job;
+    const grpc::Status status = test::submit(*stub_, spec, job);
+    EXPECT_EQ(status.error_code(), code) << status.error_message();
+    for (const std::string& needle : needles) {
+      EXPECT_NE(status.error_message().find(needle), std::string::npos)
+          << "no '" << needle << "' in: " << status.error_message();
+    }
+  };
+  const auto with = [](const std::function<void(nlohmann::json&)>& change) {
+    nlohmann::json job = nlohmann::json::parse(test::cornell_job_json("raster", 32, 32, 1));
+    change(job);
+    return test::make_job_spec(job.dump(), test::cornell_assets(), "cornell.json");
+  };
+
+  expect_refused(cornell("raster", 16384, 16384, 1, 1), grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 {"cornell.json", "render.tile_size", "268435456 tiles", "at most 65536",
+                  "--max-tiles-per-job"});
+  expect_refused(cornell("raster", 4096, 4096, 1, 1), grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 {"16777216 tiles", "--max-tiles-per-job"});
+  expect_refused(cornell("path", 16384, 16384, kMaxSpp, 128), grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 {"render", "1048576 spp", "--max-work"});
+  expect_refused(with([](nlohmann::json& j) { j["validate"]["embree_rays"] = 1'000'000'000'000; }),
+                 grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 {"validate.embree_rays", "1000000000000 rays", "at most 10000000", "--max-embree-rays"});
+  // Raw, past the client's own 16 MiB check, under the scheduler's 64 MiB message limit.
+  v1::JobSpec fat = cornell("raster", 32, 32, 1, 16);
+  fat.set_job_json(fat.job_json() + std::string(50 << 20, ' '));
+  expect_refused(fat, grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 {std::to_string(fat.job_json().size()) + " bytes", "at most 16777216", "--max-job-bytes"});
+  expect_refused(with([](nlohmann::json& j) { j["name"] = std::string(300, 'n'); }),
+                 grpc::StatusCode::INVALID_ARGUMENT, {"cornell.json: name:", "300 bytes", "at most 200"});
+
+  // Nothing of them was stored: no job, no tile rows.
+  {
+    grpc::ClientContext context;
+    v1::ListJobsResponse jobs;
+    ASSERT_TRUE(stub_->ListJobs(&context, v1::ListJobsRequest(), &jobs).ok());
+    EXPECT_EQ(jobs.jobs_size(), 0);
+  }
+  std::uintmax_t database = 0;
+  for (const auto& entry : fs::directory_iterator(dir_ / "data")) {
+    if (entry.path().filename().string().starts_with("jobs.db")) database += entry.file_size();
+  }
+  EXPECT_LT(database, std::uintmax_t{4} << 20);
+
+  const v1::Job good = submit_ok(cornell("raster", 32, 32, 1, 16));
+  const auto final_job = test::wait_for_job(*stub_, good.job_id(), done, 30s);
+  ASSERT_TRUE(final_job);
+  EXPECT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+}
+
+// The limits are the operator's: `farm scheduler --max-...` moves them.
+TEST_F(FarmSchedulerTest, SchedulerFlagsSetTheSubmitLimits) {
+  auto scheduler = start_scheduler({"--max-tiles-per-job", "4", "--max-job-bytes", "100000",
+                                    "--max-embree-rays", "0", "--max-work", "5000"});
+  ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  const auto refusal = [&](const v1::JobSpec& spec) {
+    v1::Job job;
+    const grpc::Status status = test::submit(*stub_, spec, job);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+    return status.error_message();
+  };
+  EXPECT_NE(refusal(cornell("raster", 64, 64, 1, 16)).find("16 tiles; the scheduler takes at most 4 "),
+            std::string::npos);
+  EXPECT_NE(refusal(cornell("raster", 64, 64, 2, 32)).find("at most 5e+03 a job (--max-work)"),
+            std::string::npos);
+  v1::JobSpec fat = cornell("raster", 64, 64, 1, 32);
+  fat.set_job_json(fat.job_json() + std::string(100000, ' '));
+  EXPECT_NE(refusal(fat).find("at most 100000 (--max-job-bytes)"), std::string::npos);
+  nlohmann::json rays = nlohmann::json::parse(test::cornell_job_json("raster", 64, 64, 1));
+  rays["render"]["tile_size"] = 32;
+  rays["validate"]["embree_rays"] = 1;
+  EXPECT_NE(refusal(test::make_job_spec(rays.dump(), test::cornell_assets(), "cornell.json"))
+                .find("at most 0 a job (--max-embree-rays)"),
+            std::string::npos);
+  submit_ok(cornell("raster", 64, 64, 1, 32));  // 4 tiles, 4096 samples: within every one
 }
 
 TEST_F(FarmSchedulerTest, PythonClientGeneratedFromTheProtoSubmitsAndFetches) {

@@ -229,6 +229,37 @@ TEST_F(FarmWorkerTest, InlineAssetsAreVerifiedAndKept) {
   EXPECT_TRUE(AssetStore(cache / "blobs").has(request.assets(0).sha256()));
 }
 
+// A worker keeps the files sent with a call: one the job does not list would only fill its disk
+// (at an older HEAD a 100 MB blob no job uses was kept). The call is refused naming the hash, and
+// nothing of it is kept, not even the files the job does list.
+TEST_F(FarmWorkerTest, InlineAssetTheJobDoesNotListIsRefusedAndNothingIsKept) {
+  const fs::path cache = dir_ / "cache";
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", cache.string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  auto stub = worker_stub(worker.address());
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 16, 16, 1);
+  v1::RenderTileRequest request = tile_request(spec, {0, 0, 16, 16});
+  for (const auto& [path, file] : test::cornell_assets()) {
+    v1::InlineAsset& asset = *request.add_assets();
+    asset.set_data(test::read_file(file));
+    asset.set_sha256(sha256_hex(asset.data()));
+  }
+  v1::RenderTileRequest stuffed = request;
+  v1::InlineAsset& unused = *stuffed.add_assets();
+  unused.set_data(std::string(4 << 20, 'u'));
+  unused.set_sha256(sha256_hex(unused.data()));
+  v1::RenderTileResponse response;
+  const grpc::Status status = render(*stub, stuffed, response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_NE(status.error_message().find(unused.sha256()), std::string::npos) << status.error_message();
+  const AssetStore blobs(cache / "blobs");
+  for (const v1::InlineAsset& asset : stuffed.assets()) EXPECT_FALSE(blobs.has(asset.sha256()));
+
+  // The same call with only the job's files renders.
+  ASSERT_TRUE(render(*stub, request, response).ok());
+  EXPECT_FALSE(blobs.has(unused.sha256()));
+}
+
 TEST_F(FarmWorkerTest, MissingAssetsWithoutSchedulerAreFailedPreconditionUntilCached) {
   const fs::path cache = dir_ / "cache";
   test::WorkerProcess worker({"--threads", "1", "--cache-dir", cache.string()});

@@ -566,6 +566,9 @@ const std::vector<BadJob> kBadJobs = {
      "output.preview", "same file"},
     {"NameWithSlash", job_with_keys(R"("name": "../x")"), "name", "must not contain '/'"},
     {"EmptyName", job_with_keys(R"("name": "")"), "name", "non-empty name"},
+    // It names the result files: 300 bytes would render every tile, then fail at the merge.
+    {"NameLongerThanAFileNameAllows", job_with_keys("\"name\": \"" + std::string(300, 'n') + "\""),
+     "name", "a name of 300 bytes; at most 200"},
 };
 
 INSTANTIATE_TEST_SUITE_P(JobBadFiles, JobValidation, ::testing::ValuesIn(kBadJobs),
