@@ -40,6 +40,7 @@ void throw_for_status(const grpc::Status& status, const std::string& what, const
     case grpc::StatusCode::FAILED_PRECONDITION:
     case grpc::StatusCode::ALREADY_EXISTS:
     case grpc::StatusCode::OUT_OF_RANGE:
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:  // a job over a scheduler's limit: the job is too big
       throw InputError(status.error_message());
     case grpc::StatusCode::UNAVAILABLE:
       throw ServiceError(grpc::StatusCode::UNAVAILABLE, fmt::format(
