@@ -30,6 +30,24 @@ bool AssetStore::has(std::string_view sha256) const {
   return fs::is_regular_file(dir_ / std::string(sha256), ec);
 }
 
+bool AssetStore::intact(std::string_view sha256) const {
+  if (!has(sha256)) return false;
+  std::ifstream in(path_of(sha256), std::ios::binary);
+  if (!in) return false;
+  Sha256 hash;
+  std::string buffer(1 << 16, '\0');
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    hash.update(buffer.data(), static_cast<std::size_t>(in.gcount()));
+  }
+  return !in.bad() && hash.finish_hex() == sha256;
+}
+
+void AssetStore::remove(std::string_view sha256) const {
+  std::error_code ignored;
+  fs::remove(path_of(sha256), ignored);
+}
+
 fs::path AssetStore::path_of(std::string_view sha256) const {
   if (!is_sha256_hex(sha256)) {
     throw InputError(fmt::format("'{}' is not a SHA-256 (64 lowercase hex digits)",

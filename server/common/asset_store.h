@@ -22,6 +22,11 @@ class AssetStore {
   const std::filesystem::path& dir() const { return dir_; }
 
   bool has(std::string_view sha256) const;
+  // The blob is there and its bytes hash to its name (it is read whole: a disk or a hand may
+  // have changed it since it was verified and published).
+  bool intact(std::string_view sha256) const;
+  // Removes the blob (a damaged one, so that it can be uploaded again); nothing if it is absent.
+  void remove(std::string_view sha256) const;
   // Where the blob named `sha256` lives (or would); InputError unless it is 64 lowercase hex digits.
   std::filesystem::path path_of(std::string_view sha256) const;
 

@@ -34,6 +34,31 @@ std::string missing_message(const std::vector<v1::AssetRef>& missing) {
   return fmt::format("missing asset{} {}", missing.size() == 1 ? "" : "s", names);
 }
 
+std::string corrupt_message(const std::vector<v1::AssetRef>& corrupt) {
+  std::string names;
+  for (std::size_t i = 0; i < corrupt.size() && i < 5; ++i) {
+    names += fmt::format("{}'{}' (sha256 {})", i ? ", " : "", shown(corrupt[i].path()), corrupt[i].sha256());
+  }
+  if (corrupt.size() > 5) names += fmt::format(" and {} more", corrupt.size() - 5);
+  return fmt::format("asset{} {} stored damaged (the bytes no longer match the SHA-256) and removed: upload {} "
+                     "again",
+                     corrupt.size() == 1 ? "" : "s", names, corrupt.size() == 1 ? "it" : "them");
+}
+
+// Every blob of the spec that the store holds, hashed: damaged ones are removed and refused.
+void refuse_corrupt_assets(const v1::JobSpec& spec, const AssetStore& store) {
+  std::vector<v1::AssetRef> corrupt;
+  std::set<std::string> seen;
+  for (const v1::AssetRef& ref : spec.assets()) {
+    if (!seen.insert(ref.sha256()).second || !store.has(ref.sha256())) continue;
+    if (!store.intact(ref.sha256())) {
+      store.remove(ref.sha256());
+      corrupt.push_back(ref);
+    }
+  }
+  if (!corrupt.empty()) throw CorruptAssetsError(std::move(corrupt));
+}
+
 // The path an asset is laid out at, relative to the scene folder; InputError if it could leave it.
 fs::path checked_relative_path(const v1::AssetRef& ref) {
   const std::string& p = ref.path();
@@ -117,6 +142,9 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
 MissingAssetsError::MissingAssetsError(std::vector<v1::AssetRef> missing)
     : std::runtime_error(missing_message(missing)), missing_(std::move(missing)) {}
 
+CorruptAssetsError::CorruptAssetsError(std::vector<v1::AssetRef> corrupt)
+    : MissingAssetsError(corrupt, corrupt_message(corrupt)) {}
+
 void validate_asset_refs(const v1::JobSpec& spec) {
   std::set<fs::path> seen;
   for (const v1::AssetRef& ref : spec.assets()) {
@@ -138,6 +166,12 @@ void check_asset_sizes(const v1::JobSpec& spec, const AssetStore& store) {
     const std::uintmax_t size = fs::file_size(store.path_of(ref.sha256()), ec);
     if (ec) continue;  // gone since: missing_assets' concern
     if (size != ref.size()) {
+      // A blob is verified when stored: one of another size was cut short or grown since, unless
+      // it still hashes to its name (then the job's size is wrong).
+      if (!store.intact(ref.sha256())) {
+        store.remove(ref.sha256());
+        throw CorruptAssetsError({ref});
+      }
       throw InputError(fmt::format("asset '{}' (sha256 {}): the job says {} bytes, the file has {}",
                                    shown(ref.path()), ref.sha256(), ref.size(), size));
     }
@@ -170,6 +204,8 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
     if (auto missing = missing_assets(spec, store); !missing.empty()) {
       throw MissingAssetsError(std::move(missing));
     }
+    // The laid-out files are links to the blobs: a damaged blob would be the scene's file.
+    refuse_corrupt_assets(spec, store);
     lay_out(spec, store, result.dir, job_name);
   }
 

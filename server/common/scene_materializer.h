@@ -20,8 +20,20 @@ class MissingAssetsError : public std::runtime_error {
   explicit MissingAssetsError(std::vector<v1::AssetRef> missing);
   const std::vector<v1::AssetRef>& missing() const { return missing_; }
 
+ protected:
+  MissingAssetsError(std::vector<v1::AssetRef> missing, const std::string& message)
+      : std::runtime_error(message), missing_(std::move(missing)) {}
+
  private:
   std::vector<v1::AssetRef> missing_;
+};
+
+// Assets whose blobs the store held damaged (their bytes no longer hash to their names): the
+// blobs are removed, so uploading them again repairs the store; the services answer
+// FAILED_PRECONDITION, as for missing ones.
+class CorruptAssetsError : public MissingAssetsError {
+ public:
+  explicit CorruptAssetsError(std::vector<v1::AssetRef> corrupt);
 };
 
 // InputError unless every asset path is relative, free of ".." and NUL, unique, and every hash is
@@ -42,7 +54,8 @@ struct MaterializedScene {
 
 // Lays out (once; the folder appears complete or not at all) and parses. InputError for bad asset
 // refs, sizes that differ from the blobs', or a bad job (messages name spec.file_name, never the
-// cache folder); MissingAssetsError when a blob is absent. Safe to call concurrently, also from several processes on one cache.
+// cache folder); MissingAssetsError when a blob is absent; CorruptAssetsError (the blobs removed)
+// when a blob to be laid out, or one whose size differs from its ref's, fails its SHA-256. Safe to call concurrently, also from several processes on one cache.
 MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& scene_hash,
                                     const AssetStore& store,
                                     const std::filesystem::path& cache_dir);

@@ -70,6 +70,9 @@ void Finisher::merge(const std::string& job_id) {
       return;
     }
     log_.info("job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(), parts.size());
+  } catch (const DamagedParts& e) {
+    if (render_again(job_id, e)) return;
+    after = *store_.get_job(job_id);  // final meanwhile (cancelled): nothing to render again
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, fmt::format("merging the tiles: {}", e.what()),
                               "", unix_ms_now());
@@ -77,6 +80,27 @@ void Finisher::merge(const std::string& job_id) {
   }
   if (after.state() != before.state()) events_.publish_state(after, before.state());
   release(job_id);
+}
+
+bool Finisher::render_again(const std::string& job_id, const DamagedParts& damaged) {
+  std::vector<std::uint32_t> parts;
+  for (const DamagedParts::Part& p : damaged.parts()) parts.push_back(p.part);
+  const std::vector<TileBatch> taken = store_.requeue_parts(job_id, parts);
+  if (taken.empty()) return false;
+  for (const DamagedParts::Part& p : damaged.parts()) {
+    log_.warn("job {}: {}; its tiles are rendered again, not merged", job_id, p.problem);
+  }
+  for (const TileBatch& b : taken) {
+    events_.publish(job_id, [&](v1::JobEvent& event) {
+      v1::TileFailed& f = *event.mutable_tile_failed();
+      f.set_tile_index(b.first);
+      f.set_tile_count(b.count);
+      f.set_reason("the scheduler's copy of the result is damaged: rendered again");
+      f.set_will_retry(true);
+    });
+  }
+  if (on_requeued_) on_requeued_();
+  return true;
 }
 
 MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info) const {

@@ -1,11 +1,14 @@
 #pragma once
 // The end of a job: once its tiles are all done, its frame is assembled (FrameAssembly), written
 // (the EXR and the preview, job_merger.h), checked against Embree when the job asks for it, and
-// the job marked SUCCEEDED (FAILED when any of that throws). A final job's memory and kept tiles
-// then go (release()), whichever way it ended.
+// the job marked SUCCEEDED (FAILED when any of that throws). A part whose kept data is damaged
+// (DamagedParts: its file missing, truncated or failing its checksum) fails nothing: its tiles are
+// queued again (JobStore::requeue_parts), the job stays running and is merged once they are done.
+// A final job's memory and kept tiles then go (release()), whichever way it ended.
 //
 // Lock: Finisher::mutex_ guards merging_ only, and is a leaf: the merge itself runs without it.
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -34,9 +37,13 @@ class Finisher {
   void release(const std::string& job_id);
   // The merged EXR or PNG under results/ of a SUCCEEDED job; nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview) const;
+  // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.
+  void on_requeued(std::function<void()> f) { on_requeued_ = std::move(f); }
 
  private:
   void merge(const std::string& job_id);
+  // Queues the damaged parts' tiles again; false when the job had none done any more (final).
+  bool render_again(const std::string& job_id, const DamagedParts& damaged);
   // Where the job's frame goes: where its submitter said, or results/<job id>/<stem>.exr and .png.
   MergedFiles files_of(const std::string& job_id, const JobInfo& info) const;
   std::filesystem::path results_dir(const std::string& job_id) const;
@@ -49,6 +56,7 @@ class Finisher {
   spdlog::logger& log_;
   std::mutex mutex_;
   std::set<std::string> merging_;
+  std::function<void()> on_requeued_;  // set once, before any merge
 };
 
 }  // namespace farm

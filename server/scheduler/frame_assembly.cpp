@@ -24,7 +24,16 @@ void check_fits(const TileBuffer& tile, const FrameLayout& frame, const std::str
   }
 }
 
+std::string describe(const std::vector<DamagedParts::Part>& parts) {
+  std::string s = fmt::format("{} damaged result{}:", parts.size(), parts.size() == 1 ? "" : "s");
+  for (const DamagedParts::Part& p : parts) s += " " + p.problem + ";";
+  s.pop_back();
+  return s;
+}
+
 }  // namespace
+
+DamagedParts::DamagedParts(std::vector<Part> parts) : std::runtime_error(describe(parts)), parts_(std::move(parts)) {}
 
 void TileFileAssembly::add(const std::string& job_id, const FrameLayout&, std::uint32_t part,
                            RenderedTiles& tiles) {
@@ -42,14 +51,21 @@ TileBuffer TileFileAssembly::assemble(const std::string& job_id, const FrameLayo
   // The parts cover the image exactly (tiles of split_into_tiles, in batches), so the film need
   // not be cleared first.
   film.reset_for_overwrite(frame.image, frame.aovs);
+  std::vector<DamagedParts::Part> damaged;
   for (std::uint32_t part : parts) {
     RenderedTiles tiles;
-    tiles.response = files_.read(job_id, part);
+    try {
+      tiles.response = files_.read(job_id, part);
+    } catch (const DamagedTileResult& e) {
+      damaged.push_back({part, e.what()});  // the others are read too: all go back at once
+      continue;
+    }
     const TileBuffer buffer = pixels_of(tiles);
     check_fits(buffer, frame, job_id, part);
     film.paste(buffer);
     film.stats() += decode_stats(tiles.response.stats());
   }
+  if (!damaged.empty()) throw DamagedParts(std::move(damaged));
   return film;
 }
 

@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,21 @@
 #include "server/scheduler/tile_worker.h"
 
 namespace farm {
+
+// Parts whose kept data cannot be read back (TileFileAssembly: the file is missing, truncated or
+// fails its checksum). Their tiles are to be rendered again; nothing of them may be merged.
+class DamagedParts : public std::runtime_error {
+ public:
+  struct Part {
+    std::uint32_t part = 0;
+    std::string problem;  // names the file
+  };
+  explicit DamagedParts(std::vector<Part> parts);
+  const std::vector<Part>& parts() const { return parts_; }
+
+ private:
+  std::vector<Part> parts_;
+};
 
 // The frame a job's tiles make up.
 struct FrameLayout {
@@ -34,7 +50,8 @@ class FrameAssembly {
   virtual void add(const std::string& job_id, const FrameLayout& frame, std::uint32_t part,
                    RenderedTiles& tiles) = 0;
   // The job's frame from its parts (each once, as the job store lists them), with the render
-  // statistics summed. std::runtime_error when a part is missing or does not fit.
+  // statistics summed. DamagedParts (every such part, once all are read) when parts' kept data
+  // is damaged; std::runtime_error when a part was never kept or does not fit.
   virtual TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                               const std::vector<std::uint32_t>& parts) = 0;
   // Forgets the job (done, failed or cancelled).

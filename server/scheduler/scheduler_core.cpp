@@ -61,6 +61,8 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                              .workers = workers_,
                              .finisher = finisher_,
                              .log = *log_}) {
+  // A merge that found damaged tile results queued their tiles again: the slots take them now.
+  finisher_.on_requeued([this] { dispatcher_.work_queued(); });
   // Jobs interrupted between their last tile and their merge.
   for (const std::string& id : store_.active_jobs()) finisher_.finish_if_complete(id);
 }

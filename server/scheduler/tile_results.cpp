@@ -10,9 +10,28 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "server/common/sha256.h"
+
 namespace farm {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::string_view kMagic = "FARMTIL1";
+constexpr std::size_t kLengthBytes = 8;
+constexpr std::size_t kHashChars = 64;
+constexpr std::size_t kHeaderBytes = kMagic.size() + kLengthBytes + kHashChars;
+
+std::string header_of(std::string_view payload) {
+  std::string header(kMagic);
+  std::uint64_t n = payload.size();
+  for (std::size_t i = 0; i < kLengthBytes; ++i, n >>= 8) header.push_back(static_cast<char>(n & 0xff));
+  header += sha256_hex(payload);
+  return header;
+}
+
+}  // namespace
 
 TileResults::TileResults(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
 
@@ -27,7 +46,8 @@ void TileResults::write(const std::string& job_id, std::uint32_t part,
   fs::create_directories(final_path.parent_path());
   const fs::path temp = final_path.parent_path() /
                         fmt::format(".tmp-{}-{}-{}", part, ::getpid(), counter++);
-  const std::string bytes = tile.SerializeAsString();
+  const std::string payload = tile.SerializeAsString();
+  const std::string bytes = header_of(payload) + payload;
   const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw std::system_error(errno, std::generic_category(), "cannot write " + temp.string());
   std::size_t written = 0;
@@ -48,14 +68,30 @@ void TileResults::write(const std::string& job_id, std::uint32_t part,
 
 v1::RenderTileResponse TileResults::read(const std::string& job_id, std::uint32_t part) const {
   const fs::path file = path_of(job_id, part);
+  const auto damaged = [&](std::string_view problem) {
+    return DamagedTileResult(file, fmt::format("result {} of job {}: {} {}", part, job_id, file.string(), problem));
+  };
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("result {} of job {}: {} is missing", part, job_id, file.string()));
+  if (!in) throw damaged("is missing or unreadable");
   std::ostringstream s;
   s << in.rdbuf();
-  v1::RenderTileResponse tile;
-  if (!tile.ParseFromString(s.str())) {
-    throw std::runtime_error(fmt::format("result {} of job {}: {} is corrupt", part, job_id, file.string()));
+  if (in.bad()) throw damaged("cannot be read");
+  const std::string bytes = std::move(s).str();
+  if (bytes.size() < kHeaderBytes || std::string_view(bytes).substr(0, kMagic.size()) != kMagic) {
+    throw damaged(fmt::format("has no result header ({} bytes)", bytes.size()));
   }
+  std::uint64_t length = 0;
+  for (std::size_t i = kLengthBytes; i-- > 0;) {
+    length = (length << 8) | static_cast<unsigned char>(bytes[kMagic.size() + i]);
+  }
+  const std::string_view payload = std::string_view(bytes).substr(kHeaderBytes);
+  if (payload.size() != length) {
+    throw damaged(fmt::format("is truncated or padded: {} bytes of result, the header says {}", payload.size(), length));
+  }
+  const std::string_view expected = std::string_view(bytes).substr(kMagic.size() + kLengthBytes, kHashChars);
+  if (sha256_hex(payload) != expected) throw damaged("fails its checksum (SHA-256 of the result differs)");
+  v1::RenderTileResponse tile;
+  if (!tile.ParseFromArray(payload.data(), static_cast<int>(payload.size()))) throw damaged("does not parse");
   return tile;
 }
 

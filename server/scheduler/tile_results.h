@@ -4,20 +4,42 @@
 // part is the batch's first tile index (JobStore's tiles.part). Written to a temporary file and
 // renamed into place, so a file under a part's name is always complete; the scheduler writes it
 // BEFORE it marks the tiles done in the job store, so done tiles' data survives a crash.
+//
+// A file is a header and the payload:
+//   "FARMTIL1"                       8 bytes, the format
+//   payload length                   8 bytes, little endian
+//   SHA-256 of the payload           64 lowercase hex digits
+//   payload                          the serialized RenderTileResponse
+// so that a file cut short, emptied, deleted or with bytes changed on disk is found when it is read
+// back, and its tiles rendered again instead of merged (protobuf parses most damaged bytes
+// without complaint: a flipped byte in pixel data is just another pixel).
 #include <cstdint>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 #include "proto/farm.pb.h"
 
 namespace farm {
 
+// A result file that cannot be trusted: missing, unreadable, cut short, or failing its checksum.
+// what() names the file and the problem.
+class DamagedTileResult : public std::runtime_error {
+ public:
+  DamagedTileResult(std::filesystem::path file, const std::string& message)
+      : std::runtime_error(message), file_(std::move(file)) {}
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path file_;
+};
+
 class TileResults {
  public:
   explicit TileResults(std::filesystem::path dir);  // creates dir
 
   void write(const std::string& job_id, std::uint32_t part, const v1::RenderTileResponse& tile) const;
-  // std::runtime_error when the file is missing or unreadable.
+  // DamagedTileResult when the file is missing, unreadable, truncated or fails its checksum.
   v1::RenderTileResponse read(const std::string& job_id, std::uint32_t part) const;
   void remove_job(const std::string& job_id) const;
 

@@ -339,6 +339,81 @@ TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTiles
   EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 }
 
+// How a tile result file is damaged while the scheduler is down.
+enum class Damage { Truncate, Delete, FlipBytes };
+
+void damage(const fs::path& file, Damage how) {
+  switch (how) {
+    case Damage::Truncate:
+      fs::resize_file(file, fs::file_size(file) / 2);
+      return;
+    case Damage::Delete:
+      fs::remove(file);
+      return;
+    case Damage::FlipBytes: {
+      std::string bytes = test::read_file(file);
+      ASSERT_GT(bytes.size(), 64u);
+      for (std::size_t i = bytes.size() / 2; i < bytes.size() / 2 + 16; ++i) bytes[i] = static_cast<char>(~bytes[i]);
+      std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+      return;
+    }
+  }
+}
+
+class DamagedTileResultsTest : public FarmSchedulerTest, public ::testing::WithParamInterface<Damage> {};
+
+// The scheduler is killed mid-job and every tile result file of the job damaged before it comes
+// back: the done tiles whose files are damaged are rendered again (the log names each file), never
+// merged, and the job succeeds with the frame `farm render` gives.
+TEST_P(DamagedTileResultsTest, DamagedTileFilesAreRenderedAgainAndTheFrameIsBitIdentical) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address(), "--float"});
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);
+  const v1::Job job = submit_ok(spec);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 2 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  scheduler->process().send_signal(SIGKILL);
+  ASSERT_TRUE(scheduler->process().wait_exit(10s));
+  ASSERT_NE(before->state(), v1::JOB_STATE_SUCCEEDED) << "the job finished before the kill";
+
+  std::vector<std::string> damaged;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir_ / "data" / "tiles" / job.job_id())) {
+    if (e.path().filename().string().starts_with(".")) continue;
+    damaged.push_back(e.path().string());
+    damage(e.path(), GetParam());
+  }
+  ASSERT_FALSE(damaged.empty());
+
+  scheduler = start_scheduler({"--worker", worker->address(), "--float"});
+  ASSERT_TRUE(stub_);
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+  EXPECT_EQ(final_job->tiles_done(), final_job->tiles_total());
+  // At least the tiles done before the kill were accepted twice.
+  EXPECT_GE(final_job->tiles_rendered(), final_job->tiles_total() + before->tiles_done());
+  EXPECT_EQ(final_job->tile_failures(), 0u);
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
+  const std::string log = scheduler->process().output();
+  int named = 0;
+  for (const std::string& file : damaged) named += log.find(file) != std::string::npos ? 1 : 0;
+  EXPECT_GE(named, 1) << log;
+  EXPECT_NE(log.find("rendered again, not merged"), std::string::npos) << log;
+}
+
+INSTANTIATE_TEST_SUITE_P(EachDamage, DamagedTileResultsTest,
+                         ::testing::Values(Damage::Truncate, Damage::Delete, Damage::FlipBytes),
+                         [](const ::testing::TestParamInfo<Damage>& p) {
+                           switch (p.param) {
+                             case Damage::Truncate: return std::string("Truncated");
+                             case Damage::Delete: return std::string("Deleted");
+                             case Damage::FlipBytes: return std::string("BytesFlipped");
+                           }
+                           return std::string();
+                         });
+
 TEST_F(FarmSchedulerTest, CancelStopsTheJobQuicklyAndTheWorkerServesTheNextJob) {
   auto worker = start_worker("w1");
   auto scheduler = start_scheduler({"--worker", worker->address()});

@@ -341,3 +341,53 @@ TEST(JobStoreTest, BatchOperationsActOnlyOnTheirWorkersTilesAndSuccessNeedsEvery
 
 }  // namespace
 }  // namespace farm
+
+namespace farm {
+namespace {
+
+// A batch whose result file turned out damaged at the merge goes back to the queue in one step:
+// its tiles queued without an attempt, its stats out of the job's, the job still running; a final
+// job is left alone.
+TEST(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysActive) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  store.add_job(make_job("a", 0, 3), 1);
+  v1::TileStats stats;
+  stats.set_samples(10);
+  const BatchSize two = [](const std::string&, int) { return 2; };
+  auto first = store.claim_next_batch("w", 2, two);  // tiles 0 and 1
+  auto last = store.claim_next_batch("w", 2);        // tile 2
+  ASSERT_TRUE(first && last);
+  ASSERT_TRUE(store.batch_done("a", first->first, first->count, stats, "w"));
+  ASSERT_TRUE(store.batch_done("a", last->first, last->count, stats, "w"));
+  ASSERT_EQ(store.get_job("a")->tiles_done(), 3u);
+
+  const std::vector<TileBatch> taken = store.requeue_parts("a", {0, 99});
+  ASSERT_EQ(taken.size(), 1u);  // part 99 holds no done tiles
+  EXPECT_EQ(taken[0].first, 0u);
+  EXPECT_EQ(taken[0].count, 2u);
+  EXPECT_EQ(taken[0].rect, (Rect{0, 0, 32, 16}));
+  const v1::Job a = *store.get_job("a");
+  EXPECT_EQ(a.state(), v1::JOB_STATE_RUNNING);
+  EXPECT_EQ(a.tiles_done(), 1u);
+  EXPECT_EQ(a.tiles_rendered(), 3u);
+  EXPECT_EQ(a.stats().samples(), 10u);
+  const std::vector<TileRecord> tiles = store.tiles("a");
+  EXPECT_EQ(tiles[0].state, TileState::Queued);
+  EXPECT_EQ(tiles[0].attempts, 0);
+  EXPECT_EQ(tiles[1].state, TileState::Queued);
+  EXPECT_EQ(tiles[2].state, TileState::Done);
+  // Not SUCCEEDED while they are queued; rendered again, the job can finish.
+  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 3).state(), v1::JOB_STATE_RUNNING);
+  auto again = store.claim_next_batch("w", 4, two);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->first, 0u);
+  EXPECT_EQ(again->count, 2u);
+  ASSERT_TRUE(store.batch_done("a", again->first, again->count, stats, "w"));
+  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_TRUE(store.requeue_parts("a", {0}).empty());
+  EXPECT_EQ(store.get_job("a")->tiles_done(), 3u);
+}
+
+}  // namespace
+}  // namespace farm

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -90,6 +92,43 @@ TEST_F(SceneMaterializer, MissingBlobIsNamed) {
     EXPECT_NE(std::string(e.what()).find("assets/cornell_box.mtl"), std::string::npos);
   }
   EXPECT_FALSE(fs::exists(dir_ / "cache/scenes" / scene_hash(spec)));
+}
+
+// A blob changed on disk after it was verified (bytes flipped, or cut short) is not laid out: it
+// is removed and named, so that the client uploads it again, and then the scene materializes.
+TEST_F(SceneMaterializer, ADamagedBlobIsRemovedAndNamedNotUsed) {
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 32, 24, 1);
+  for (const bool truncate : {false, true}) {
+    store_cornell_assets();
+    const v1::AssetRef& obj = *std::find_if(spec.assets().begin(), spec.assets().end(),
+                                            [](const v1::AssetRef& r) { return r.path().ends_with(".obj"); });
+    const fs::path blob = store_.path_of(obj.sha256());
+    std::string bytes = test::read_file(blob);
+    if (truncate) {
+      bytes.resize(bytes.size() / 2);
+    } else {
+      for (std::size_t i = 0; i < 16; ++i) bytes[bytes.size() / 2 + i] ^= 0x5a;
+    }
+    fs::remove(blob);  // not through the hard link a laid-out scene may share
+    std::ofstream(blob, std::ios::binary) << bytes;
+    EXPECT_TRUE(store_.has(obj.sha256()));
+    EXPECT_FALSE(store_.intact(obj.sha256()));
+    fs::remove_all(dir_ / "cache");
+    try {
+      materialize(spec);
+      ADD_FAILURE() << "a damaged blob was used (truncated: " << truncate << ")";
+    } catch (const CorruptAssetsError& e) {
+      EXPECT_NE(std::string(e.what()).find(obj.path()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(obj.sha256()), std::string::npos) << e.what();
+      ASSERT_EQ(e.missing().size(), 1u);
+      EXPECT_EQ(e.missing()[0].sha256(), obj.sha256());
+    }
+    EXPECT_FALSE(store_.has(obj.sha256()));
+    EXPECT_FALSE(fs::exists(dir_ / "cache" / "scenes" / scene_hash(spec)));
+    store_cornell_assets();  // uploaded again
+    EXPECT_TRUE(store_.intact(obj.sha256()));
+    EXPECT_EQ(materialize(spec).job.render.width, 32);
+  }
 }
 
 TEST_F(SceneMaterializer, BadJobMessageNamesTheSubmittedFileNotTheCache) {

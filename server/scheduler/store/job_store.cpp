@@ -552,23 +552,9 @@ std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
   for (std::size_t i = 0; i < discarded.size(); ++i) {
     const std::int64_t seq = seqs[i];
     const TileBatch& b = discarded[i];
-    v1::TileStats sum, part;
-    {
-      Stmt s(db_, prepared("SELECT stats FROM jobs WHERE seq = ?"));
-      s.bind(1, seq);
-      if (s.step()) sum.ParseFromString(s.blob(0));
-    }
-    {
-      Stmt s(db_, prepared("SELECT stats FROM parts WHERE job_seq = ? AND part = ?"));
-      s.bind(1, seq).bind(2, b.first);
-      if (s.step()) part.ParseFromString(s.blob(0));
-    }
-    subtract_stats(sum, part);
     Stmt(db_, prepared("UPDATE tiles SET state = 0, worker = '' WHERE job_seq = ? AND part = ? AND state = 2 AND worker = ?"))
         .bind(1, seq).bind(2, b.first).bind(3, worker).run();
-    Stmt(db_, prepared("DELETE FROM parts WHERE job_seq = ? AND part = ?")).bind(1, seq).bind(2, b.first).run();
-    Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done - ?, stats = ? WHERE seq = ?"))
-        .bind(1, b.count).bind_blob(2, sum.SerializeAsString()).bind(3, seq).run();
+    take_back_part_locked(seq, b.first, b.count);
   }
   // Its calls in flight and its results waiting for a spot check: nothing of them is kept.
   Stmt(db_, prepared(fmt::format("UPDATE tiles SET state = 0, worker = '' WHERE worker = ? AND state = 1 "
@@ -577,6 +563,56 @@ std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
       .bind(1, worker).run();
   t.commit();
   return discarded;
+}
+
+void JobStore::take_back_part_locked(std::int64_t seq, std::uint32_t part, std::uint32_t count) {
+  v1::TileStats sum, stats;
+  {
+    Stmt s(db_, prepared("SELECT stats FROM jobs WHERE seq = ?"));
+    s.bind(1, seq);
+    if (s.step()) sum.ParseFromString(s.blob(0));
+  }
+  {
+    Stmt s(db_, prepared("SELECT stats FROM parts WHERE job_seq = ? AND part = ?"));
+    s.bind(1, seq).bind(2, part);
+    if (s.step()) stats.ParseFromString(s.blob(0));
+  }
+  subtract_stats(sum, stats);
+  Stmt(db_, prepared("DELETE FROM parts WHERE job_seq = ? AND part = ?")).bind(1, seq).bind(2, part).run();
+  Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done - ?, stats = ? WHERE seq = ?"))
+      .bind(1, count).bind_blob(2, sum.SerializeAsString()).bind(3, seq).run();
+}
+
+std::vector<TileBatch> JobStore::requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  std::vector<TileBatch> taken;
+  std::int64_t seq = 0;
+  {
+    Stmt s(db_, prepared(fmt::format("SELECT seq FROM jobs WHERE id = ? AND state IN {}", kActiveSql)));
+    s.bind(1, job_id);
+    if (!s.step()) return taken;
+    seq = s.i64(0);
+  }
+  for (std::uint32_t part : parts) {
+    TileBatch b;
+    b.job_id = job_id;
+    b.first = part;
+    {
+      Stmt s(db_, prepared("SELECT COUNT(*), MIN(x0), MIN(y0), MAX(x1), MAX(y1) FROM tiles "
+                           "WHERE job_seq = ? AND part = ? AND state = 2"));
+      s.bind(1, seq).bind(2, part);
+      if (!s.step() || s.i64(0) == 0) continue;
+      b.count = static_cast<std::uint32_t>(s.i64(0));
+      b.rect = {s.i32(1), s.i32(2), s.i32(3), s.i32(4)};
+    }
+    Stmt(db_, prepared("UPDATE tiles SET state = 0, worker = '' WHERE job_seq = ? AND part = ? AND state = 2"))
+        .bind(1, seq).bind(2, part).run();
+    take_back_part_locked(seq, part, b.count);
+    taken.push_back(std::move(b));
+  }
+  t.commit();
+  return taken;
 }
 
 v1::Job JobStore::finish_job(const std::string& id, v1::JobState state, const std::string& reason,

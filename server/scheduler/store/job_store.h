@@ -134,6 +134,12 @@ class JobStore {
   // so are the tiles running on it. One transaction. Returns the done batches it took back.
   std::vector<TileBatch> quarantine_worker(const std::string& worker);
 
+  // The done batches (by part) of an active job whose kept data turned out damaged at the merge:
+  // their tiles are queued again without counting an attempt, their stats taken out of the job's
+  // (tiles_rendered keeps counting them); the job stays active. One transaction. Returns the
+  // batches it took back (none when the job is final, or a part has no done tiles).
+  std::vector<TileBatch> requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts);
+
   // Final states. Each is a no-op (returns the job as it is) when the job is already final, and
   // SUCCEEDED also when not every tile is done (quarantine_worker took some back).
   v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
@@ -149,6 +155,9 @@ class JobStore {
   // The job's seq when the batch's tiles are all running on an active job.
   std::optional<std::int64_t> running_batch_locked(const std::string& job_id, std::uint32_t first,
                                                    std::uint32_t count, const std::string& worker) const;
+  // A done batch of `count` tiles taken back: its stats out of the job's, its parts row gone,
+  // tiles_done lowered. The caller queues its tiles again.
+  void take_back_part_locked(std::int64_t seq, std::uint32_t part, std::uint32_t count);
 
   mutable std::mutex mutex_;
   sqlite3* db_ = nullptr;
