@@ -201,6 +201,17 @@ TEST_F(FarmWorkerTest, MalformedJobIsInvalidArgumentAndTheWorkerKeepsServing) {
   EXPECT_EQ(render(*stub, wrong_hash, response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
 }
 
+// `request` with the Cornell box's files inline, as a scheduler sends them to a worker that
+// cannot fetch.
+v1::RenderTileRequest with_cornell_files_inline(v1::RenderTileRequest request) {
+  for (const auto& [path, file] : test::cornell_assets()) {
+    v1::InlineAsset& asset = *request.add_assets();
+    asset.set_data(test::read_file(file));
+    asset.set_sha256(sha256_hex(asset.data()));
+  }
+  return request;
+}
+
 // What a scheduler sends a worker it cannot expect to fetch: the files inline, verified by hash.
 TEST_F(FarmWorkerTest, InlineAssetsAreVerifiedAndKept) {
   const fs::path cache = dir_ / "cache";
@@ -208,12 +219,7 @@ TEST_F(FarmWorkerTest, InlineAssetsAreVerifiedAndKept) {
   ASSERT_FALSE(worker.address().empty()) << worker.process().output();
   auto stub = worker_stub(worker.address());
   const v1::JobSpec spec = test::cornell_job_spec("raster", 16, 16, 1);
-  v1::RenderTileRequest request = tile_request(spec, {0, 0, 16, 16});
-  for (const auto& [path, file] : test::cornell_assets()) {
-    v1::InlineAsset& asset = *request.add_assets();
-    asset.set_data(test::read_file(file));
-    asset.set_sha256(sha256_hex(asset.data()));
-  }
+  v1::RenderTileRequest request = with_cornell_files_inline(tile_request(spec, {0, 0, 16, 16}));
   v1::RenderTileRequest lying = request;
   lying.mutable_assets(0)->mutable_data()->append(" ");  // bytes that do not match their hash
   v1::RenderTileResponse response;
@@ -238,12 +244,7 @@ TEST_F(FarmWorkerTest, InlineAssetTheJobDoesNotListIsRefusedAndNothingIsKept) {
   ASSERT_FALSE(worker.address().empty()) << worker.process().output();
   auto stub = worker_stub(worker.address());
   const v1::JobSpec spec = test::cornell_job_spec("raster", 16, 16, 1);
-  v1::RenderTileRequest request = tile_request(spec, {0, 0, 16, 16});
-  for (const auto& [path, file] : test::cornell_assets()) {
-    v1::InlineAsset& asset = *request.add_assets();
-    asset.set_data(test::read_file(file));
-    asset.set_sha256(sha256_hex(asset.data()));
-  }
+  v1::RenderTileRequest request = with_cornell_files_inline(tile_request(spec, {0, 0, 16, 16}));
   v1::RenderTileRequest stuffed = request;
   v1::InlineAsset& unused = *stuffed.add_assets();
   unused.set_data(std::string(4 << 20, 'u'));
