@@ -45,11 +45,7 @@ int run_grade_command(const GradeCommandOptions& o) {
   GradeOptions options;
   options.jobs = o.jobs;
   options.threads = o.threads;
-  if (o.scheduler) {
-    SchedulerConnectionFlags flags = o.identity;
-    flags.address = *o.scheduler;
-    options.scheduler = resolve_scheduler_connection(flags);
-  }
+  options.scheduler = resolve_optional_scheduler(o.scheduler, o.identity);
 
   if (o.gradescope) {
     // Inside Gradescope's container: the one submission, the one results file.

@@ -50,11 +50,7 @@ int run_regress_command(const RegressCommandOptions& o) {
   options.update = !o.update ? ReferenceUpdate::none : (*o.update == "all" ? ReferenceUpdate::all : ReferenceUpdate::failed);
   options.jobs = o.jobs;
   options.threads = o.threads;
-  if (o.scheduler) {
-    SchedulerConnectionFlags flags = o.identity;
-    flags.address = *o.scheduler;
-    options.scheduler = resolve_scheduler_connection(flags);
-  }
+  options.scheduler = resolve_optional_scheduler(o.scheduler, o.identity);
   options.output_dir = o.report ? *o.report : fs::path("regress-report") / suite.name;
 
   ProgressBar bar(suite.name, ProgressBar::stderr_is_terminal());

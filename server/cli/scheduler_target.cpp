@@ -22,6 +22,14 @@ void add_scheduler_connection_options(CLI::App& command, SchedulerConnectionFlag
   add_client_identity_options(command, flags);
 }
 
+std::optional<SchedulerConnection> resolve_optional_scheduler(const std::optional<std::string>& address,
+                                                              const SchedulerConnectionFlags& identity) {
+  if (!address) return std::nullopt;
+  SchedulerConnectionFlags flags = identity;
+  flags.address = *address;
+  return resolve_scheduler_connection(flags);
+}
+
 void add_job_on_scheduler_options(CLI::App& command, JobOnScheduler& target) {
   command.add_option("id", target.job_id, "Job id")->required();
   add_scheduler_connection_options(command, target.scheduler);

@@ -6,6 +6,7 @@
 // (server/client/scheduler_connection.h).
 #include <CLI/CLI.hpp>
 
+#include <optional>
 #include <string>
 
 #include "server/client/scheduler_connection.h"
@@ -23,6 +24,11 @@ void add_client_identity_options(CLI::App& command, SchedulerConnectionFlags& fl
 
 // Adds --scheduler HOST:PORT and the identity options above.
 void add_scheduler_connection_options(CLI::App& command, SchedulerConnectionFlags& flags);
+
+// `farm regress` and `farm grade` render on a scheduler only when --scheduler is given: its
+// connection then, with the identity options; nullopt without it.
+std::optional<SchedulerConnection> resolve_optional_scheduler(const std::optional<std::string>& address,
+                                                              const SchedulerConnectionFlags& identity);
 
 // Adds the required job ID argument and the connection options.
 void add_job_on_scheduler_options(CLI::App& command, JobOnScheduler& target);

@@ -6,10 +6,9 @@
 #include <openssl/pem.h>
 #include <openssl/x509.h>
 
-#include <fstream>
-#include <iterator>
 
 #include "renderer/scene/input_error.h"
+#include "server/common/read_whole_file.h"
 
 namespace farm {
 namespace {
@@ -23,10 +22,7 @@ std::string read_pem(const std::filesystem::path& file, const char* what) {
     throw InputError(fmt::format("{}: cannot read the {} (not a readable file)", file.string(), what));
   }
   if (size > kMaxPemBytes) throw InputError(fmt::format("{}: over 1 MiB; not a {}", file.string(), what));
-  std::ifstream in(file, std::ios::binary);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in && !in.eof()) throw InputError(fmt::format("{}: cannot read the {}", file.string(), what));
-  return text;
+  return read_whole_file(file, what);
 }
 
 struct BioDeleter {
