@@ -27,10 +27,6 @@ grpc::Status guarded(F&& body) {
   }
 }
 
-grpc::Status not_found(const std::string& id) {
-  return {grpc::StatusCode::NOT_FOUND, fmt::format("no job '{}'", id.substr(0, 80))};
-}
-
 // Streams `file` in chunks of `make(offset, bytes, first)`; false when the client went away.
 template <typename Chunk, typename Make>
 bool stream_file(const std::filesystem::path& file, grpc::ServerWriter<Chunk>* writer,
@@ -120,8 +116,8 @@ grpc::Status SchedulerService::WatchJob(grpc::ServerContext* context,
                                         grpc::ServerWriter<v1::JobEvent>* writer) {
   return guarded([&] {
     const Principal who = access_.access.require(*context, kJobReaders, "WatchJob");
-    visible_job(who, request->job_id(), kAllJobReaders, "watch");
-    // Subscribe before the snapshot, so no event falls between them.
+    // Subscribe before the snapshot, so no event falls between them (a caller the snapshot then
+    // refuses is unsubscribed on the way out).
     const std::shared_ptr<JobEventQueue> queue = core_.watch(request->job_id());
     struct Unwatch {
       SchedulerCore& core;
@@ -130,13 +126,12 @@ grpc::Status SchedulerService::WatchJob(grpc::ServerContext* context,
       ~Unwatch() { core.unwatch(id, queue); }
     } unwatch{core_, request->job_id(), queue};
 
-    std::optional<v1::Job> job = core_.get_job(request->job_id());
-    if (!job) return not_found(request->job_id());
+    const v1::Job job = visible_job(who, request->job_id(), kAllJobReaders, "watch");
     v1::JobEvent event;
-    *event.mutable_job() = *job;
+    *event.mutable_job() = job;
     event.mutable_snapshot();
     if (!writer->Write(event)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
-    if (is_final(job->state())) return grpc::Status::OK;
+    if (is_final(job.state())) return grpc::Status::OK;
     while (true) {
       // Polls for a client that went away, so a watch never outlives its caller.
       if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
@@ -162,14 +157,14 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
                                          grpc::ServerWriter<v1::FileChunk>* writer) {
   return guarded([&] {
     const Principal who = access_.access.require(*context, kJobReaders, "GetResult");
-    const std::optional<v1::Job> job = visible_job(who, request->job_id(), kAllJobReaders, "fetch");
-    if (job->state() != v1::JOB_STATE_SUCCEEDED) {
+    const v1::Job job = visible_job(who, request->job_id(), kAllJobReaders, "fetch");
+    if (job.state() != v1::JOB_STATE_SUCCEEDED) {
       return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                          fmt::format("job {} is {}, not done", job->job_id(),
-                                      v1::JobState_Name(job->state())));
+                          fmt::format("job {} is {}, not done", job.job_id(),
+                                      v1::JobState_Name(job.state())));
     }
     const bool preview = request->kind() == v1::RESULT_KIND_PREVIEW;
-    const std::optional<std::filesystem::path> file = core_.result_file(job->job_id(), preview);
+    const std::optional<std::filesystem::path> file = core_.result_file(job.job_id(), preview);
     if (!file) return grpc::Status(grpc::StatusCode::INTERNAL, "the job's result file is missing");
     const std::string sha = sha256_file_hex(*file);
     const std::uint64_t size = std::filesystem::file_size(*file);

@@ -127,6 +127,21 @@ class FarmSchedulerTest : public ::testing::Test {
     return test::wait_for_job(*stub_, job.job_id(), done, 90s);
   }
 
+  // Waits until `tiles` tiles of the job are done, then kills the scheduler (SIGKILL) and waits
+  // for it to go; the job as it was just before, nullopt when it got nowhere within a minute (or
+  // the scheduler did not go).
+  std::optional<v1::Job> kill_scheduler_after_tiles(test::SchedulerProcess& scheduler, const std::string& id,
+                                                    std::uint32_t tiles) {
+    const auto before = test::wait_for_job(
+        *stub_, id, [tiles](const v1::Job& j) { return j.tiles_done() >= tiles || done(j); }, 60s);
+    scheduler.process().send_signal(SIGKILL);
+    if (!scheduler.process().wait_exit(10s)) {
+      ADD_FAILURE() << "the scheduler outlived SIGKILL";
+      return std::nullopt;
+    }
+    return before;
+  }
+
   TileBuffer fetch_exr(const std::string& id) {
     const fs::path file = dir_ / (id + ".exr");
     const grpc::Status status = test::fetch_result(*stub_, id, v1::RESULT_KIND_EXR, file);
@@ -318,11 +333,8 @@ TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTiles
   ASSERT_TRUE(stub_);
   const v1::JobSpec spec = cornell("path", 64, 48, 512, 8);
   const v1::Job job = submit_ok(spec);
-  const auto before = test::wait_for_job(
-      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 6 || done(j); }, 60s);
+  const auto before = kill_scheduler_after_tiles(*scheduler, job.job_id(), 6);
   ASSERT_TRUE(before);
-  scheduler->process().send_signal(SIGKILL);
-  ASSERT_TRUE(scheduler->process().wait_exit(10s));
   ASSERT_NE(before->state(), v1::JOB_STATE_SUCCEEDED) << "the job finished before the kill";
 
   scheduler = start_scheduler({"--worker", worker->address(), "--float"});
@@ -371,11 +383,8 @@ TEST_P(DamagedTileResultsTest, DamagedTileFilesAreRenderedAgainAndTheFrameIsBitI
   ASSERT_TRUE(stub_);
   const v1::JobSpec spec = cornell("path", 64, 48, 1024, 8);
   const v1::Job job = submit_ok(spec);
-  const auto before = test::wait_for_job(
-      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 2 || done(j); }, 60s);
+  const auto before = kill_scheduler_after_tiles(*scheduler, job.job_id(), 2);
   ASSERT_TRUE(before);
-  scheduler->process().send_signal(SIGKILL);
-  ASSERT_TRUE(scheduler->process().wait_exit(10s));
   ASSERT_NE(before->state(), v1::JOB_STATE_SUCCEEDED) << "the job finished before the kill";
 
   std::vector<std::string> damaged;

@@ -399,22 +399,28 @@ class CallInFlight {
   std::thread thread_;
 };
 
+// A small call right after a stopped one succeeds: the stopped render no longer holds the
+// worker's one render thread. `busy` says what it means when it does not.
+void expect_next_call_served(v1::Worker::Stub& stub, test::WorkerProcess& worker, const std::string& busy) {
+  const v1::JobSpec quick = test::cornell_job_spec("raster", 16, 16, 1);
+  v1::RenderTileResponse response;
+  const grpc::Status next = render(stub, tile_request(quick, {0, 0, 16, 16}), response, 30s);
+  EXPECT_TRUE(next.ok()) << busy << ": " << next.error_message() << "\n" << worker.process().output();
+}
+
 // The worker has one render thread: were a stopped render still running on it, the small call
 // after it would wait behind hours of work.
 TEST_F(FarmWorkerTest, HugeSppStopsAtTheDeadlineForEveryEngineAndTheWorkerServesTheNextCall) {
   auto worker = start_worker_with_scheduler(1);
   ASSERT_FALSE(worker->address().empty());
   auto stub = worker_stub(worker->address());
-  const v1::JobSpec quick = test::cornell_job_spec("raster", 16, 16, 1);
   for (const HugeTile& huge : kHugeTiles) {
     const v1::JobSpec spec = huge_spec(huge);
     prepare_scene(*stub, *worker, spec);
     v1::RenderTileResponse response;
     const grpc::Status late = render(*stub, tile_request(spec, {0, 0, huge.size, huge.size}), response, 1s);
     EXPECT_EQ(late.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << huge.engine << ": " << late.error_message();
-    const grpc::Status next = render(*stub, tile_request(quick, {0, 0, 16, 16}), response, 30s);
-    EXPECT_TRUE(next.ok()) << huge.engine << ": the worker is still busy with the late tile: "
-                           << next.error_message() << "\n" << worker->process().output();
+    expect_next_call_served(*stub, *worker, std::string(huge.engine) + ": the worker is still busy with the late tile");
   }
 }
 
@@ -422,7 +428,6 @@ TEST_F(FarmWorkerTest, HugeSppCancelledMidTileFreesTheWorkerForEveryEngine) {
   auto worker = start_worker_with_scheduler(1);
   ASSERT_FALSE(worker->address().empty());
   auto stub = worker_stub(worker->address());
-  const v1::JobSpec quick = test::cornell_job_spec("raster", 16, 16, 1);
   for (const HugeTile& huge : kHugeTiles) {
     const v1::JobSpec spec = huge_spec(huge);
     prepare_scene(*stub, *worker, spec);
@@ -430,10 +435,7 @@ TEST_F(FarmWorkerTest, HugeSppCancelledMidTileFreesTheWorkerForEveryEngine) {
     std::this_thread::sleep_for(500ms);  // into the render (an earlier cancel proves less, never fails)
     call.cancel();
     EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::CANCELLED) << huge.engine;
-    v1::RenderTileResponse response;
-    const grpc::Status next = render(*stub, tile_request(quick, {0, 0, 16, 16}), response, 30s);
-    EXPECT_TRUE(next.ok()) << huge.engine << ": the worker is still busy with the cancelled tile: "
-                           << next.error_message() << "\n" << worker->process().output();
+    expect_next_call_served(*stub, *worker, std::string(huge.engine) + ": the worker is still busy with the cancelled tile");
   }
 }
 
