@@ -8,6 +8,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/loaders.h"
 #include "renderer/scene/model.h"
+#include "renderer/scene/ply_header.h"
 
 namespace farm {
 namespace {
@@ -46,6 +47,8 @@ Model load_model(const fs::path& file, const fs::path& asset_root) {
   model.file = confine_file(model.root, absolute, absolute.string(), ReferenceForm::relative_or_absolute);
   if (model.file.verdict == Confinement::missing) throw InputError(file.string() + ": model file not found");
   if (!model.file.allowed()) throw InputError(file.string() + ": " + model.file.reason);
+  // Assimp trusts a PLY header's element counts: they are held against the file's size first.
+  if (ext == ".ply") check_ply_file(model.file, file.string());
   return assimp ? load_with_assimp(model) : load_gltf(model);
 }
 

@@ -1,0 +1,137 @@
+#include "renderer/scene/ply_header.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "renderer/scene/input_error.h"
+
+namespace farm {
+namespace {
+
+// Bytes of each scalar type PLY names, under both spellings.
+const std::map<std::string, std::uint64_t, std::less<>>& scalar_sizes() {
+  static const std::map<std::string, std::uint64_t, std::less<>> sizes{
+      {"char", 1},   {"uchar", 1},  {"int8", 1},    {"uint8", 1},   {"short", 2},
+      {"ushort", 2}, {"int16", 2},  {"uint16", 2},  {"int", 4},     {"uint", 4},
+      {"int32", 4},  {"uint32", 4}, {"float", 4},   {"float32", 4}, {"double", 8},
+      {"float64", 8}};
+  return sizes;
+}
+
+std::vector<std::string> words_of(std::string_view line) {
+  std::vector<std::string> words;
+  std::istringstream in{std::string(line)};
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
+}
+
+}  // namespace
+
+PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
+  PlyHeader header;
+  const std::string_view head = bytes.substr(0, kMaxPlyHeaderBytes);
+  std::size_t pos = 0;
+  int line_number = 0;
+  bool format_seen = false;
+  auto fail = [&](const std::string& why) {
+    throw InputError(file + ": PLY header line " + std::to_string(line_number) + ": " + why);
+  };
+  while (true) {
+    const std::size_t end = head.find('\n', pos);
+    ++line_number;
+    if (end == std::string_view::npos) {
+      fail(bytes.size() > head.size()
+               ? "no end_header within the first " + std::to_string(kMaxPlyHeaderBytes) + " bytes"
+               : "the file ends before end_header");
+    }
+    const std::vector<std::string> w = words_of(head.substr(pos, end - pos));
+    pos = end + 1;
+    if (line_number == 1) {
+      if (w.size() != 1 || w[0] != "ply") fail("a PLY file starts with the line 'ply'");
+      continue;
+    }
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "end_header") break;
+    if (w[0] == "format") {
+      if (w.size() != 3) fail("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      if (w[1] == "ascii") header.format = PlyHeader::Format::ascii;
+      else if (w[1] == "binary_little_endian") header.format = PlyHeader::Format::binary_little_endian;
+      else if (w[1] == "binary_big_endian") header.format = PlyHeader::Format::binary_big_endian;
+      else fail("unknown format '" + w[1] + "'");
+      format_seen = true;
+    } else if (w[0] == "element") {
+      if (w.size() != 3) fail("expected 'element NAME COUNT'");
+      PlyElement e{w[1], 0, 0};
+      const auto [p, ec] = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
+      if (ec != std::errc() || p != w[2].data() + w[2].size()) {
+        fail("element '" + w[1] + "' has count '" + w[2] + "', not a whole number");
+      }
+      header.elements.push_back(std::move(e));
+    } else if (w[0] == "property") {
+      if (header.elements.empty()) fail("a property before any element");
+      const bool ascii = header.format == PlyHeader::Format::ascii;
+      const auto& sizes = scalar_sizes();
+      std::uint64_t bytes_needed = 0;
+      if (w.size() == 5 && w[1] == "list") {
+        const auto length = sizes.find(w[2]);
+        if (length == sizes.end() || sizes.find(w[3]) == sizes.end()) fail("unknown type in a list property");
+        bytes_needed = ascii ? 2 : length->second;  // an empty list is its length alone
+      } else if (w.size() == 3) {
+        const auto scalar = sizes.find(w[1]);
+        if (scalar == sizes.end()) fail("unknown type '" + w[1] + "'");
+        bytes_needed = ascii ? 2 : scalar->second;
+      } else {
+        fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
+      }
+      header.elements.back().min_bytes += bytes_needed;
+    }  // other keywords (some writers add their own) declare nothing that is counted
+  }
+  if (!format_seen) throw InputError(file + ": PLY header has no format line");
+  header.header_bytes = pos;
+  return header;
+}
+
+void check_ply_counts(const PlyHeader& header, std::uint64_t file_bytes, const std::string& file) {
+  const std::uint64_t body = file_bytes > header.header_bytes ? file_bytes - header.header_bytes : 0;
+  std::uint64_t needed = 0;
+  for (const PlyElement& e : header.elements) {
+    // Checked arithmetic: a count near 2^64 must not wrap into something small.
+    const bool too_many = e.min_bytes > 0 && e.count > (std::numeric_limits<std::uint64_t>::max() - needed) / e.min_bytes;
+    if (!too_many) needed += e.count * e.min_bytes;
+    if (too_many || needed > body) {
+      throw InputError(file + ": the PLY header declares " + std::to_string(e.count) + " '" + e.name +
+                       "' elements, which need more bytes than the " + std::to_string(body) +
+                       " that follow the header (the file is truncated or its counts are false)");
+    }
+  }
+}
+
+void check_ply_file(const ConfinedFile& file, const std::string& name) {
+  std::string why;
+  const int fd = open_confined(file, &why);
+  if (fd < 0) throw InputError(name + ": " + why);
+  std::string head(kMaxPlyHeaderBytes + 1, '\0');
+  std::size_t got = 0;
+  while (got < head.size()) {
+    const ssize_t n = ::read(fd, head.data() + got, head.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const int err = errno;
+      ::close(fd);
+      throw InputError(name + ": cannot read: " + std::strerror(err));
+    }
+    if (n == 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  head.resize(got);
+  check_ply_counts(parse_ply_header(head, name), file.size, name);
+}
+
+}  // namespace farm

@@ -1,0 +1,109 @@
+// PLY headers: element counts are held against the bytes after the header before Assimp reads a
+// PLY file (renderer/scene/ply_header.h), so a tiny file declaring millions of faces is refused
+// at once; honest ASCII and binary files still load.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/model.h"
+#include "renderer/scene/ply_header.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+using test::TempDir;
+
+std::string ascii_triangle(const std::string& face_count) {
+  return "ply\nformat ascii 1.0\ncomment one triangle\nelement vertex 3\nproperty float x\n"
+         "property float y\nproperty float z\nelement face " + face_count +
+         "\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+}
+
+// One triangle in binary_little_endian: 3 vertices of 3 floats, one face (uchar 3, 3 ints).
+std::string binary_triangle() {
+  std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                  "property float y\nproperty float z\nelement face 1\n"
+                  "property list uchar int vertex_indices\nend_header\n";
+  const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  s.append(reinterpret_cast<const char*>(v), sizeof v);
+  s.push_back(3);
+  const std::int32_t f[3] = {0, 1, 2};
+  s.append(reinterpret_cast<const char*>(f), sizeof f);
+  return s;
+}
+
+std::string load_error(const std::filesystem::path& file) {
+  try {
+    load_model(file);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(PlyHeader, HonestAsciiAndBinaryTrianglesLoad) {
+  TempDir dir;
+  for (const auto& [name, text] : {std::pair{"ascii.ply", ascii_triangle("1")},
+                                   std::pair{"binary.ply", binary_triangle()}}) {
+    const Model m = load_model(dir.write(name, text));
+    ASSERT_EQ(m.meshes.size(), 1u) << name;
+    EXPECT_EQ(m.meshes[0].triangles.size(), 1u) << name;
+    EXPECT_EQ(m.meshes[0].positions.size(), 3u) << name;
+  }
+}
+
+TEST(PlyHeader, TenMillionFacesDeclaredInATinyFileAreRefusedBeforeLoading) {
+  TempDir dir;
+  const std::string text = ascii_triangle("10000000");
+  ASSERT_LT(text.size(), 400u);  // the bomb: a few hundred bytes
+  const std::string error = load_error(dir.write("bomb.ply", text));
+  EXPECT_NE(error.find("bomb.ply"), std::string::npos) << error;
+  EXPECT_NE(error.find("declares 10000000 'face' elements"), std::string::npos) << error;
+}
+
+TEST(PlyHeader, BinaryCountsAreHeldToTheExactBytes) {
+  const std::string whole = binary_triangle();
+  const PlyHeader header = parse_ply_header(whole, "t.ply");
+  EXPECT_EQ(header.format, PlyHeader::Format::binary_little_endian);
+  ASSERT_EQ(header.elements.size(), 2u);
+  EXPECT_EQ(header.elements[0].min_bytes, 12u);  // three floats
+  EXPECT_EQ(header.elements[1].min_bytes, 1u);   // an empty list: its uchar length
+  EXPECT_NO_THROW(check_ply_counts(header, whole.size(), "t.ply"));
+  // The face's list length needs one byte more than the vertices leave.
+  EXPECT_THROW(check_ply_counts(header, header.header_bytes + 36, "t.ply"), InputError);
+  EXPECT_NO_THROW(check_ply_counts(header, header.header_bytes + 37, "t.ply"));
+}
+
+TEST(PlyHeader, CountsThatWouldOverflowAreRefused) {
+  const std::string text = ascii_triangle("18446744073709551615");
+  EXPECT_THROW(check_ply_counts(parse_ply_header(text, "t.ply"), text.size(), "t.ply"), InputError);
+  EXPECT_THROW(parse_ply_header(ascii_triangle("18446744073709551616"), "t.ply"), InputError);
+  EXPECT_THROW(parse_ply_header(ascii_triangle("-1"), "t.ply"), InputError);
+}
+
+TEST(PlyHeader, MalformedHeadersNameTheFileAndTheLine) {
+  auto error_of = [](const std::string& text) {
+    try {
+      parse_ply_header(text, "m.ply");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("plx\n").find("m.ply: PLY header line 1"), std::string::npos);
+  EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\nproperty quad x\nend_header\n")
+                .find("line 4: unknown type 'quad'"), std::string::npos);
+  EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\n").find("ends before end_header"),
+            std::string::npos);
+  EXPECT_NE(error_of("ply\nelement vertex 3\nend_header\n").find("no format line"), std::string::npos);
+  // A header that never ends is read no further than its bound.
+  EXPECT_NE(error_of("ply\n" + std::string(kMaxPlyHeaderBytes, 'c') + "\n").find("no end_header within"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace farm
