@@ -11,6 +11,7 @@
 #include "renderer/scene/input_error.h"
 #include "server/cli/bench_command.h"
 #include "server/cli/cancel_command.h"
+#include "server/cli/check_scene_command.h"
 #include "server/cli/command_table.h"
 #include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
   farm::add_cancel_command(app, commands);
   farm::add_fetch_command(app, commands);
   farm::add_token_command(app, commands);
+  farm::add_check_scene_command(app, commands);
 
   try {
     app.parse(argc, argv);

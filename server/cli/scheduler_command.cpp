@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "renderer/scene/input_error.h"
@@ -58,6 +59,8 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
   options.verify_fraction = o.verify_fraction;
   options.limits = o.limits;
+  // New jobs' scenes are loaded by this binary again, as `farm check-scene`, under the limits.
+  options.scene_check_program = std::filesystem::read_symlink("/proc/self/exe");
   SchedulerCore core(options);
   for (const std::string& address : o.workers) {
     core.add_worker(std::make_shared<RemoteTileWorker>(
@@ -181,6 +184,16 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->capture_default_str();
   s->add_option("--max-job-asset-bytes", o->limits.max_job_asset_bytes,
                 "Most bytes of one job's assets together")
+      ->capture_default_str();
+  s->add_option("--max-scene-memory", o->limits.max_scene_memory,
+                "Memory, in bytes, that loading a new job's models and building its scene may take "
+                "at submit (done in a child process; RESOURCE_EXHAUSTED above)")
+      ->check(CLI::Range(std::uint64_t{256} << 20, std::uint64_t{1} << 50))
+      ->capture_default_str();
+  s->add_option("--max-scene-seconds", o->limits.max_scene_seconds,
+                "Seconds that loading a new job's models and building its scene may take at submit "
+                "(the child process is killed after that; RESOURCE_EXHAUSTED)")
+      ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
   add_log_level_option(*s, "info");
   commands.add(s, [o] { return run_scheduler_command(*o); });

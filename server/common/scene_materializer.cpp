@@ -198,7 +198,7 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
 
   const fs::path scenes = fs::weakly_canonical(fs::absolute(cache_dir)) / "scenes";
   fs::create_directories(scenes);
-  MaterializedScene result{scenes / scene_hash, {}};
+  MaterializedScene result{scenes / scene_hash, scenes / scene_hash / job_name, {}};
   // A published folder is complete: it only ever appears by rename.
   if (!fs::is_directory(result.dir)) {
     if (auto missing = missing_assets(spec, store); !missing.empty()) {
@@ -212,15 +212,17 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
   JobLoadOptions options;
   options.asset_root = result.dir;
   try {
-    result.job = parse_job(spec.job_json(), result.dir / job_name, options);
+    result.job = parse_job(spec.job_json(), result.job_file, options);
   } catch (const InputError& e) {
-    // Name the job as its author knows it, not by this worker's cache folder.
-    std::string message = e.what();
-    replace_all(message, result.dir.string() + "/", "");
-    replace_all(message, result.dir.string(), "the job's folder");
-    throw InputError(message);
+    throw InputError(without_scene_folder(e.what(), result.dir));
   }
   return result;
+}
+
+std::string without_scene_folder(std::string message, const fs::path& scene_dir) {
+  replace_all(message, scene_dir.string() + "/", "");
+  replace_all(message, scene_dir.string(), "the job's folder");
+  return message;
 }
 
 }  // namespace farm

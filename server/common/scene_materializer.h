@@ -48,8 +48,9 @@ void check_asset_sizes(const v1::JobSpec& spec, const AssetStore& store);
 std::vector<v1::AssetRef> missing_assets(const v1::JobSpec& spec, const AssetStore& store);
 
 struct MaterializedScene {
-  std::filesystem::path dir;  // <cache>/scenes/<scene hash>
-  Job job;                    // parsed with `dir` as the asset root
+  std::filesystem::path dir;       // <cache>/scenes/<scene hash>
+  std::filesystem::path job_file;  // the job's text inside `dir`
+  Job job;                         // parsed with `dir` as the asset root
 };
 
 // Lays out (once; the folder appears complete or not at all) and parses. InputError for bad asset
@@ -59,5 +60,9 @@ struct MaterializedScene {
 MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& scene_hash,
                                     const AssetStore& store,
                                     const std::filesystem::path& cache_dir);
+
+// `message` (a loader's or parse_job's) naming the job as its author knows it: paths inside the
+// scene folder relative to it, the folder itself as "the job's folder", never this machine's cache.
+std::string without_scene_folder(std::string message, const std::filesystem::path& scene_dir);
 
 }  // namespace farm

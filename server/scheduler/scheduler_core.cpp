@@ -27,13 +27,6 @@ std::string new_job_id() {
   return fmt::format("{:016x}", random());
 }
 
-void replace_all(std::string& s, const std::string& from, const std::string& to) {
-  if (from.empty()) return;
-  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
-    s.replace(at, from.size(), to);
-  }
-}
-
 std::unique_ptr<FrameAssembly> make_assembly(const SchedulerOptions& options) {
   if (options.in_memory) return std::make_unique<InMemoryAssembly>();
   return std::make_unique<TileFileAssembly>(options.data_dir / "tiles");
@@ -47,6 +40,13 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
       store_(options_.in_memory ? fs::path(":memory:") : options_.data_dir / "jobs.db"),
       log_(make_logger("scheduler", options_.log_level)),
       assembly_(make_assembly(options_)),
+      scene_checker_(options_.scene_check_program.empty()
+                         ? nullptr
+                         : std::make_unique<SceneChecker>(
+                               options_.scene_check_program,
+                               SceneBudget{options_.limits.max_scene_memory,
+                                           std::chrono::milliseconds(static_cast<std::int64_t>(
+                                               options_.limits.max_scene_seconds * 1000.0))})),
       jobs_(store_, assets_, options_.data_dir),
       events_(store_),
       finisher_(options_, store_, *assembly_, jobs_, events_, *log_),
@@ -92,21 +92,22 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
   const std::string hash = scene_hash(spec);
   MaterializedScene m = materialize_scene(spec, hash, assets_, options_.data_dir);
   check_job_limits(m.job, spec, options_.limits);
-  Scene scene;
-  try {
-    // What `farm render` does before rendering: models load, the scene builds.
-    scene = build_scene(m.job);
-  } catch (const InputError& e) {
-    std::string message = e.what();
-    replace_all(message, m.dir.string() + "/", "");
-    replace_all(message, m.dir.string(), "the job's folder");
-    throw InputError(message);
-  }
   auto info = std::make_shared<JobInfo>();
-  if (options_.validated_scene) {
-    options_.validated_scene(hash, m.job, std::move(scene));
-  } else if (m.job.embree_rays > 0) {
-    info->scene = std::make_shared<const PreparedScene>(std::move(scene));  // for the merge's check
+  try {
+    // What `farm render` does before rendering: models load, the scene builds. A server does it in
+    // a child process under a budget; the merge's Embree check then loads the scene when it runs.
+    if (scene_checker_) {
+      scene_checker_->check(hash, m.job_file, m.dir, spec.file_name().empty() ? m.job.name : spec.file_name());
+    } else {
+      Scene scene = build_scene(m.job);
+      if (options_.validated_scene) {
+        options_.validated_scene(hash, m.job, std::move(scene));
+      } else if (m.job.embree_rays > 0) {
+        info->scene = std::make_shared<const PreparedScene>(std::move(scene));  // for the merge's check
+      }
+    }
+  } catch (const InputError& e) {
+    throw InputError(without_scene_folder(e.what(), m.dir));
   }
   info->spec = std::make_shared<const v1::JobSpec>(spec);
   info->scene_hash = hash;

@@ -37,6 +37,7 @@
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_events.h"
 #include "server/scheduler/running_jobs.h"
+#include "server/scheduler/scene_check.h"
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/asset_grants.h"
@@ -118,6 +119,7 @@ class SchedulerCore {
   JobStore store_;
   std::shared_ptr<spdlog::logger> log_;
   std::unique_ptr<FrameAssembly> assembly_;
+  std::unique_ptr<SceneChecker> scene_checker_;  // when options_.scene_check_program is set
   RunningJobs jobs_;
   JobEvents events_;
   Finisher finisher_;

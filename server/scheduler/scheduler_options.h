@@ -37,6 +37,10 @@ struct SchedulerOptions {
   // pasted into their frame as they arrive (InMemoryAssembly), so nothing outlives the process.
   // Off (the farm): jobs.db on disk, each batch a file before its tiles are marked done.
   bool in_memory = false;
+  // The `farm` binary, run as `farm check-scene` to load each new job's scene at submit under
+  // limits.max_scene_memory and max_scene_seconds (scene_check.h). Empty: the scene is built in
+  // this process, as the embedded farm of `farm render` does with its user's own files.
+  std::filesystem::path scene_check_program;
   // Given each job's scene as submit() built it to validate the job: the embedded farm hands it
   // to its in-process worker, so that `farm render` loads the models once, not twice.
   std::function<void(const std::string& scene_hash, const Job& job, Scene scene)> validated_scene;

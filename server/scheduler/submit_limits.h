@@ -27,6 +27,11 @@ struct SubmitLimits {
   // AssetRef.size of one file, and of all the files of one job together.
   std::uint64_t max_asset_bytes = std::uint64_t{2} << 30;      // 2 GiB
   std::uint64_t max_job_asset_bytes = std::uint64_t{4} << 30;  // 4 GiB
+  // Loading a job's models and building its scene at submit, in a child process
+  // (scene_check.h): its address space and its wall-clock time. The lab's cow loads in 0.1 s in
+  // 130 MiB; a 10M-triangle model in about a minute and a few GiB.
+  std::uint64_t max_scene_memory = std::uint64_t{8} << 30;  // 8 GiB
+  double max_scene_seconds = 120;
 };
 
 // The rays a sample may trace, as counted against max_work: 1 for raster; for the ray engines

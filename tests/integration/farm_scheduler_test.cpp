@@ -684,6 +684,76 @@ TEST_F(FarmSchedulerTest, WorkBombsAreRefusedAtSubmitAndTheFarmKeepsServing) {
   EXPECT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
 }
 
+// A model whose loading would hold a scheduler thread is refused, and the scheduler keeps serving:
+// a 187-byte PLY that declares 10M faces (it used to run minutes at 1.5 GB) by its header check;
+// a model within every byte limit that takes long to triangulate, or memory to load, by the
+// budget of the child process SubmitJob loads scenes in. That child never outlives the call.
+TEST_F(FarmSchedulerTest, ModelBombsAreRefusedWithinTheSceneBudgetAndTheSchedulerKeepsServing) {
+  auto worker = start_worker("w1");
+  auto scheduler = start_scheduler({"--worker", worker->address(), "--max-scene-seconds", "3",
+                                    "--max-scene-memory", std::to_string(256 << 20)});
+  ASSERT_TRUE(stub_);
+  const auto refusal = [&](const std::string& name, const fs::path& model) {
+    const std::vector<std::pair<std::string, fs::path>> files{{name, model}};
+    EXPECT_TRUE(test::upload_assets(*stub_, files).ok());
+    const v1::JobSpec spec = test::make_job_spec(
+        R"({"version": 1, "name": "bomb", "scene": {"objects": [{"file": ")" + name +
+            R"("}]}, "render": {"engine": "raster", "width": 16, "height": 16}})",
+        files, "bomb.json");
+    v1::Job job;
+    return test::submit(*stub_, spec, job);
+  };
+
+  std::ofstream(dir_ / "faces.ply")
+      << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 10000000\nproperty list uchar int vertex_indices\n"
+         "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const grpc::Status faces = refusal("faces.ply", dir_ / "faces.ply");
+  EXPECT_EQ(faces.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << faces.error_message();
+  EXPECT_NE(faces.error_message().find("bomb.json: scene.objects[0].file: faces.ply: the PLY header "
+                                       "declares 10000000 'face' elements"),
+            std::string::npos) << faces.error_message();
+
+  write_slow_model(dir_ / "slow.obj");
+  const grpc::Status slow = refusal("slow.obj", dir_ / "slow.obj");
+  EXPECT_EQ(slow.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << slow.error_message();
+  EXPECT_NE(slow.error_message().find("bomb.json: loading the job's models and building its scene took "
+                                      "longer than 3 s, the scheduler's limit (--max-scene-seconds)"),
+            std::string::npos) << slow.error_message();
+
+  {  // 250,000 honest quads: 10 MB of text that Assimp needs about 270 MiB of memory to load
+    std::ofstream out(dir_ / "grid.obj");
+    constexpr int kSide = 500;
+    for (int j = 0; j < kSide; ++j)
+      for (int i = 0; i < kSide; ++i) out << "v " << i << ' ' << j << " 0\n";
+    for (int j = 0; j + 1 < kSide; ++j)
+      for (int i = 0; i + 1 < kSide; ++i) {
+        const int a = j * kSide + i + 1;
+        out << "f " << a << ' ' << a + 1 << ' ' << a + kSide + 1 << ' ' << a + kSide << '\n';
+      }
+  }
+  const grpc::Status big = refusal("grid.obj", dir_ / "grid.obj");
+  EXPECT_EQ(big.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << big.error_message();
+  EXPECT_NE(big.error_message().find("bomb.json: loading the job's models and building its scene needs "
+                                     "more than 0.25 GiB of memory, the scheduler's limit (--max-scene-memory)"),
+            std::string::npos) << big.error_message();
+
+  // No job was stored and no checking process is left behind.
+  {
+    grpc::ClientContext context;
+    v1::ListJobsResponse jobs;
+    ASSERT_TRUE(stub_->ListJobs(&context, v1::ListJobsRequest(), &jobs).ok());
+    EXPECT_EQ(jobs.jobs_size(), 0);
+  }
+  EXPECT_EQ(test::children_of(scheduler->process().pid()), 0u);
+
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  const v1::Job good = submit_ok(cornell("raster", 32, 32, 1, 16));
+  const auto final_job = test::wait_for_job(*stub_, good.job_id(), done, 30s);
+  ASSERT_TRUE(final_job);
+  EXPECT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
+}
+
 // The limits are the operator's: `farm scheduler --max-...` moves them.
 TEST_F(FarmSchedulerTest, SchedulerFlagsSetTheSubmitLimits) {
   auto scheduler = start_scheduler({"--max-tiles-per-job", "4", "--max-job-bytes", "100000",

@@ -1,6 +1,10 @@
 #include "tests/support/background_process.h"
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 namespace farm::test {
 
@@ -11,5 +15,22 @@ WorkerProcess::WorkerProcess(const std::vector<std::string>& extra_args)
         return argv;
       }()),
       address_(wait_for_listening(process_, "worker", std::chrono::seconds(30))) {}
+
+std::size_t children_of(int pid) {
+  std::size_t children = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+    std::ifstream in(entry.path() / "stat");
+    std::string stat;
+    if (!std::getline(in, stat)) continue;
+    // pid (comm) state ppid ...: the command name may hold spaces and parentheses.
+    const std::size_t close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream fields(stat.substr(close + 1));
+    std::string state;
+    int ppid = 0;
+    if (fields >> state >> ppid && ppid == pid) ++children;
+  }
+  return children;
+}
 
 }  // namespace farm::test

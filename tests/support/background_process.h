@@ -1,6 +1,7 @@
 #pragma once
 // Processes beside a test: farm::ChildProcess (server/common/child_process.h) and the `farm worker`
 // binary under test on a free port.
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -21,5 +22,8 @@ class WorkerProcess {
   BackgroundProcess process_;
   std::string address_;
 };
+
+// How many processes have `pid` as their parent now (from /proc/*/stat).
+std::size_t children_of(int pid);
 
 }  // namespace farm::test

@@ -1,0 +1,56 @@
+#pragma once
+// SubmitJob validates a job by loading its models and building its scene, as `farm render` does
+// before it renders. Neither loader can be interrupted, and a hostile model within every byte
+// limit can still hold a thread for hours (Assimp triangulates a polygon in quadratic time) or
+// expand into gigabytes. So `farm scheduler` does that work in a child process, its own binary
+// run as `farm check-scene`, under a memory limit (RLIMIT_AS, set by the child on itself before
+// it reads anything) and a wall-clock limit (the child is killed when it passes it). The child
+// says how it went in one line on its output, which the scheduler checks before trusting it.
+//
+// Scenes that passed are remembered by their hash (a bounded set), so a job submitted again does
+// not pay for a second process.
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <unordered_set>
+
+namespace farm {
+
+struct SceneBudget {
+  std::uint64_t memory_bytes = std::uint64_t{8} << 30;  // address space of the checking process
+  std::chrono::milliseconds time = std::chrono::seconds(120);
+};
+
+class SceneChecker {
+ public:
+  // `program`: the `farm` binary (what /proc/self/exe names for `farm scheduler`).
+  SceneChecker(std::filesystem::path program, SceneBudget budget);
+
+  // Returns once the job at `job_file` (its models under `asset_root`) loaded and built within
+  // the budget. Throws InputError with the loaders' message for a bad job or model, and
+  // ServiceError RESOURCE_EXHAUSTED naming `display_name`, the limit and its flag when the
+  // budget ran out.
+  void check(const std::string& scene_hash, const std::filesystem::path& job_file,
+             const std::filesystem::path& asset_root, const std::string& display_name);
+
+ private:
+  bool passed_before(const std::string& scene_hash);
+  void remember_passed(const std::string& scene_hash);
+
+  static constexpr std::size_t kRememberedScenes = 4096;
+  std::filesystem::path program_;
+  SceneBudget budget_;
+  std::mutex mutex_;  // guards the two below
+  std::unordered_set<std::string> passed_;
+  std::deque<std::string> passed_order_;  // oldest first, to forget beyond kRememberedScenes
+};
+
+// The child's side, run by `farm check-scene`: limits its own address space to `memory_bytes`,
+// loads the job and builds its scene, prints its one-line verdict and returns the exit code.
+int check_scene_in_this_process(const std::filesystem::path& job_file,
+                                const std::filesystem::path& asset_root, std::uint64_t memory_bytes);
+
+}  // namespace farm
