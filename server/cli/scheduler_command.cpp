@@ -185,6 +185,10 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
   s->add_option("--max-job-asset-bytes", o->limits.max_job_asset_bytes,
                 "Most bytes of one job's assets together")
       ->capture_default_str();
+  s->add_option("--max-asset-store-bytes", o->limits.max_asset_store_bytes,
+                "Most bytes the scheduler's asset store holds together (UploadAsset is "
+                "RESOURCE_EXHAUSTED beyond); 0 for no limit")
+      ->capture_default_str();
   s->add_option("--max-scene-memory", o->limits.max_scene_memory,
                 "Memory, in bytes, that loading a new job's models and building its scene may take "
                 "at submit (done in a child process; RESOURCE_EXHAUSTED above)")

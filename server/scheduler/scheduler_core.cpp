@@ -37,6 +37,7 @@ std::unique_ptr<FrameAssembly> make_assembly(const SchedulerOptions& options) {
 SchedulerCore::SchedulerCore(SchedulerOptions options)
     : options_(std::move(options)),
       assets_((fs::create_directories(options_.data_dir), options_.data_dir / "assets")),
+      asset_quota_(assets_.dir(), options_.limits.max_asset_store_bytes),
       store_(options_.in_memory ? fs::path(":memory:") : options_.data_dir / "jobs.db"),
       log_(make_logger("scheduler", options_.log_level)),
       assembly_(make_assembly(options_)),

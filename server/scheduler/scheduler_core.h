@@ -41,6 +41,7 @@
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/asset_grants.h"
+#include "server/scheduler/asset_quota.h"
 #include "server/scheduler/tile_worker.h"
 #include "server/scheduler/worker_registry.h"
 
@@ -73,6 +74,8 @@ class SchedulerCore {
   void stop();
 
   const AssetStore& assets() const { return assets_; }
+  // Uploads reserve their size here before they are written (--max-asset-store-bytes).
+  AssetQuota& asset_quota() { return asset_quota_; }
   // The assets workers may fetch now (given to RemoteTileWorkers this core renders on).
   AssetGrants& grants() { return grants_; }
   const JobStore& store() const { return store_; }
@@ -115,6 +118,7 @@ class SchedulerCore {
   // Declared in the order they are built: each part is given the ones above it.
   SchedulerOptions options_;
   AssetStore assets_;
+  AssetQuota asset_quota_;
   AssetGrants grants_;
   JobStore store_;
   std::shared_ptr<spdlog::logger> log_;

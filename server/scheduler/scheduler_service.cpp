@@ -210,6 +210,7 @@ grpc::Status SchedulerService::UploadAsset(grpc::ServerContext* context,
       response->set_already_present(true);
       return grpc::Status::OK;
     }
+    const AssetQuota::Reservation reserved = core_.asset_quota().reserve(header.size());
     AssetStore::Writer writer = core_.assets().begin(header.sha256(), header.size());
     while (reader->Read(&part)) {
       if (!part.has_data() && part.has_header()) throw InputError("UploadAsset: a second AssetHeader");

@@ -27,6 +27,8 @@ struct SubmitLimits {
   // AssetRef.size of one file, and of all the files of one job together.
   std::uint64_t max_asset_bytes = std::uint64_t{2} << 30;      // 2 GiB
   std::uint64_t max_job_asset_bytes = std::uint64_t{4} << 30;  // 4 GiB
+  // Every blob the asset store holds, together (asset_quota.h); 0 for no limit.
+  std::uint64_t max_asset_store_bytes = std::uint64_t{64} << 30;  // 64 GiB
   // Loading a job's models and building its scene at submit, in a child process
   // (scene_check.h): its address space and its wall-clock time. The lab's cow loads in 0.1 s in
   // 130 MiB; a 10M-triangle model in about a minute and a few GiB.

@@ -757,9 +757,20 @@ TEST_F(FarmSchedulerTest, ModelBombsAreRefusedWithinTheSceneBudgetAndTheSchedule
 // The limits are the operator's: `farm scheduler --max-...` moves them.
 TEST_F(FarmSchedulerTest, SchedulerFlagsSetTheSubmitLimits) {
   auto scheduler = start_scheduler({"--max-tiles-per-job", "4", "--max-job-bytes", "100000",
-                                    "--max-embree-rays", "0", "--max-work", "5000"});
+                                    "--max-embree-rays", "0", "--max-work", "5000",
+                                    "--max-asset-store-bytes", "100000"});
   ASSERT_TRUE(stub_);
   ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  {  // The Cornell box's files are a few kB; 100 kB more would pass the store's limit.
+    std::ofstream(dir_ / "big.bin") << std::string(100000, 'b');
+    const grpc::Status full = test::upload_assets(*stub_, {{"big.bin", dir_ / "big.bin"}});
+    EXPECT_EQ(full.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << full.error_message();
+    EXPECT_NE(full.error_message().find("asset of 100000 bytes: the scheduler's asset store holds "),
+              std::string::npos) << full.error_message();
+    EXPECT_NE(full.error_message().find("of at most 100000 (--max-asset-store-bytes)"), std::string::npos)
+        << full.error_message();
+    EXPECT_FALSE(fs::exists(dir_ / "data" / "assets" / sha256_hex(std::string(100000, 'b'))));
+  }
   const auto refusal = [&](const v1::JobSpec& spec) {
     v1::Job job;
     const grpc::Status status = test::submit(*stub_, spec, job);
