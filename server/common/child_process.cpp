@@ -97,6 +97,12 @@ std::optional<std::string> ChildProcess::wait_for_line(const std::string& needle
   }
 }
 
+std::string ChildProcess::output_to_end(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  output_changed_.wait_for(lock, timeout, [this] { return eof_; });
+  return output_;
+}
+
 void ChildProcess::send_signal(int signal) {
   if (!exit_code_) kill(pid_, signal);
 }

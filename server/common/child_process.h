@@ -29,6 +29,9 @@ class ChildProcess {
                                            std::chrono::milliseconds timeout);
   // Everything read so far (the last kMaxOutputBytes of it).
   std::string output() const;
+  // Everything, once the child has closed its output (it has exited, and its last words are read
+  // only after that); what was read by then if `timeout` passes first.
+  std::string output_to_end(std::chrono::milliseconds timeout);
 
   void send_signal(int signal);
   pid_t pid() const { return pid_; }  // for /proc/PID: what the child costs in threads and memory

@@ -291,7 +291,8 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
     const std::shared_ptr<const JobInfo> info = jobs_.get(batch.job_id);
     const v1::JobSpec& spec = *info->spec;
     v1::RenderTileRequest request;
-    *request.mutable_job() = spec;
+    // The job text (up to --max-job-bytes) travels once per worker and scene, not with every call.
+    if (!w.scenes_sent.contains(info->scene_hash)) *request.mutable_job() = spec;
     request.set_scene_hash(info->scene_hash);
     *request.mutable_rect() = to_proto(batch.rect);
     request.set_job_id(batch.job_id);
@@ -299,6 +300,12 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
     // Each tile of the batch has its deadline.
     const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch.count;
     grpc::Status status = w.worker->render(request, result, deadline, *call.cancel);
+    if (status.error_code() == grpc::StatusCode::NOT_FOUND && !request.has_job() && !call.cancel->cancelled()) {
+      // The worker no longer holds the scene (evicted, or a new process at the address).
+      *request.mutable_job() = spec;
+      result = RenderedTiles();
+      status = w.worker->render(request, result, deadline, *call.cancel);
+    }
     if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION && !call.cancel->cancelled()) {
       // A worker that cannot fetch the job's files (no --scheduler): once more, files inline.
       for (const v1::AssetRef& ref : spec.assets()) {
@@ -309,6 +316,7 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
       result = RenderedTiles();
       status = w.worker->render(request, result, deadline, *call.cancel);
     }
+    if (status.ok() && request.has_job()) w.scenes_sent.insert(info->scene_hash);
     return status;
   } catch (const std::exception& e) {
     return {grpc::StatusCode::INTERNAL, e.what()};

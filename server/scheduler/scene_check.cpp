@@ -68,24 +68,9 @@ std::optional<std::pair<std::string, std::string>> verdict_of(std::string_view o
 SceneChecker::SceneChecker(fs::path program, SceneBudget budget)
     : program_(std::move(program)), budget_(budget) {}
 
-bool SceneChecker::passed_before(const std::string& scene_hash) {
-  std::lock_guard lock(mutex_);
-  return passed_.count(scene_hash) > 0;
-}
-
-void SceneChecker::remember_passed(const std::string& scene_hash) {
-  std::lock_guard lock(mutex_);
-  if (!passed_.insert(scene_hash).second) return;
-  passed_order_.push_back(scene_hash);
-  if (passed_order_.size() > kRememberedScenes) {
-    passed_.erase(passed_order_.front());
-    passed_order_.pop_front();
-  }
-}
-
 void SceneChecker::check(const std::string& scene_hash, const fs::path& job_file,
                          const fs::path& asset_root, const std::string& display_name) {
-  if (passed_before(scene_hash)) return;
+  if (passed_.contains(scene_hash)) return;
   ChildProcess child({program_.string(), "check-scene", job_file.string(), "--asset-root",
                       asset_root.string(), "--memory-limit", std::to_string(budget_.memory_bytes)});
   std::optional<int> code = child.wait_exit(budget_.time);
@@ -97,9 +82,9 @@ void SceneChecker::check(const std::string& scene_hash, const fs::path& job_file
                                    "than {:.4g} s, the scheduler's limit (--max-scene-seconds)",
                                    display_name, std::chrono::duration<double>(budget_.time).count()));
   }
-  const auto verdict = verdict_of(child.output());
+  const auto verdict = verdict_of(child.output_to_end(std::chrono::seconds(10)));
   if (*code == 0 && verdict && verdict->first == kPassed) {
-    remember_passed(scene_hash);
+    passed_.insert(scene_hash);
     return;
   }
   if (verdict && verdict->first == kInvalid && *code == 2) {

@@ -11,11 +11,10 @@
 // not pay for a second process.
 #include <chrono>
 #include <cstdint>
-#include <deque>
 #include <filesystem>
-#include <mutex>
 #include <string>
-#include <unordered_set>
+
+#include "server/common/recent_hashes.h"
 
 namespace farm {
 
@@ -37,15 +36,9 @@ class SceneChecker {
              const std::filesystem::path& asset_root, const std::string& display_name);
 
  private:
-  bool passed_before(const std::string& scene_hash);
-  void remember_passed(const std::string& scene_hash);
-
-  static constexpr std::size_t kRememberedScenes = 4096;
   std::filesystem::path program_;
   SceneBudget budget_;
-  std::mutex mutex_;  // guards the two below
-  std::unordered_set<std::string> passed_;
-  std::deque<std::string> passed_order_;  // oldest first, to forget beyond kRememberedScenes
+  RecentHashes passed_{4096};
 };
 
 // The child's side, run by `farm check-scene`: limits its own address space to `memory_bytes`,

@@ -34,6 +34,7 @@
 #include <spdlog/logger.h>
 
 #include "server/scheduler/scheduler_options.h"
+#include "server/common/recent_hashes.h"
 #include "server/scheduler/tile_worker.h"
 
 namespace farm {
@@ -57,6 +58,9 @@ struct WorkerEntry {
   // first (a worker just started connects within milliseconds), longer while it stays away.
   std::chrono::milliseconds retry{0};
   Clock::time_point last_heartbeat = Clock::now();
+  // Scenes whose job this worker was sent in a call it answered: later calls for them leave the
+  // job text out (a worker that no longer holds one answers NOT_FOUND and is sent it again).
+  RecentHashes scenes_sent{256};
 };
 
 // A worker as the registry sees it now (SchedulerCore::workers()).

@@ -20,6 +20,7 @@
 #include "server/common/scene_hash.h"
 #include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"
+#include "server/common/sha256.h"
 #include "server/common/tile_codec.h"
 
 namespace farm {
@@ -205,11 +206,12 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& request, TileBuff
 void TileRenderer::log_call(const v1::RenderTileRequest& request, const grpc::Status& status,
                             const v1::TileStats& stats) const {
   // Only other failures are warnings. A cancelled call is the scheduler's decision (a job
-  // cancelled, a worker dropped, a shutdown); a call for files this worker cannot fetch is
-  // answered by the scheduler sending them along with its next call.
+  // cancelled, a worker dropped, a shutdown); a call for files this worker cannot fetch, or
+  // without the job of a scene it no longer holds, is answered by the scheduler sending them
+  // along with its next call.
   const grpc::StatusCode code = status.error_code();
   const bool expected = status.ok() || code == grpc::StatusCode::CANCELLED ||
-                        code == grpc::StatusCode::FAILED_PRECONDITION;
+                        code == grpc::StatusCode::FAILED_PRECONDITION || code == grpc::StatusCode::NOT_FOUND;
   const LogLevel level = expected ? LogLevel::debug : LogLevel::warn;
   if (!log_->should_log(level)) return;  // spares the formatting of every call
   const v1::TileRect& r = request.rect();
@@ -230,12 +232,28 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
   };
   try {
     const v1::JobSpec& spec = request->job();
-    const std::string hash = scene_hash(spec);
-    if (!request->scene_hash().empty() && request->scene_hash() != hash) {
+    // A call without its job is for a scene this worker prepared from an earlier call's job.
+    const bool job_sent = request->has_job();
+    if (!job_sent && !is_sha256_hex(request->scene_hash())) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              "a call without its job must name its scene_hash (64 lowercase hex digits)"};
+    }
+    if (!job_sent && request->assets_size() > 0) {
+      return {grpc::StatusCode::INVALID_ARGUMENT, "inline files come only with the job that lists them"};
+    }
+    const std::string hash = job_sent ? scene_hash(spec) : request->scene_hash();
+    if (job_sent && !request->scene_hash().empty() && request->scene_hash() != hash) {
       return {grpc::StatusCode::INVALID_ARGUMENT,
               fmt::format("scene_hash {} does not match the job spec's {}",
                           request->scene_hash().substr(0, 64), hash)};
     }
+    const auto prepare_from_job = [&]() -> std::shared_ptr<const CachedScene> {
+      if (!job_sent) {
+        throw ServiceError(grpc::StatusCode::NOT_FOUND,
+                           fmt::format("scene {} is not prepared on this worker: send its job", hash));
+      }
+      return prepare(spec, hash);
+    };
 
     // Files sent along by a scheduler we cannot fetch from: verified (their size against the
     // spec's, their hash), then kept like fetched ones.
@@ -247,12 +265,15 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
 
     const SceneCache::Lookup lookup = [&] {
       try {
-        return cache_.get(hash, [&] { return prepare(spec, hash); }, is_stopped);
+        return cache_.get(hash, prepare_from_job, is_stopped);
       } catch (const ServiceError& e) {
-        // A concurrent call without the files failed the preparation this one waited on, while
-        // this one brought them inline: with every file here now, prepare again.
-        if (e.code() != grpc::StatusCode::FAILED_PRECONDITION || !missing_assets(spec, store_).empty()) throw;
-        return cache_.get(hash, [&] { return prepare(spec, hash); }, is_stopped);
+        // A concurrent call without the files (or without the job) failed the preparation this
+        // one waited on, while this one brought them: with every file here now, prepare again.
+        const bool retry = job_sent && (e.code() == grpc::StatusCode::NOT_FOUND ||
+                                        (e.code() == grpc::StatusCode::FAILED_PRECONDITION &&
+                                         missing_assets(spec, store_).empty()));
+        if (!retry) throw;
+        return cache_.get(hash, prepare_from_job, is_stopped);
       }
     }();
     if (!lookup.scene || is_stopped()) return stopped(r->flag);

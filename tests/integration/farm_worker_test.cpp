@@ -261,6 +261,36 @@ TEST_F(FarmWorkerTest, InlineAssetTheJobDoesNotListIsRefusedAndNothingIsKept) {
   EXPECT_FALSE(blobs.has(unused.sha256()));
 }
 
+// The scheduler sends a job's text once per worker: later calls name only the scene hash. A
+// worker renders those from the scene it prepared, and answers NOT_FOUND for one it does not hold.
+TEST_F(FarmWorkerTest, ACallWithoutItsJobRendersThePreparedSceneOrIsNotFound) {
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", (dir_ / "cache").string()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  auto stub = worker_stub(worker.address());
+  const v1::JobSpec spec = test::cornell_job_spec("whitted", 32, 32, 1);
+  const v1::RenderTileRequest with_job = with_cornell_files_inline(tile_request(spec, {0, 0, 32, 32}));
+  v1::RenderTileRequest without_job;
+  without_job.set_scene_hash(scene_hash(spec));
+  *without_job.mutable_rect() = with_job.rect();
+
+  v1::RenderTileResponse response;
+  grpc::Status status = render(*stub, without_job, response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND) << status.error_message();
+  EXPECT_NE(status.error_message().find("send its job"), std::string::npos) << status.error_message();
+
+  ASSERT_TRUE(render(*stub, with_job, response).ok());
+  status = render(*stub, without_job, response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  expect_bit_identical(response.tile(), render_in_process(spec, {0, 0, 32, 32}), "without its job");
+
+  v1::RenderTileRequest bad = without_job;
+  bad.set_scene_hash("not-a-hash");
+  EXPECT_EQ(render(*stub, bad, response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  bad = without_job;
+  *bad.add_assets() = with_job.assets(0);  // files come only with the job that lists them
+  EXPECT_EQ(render(*stub, bad, response).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+}
+
 TEST_F(FarmWorkerTest, MissingAssetsWithoutSchedulerAreFailedPreconditionUntilCached) {
   const fs::path cache = dir_ / "cache";
   test::WorkerProcess worker({"--threads", "1", "--cache-dir", cache.string()});

@@ -286,6 +286,35 @@ TEST_F(UntrustedWorkersTest, MalformedRepliesNeverReachTheImageAndTheirWorkersAr
 // Pixels that look right pass the checks; with no spot checks they are kept. When their worker is
 // caught later (here: a NaN), what it rendered for unfinished jobs is thrown away and rendered
 // again, so the image is still bit-identical to `farm render`.
+// Not about trust, but this fixture has the worker that counts what it is sent: a job's text
+// travels with the first calls to a worker, not with all 24; a worker that lost the scene answers
+// NOT_FOUND and is sent the job again, with no failure counted and the same pixels.
+TEST_F(UntrustedWorkersTest, TheJobTextTravelsOncePerWorkerAndAgainToOneThatLostTheScene) {
+  const auto fake = fake_worker("w");
+  test::FakeWorker& worker = *fake;
+  ASSERT_FALSE(worker.address().empty());
+  ASSERT_NO_FATAL_FAILURE(start_scheduler({"--float", "--batch-ms", "0", "--worker", worker.address()}));
+  const v1::JobSpec spec = job_spec();
+  const v1::Job first = finish(submit(spec));
+  ASSERT_EQ(first.state(), v1::JOB_STATE_SUCCEEDED) << first.failure_reason();
+  // The first calls go out together (--tiles-per-worker 2), before the worker has answered one.
+  EXPECT_GE(worker.calls_received(), 24);
+  const int sent = worker.calls_with_job();
+  EXPECT_GE(sent, 1);
+  EXPECT_LE(sent, 2);
+  EXPECT_EQ(worker.job_text_bytes(), sent * spec.job_json().size());
+
+  worker.forget_scenes_for(1);
+  const std::string id = submit(spec);
+  const v1::Job second = finish(id);
+  ASSERT_EQ(second.state(), v1::JOB_STATE_SUCCEEDED) << second.failure_reason();
+  EXPECT_EQ(worker.calls_with_job(), sent + 1);
+  EXPECT_EQ(second.tiles_rendered(), second.tiles_total());
+  EXPECT_TRUE(failures_of(worker.address()).empty());
+  const auto [farm_image, local_image] = farm_and_local_images(id, spec);
+  EXPECT_EQ(differing_pixels(farm_image, local_image), 0);
+}
+
 TEST_F(UntrustedWorkersTest, ForgedPixelsKeptBeforeTheirWorkerWasCaughtAreRenderedAgain) {
   const auto fake = fake_worker("liar", test::Lie::FlippedBits);
   test::FakeWorker& liar = *fake;

@@ -90,6 +90,15 @@ class FakeWorker::Service final : public v1::Worker::Service {
         owner_.released_.wait_for(lock, std::chrono::milliseconds(10));
       }
     }
+    ++owner_.calls_;
+    if (request->has_job()) {
+      ++owner_.calls_with_job_;
+      owner_.job_bytes_ += request->job().job_json().size();
+    } else if (owner_.forget_.fetch_sub(1) > 0) {
+      return {grpc::StatusCode::NOT_FOUND, "scene not prepared on this worker: send its job"};
+    } else {
+      owner_.forget_ = 0;
+    }
     RenderControl control;
     control.cancelled = [context] { return context->IsCancelled(); };
     control.deadline = context->deadline();

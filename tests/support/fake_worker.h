@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -48,12 +49,20 @@ class FakeWorker {
   void release();
   int calls_answered() const { return answered_.load(); }  // replies sent with OK
   int lies_told() const { return lies_.load(); }
+  // The next `n` calls that come without their job are answered NOT_FOUND, as a worker that no
+  // longer holds the scene answers.
+  void forget_scenes_for(int n) { forget_ = n; }
+  int calls_received() const { return calls_.load(); }  // every RenderTile, answered or not
+  int calls_with_job() const { return calls_with_job_.load(); }
+  std::uint64_t job_text_bytes() const { return job_bytes_.load(); }  // job_json received, all calls
 
  private:
   class Service;
 
   std::atomic<Lie> lie_;
-  std::atomic<int> answered_{0}, lies_{0};
+  std::atomic<int> answered_{0}, lies_{0}, calls_{0}, calls_with_job_{0};
+  std::atomic<std::uint64_t> job_bytes_{0};
+  std::atomic<int> forget_{0};
   std::mutex mutex_;  // guards hold_after_
   std::condition_variable released_;
   int hold_after_ = -1;  // -1: no call waits
