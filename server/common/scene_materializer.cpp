@@ -137,6 +137,23 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
   }
 }
 
+// The job's text under `job_name` in a published folder: the folder holds the text under the
+// name the first submission of its scene gave it, and the same text may come under another name
+// (the file name is not part of the scene hash), so it is written beside, atomically.
+void ensure_job_file(const fs::path& dir, const std::string& job_name, const std::string& job_json) {
+  const fs::path file = dir / job_name;
+  std::error_code ec;
+  if (fs::is_regular_file(fs::symlink_status(file, ec))) return;
+  static std::atomic<std::uint64_t> counter{0};
+  const fs::path temp = dir / fmt::format(".tmp-job-{}-{}", ::getpid(), counter++);
+  std::ofstream(temp, std::ios::binary) << job_json;
+  fs::rename(temp, file, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    throw InputError(fmt::format("cannot write the job file '{}' into the scene folder", job_name));
+  }
+}
+
 }  // namespace
 
 MissingAssetsError::MissingAssetsError(std::vector<v1::AssetRef> missing)
@@ -208,6 +225,7 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
     refuse_corrupt_assets(spec, store);
     lay_out(spec, store, result.dir, job_name);
   }
+  ensure_job_file(result.dir, job_name, spec.job_json());
 
   JobLoadOptions options;
   options.asset_root = result.dir;

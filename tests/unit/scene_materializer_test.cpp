@@ -57,6 +57,20 @@ TEST_F(SceneMaterializer, ObjWithMtlJobIsLaidOutAndLoads) {
   EXPECT_EQ(materialize(spec).dir, m.dir);
 }
 
+// The file name is not part of the scene hash: the same job under another name finds its text
+// in the published folder under that name too (the scene check in a child process reads it there).
+TEST_F(SceneMaterializer, TheSameSceneUnderAnotherFileNameHasItsJobFileToo) {
+  store_cornell_assets();
+  v1::JobSpec spec = test::cornell_job_spec("raster", 32, 24, 1);
+  const MaterializedScene first = materialize(spec);
+  spec.set_file_name("renamed.json");
+  const MaterializedScene second = materialize(spec);
+  EXPECT_EQ(second.dir, first.dir);
+  EXPECT_EQ(second.job_file, first.dir / "renamed.json");
+  EXPECT_EQ(test::read_file(second.job_file), spec.job_json());
+  EXPECT_EQ(test::read_file(first.job_file), spec.job_json());
+}
+
 TEST_F(SceneMaterializer, PathsThatCouldEscapeAreRejected) {
   store_cornell_assets();
   const std::vector<std::string> bad_paths{"../cornell_box.obj", "assets/../../x.obj",
