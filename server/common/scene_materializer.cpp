@@ -67,10 +67,17 @@ fs::path checked_relative_path(const v1::AssetRef& ref) {
   };
   if (p.empty()) fail("empty");
   if (p.find('\0') != std::string::npos) fail("contains a NUL character");
+  // Laid out under <data dir>/scenes/<hash>/, it must fit the file system's limits there too.
+  if (p.size() > kMaxAssetPathBytes) {
+    fail(fmt::format("{} bytes long; at most {}", p.size(), kMaxAssetPathBytes));
+  }
   const fs::path path(p);
   if (path.is_absolute() || path.has_root_path()) fail("must be relative to the job's folder");
   for (const fs::path& part : path) {
     if (part == "..") fail("must not contain '..'");
+    if (part.native().size() > kMaxFileNameBytes) {
+      fail(fmt::format("a name of {} bytes; a file name holds at most {}", part.native().size(), kMaxFileNameBytes));
+    }
   }
   const fs::path normal = path.lexically_normal();
   if (normal.empty() || normal == "." || !normal.has_filename()) fail("names no file");
@@ -83,7 +90,7 @@ std::string job_file_name(const v1::JobSpec& spec, const std::set<fs::path>& ass
   const fs::path given = fs::path(spec.file_name()).filename();
   const std::string name = given.string();
   if (!name.empty() && name != "." && name != ".." && name.find('\0') == std::string::npos &&
-      !asset_paths.count(given)) {
+      name.size() <= kMaxFileNameBytes && !asset_paths.count(given)) {
     return name;
   }
   if (asset_paths.count(kDefaultJobName)) {
@@ -163,6 +170,10 @@ CorruptAssetsError::CorruptAssetsError(std::vector<v1::AssetRef> corrupt)
     : MissingAssetsError(corrupt, corrupt_message(corrupt)) {}
 
 void validate_asset_refs(const v1::JobSpec& spec) {
+  // Each is a file to check, link and perhaps fetch: far more than a scene's textures need.
+  if (spec.assets_size() > kMaxJobAssets) {
+    throw InputError(fmt::format("the job lists {} asset files; at most {}", spec.assets_size(), kMaxJobAssets));
+  }
   std::set<fs::path> seen;
   for (const v1::AssetRef& ref : spec.assets()) {
     const fs::path path = checked_relative_path(ref);

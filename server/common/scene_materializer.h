@@ -36,8 +36,14 @@ class CorruptAssetsError : public MissingAssetsError {
   explicit CorruptAssetsError(std::vector<v1::AssetRef> corrupt);
 };
 
-// InputError unless every asset path is relative, free of ".." and NUL, unique, and every hash is
-// 64 lowercase hex digits.
+// Bounds on a job's files: how many, and their paths' lengths (a file name's 255 bytes; the whole
+// path short enough to lie under a data dir's scene folder within PATH_MAX).
+inline constexpr int kMaxJobAssets = 10000;
+inline constexpr std::size_t kMaxAssetPathBytes = 1024;
+inline constexpr std::size_t kMaxFileNameBytes = 255;
+
+// InputError unless there are at most kMaxJobAssets, every asset path is relative, free of ".."
+// and NUL, within the lengths above, unique, and every hash is 64 lowercase hex digits.
 void validate_asset_refs(const v1::JobSpec& spec);
 
 // InputError naming the asset's path when a blob the store holds is not as long as the AssetRef

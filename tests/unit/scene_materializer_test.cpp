@@ -84,6 +84,37 @@ TEST_F(SceneMaterializer, PathsThatCouldEscapeAreRejected) {
   EXPECT_FALSE(fs::exists(dir_ / "x.obj"));
 }
 
+// Lengths a file system cannot hold, and more files than any scene needs, are named before
+// anything is laid out; a job file name too long to keep is replaced by the default one.
+TEST_F(SceneMaterializer, PathsTooLongForTheFileSystemAndTooManyFilesAreRefused) {
+  store_cornell_assets();
+  const auto error_of = [](const v1::JobSpec& spec) {
+    try {
+      validate_asset_refs(spec);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
+  spec.mutable_assets(0)->set_path("assets/" + std::string(256, 'n') + ".obj");
+  EXPECT_NE(error_of(spec).find("a name of 260 bytes; a file name holds at most 255"), std::string::npos)
+      << error_of(spec);
+  std::string deep;
+  for (int i = 0; i < 250; ++i) deep += "dir" + std::to_string(i % 10) + "/";  // 1250 bytes
+  spec.mutable_assets(0)->set_path(deep + "x.obj");
+  EXPECT_NE(error_of(spec).find("bytes long; at most 1024"), std::string::npos) << error_of(spec);
+
+  spec = test::cornell_job_spec("raster", 8, 8, 1);
+  while (spec.assets_size() <= kMaxJobAssets) *spec.add_assets() = spec.assets(0);
+  EXPECT_NE(error_of(spec).find("the job lists 10001 asset files; at most 10000"), std::string::npos);
+
+  spec = test::cornell_job_spec("raster", 8, 8, 1);
+  spec.set_file_name(std::string(300, 'j') + ".json");
+  const MaterializedScene m = materialize(spec);
+  EXPECT_EQ(m.job_file.filename(), "job.json");
+}
+
 TEST_F(SceneMaterializer, DuplicatePathsAndBadHashesAreRejected) {
   v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
   *spec.add_assets() = spec.assets(0);
