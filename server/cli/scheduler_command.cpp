@@ -199,6 +199,11 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "(the child process is killed after that; RESOURCE_EXHAUSTED)")
       ->check(CLI::Range(0.1, 86400.0))
       ->capture_default_str();
+  s->add_option("--max-scene-checks", o->limits.max_scene_checks,
+                "Scene checks (child processes) at once; others wait up to --max-scene-seconds for "
+                "one to end. 0: half the machine's hardware threads, at least 1")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   add_log_level_option(*s, "info");
   commands.add(s, [o] { return run_scheduler_command(*o); });
 }

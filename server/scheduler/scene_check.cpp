@@ -13,6 +13,7 @@
 #include <new>
 #include <optional>
 #include <string_view>
+#include <thread>
 #include <utility>
 
 #include "renderer/scene/input_error.h"
@@ -66,11 +67,37 @@ std::optional<std::pair<std::string, std::string>> verdict_of(std::string_view o
 }  // namespace
 
 SceneChecker::SceneChecker(fs::path program, SceneBudget budget)
-    : program_(std::move(program)), budget_(budget) {}
+    : program_(std::move(program)),
+      budget_(budget),
+      max_parallel_(budget.max_parallel > 0 ? budget.max_parallel
+                                            : std::max(1, static_cast<int>(std::thread::hardware_concurrency() / 2))) {}
+
+void SceneChecker::acquire_slot(const std::string& display_name) {
+  std::unique_lock lock(mutex_);
+  if (!slot_freed_.wait_for(lock, budget_.time, [this] { return running_ < max_parallel_; })) {
+    throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                       fmt::format("{}: the scheduler is checking {} other new scenes; submit again later",
+                                   display_name, running_));
+  }
+  ++running_;
+}
+
+void SceneChecker::release_slot() {
+  {
+    std::lock_guard lock(mutex_);
+    --running_;
+  }
+  slot_freed_.notify_one();
+}
 
 void SceneChecker::check(const std::string& scene_hash, const fs::path& job_file,
                          const fs::path& asset_root, const std::string& display_name) {
   if (passed_.contains(scene_hash)) return;
+  acquire_slot(display_name);
+  struct SlotRelease {
+    SceneChecker* checker;
+    ~SlotRelease() { checker->release_slot(); }
+  } const slot{this};
   ChildProcess child({program_.string(), "check-scene", job_file.string(), "--asset-root",
                       asset_root.string(), "--memory-limit", std::to_string(budget_.memory_bytes)});
   std::optional<int> code = child.wait_exit(budget_.time);

@@ -10,8 +10,10 @@
 // Scenes that passed are remembered by their hash (a bounded set), so a job submitted again does
 // not pay for a second process.
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
+#include <mutex>
 #include <string>
 
 #include "server/common/recent_hashes.h"
@@ -21,6 +23,7 @@ namespace farm {
 struct SceneBudget {
   std::uint64_t memory_bytes = std::uint64_t{8} << 30;  // address space of the checking process
   std::chrono::milliseconds time = std::chrono::seconds(120);
+  int max_parallel = 0;  // checks at once; 0: half the machine's hardware threads, at least 1
 };
 
 class SceneChecker {
@@ -36,9 +39,18 @@ class SceneChecker {
              const std::filesystem::path& asset_root, const std::string& display_name);
 
  private:
+  // A check holds a core for up to the budget's time: at most max_parallel_ run at once, so a
+  // burst of hostile submissions cannot take every core of the scheduler's machine.
+  void acquire_slot(const std::string& display_name);
+  void release_slot();
+
   std::filesystem::path program_;
   SceneBudget budget_;
   RecentHashes passed_{4096};
+  const int max_parallel_;
+  std::mutex mutex_;  // guards running_
+  std::condition_variable slot_freed_;
+  int running_ = 0;
 };
 
 // The child's side, run by `farm check-scene`: limits its own address space to `memory_bytes`,

@@ -47,7 +47,8 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                                options_.scene_check_program,
                                SceneBudget{options_.limits.max_scene_memory,
                                            std::chrono::milliseconds(static_cast<std::int64_t>(
-                                               options_.limits.max_scene_seconds * 1000.0))})),
+                                               options_.limits.max_scene_seconds * 1000.0)),
+                                           options_.limits.max_scene_checks})),
       jobs_(store_, assets_, options_.data_dir),
       events_(store_),
       finisher_(options_, store_, *assembly_, jobs_, events_, *log_),

@@ -34,6 +34,7 @@ struct SubmitLimits {
   // 130 MiB; a 10M-triangle model in about a minute and a few GiB.
   std::uint64_t max_scene_memory = std::uint64_t{8} << 30;  // 8 GiB
   double max_scene_seconds = 120;
+  int max_scene_checks = 0;  // child processes at once; 0: half the hardware threads, at least 1
 };
 
 // The rays a sample may trace, as counted against max_work: 1 for raster; for the ray engines

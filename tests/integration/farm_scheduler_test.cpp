@@ -754,6 +754,43 @@ TEST_F(FarmSchedulerTest, ModelBombsAreRefusedWithinTheSceneBudgetAndTheSchedule
   EXPECT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason();
 }
 
+// Each scene check holds a core for up to its time budget: a burst of slow models gets at most
+// --max-scene-checks of them at once, the others wait for a slot (or are refused when none comes).
+TEST_F(FarmSchedulerTest, SlowModelsSubmittedTogetherAreCheckedOneAtATime) {
+  auto scheduler = start_scheduler({"--max-scene-seconds", "4", "--max-scene-checks", "1"});
+  ASSERT_TRUE(stub_);
+  write_slow_model(dir_ / "slow.obj");
+  const std::vector<std::pair<std::string, fs::path>> files{{"slow.obj", dir_ / "slow.obj"}};
+  ASSERT_TRUE(test::upload_assets(*stub_, files).ok());
+  std::vector<grpc::Status> statuses(3);
+  std::atomic<std::size_t> finished{0};
+  std::vector<std::thread> submits;
+  for (std::size_t i = 0; i < statuses.size(); ++i) {
+    submits.emplace_back([&, i] {
+      // Three different scenes (the names differ), so none is a check another already passed.
+      const v1::JobSpec spec = test::make_job_spec(
+          R"({"version": 1, "name": "slow)" + std::to_string(i) +
+              R"(", "scene": {"objects": [{"file": "slow.obj"}]}, "render": {"engine": "raster", "width": 16, "height": 16}})",
+          files, "slow.json");
+      v1::Job job;
+      statuses[i] = test::submit(*stub_, spec, job);
+      ++finished;
+    });
+  }
+  // Sampling can miss a moment with two children, never invent one.
+  std::size_t most_children = 0;
+  while (finished < statuses.size()) {
+    most_children = std::max(most_children, test::children_of(scheduler->process().pid()));
+    std::this_thread::sleep_for(20ms);
+  }
+  for (std::thread& t : submits) t.join();
+  EXPECT_EQ(most_children, 1u);
+  for (const grpc::Status& status : statuses) {
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+  }
+  EXPECT_EQ(test::children_of(scheduler->process().pid()), 0u);
+}
+
 // The limits are the operator's: `farm scheduler --max-...` moves them.
 TEST_F(FarmSchedulerTest, SchedulerFlagsSetTheSubmitLimits) {
   auto scheduler = start_scheduler({"--max-tiles-per-job", "4", "--max-job-bytes", "100000",
