@@ -7,6 +7,7 @@
 // A final job's memory and kept tiles then go (release()), whichever way it ended.
 //
 // Lock: Finisher::mutex_ guards merging_ only, and is a leaf: the merge itself runs without it.
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <mutex>
@@ -57,6 +58,8 @@ class Finisher {
   std::mutex mutex_;
   std::set<std::string> merging_;
   std::function<void()> on_requeued_;  // set once, before any merge
+  static constexpr unsigned kTrimEvery = 16;
+  std::atomic<unsigned> released_{0};  // jobs released, for trimming the heap now and then
 };
 
 }  // namespace farm

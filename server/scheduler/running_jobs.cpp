@@ -1,7 +1,9 @@
 #include "server/scheduler/running_jobs.h"
 
+#include <algorithm>
 #include <stdexcept>
 
+#include "server/common/job_state.h"
 #include "server/common/scene_materializer.h"
 
 namespace farm {
@@ -21,6 +23,7 @@ std::shared_ptr<const JobInfo> RunningJobs::get(const std::string& job_id) {
   info->scene_hash = job->scene_hash();
   info->job = std::make_shared<const Job>(
       materialize_scene(*info->spec, info->scene_hash, assets_, data_dir_).job);
+  if (is_final(job->state())) return info;  // nobody forgets a final job again
   return add(job_id, std::move(info));
 }
 
@@ -44,10 +47,16 @@ std::optional<double> RunningJobs::tile_cost(const std::string& job_id) const {
   return it->second;
 }
 
-void RunningJobs::forget(const std::string& job_id) {
+std::size_t RunningJobs::forget(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   jobs_.erase(job_id);
   ms_per_tile_.erase(job_id);
+  return std::max(jobs_.size(), ms_per_tile_.size());
+}
+
+std::size_t RunningJobs::count() const {
+  std::lock_guard lock(mutex_);
+  return std::max(jobs_.size(), ms_per_tile_.size());
 }
 
 }  // namespace farm

@@ -45,7 +45,8 @@ class RunningJobs {
   // Keeps a job being queued; returns the one kept (an earlier one for the same id wins).
   std::shared_ptr<const JobInfo> add(const std::string& job_id, std::shared_ptr<const JobInfo> info);
   // The job's JobInfo; one an earlier process queued is read from the store, materialized and
-  // parsed once. std::runtime_error when the store does not have it.
+  // parsed once (and kept only while the job is active: a late call about a final job must not
+  // bring it back for good). std::runtime_error when the store does not have it.
   std::shared_ptr<const JobInfo> get(const std::string& job_id);
 
   // What one of the job's tiles took to render, as a batch measured it: the estimate follows the
@@ -53,8 +54,10 @@ class RunningJobs {
   void add_tile_cost(const std::string& job_id, double ms);
   std::optional<double> tile_cost(const std::string& job_id) const;  // nullopt: none measured yet
 
-  // The job is final: its memory goes.
-  void forget(const std::string& job_id);
+  // The job is final: its memory goes. Returns how many jobs are still kept.
+  std::size_t forget(const std::string& job_id);
+  // Jobs kept in memory now (their JobInfo or their tile cost).
+  std::size_t count() const;
 
  private:
   const JobStore& store_;

@@ -110,6 +110,9 @@ class SchedulerCore {
   // Every worker now: up or down, and quarantined with the reason.
   std::vector<WorkerStatus> workers() const;
 
+  // Jobs whose state is kept in memory now (RunningJobs): none once every job is final.
+  std::size_t jobs_in_memory() const { return jobs_.count(); }
+
  private:
   // Adds a validated job to the store and the dispatch.
   v1::Job queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
