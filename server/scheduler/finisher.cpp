@@ -40,9 +40,29 @@ void Finisher::finish_if_complete(const std::string& job_id) {
     std::lock_guard lock(mutex_);
     if (!merging_.insert(job_id).second) return;
   }
-  merge(job_id);
+  bool refused = false;
+  try {
+    merge(job_id);
+  } catch (const DiskFull& e) {
+    // The job stays as it is, its tiles done, until there is room for its frame.
+    log_.debug("job {}: merge refused: {}", job_id, e.what());
+    pause_.report(e);
+    refused = true;
+  } catch (const std::exception& e) {
+    log_.error("job {}: merging: {}", job_id, e.what());
+  }
   std::lock_guard lock(mutex_);
   merging_.erase(job_id);
+  if (refused) refused_.insert(job_id);
+}
+
+void Finisher::retry_refused() {
+  std::set<std::string> jobs;
+  {
+    std::lock_guard lock(mutex_);
+    jobs.swap(refused_);
+  }
+  for (const std::string& id : jobs) finish_if_complete(id);
 }
 
 void Finisher::release(const std::string& job_id) {
@@ -73,6 +93,8 @@ void Finisher::merge(const std::string& job_id) {
   } catch (const DamagedParts& e) {
     if (render_again(job_id, e)) return;
     after = *store_.get_job(job_id);  // final meanwhile (cancelled): nothing to render again
+  } catch (const DiskFull&) {
+    throw;  // not the job's fault: merged again once there is room (finish_if_complete)
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, fmt::format("merging the tiles: {}", e.what()),
                               "", unix_ms_now());
