@@ -16,6 +16,18 @@ double seconds(std::chrono::steady_clock::duration d) { return std::chrono::dura
 
 }  // namespace
 
+bool DiskFullPause::guarded(const std::function<bool()>& f) {
+  // Nothing may end the prober (std::terminate): a store still full answers DiskFull here.
+  try {
+    return f();
+  } catch (const DiskFull& e) {
+    log_.debug("{}", e.what());
+  } catch (const std::exception& e) {
+    log_.error("while the disk was full: {}", e.what());
+  }
+  return false;
+}
+
 DiskFullPause::DiskFullPause(spdlog::logger& log, std::chrono::milliseconds first, std::chrono::milliseconds max)
     : log_(log), backoff_(first, max), prober_([this] { probe_loop(); }) {}
 
@@ -81,6 +93,12 @@ void DiskFullPause::probe_loop() {
     lock.lock();
     if (stopping_ || !paused_) continue;
     if (!free || *free < wanted) {
+      if (on_still_full_) {
+        lock.unlock();
+        const bool freed = guarded(on_still_full_);
+        lock.lock();
+        if (freed) continue;  // looked at again at once
+      }
       next_probe_ = Clock::now() + backoff_.next();
       log_locked(fmt::format("disk full in {}: {} free, {} wanted; dispatch still paused, looked at again in {:.0f} s",
                              folder.string(), free ? describe_bytes(*free) : "unknown", describe_bytes(wanted),
@@ -94,7 +112,7 @@ void DiskFullPause::probe_loop() {
       announced_ = false;
     }
     lock.unlock();
-    if (on_resume_) on_resume_();
+    if (on_resume_) guarded([this] { on_resume_(); return true; });
     lock.lock();
   }
 }

@@ -5,7 +5,9 @@
 // thread then looks at the free space of the folder that was full, after a backoff (`first`,
 // doubling up to `max`): with room for the refused write, dispatch resumes by itself and
 // `on_resume` runs (the dispatcher wakes its slots, the finisher retries the merges the disk
-// refused); without, it looks again later. A write refused again after a resume pauses again
+// refused); without, `on_still_full` may make room (the finisher takes back the tiles of the
+// youngest of the jobs holding some, so that older ones can finish: the farm's own tiles would
+// otherwise hold the disk for good), and it looks again at once if it did, later if not. A write refused again after a resume pauses again
 // with the next, longer backoff; a write that goes through makes the next pause short again.
 // At most one line a minute is logged about it (which folder, how much is free, how many writes
 // were refused), and one when dispatch resumes after a pause that was logged.
@@ -36,6 +38,9 @@ class DiskFullPause {
 
   // Called when dispatch resumes; set once, before anything is reported.
   void on_resume(std::function<void()> f) { on_resume_ = std::move(f); }
+  // Called (on the prober thread, without the lock) when a look finds no room; true when it freed
+  // some. Set once, before anything is reported.
+  void on_still_full(std::function<bool()> f) { on_still_full_ = std::move(f); }
   // A write was refused: dispatch pauses (until the prober finds room again).
   void report(const DiskFull& refused);
   // A write went through: the next pause starts with the shortest backoff.
@@ -47,6 +52,7 @@ class DiskFullPause {
  private:
   using Clock = std::chrono::steady_clock;
   void probe_loop();
+  bool guarded(const std::function<bool()>& f);  // f(), false when it throws (logged)
   // Logs `line` (with how many writes were refused since the last line) unless a line about the
   // disk was logged less than a minute ago.
   void log_locked(const std::string& line);
@@ -63,6 +69,7 @@ class DiskFullPause {
   Clock::time_point paused_since_, next_probe_;
   RetryBackoff backoff_;
   std::function<void()> on_resume_;
+  std::function<bool()> on_still_full_;
   std::thread prober_;  // last: started once the rest is built
 };
 

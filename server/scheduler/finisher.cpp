@@ -104,6 +104,46 @@ void Finisher::merge(const std::string& job_id) {
   release(job_id);
 }
 
+bool Finisher::make_room() {
+  std::optional<v1::Job> youngest;
+  int holding = 0;
+  for (const std::string& id : store_.active_jobs()) {
+    const std::optional<v1::Job> job = store_.get_job(id);
+    if (!job || job->tiles_done() == 0) continue;
+    ++holding;
+    // active_jobs() is in submission order: a later job of the same priority is younger.
+    if (!youngest || job->priority() <= youngest->priority()) youngest = job;
+  }
+  if (holding < 2) return false;
+  const std::string& id = youngest->job_id();
+  std::set<std::uint32_t> done;
+  for (const TileRecord& t : store_.tiles(id)) {
+    if (t.state == TileState::Done) done.insert(t.part);
+  }
+  if (done.empty()) return false;
+  const std::vector<std::uint32_t> parts(done.begin(), done.end());
+  // The files first: the store itself may need their room to take the tiles back. Should it fail
+  // still, the tiles stay done without their files, and the merge renders them again
+  // (DamagedParts), as after a crash.
+  assembly_.free_parts(id, parts);
+  const std::vector<TileBatch> taken = store_.requeue_parts(id, parts);
+  std::uint32_t tiles = 0;
+  for (const TileBatch& b : taken) tiles += b.count;
+  log_.warn("the disk is full: the {} done tiles of job {} (the youngest of {} running jobs holding tiles) are "
+            "thrown away to make room for the older ones, and rendered again later",
+            tiles, id, holding);
+  for (const TileBatch& b : taken) {
+    events_.publish(id, [&](v1::JobEvent& event) {
+      v1::TileFailed& f = *event.mutable_tile_failed();
+      f.set_tile_index(b.first);
+      f.set_tile_count(b.count);
+      f.set_reason("the scheduler's disk is full: thrown away to make room for older jobs, rendered again");
+      f.set_will_retry(true);
+    });
+  }
+  return true;
+}
+
 bool Finisher::render_again(const std::string& job_id, const DamagedParts& damaged) {
   std::vector<std::uint32_t> parts;
   for (const DamagedParts::Part& p : damaged.parts()) parts.push_back(p.part);

@@ -7,7 +7,8 @@
 // A final job's memory and kept tiles then go (release()), whichever way it ended. A merge the disk
 // refuses (DiskFull: the frame's files or the store's final mark) fails nothing either: the pause
 // is told (disk_full_pause.h), the job stays running with its tiles done, and it is merged again
-// when dispatch resumes (retry_refused()).
+// when dispatch resumes (retry_refused()). While the disk stays full, make_room() frees the tiles of
+// the youngest job holding some, so that the farm's own tiles never hold the disk for good.
 //
 // Lock: Finisher::mutex_ guards merging_ and refused_ only, and is a leaf: the merge itself runs
 // without it.
@@ -43,6 +44,11 @@ class Finisher {
   void release(const std::string& job_id);
   // Merges again the jobs whose merge the disk refused (called when dispatch resumes).
   void retry_refused();
+  // The disk is full and stays full (called while dispatch is paused): the youngest running job
+  // that holds done tiles (the last the queue reaches: lowest priority, then latest submission)
+  // gives them back, their files removed and their tiles queued again (no attempt counted), so
+  // that older jobs can finish and merge. False when fewer than two jobs hold done tiles.
+  bool make_room();
   // The merged EXR or PNG under results/ of a SUCCEEDED job; nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview) const;
   // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.

@@ -64,10 +64,13 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                              .pause = pause_,
                              .log = *log_}) {
   // Room on the disk again: the slots claim, and the merges the disk refused are done.
+  // Room on the disk again: the merges the disk refused first (they free their tiles), then
+  // the slots. Still none: the youngest job holding tiles gives them back.
   pause_.on_resume([this] {
-    dispatcher_.work_queued();
     finisher_.retry_refused();
+    dispatcher_.work_queued();
   });
+  pause_.on_still_full([this] { return finisher_.make_room(); });
   // A merge that found damaged tile results queued their tiles again: the slots take them now.
   finisher_.on_requeued([this] { dispatcher_.work_queued(); });
   // Jobs interrupted between their last tile and their merge.

@@ -100,6 +100,11 @@ v1::RenderTileResponse TileResults::read(const std::string& job_id, std::uint32_
   return tile;
 }
 
+void TileResults::remove(const std::string& job_id, std::uint32_t part) const {
+  std::error_code ignored;
+  fs::remove(path_of(job_id, part), ignored);
+}
+
 void TileResults::remove_job(const std::string& job_id) const {
   std::error_code ignored;
   fs::remove_all(dir_ / job_id, ignored);

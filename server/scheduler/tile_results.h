@@ -43,6 +43,7 @@ class TileResults {
   // DamagedTileResult when the file is missing, unreadable, truncated or fails its checksum.
   v1::RenderTileResponse read(const std::string& job_id, std::uint32_t part) const;
   void remove_job(const std::string& job_id) const;
+  void remove(const std::string& job_id, std::uint32_t part) const;  // nothing if it is absent
 
   std::filesystem::path path_of(const std::string& job_id, std::uint32_t part) const;
 
