@@ -183,5 +183,40 @@ TEST_F(SchedulerDiskFullTest, AFullJobStoreRefusesASubmitAsDiskFullAndTakesItOnc
   EXPECT_FALSE(scheduler.process().wait_exit(0ms)) << scheduler.process().output();
 }
 
+// The worker's disk, not the scheduler's: its cache cannot take the job's files. It answers
+// RESOURCE_EXHAUSTED "disk full", which counts no attempt against the job; once its disk has
+// room the job finishes.
+TEST(WorkerDiskFullTest, AWorkerWithAFullCacheCountsNoAttemptAndTheJobFinishesOnceItHasRoom) {
+  test::TempDir dir;
+  const fs::path cache = dir / "w1";
+  test::TmpfsMount mount(cache, 4 << 20);
+  if (!mount.mounted()) GTEST_SKIP() << "needs a tmpfs of its own: " << mount.problem();
+  test::SchedulerProcess scheduler(dir / "data", {});
+  ASSERT_FALSE(scheduler.address().empty()) << scheduler.process().output();
+  const auto stub = test::scheduler_stub(scheduler.address());
+  ASSERT_TRUE(test::upload_assets(*stub, test::cornell_assets()).ok());
+  test::WorkerProcess worker({"--threads", "1", "--cache-dir", cache.string(), "--scheduler", scheduler.address()});
+  ASSERT_FALSE(worker.address().empty()) << worker.process().output();
+  ASSERT_TRUE(worker.process().wait_for_line("registered with the scheduler", 20s)) << worker.process().output();
+  mount.fill(cache / "ballast", 0);
+
+  v1::Job job;
+  const grpc::Status submitted = test::submit(*stub, cornell("raster", 32, 32, 1, 16), job);
+  ASSERT_TRUE(submitted.ok()) << submitted.error_message();
+  ASSERT_TRUE(scheduler.process().wait_for_line("disk full in " + cache.string(), 60s))
+      << scheduler.process().output();
+  const auto meanwhile = test::get_job(*stub, job.job_id());
+  ASSERT_TRUE(meanwhile);
+  EXPECT_FALSE(is_final(meanwhile->state())) << meanwhile->failure_reason();
+  EXPECT_EQ(meanwhile->tile_failures(), 0u);
+
+  fs::remove(cache / "ballast");
+  const auto done = test::wait_for_job(*stub, job.job_id(), [](const v1::Job& j) { return is_final(j.state()); }, 120s);
+  ASSERT_TRUE(done) << scheduler.process().output();
+  EXPECT_EQ(done->state(), v1::JOB_STATE_SUCCEEDED) << done->failure_reason();
+  EXPECT_EQ(done->tile_failures(), 0u);
+  EXPECT_LT(disk_full_lines(scheduler.process().output()), 20) << scheduler.process().output().substr(0, 4000);
+}
+
 }  // namespace
 }  // namespace farm
