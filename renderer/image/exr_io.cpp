@@ -7,12 +7,14 @@
 #include <ImfOutputFile.h>
 #include <ImfThreading.h>
 #include <Iex.h>
+#include <IexErrnoExc.h>
 #include <fmt/format.h>
 
 #include <Imath/half.h>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -108,6 +110,11 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
       Imf::OutputFile out(temp.c_str(), header, Imf::globalThreadCount());
       out.setFrameBuffer(frame);
       out.writePixels(height);
+    } catch (const Iex::EnospcExc& e) {
+      // The errno kept, so that a server tells a full disk from a broken image.
+      throw std::system_error(ENOSPC, std::generic_category(), fmt::format("{}: cannot write EXR: {}", file.string(), e.what()));
+    } catch (const Iex::EdquotExc& e) {
+      throw std::system_error(EDQUOT, std::generic_category(), fmt::format("{}: cannot write EXR: {}", file.string(), e.what()));
     } catch (const std::exception& e) {
       throw std::runtime_error(fmt::format("{}: cannot write EXR: {}", file.string(), e.what()));
     }

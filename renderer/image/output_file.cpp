@@ -9,6 +9,7 @@
 #include <cstring>
 #include <memory>
 #include <stdexcept>
+#include <system_error>
 
 namespace farm {
 namespace {
@@ -41,13 +42,15 @@ void write_c_file_atomically(const std::filesystem::path& target, const std::fun
   write_file_atomically(target, [&](const std::filesystem::path& temp) {
     // The deleter closes it if `write` throws; otherwise it is closed below, where the result counts.
     std::unique_ptr<std::FILE, CloseFile> out(std::fopen(temp.c_str(), "wb"));
+    // Errors keep their errno (std::system_error), so that a server tells a full disk (ENOSPC)
+    // from a broken image.
     if (!out) {
-      throw std::runtime_error(fmt::format("{}: cannot create {}: {}", target.string(), temp.string(),
-                                           std::strerror(errno)));
+      throw std::system_error(errno, std::generic_category(),
+                              fmt::format("{}: cannot create {}", target.string(), temp.string()));
     }
     write(out.get());
     if (std::fclose(out.release()) != 0) {
-      throw std::runtime_error(fmt::format("{}: cannot write: {}", target.string(), std::strerror(errno)));
+      throw std::system_error(errno, std::generic_category(), fmt::format("{}: cannot write", target.string()));
     }
   });
 }

@@ -15,7 +15,7 @@ void write_file_atomically(const std::filesystem::path& target,
 
 // The same for writers that take an open file (libpng, libjpeg): `write(out)` writes to the
 // temporary file, opened "wb". Errors opening or closing it (the last buffered bytes may only
-// fail there, e.g. on a full disk) throw std::runtime_error naming `target`.
+// fail there, e.g. on a full disk) throw std::system_error with the errno, naming `target`.
 void write_c_file_atomically(const std::filesystem::path& target, const std::function<void(std::FILE*)>& write);
 
 }  // namespace farm

@@ -6,7 +6,9 @@
 #include <csetjmp>
 #include <cstddef>
 #include <cstdio>
+#include <cerrno>
 #include <stdexcept>
+#include <system_error>
 
 #include "renderer/image/png_error.h"
 
@@ -65,7 +67,11 @@ void write_png(const Rgb8Image& image, std::FILE* out, const std::filesystem::pa
     throw std::runtime_error(fmt::format("{}: cannot write PNG: libpng failed to start", name.string()));
   }
   if (!encode(write.png(), write.info(), image, out)) {
-    throw std::runtime_error(fmt::format("{}: cannot write PNG: {}", name.string(), error.message));
+    // A write that failed (libpng's "Write Error") keeps its errno: a full disk is told apart.
+    const int write_errno = errno;
+    const std::string message = fmt::format("{}: cannot write PNG: {}", name.string(), error.message);
+    if (std::ferror(out) && write_errno != 0) throw std::system_error(write_errno, std::generic_category(), message);
+    throw std::runtime_error(message);
   }
 }
 

@@ -1,12 +1,15 @@
 #include "server/common/asset_store.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <fstream>
 #include <system_error>
 
 #include "renderer/scene/input_error.h"
+#include "server/common/disk_full.h"
 
 namespace farm {
 
@@ -67,8 +70,8 @@ AssetStore::Writer::Writer(const AssetStore& store, std::string sha256,
       temp_path_(temp_name(store.dir(), sha256)),
       expected_sha256_(std::move(sha256)),
       expected_size_(size),
-      out_(temp_path_, std::ios::binary | std::ios::trunc) {
-  if (!out_) throw std::runtime_error(fmt::format("cannot create '{}'", temp_path_.string()));
+      fd_(::open(temp_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)) {
+  if (fd_ < 0) throw_write_error(errno, temp_path_, size.value_or(0));
 }
 
 AssetStore::Writer::Writer(Writer&& o) noexcept
@@ -76,16 +79,17 @@ AssetStore::Writer::Writer(Writer&& o) noexcept
       temp_path_(std::move(o.temp_path_)),
       expected_sha256_(std::move(o.expected_sha256_)),
       expected_size_(o.expected_size_),
-      out_(std::move(o.out_)),
+      fd_(o.fd_),
       hash_(std::move(o.hash_)),
       size_(o.size_),
       done_(o.done_) {
+  o.fd_ = -1;
   o.done_ = true;  // the moved-from writer owns no temporary file any more
 }
 
 AssetStore::Writer::~Writer() {
+  if (fd_ >= 0) ::close(fd_);
   if (done_) return;
-  out_.close();
   std::error_code ec;
   fs::remove(temp_path_, ec);
 }
@@ -95,15 +99,18 @@ void AssetStore::Writer::append(std::string_view bytes) {
     throw InputError(fmt::format("asset {}: more than the announced {} bytes", expected_sha256_,
                                  *expected_size_));
   }
-  out_.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  if (!out_) throw std::runtime_error(fmt::format("cannot write '{}'", temp_path_.string()));
+  if (fd_ < 0) throw std::logic_error("AssetStore::Writer: append after commit");
+  write_all(fd_, bytes, temp_path_);
   hash_.update(bytes);
   size_ += bytes.size();
 }
 
 void AssetStore::Writer::commit() {
-  out_.close();
-  if (!out_) throw std::runtime_error(fmt::format("cannot write '{}'", temp_path_.string()));
+  if (fd_ < 0) throw std::logic_error("AssetStore::Writer: committed twice");
+  const int closed = ::close(fd_);
+  fd_ = -1;
+  // A file system may only report the lack of space when the file is closed (NFS, quotas).
+  if (closed != 0) throw_write_error(errno, temp_path_, size_);
   if (expected_size_ && size_ != *expected_size_) {
     throw InputError(fmt::format("asset {}: got {} bytes, expected {}", expected_sha256_, size_,
                                  *expected_size_));

@@ -5,7 +5,6 @@
 // the same blob or a lying peer never leaves a wrong or partial file under a hash's name.
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -38,9 +37,11 @@ class AssetStore {
     Writer(const Writer&) = delete;
     ~Writer();
 
+    // DiskFull (naming the store's folder) when the disk has no room for them.
     void append(std::string_view bytes);
     std::uint64_t bytes_written() const { return size_; }
-    // Verifies the hash (and size) and publishes the blob. InputError on a mismatch.
+    // Verifies the hash (and size) and publishes the blob. InputError on a mismatch; DiskFull
+    // when the last bytes find no room.
     void commit();
 
    private:
@@ -50,7 +51,7 @@ class AssetStore {
     std::filesystem::path final_path_, temp_path_;
     std::string expected_sha256_;
     std::optional<std::uint64_t> expected_size_;
-    std::ofstream out_;
+    int fd_ = -1;  // the temporary file, open until commit() or the destructor
     Sha256 hash_;
     std::uint64_t size_ = 0;
     bool done_ = false;

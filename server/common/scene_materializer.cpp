@@ -1,14 +1,15 @@
 #include "server/common/scene_materializer.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
 #include <atomic>
-#include <fstream>
 #include <set>
 #include <system_error>
 
 #include "renderer/scene/input_error.h"
+#include "server/common/disk_full.h"
 #include "server/common/sha256.h"
 
 namespace farm {
@@ -112,6 +113,19 @@ void link_or_copy(const fs::path& blob, const fs::path& to) {
   if (ec) fs::copy_file(blob, to);  // e.g. the cache and the blobs on different file systems
 }
 
+// Checked: a job file cut short by a full disk would be published as the scene's for good.
+void write_job_file(const fs::path& file, const std::string& json) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw_write_error(errno, file, json.size());
+  try {
+    write_all(fd, json, file);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  if (::close(fd) != 0) throw_write_error(errno, file, json.size());
+}
+
 void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& dir,
              const std::string& job_name) {
   static std::atomic<std::uint64_t> counter{0};
@@ -124,6 +138,7 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
       const fs::path to = temp / checked_relative_path(ref);
       std::error_code ec;
       fs::create_directories(to.parent_path(), ec);
+      if (ec && is_disk_full_errno(ec.value())) throw fs::filesystem_error("cannot create", to.parent_path(), ec);
       if (ec || fs::exists(to)) {
         // One asset's path is a folder of another's ("a" and "a/b.obj").
         throw InputError(fmt::format("asset path '{}' conflicts with another asset's path",
@@ -131,7 +146,7 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
       }
       link_or_copy(store.path_of(ref.sha256()), to);
     }
-    std::ofstream(temp / job_name, std::ios::binary) << spec.job_json();
+    write_job_file(temp / job_name, spec.job_json());
     std::error_code ec;
     fs::rename(temp, dir, ec);
     // Someone else published the same scene first: theirs has the same contents.
@@ -140,7 +155,7 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
   } catch (...) {
     std::error_code ignored;
     fs::remove_all(temp, ignored);
-    throw;
+    rethrow_as_disk_full(dir.parent_path());
   }
 }
 
@@ -153,7 +168,12 @@ void ensure_job_file(const fs::path& dir, const std::string& job_name, const std
   if (fs::is_regular_file(fs::symlink_status(file, ec))) return;
   static std::atomic<std::uint64_t> counter{0};
   const fs::path temp = dir / fmt::format(".tmp-job-{}-{}", ::getpid(), counter++);
-  std::ofstream(temp, std::ios::binary) << job_json;
+  try {
+    write_job_file(temp, job_json);  // DiskFull naming the folder when there is no room
+  } catch (...) {
+    fs::remove(temp, ec);
+    throw;
+  }
   fs::rename(temp, file, ec);
   if (ec) {
     fs::remove(temp, ec);
@@ -225,7 +245,11 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
   const std::string job_name = job_file_name(spec, asset_paths);
 
   const fs::path scenes = fs::weakly_canonical(fs::absolute(cache_dir)) / "scenes";
-  fs::create_directories(scenes);
+  try {
+    fs::create_directories(scenes);
+  } catch (const std::exception&) {
+    rethrow_as_disk_full(scenes);
+  }
   MaterializedScene result{scenes / scene_hash, scenes / scene_hash / job_name, {}};
   // A published folder is complete: it only ever appears by rename.
   if (!fs::is_directory(result.dir)) {

@@ -62,7 +62,9 @@ struct MaterializedScene {
 // Lays out (once; the folder appears complete or not at all) and parses. InputError for bad asset
 // refs, sizes that differ from the blobs', or a bad job (messages name spec.file_name, never the
 // cache folder); MissingAssetsError when a blob is absent; CorruptAssetsError (the blobs removed)
-// when a blob to be laid out, or one whose size differs from its ref's, fails its SHA-256. Safe to call concurrently, also from several processes on one cache.
+// when a blob to be laid out, or one whose size differs from its ref's, fails its SHA-256; DiskFull
+// when the disk has no room to lay it out (nothing is published). Safe to call concurrently, also
+// from several processes on one cache.
 MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& scene_hash,
                                     const AssetStore& store,
                                     const std::filesystem::path& cache_dir);

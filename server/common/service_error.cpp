@@ -3,6 +3,7 @@
 #include <new>
 
 #include "renderer/scene/input_error.h"
+#include "server/common/disk_full.h"
 #include "server/common/scene_materializer.h"
 
 namespace farm {
@@ -16,6 +17,8 @@ grpc::Status status_of_current_exception() {
     return {grpc::StatusCode::FAILED_PRECONDITION, e.what()};
   } catch (const InputError& e) {
     return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
+  } catch (const DiskFull& e) {
+    return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
   } catch (const std::bad_alloc&) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory"};
   } catch (const std::exception& e) {

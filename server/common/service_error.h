@@ -24,7 +24,7 @@ namespace farm {
 
 // The status a service answers for the exception being handled (call only inside a catch
 // block): ServiceError its own code, MissingAssetsError FAILED_PRECONDITION, InputError
-// INVALID_ARGUMENT, bad_alloc RESOURCE_EXHAUSTED, anything else INTERNAL.
+// INVALID_ARGUMENT, DiskFull and bad_alloc RESOURCE_EXHAUSTED, anything else INTERNAL.
 grpc::Status status_of_current_exception();
 
 // "UNAVAILABLE", "DEADLINE_EXCEEDED", ...: the code as logs and messages name it; "ERROR" for

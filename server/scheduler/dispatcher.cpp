@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <random>
 
+#include "server/common/disk_full.h"
 #include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "server/common/service_error.h"
@@ -81,6 +82,7 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       events_(parts.events),
       workers_(parts.workers),
       finisher_(parts.finisher),
+      pause_(parts.pause),
       log_(parts.log),
       chooser_(options.verify_fraction, random_key()) {}
 
@@ -231,8 +233,24 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
       continue;  // no work yet, or the worker went down: await_up says which
     }
     RenderedTiles result;
-    const grpc::Status status = render(*w, *call, result);
-    handle_result(*w, *call, status, result);
+    try {
+      const grpc::Status status = render(*w, *call, result);
+      handle_result(*w, *call, status, result);
+    } catch (const DiskFull& e) {
+      // The scheduler's own disk refused something on the way (the job's scene laid out again, a
+      // mark in the store): not the job's fault nor the worker's. The batch waits for room.
+      pause_.report(e);
+      if (call->check) {
+        std::lock_guard lock(mutex_);
+        call->check->queued = true;  // another worker checks it once dispatch resumes
+      } else {
+        requeue_when_stored(call->batch, w->id);
+      }
+    } catch (const std::exception& e) {
+      // Nothing may end a slot's thread (that would be std::terminate); the batch's tiles stay
+      // as the store has them, queued again by the next scheduler to open it.
+      log_.error("job {} {}: {}", call->batch.job_id, describe(call->batch), e.what());
+    }
     std::lock_guard lock(mutex_);
     in_flight_.erase(call);
   }
@@ -243,6 +261,12 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
   // Checked under this lock, with the claim: a worker removed, quarantined (or marked down) after
   // this point finds the call in flight and cancels it.
   if (stopping_ || !workers_.available(w)) return nullptr;
+  // A result rendered now could not be kept: nothing goes out until the disk has room again
+  // (the pause's resume wakes the slots).
+  if (pause_.paused()) {
+    work_.wait_for(lock, kIdleWait);
+    return nullptr;
+  }
   // A batch waiting for a spot check goes first: its job cannot finish before it.
   for (const std::shared_ptr<SpotCheck>& c : checks_) {
     if (!c->queued || c->asked.contains(w.id)) continue;
@@ -260,6 +284,8 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
     batch = store_.claim_next_batch(w.id, unix_ms_now(), [this](const std::string& job_id, int queued) {
       return batch_size(job_id, queued);
     });
+  } catch (const DiskFull& e) {
+    pause_.report(e);  // the store could not mark the claim: nothing was claimed
   } catch (const std::exception& e) {
     log_.error("claiming tiles: {}", e.what());
   }
@@ -318,6 +344,8 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
     }
     if (status.ok() && request.has_job()) w.scenes_sent.insert(info->scene_hash);
     return status;
+  } catch (const DiskFull&) {
+    throw;  // the scheduler's disk (the job's scene laid out again): slot_loop waits for room
   } catch (const std::exception& e) {
     return {grpc::StatusCode::INTERNAL, e.what()};
   }
@@ -558,12 +586,60 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       f.set_worker(worker);
       *f.mutable_stats() = stats;
     });
+    pause_.written();
+    {
+      std::lock_guard lock(mutex_);
+      worker_disk_full_.erase(worker_id);  // its disk had room for this one
+    }
     finisher_.finish_if_complete(batch.job_id);
+  } catch (const DiskFull& e) {
+    // No room to keep it: rendered again once there is, with no attempt counted against the job
+    // or the worker. Logged by the pause, once a minute at most, not once a batch.
+    log_.debug("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
+    pause_.report(e);
+    requeue_when_stored(batch, worker_id);
   } catch (const std::exception& e) {
     log_.error("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
     store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
     work_.notify_all();
   }
+}
+
+void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& worker_id) {
+  while (true) {
+    try {
+      store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
+      work_.notify_all();
+      return;
+    } catch (const DiskFull& e) {
+      pause_.report(e);  // the store itself is full
+    }
+    std::unique_lock lock(mutex_);
+    // Until the pause's prober finds room again (its resume wakes this), or the scheduler stops.
+    while (!stopping_ && pause_.paused()) work_.wait_for(lock, kIdleWait);
+    if (stopping_) return;
+  }
+}
+
+void Dispatcher::worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status) {
+  std::chrono::milliseconds wait{0};
+  bool log = false;
+  int skipped = 0;
+  {
+    std::lock_guard lock(mutex_);
+    RetryBackoff& backoff =
+        worker_disk_full_.try_emplace(w.id, options_.disk_full_backoff, options_.disk_full_backoff_max).first->second;
+    wait = backoff.next();
+    log = backoff.log_now(skipped);
+  }
+  if (log) {
+    log_.warn("worker {}: {}; its batches go back to the queue (no attempt counted) and it gets none for {} ms{}",
+              w.worker->describe(), status.error_message(), wait.count(),
+              skipped > 0 ? fmt::format(" ({} more such answers since the last report)", skipped) : "");
+  }
+  workers_.mark_down(w, wait);
+  requeue_when_stored(batch, w.id);
+  settle_stranded();
 }
 
 void Dispatcher::measured(const TileBatch& batch, const v1::TileStats& stats) {
@@ -592,6 +668,9 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
     // otherwise take tile after tile to its deadline.
     workers_.mark_down(w, std::chrono::milliseconds(0));
     went_down = true;
+  } else if (is_disk_full(status)) {
+    worker_disk_full(w, batch, status);  // the worker's disk, not the job: no attempt counted
+    return;
   } else {
     why = fmt::format("worker {}: {}: {}", worker, status_code_name(status.error_code()), status.error_message());
     // A job every worker must refuse: retrying only wastes the farm's time.

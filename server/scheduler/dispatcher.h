@@ -22,17 +22,25 @@
 // in flight are cancelled, and what it rendered for jobs still running is rendered again
 // (JobStore::quarantine_worker), each batch announced as a TileFailed event naming it.
 //
+// The disk: a batch whose result the scheduler cannot keep for want of space (DiskFull: its file,
+// or the store's mark) is queued again with no attempt counted, against neither the job nor the
+// worker, and dispatch pauses (DiskFullPause: slots claim nothing until the prober finds room
+// again). A worker that answers that its own disk is full (RESOURCE_EXHAUSTED "disk full in ...")
+// gets its batch queued again, no attempt counted, and no tiles for a while (a backoff per
+// worker, 1 s doubling to 30 s; one log line a minute for it).
+//
 // A worker's slots are started when it is first up (WorkerRegistry's on_first_up) and end when
 // it is removed or quarantined; a slot that ended is joined by the next slot started, by an idle
 // slot, or by stop(), so workers coming and going leave no threads behind.
 //
 // Lock: Dispatcher::mutex_ guards stopping_, the slot threads, the calls in flight (each one's
-// cancel reason) and the batches waiting for a spot check. A batch is claimed, and a job
+// cancel reason), the batches waiting for a spot check and the workers' disk-full backoffs. A
+// batch is claimed, and a job
 // cancelled in the store, under it, so that cancel_job(), worker_left(), quarantine() and stop()
 // see every call a slot has started, and no slot claims for a worker the registry has removed or
 // quarantined. Taken under it: the job store's lock and, within that (the store asking for a
 // batch size), the worker registry's and RunningJobs'; the registry's also directly (is the
-// worker available?), and each call's TileCancel. None of those is held while it is taken;
+// worker available?), the DiskFullPause's (is dispatch paused?), and each call's TileCancel. None of those is held while it is taken;
 // results are handled, workers quarantined, events published and jobs finished without it.
 #include <condition_variable>
 #include <list>
@@ -48,6 +56,7 @@
 
 #include "proto/farm.pb.h"
 #include "server/common/asset_store.h"
+#include "server/scheduler/disk_full_pause.h"
 #include "server/scheduler/finisher.h"
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_events.h"
@@ -69,6 +78,7 @@ struct DispatcherParts {
   JobEvents& events;
   WorkerRegistry& workers;
   Finisher& finisher;
+  DiskFullPause& pause;
   spdlog::logger& log;
 };
 
@@ -129,6 +139,13 @@ class Dispatcher {
   void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
+  // The batch (running on worker_id) back in the queue with no attempt counted, once the store
+  // takes it: while the store itself is full, tried again each time dispatch resumes (or dropped
+  // at stop(), when a restarted store queues running tiles itself).
+  void requeue_when_stored(const TileBatch& batch, const std::string& worker_id);
+  // The worker said its disk is full: its batch queued again (no attempt counted) and the worker
+  // left alone for its backoff.
+  void worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status);
   // Counts a failed attempt on the batch (running on worker_id) with `why`, tells the job's
   // watchers, and fails the job at max_attempts.
   void fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
@@ -149,6 +166,7 @@ class Dispatcher {
   JobEvents& events_;
   WorkerRegistry& workers_;
   Finisher& finisher_;
+  DiskFullPause& pause_;
   spdlog::logger& log_;
   SpotCheckChooser chooser_;
   mutable std::mutex mutex_;
@@ -158,6 +176,7 @@ class Dispatcher {
   std::vector<std::thread> exited_;                 // slots that ended, not joined yet
   std::set<std::shared_ptr<InFlight>> in_flight_;
   std::list<std::shared_ptr<SpotCheck>> checks_;    // batches waiting for a spot check
+  std::map<std::string, RetryBackoff> worker_disk_full_;  // by worker id, while its disk is full
 };
 
 }  // namespace farm

@@ -41,9 +41,29 @@ void Finisher::finish_if_complete(const std::string& job_id) {
     std::lock_guard lock(mutex_);
     if (!merging_.insert(job_id).second) return;
   }
-  merge(job_id);
+  bool refused = false;
+  try {
+    merge(job_id);
+  } catch (const DiskFull& e) {
+    // The job stays as it is, its tiles done, until there is room for its frame.
+    log_.debug("job {}: merge refused: {}", job_id, e.what());
+    pause_.report(e);
+    refused = true;
+  } catch (const std::exception& e) {
+    log_.error("job {}: merging: {}", job_id, e.what());
+  }
   std::lock_guard lock(mutex_);
   merging_.erase(job_id);
+  if (refused) refused_.insert(job_id);
+}
+
+void Finisher::retry_refused() {
+  std::set<std::string> jobs;
+  {
+    std::lock_guard lock(mutex_);
+    jobs.swap(refused_);
+  }
+  for (const std::string& id : jobs) finish_if_complete(id);
 }
 
 void Finisher::release(const std::string& job_id) {
@@ -78,6 +98,8 @@ void Finisher::merge(const std::string& job_id) {
   } catch (const DamagedParts& e) {
     if (render_again(job_id, e)) return;
     after = *store_.get_job(job_id);  // final meanwhile (cancelled): nothing to render again
+  } catch (const DiskFull&) {
+    throw;  // not the job's fault: merged again once there is room (finish_if_complete)
   } catch (const std::exception& e) {
     after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, fmt::format("merging the tiles: {}", e.what()),
                               "", unix_ms_now());
@@ -85,6 +107,46 @@ void Finisher::merge(const std::string& job_id) {
   }
   if (after.state() != before.state()) events_.publish_state(after, before.state());
   release(job_id);
+}
+
+bool Finisher::make_room() {
+  std::optional<v1::Job> youngest;
+  int holding = 0;
+  for (const std::string& id : store_.active_jobs()) {
+    const std::optional<v1::Job> job = store_.get_job(id);
+    if (!job || job->tiles_done() == 0) continue;
+    ++holding;
+    // active_jobs() is in submission order: a later job of the same priority is younger.
+    if (!youngest || job->priority() <= youngest->priority()) youngest = job;
+  }
+  if (holding < 2) return false;
+  const std::string& id = youngest->job_id();
+  std::set<std::uint32_t> done;
+  for (const TileRecord& t : store_.tiles(id)) {
+    if (t.state == TileState::Done) done.insert(t.part);
+  }
+  if (done.empty()) return false;
+  const std::vector<std::uint32_t> parts(done.begin(), done.end());
+  // The files first: the store itself may need their room to take the tiles back. Should it fail
+  // still, the tiles stay done without their files, and the merge renders them again
+  // (DamagedParts), as after a crash.
+  assembly_.free_parts(id, parts);
+  const std::vector<TileBatch> taken = store_.requeue_parts(id, parts);
+  std::uint32_t tiles = 0;
+  for (const TileBatch& b : taken) tiles += b.count;
+  log_.warn("the disk is full: the {} done tiles of job {} (the youngest of {} running jobs holding tiles) are "
+            "thrown away to make room for the older ones, and rendered again later",
+            tiles, id, holding);
+  for (const TileBatch& b : taken) {
+    events_.publish(id, [&](v1::JobEvent& event) {
+      v1::TileFailed& f = *event.mutable_tile_failed();
+      f.set_tile_index(b.first);
+      f.set_tile_count(b.count);
+      f.set_reason("the scheduler's disk is full: thrown away to make room for older jobs, rendered again");
+      f.set_will_retry(true);
+    });
+  }
+  return true;
 }
 
 bool Finisher::render_again(const std::string& job_id, const DamagedParts& damaged) {

@@ -4,9 +4,14 @@
 // the job marked SUCCEEDED (FAILED when any of that throws). A part whose kept data is damaged
 // (DamagedParts: its file missing, truncated or failing its checksum) fails nothing: its tiles are
 // queued again (JobStore::requeue_parts), the job stays running and is merged once they are done.
-// A final job's memory and kept tiles then go (release()), whichever way it ended.
+// A final job's memory and kept tiles then go (release()), whichever way it ended. A merge the disk
+// refuses (DiskFull: the frame's files or the store's final mark) fails nothing either: the pause
+// is told (disk_full_pause.h), the job stays running with its tiles done, and it is merged again
+// when dispatch resumes (retry_refused()). While the disk stays full, make_room() frees the tiles of
+// the youngest job holding some, so that the farm's own tiles never hold the disk for good.
 //
-// Lock: Finisher::mutex_ guards merging_ only, and is a leaf: the merge itself runs without it.
+// Lock: Finisher::mutex_ guards merging_ and refused_ only, and is a leaf: the merge itself runs
+// without it.
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -17,6 +22,7 @@
 
 #include <spdlog/logger.h>
 
+#include "server/scheduler/disk_full_pause.h"
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_events.h"
 #include "server/scheduler/running_jobs.h"
@@ -28,14 +34,22 @@ namespace farm {
 class Finisher {
  public:
   Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly,
-           RunningJobs& jobs, JobEvents& events, spdlog::logger& log)
-      : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), log_(log) {}
+           RunningJobs& jobs, JobEvents& events, DiskFullPause& pause, spdlog::logger& log)
+      : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), pause_(pause),
+        log_(log) {}
 
   // Merges the job if its tiles are all done and it is not final; one caller merges, others
   // calling at the same time return at once.
   void finish_if_complete(const std::string& job_id);
   // The job is final: what is kept of it in memory and its tiles go.
   void release(const std::string& job_id);
+  // Merges again the jobs whose merge the disk refused (called when dispatch resumes).
+  void retry_refused();
+  // The disk is full and stays full (called while dispatch is paused): the youngest running job
+  // that holds done tiles (the last the queue reaches: lowest priority, then latest submission)
+  // gives them back, their files removed and their tiles queued again (no attempt counted), so
+  // that older jobs can finish and merge. False when fewer than two jobs hold done tiles.
+  bool make_room();
   // The merged EXR or PNG under results/ of a SUCCEEDED job; nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview) const;
   // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.
@@ -54,9 +68,11 @@ class Finisher {
   FrameAssembly& assembly_;
   RunningJobs& jobs_;
   JobEvents& events_;
+  DiskFullPause& pause_;
   spdlog::logger& log_;
   std::mutex mutex_;
   std::set<std::string> merging_;
+  std::set<std::string> refused_;  // merges the disk refused, tried again by retry_refused()
   std::function<void()> on_requeued_;  // set once, before any merge
   static constexpr unsigned kTrimEvery = 16;
   std::atomic<unsigned> released_{0};  // jobs released, for trimming the heap now and then

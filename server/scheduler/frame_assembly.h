@@ -59,6 +59,9 @@ class FrameAssembly {
   // The part's tiles are no longer done (their worker was quarantined, or the store refused
   // them): whatever replaces them is added under its own part, maybe the same number.
   virtual void discard(const std::string& job_id, std::uint32_t part) = 0;
+  // The parts' tiles were taken back to make room on a full disk, while dispatch is paused (so
+  // nothing replaces them meanwhile): their kept data goes now.
+  virtual void free_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) = 0;
 };
 
 class TileFileAssembly final : public FrameAssembly {
@@ -73,6 +76,9 @@ class TileFileAssembly final : public FrameAssembly {
   // rendered again is written over the old file. Deleting the file here could delete its
   // replacement, written meanwhile under the same part.
   void discard(const std::string&, std::uint32_t) override {}
+  void free_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) override {
+    for (std::uint32_t part : parts) files_.remove(job_id, part);
+  }
 
  private:
   TileResults files_;
@@ -86,6 +92,9 @@ class InMemoryAssembly final : public FrameAssembly {
                       const std::vector<std::uint32_t>& parts) override;
   void remove_job(const std::string& job_id) override;
   void discard(const std::string& job_id, std::uint32_t part) override;
+  void free_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) override {
+    for (std::uint32_t part : parts) discard(job_id, part);
+  }
 
  private:
   struct Film {

@@ -14,7 +14,8 @@ struct MergedFiles {
   std::filesystem::path exr, preview;
 };
 
-// Writes files.exr (`type`) and, unless it is empty, files.preview, each atomically.
+// Writes files.exr (`type`) and, unless it is empty, files.preview, each atomically. DiskFull
+// (naming the EXR's folder) when the disk has no room for them.
 void write_merged(const TileBuffer& film, const MergedFiles& files, ExrPixelType type = ExrPixelType::Half);
 
 }  // namespace farm

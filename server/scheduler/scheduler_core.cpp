@@ -51,7 +51,8 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                                            options_.limits.max_scene_checks})),
       jobs_(store_, assets_, options_.data_dir),
       events_(store_),
-      finisher_(options_, store_, *assembly_, jobs_, events_, *log_),
+      pause_(*log_, options_.disk_full_backoff, options_.disk_full_backoff_max),
+      finisher_(options_, store_, *assembly_, jobs_, events_, pause_, *log_),
       workers_(
           options_, *log_, [this](const std::string& id, const std::string& reason) { remove_worker(id, reason); },
           [this](const std::shared_ptr<WorkerEntry>& w) { dispatcher_.start_slots(w); }),
@@ -62,7 +63,16 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                              .events = events_,
                              .workers = workers_,
                              .finisher = finisher_,
+                             .pause = pause_,
                              .log = *log_}) {
+  // Room on the disk again: the slots claim, and the merges the disk refused are done.
+  // Room on the disk again: the merges the disk refused first (they free their tiles), then
+  // the slots. Still none: the youngest job holding tiles gives them back.
+  pause_.on_resume([this] {
+    finisher_.retry_refused();
+    dispatcher_.work_queued();
+  });
+  pause_.on_still_full([this] { return finisher_.make_room(); });
   // A merge that found damaged tile results queued their tiles again: the slots take them now.
   finisher_.on_requeued([this] { dispatcher_.work_queued(); });
   // Jobs interrupted between their last tile and their merge.
@@ -75,6 +85,7 @@ void SchedulerCore::stop() {
   // The registry first: slots waiting for a worker to come up return, and no worker is dropped
   // while the dispatcher cancels and joins.
   workers_.stop();
+  pause_.stop();
   dispatcher_.stop();
 }
 
@@ -146,7 +157,15 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
-  v1::Job added = store_.add_job(job, unix_ms_now());
+  v1::Job added;
+  try {
+    added = store_.add_job(job, unix_ms_now());
+  } catch (...) {
+    // Not queued (a full store: DiskFull): nothing of it is kept.
+    jobs_.forget(job.id);
+    if (watcher) events_.unsubscribe(job.id, watcher);
+    throw;
+  }
   log_->info("job {} '{}' queued: {} {}x{}, {} tiles, priority {}{}", added.job_id(), added.name(),
              added.engine(), added.width(), added.height(), added.tiles_total(), priority,
              owner.empty() ? "" : ", owner " + owner);

@@ -11,13 +11,16 @@
 //   Dispatcher      slots, claiming and sizing batches, calls in flight, results checked and
 //                   spot-checked, quarantines (dispatcher.h)
 //   Finisher        merging, writing and checking a finished job's frame (finisher.h)
+//   DiskFullPause   dispatch paused while the disk refuses writes, resumed when it has room
+//                   (disk_full_pause.h)
 //
 // Locks: each part has its own mutex, and its header says what it guards. A part holds its lock
 // while it calls another only along these arrows (A -> B: B is taken while A is held):
 //   Dispatcher -> JobStore -> {WorkerRegistry, RunningJobs}   claiming a batch (batch sizing)
 //   Dispatcher -> {WorkerRegistry, TileCancel}                claiming, cancelling calls in flight
 //   JobEvents -> {JobStore, JobEventQueue}                    publishing an event in store order
-// The others (Finisher, RunningJobs, WorkerRegistry, JobStore, the queues) are leaves: nothing is
+//   Dispatcher -> DiskFullPause                               claiming (is dispatch paused?)
+// The others (Finisher, RunningJobs, WorkerRegistry, JobStore, DiskFullPause, the queues) are leaves: nothing is
 // taken under them. The arrows make no cycle, so no two threads can deadlock on them.
 #include <filesystem>
 #include <functional>
@@ -32,6 +35,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/job.h"
 #include "server/common/asset_store.h"
+#include "server/scheduler/disk_full_pause.h"
 #include "server/scheduler/dispatcher.h"
 #include "server/scheduler/finisher.h"
 #include "server/scheduler/frame_assembly.h"
@@ -83,7 +87,8 @@ class SchedulerCore {
 
   // Validates like `farm render` (asset refs, parse_job, loading the models) and queues the job.
   // ServiceError FAILED_PRECONDITION naming a missing asset; InputError for a bad job (the
-  // message names the job file and the JSON path). A `watcher` is subscribed to the job before
+  // message names the job file and the JSON path); DiskFull when the data dir has no room for
+  // its scene or the store for the job (nothing of it is kept). A `watcher` is subscribed to the job before
   // it is queued, so it sees every event of the job (pass it to unwatch() when done).
   // `owner` is recorded with the job: the name of the caller's token.
   v1::Job submit(const v1::JobSpec& spec, int priority = 0,
@@ -129,6 +134,7 @@ class SchedulerCore {
   std::unique_ptr<SceneChecker> scene_checker_;  // when options_.scene_check_program is set
   RunningJobs jobs_;
   JobEvents events_;
+  DiskFullPause pause_;
   Finisher finisher_;
   WorkerRegistry workers_;
   Dispatcher dispatcher_;

@@ -24,6 +24,10 @@ struct SchedulerOptions {
   std::chrono::milliseconds probe_interval = std::chrono::seconds(1);
   std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped
+  // While a disk is full (the scheduler's, or a worker's), dispatch waits this long before it
+  // tries again, doubling up to the maximum (disk_full_pause.h).
+  std::chrono::milliseconds disk_full_backoff = std::chrono::seconds(1);
+  std::chrono::milliseconds disk_full_backoff_max = std::chrono::seconds(30);
   // Spot checks: this fraction of each job's tiles (at least one when > 0) is rendered again on
   // another worker and compared bit for bit before it is kept (spot_checks.h). 0: none.
   double verify_fraction = 0.0;

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "server/common/disk_full.h"
 #include "server/common/sha256.h"
 
 namespace farm {
@@ -43,26 +44,30 @@ void TileResults::write(const std::string& job_id, std::uint32_t part,
                         const v1::RenderTileResponse& tile) const {
   static std::atomic<std::uint64_t> counter{0};
   const fs::path final_path = path_of(job_id, part);
-  fs::create_directories(final_path.parent_path());
   const fs::path temp = final_path.parent_path() /
                         fmt::format(".tmp-{}-{}-{}", part, ::getpid(), counter++);
   const std::string payload = tile.SerializeAsString();
   const std::string bytes = header_of(payload) + payload;
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::system_error(errno, std::generic_category(), "cannot write " + temp.string());
-  std::size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int e = errno;
-      ::close(fd);
-      ::unlink(temp.c_str());
-      throw std::system_error(e, std::generic_category(), "cannot write " + temp.string());
-    }
-    written += static_cast<std::size_t>(n);
+  try {
+    fs::create_directories(final_path.parent_path());
+  } catch (const std::exception&) {
+    rethrow_as_disk_full(dir_);
   }
-  ::close(fd);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw_write_error(errno, temp, bytes.size());
+  try {
+    write_all(fd, bytes, temp);
+  } catch (...) {
+    ::close(fd);
+    ::unlink(temp.c_str());
+    throw;
+  }
+  // A file system may only report the lack of space when the file is closed (NFS, quotas).
+  if (::close(fd) != 0) {
+    const int error = errno;
+    ::unlink(temp.c_str());
+    throw_write_error(error, temp, bytes.size());
+  }
   fs::rename(temp, final_path);
 }
 
@@ -93,6 +98,11 @@ v1::RenderTileResponse TileResults::read(const std::string& job_id, std::uint32_
   v1::RenderTileResponse tile;
   if (!tile.ParseFromArray(payload.data(), static_cast<int>(payload.size()))) throw damaged("does not parse");
   return tile;
+}
+
+void TileResults::remove(const std::string& job_id, std::uint32_t part) const {
+  std::error_code ignored;
+  fs::remove(path_of(job_id, part), ignored);
 }
 
 void TileResults::remove_job(const std::string& job_id) const {

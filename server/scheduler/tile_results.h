@@ -38,10 +38,12 @@ class TileResults {
  public:
   explicit TileResults(std::filesystem::path dir);  // creates dir
 
+  // DiskFull (naming the folder) when the disk has no room for it; nothing is left behind.
   void write(const std::string& job_id, std::uint32_t part, const v1::RenderTileResponse& tile) const;
   // DamagedTileResult when the file is missing, unreadable, truncated or fails its checksum.
   v1::RenderTileResponse read(const std::string& job_id, std::uint32_t part) const;
   void remove_job(const std::string& job_id) const;
+  void remove(const std::string& job_id, std::uint32_t part) const;  // nothing if it is absent
 
   std::filesystem::path path_of(const std::string& job_id, std::uint32_t part) const;
 

@@ -10,6 +10,8 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "server/common/disk_full.h"
+
 namespace farm {
 
 namespace {
@@ -71,6 +73,19 @@ const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
                 static_cast<int>(v1::JOB_STATE_RUNNING));
 
+// The store's error for the last failed call on `db`: DiskFull (naming the database's folder)
+// when SQLite found no room (SQLITE_FULL, or an I/O error for ENOSPC or EDQUOT), so that callers
+// wait for space instead of failing a job; std::runtime_error otherwise.
+[[noreturn]] void throw_store_error(sqlite3* db, const std::string& context) {
+  const std::string message = fmt::format("job store: {}{}", context.empty() ? "" : context + ": ", sqlite3_errmsg(db));
+  const int code = sqlite3_extended_errcode(db) & 0xff;
+  if (code == SQLITE_FULL || (code == SQLITE_IOERR && is_disk_full_errno(sqlite3_system_errno(db)))) {
+    const char* file = sqlite3_db_filename(db, "main");
+    throw DiskFull(file && *file ? std::filesystem::path(file).parent_path() : std::filesystem::path("."), message);
+  }
+  throw std::runtime_error(message);
+}
+
 // A prepared statement from the store's cache, reset (bindings cleared) at scope exit so the next
 // user finds it fresh. Preparing is most of the cost of the scheduler's small queries.
 class Stmt {
@@ -97,7 +112,7 @@ class Stmt {
     const int rc = sqlite3_step(s_);
     if (rc == SQLITE_ROW) return true;
     if (rc == SQLITE_DONE) return false;
-    throw std::runtime_error(fmt::format("job store: {}", sqlite3_errmsg(db_)));
+    throw_store_error(db_, "");
   }
   void run() {
     while (step()) {
@@ -120,7 +135,7 @@ class Stmt {
 
  private:
   Stmt& check(int rc) {
-    if (rc != SQLITE_OK) throw std::runtime_error(fmt::format("job store: {}", sqlite3_errmsg(db_)));
+    if (rc != SQLITE_OK) throw_store_error(db_, "");
     return *this;
   }
   sqlite3* db_;
@@ -141,12 +156,7 @@ class Transaction {
 
  private:
   void exec(const char* sql) {
-    char* error = nullptr;
-    if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-      const std::string message = error ? error : "unknown error";
-      sqlite3_free(error);
-      throw std::runtime_error(fmt::format("job store: {}: {}", sql, message));
-    }
+    if (sqlite3_exec(db_, sql, nullptr, nullptr, nullptr) != SQLITE_OK) throw_store_error(db_, sql);
   }
   sqlite3* db_;
   bool done_ = false;
@@ -255,12 +265,7 @@ JobStore::~JobStore() {
 }
 
 void JobStore::exec(const char* sql) const {
-  char* error = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-    const std::string message = error ? error : "unknown error";
-    sqlite3_free(error);
-    throw std::runtime_error(fmt::format("job store: {}", message));
-  }
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, nullptr) != SQLITE_OK) throw_store_error(db_, "");
 }
 
 sqlite3_stmt* JobStore::prepare(const std::string& sql, unsigned flags) const {

@@ -18,7 +18,9 @@
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 // Tiles go out in batches: consecutive tiles of one row of the job's grid, rendered by one call
 // as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
-// The store is one connection behind a mutex, its statements prepared once.
+// The store is one connection behind a mutex, its statements prepared once. Any call may throw
+// DiskFull (server/common/disk_full.h) when SQLite finds no room (SQLITE_FULL): its transaction
+// is rolled back, so the store stays as it was and the call can be made again once there is space.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
