@@ -10,14 +10,15 @@
 
 namespace farm {
 
-void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool) {
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool,
+                   const CancelFlag& cancel) {
   switch (settings.engine) {
     case EngineKind::Raster:
-      raster::prepare_frame(scene, settings, pool);
+      raster::prepare_frame(scene, settings, pool, cancel);
       return;
     case EngineKind::Whitted:
     case EngineKind::Path:
-      cached_scene_intersector(scene, settings.accel);  // build the BVHs before the tiles start
+      cached_scene_intersector(scene, settings.accel, cancel);  // the BVHs before the tiles start
       return;
   }
 }
@@ -32,13 +33,18 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
                        TileBuffer& out, const CancelFlag& cancel) {
   const Rect image{0, 0, settings.width, settings.height};
   const Rect clipped = tile.intersect(image);
-  switch (settings.engine) {
-    case EngineKind::Raster:
-      return raster::render_tile(scene, settings, clipped, out, cancel);
-    case EngineKind::Whitted:
-      return whitted::render_tile(scene, settings, clipped, out, cancel);
-    case EngineKind::Path:
-      return path::render_tile(scene, settings, clipped, out, cancel);
+  try {
+    switch (settings.engine) {
+      case EngineKind::Raster:
+        return raster::render_tile(scene, settings, clipped, out, cancel);
+      case EngineKind::Whitted:
+        return whitted::render_tile(scene, settings, clipped, out, cancel);
+      case EngineKind::Path:
+        return path::render_tile(scene, settings, clipped, out, cancel);
+    }
+  } catch (const RenderStopped& stopped) {  // in the frame's set-up, which the tile waited for
+    out.discard_pixels();
+    return stopped.reason();
   }
   throw InputError(fmt::format("render.engine: unknown engine {}", static_cast<int>(settings.engine)));
 }

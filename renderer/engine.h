@@ -13,8 +13,11 @@ namespace farm {
 
 // Optional: does the per-frame work an engine shares between tiles (the rasterizer's vertex
 // stage, set-up and binning) on `pool`, before tiles are dispatched. render_tile does it lazily
-// on its own thread when this was not called.
-void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool);
+// on its own thread when this was not called. Polls `cancel` as it goes (every few hundred
+// triangles or BVH primitives) and throws RenderStopped when it asks: set-up that grows with
+// the scene and the resolution stops as promptly as a tile does.
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool,
+                   const CancelFlag& cancel = CancelFlag::never());
 
 // Renders `tile` (clipped to the image) into `out`, which it resizes to the tile and the
 // settings' AOVs. Throws InputError for an engine this build cannot run.

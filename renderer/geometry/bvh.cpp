@@ -16,6 +16,9 @@ constexpr float kTraversalCost = 0.5f;
 // Bvh::kMaxDepth (28 + at most 32 more levels for up to 2^32 primitives).
 constexpr int kCountSplitLevel = 28;
 constexpr std::uint32_t kNoParent = ~0u;
+// A node's split reads each of its primitives a few times: about a millisecond's work between
+// looks at the cancel flag.
+constexpr int kPrimitivesPerPoll = 1 << 16;
 
 struct Task {
   std::uint32_t begin, end;  // range of order_
@@ -37,6 +40,7 @@ class Builder {
         max_leaf_(static_cast<std::uint32_t>(std::clamp(options.max_leaf_size, 1, 255))),
         nodes_(nodes),
         order_(order),
+        poll_(options.cancel ? *options.cancel : CancelFlag::never(), kPrimitivesPerPoll),
         centroids_(boxes.size()) {
     order_.reserve(boxes.size());
     for (std::size_t i = 0; i < boxes.size(); ++i) {
@@ -63,6 +67,7 @@ class Builder {
     while (!stack.empty()) {
       const Task task = stack.back();
       stack.pop_back();
+      poll_.throw_if_stopped(static_cast<int>(task.end - task.begin));
       const auto index = static_cast<std::uint32_t>(nodes_.size());
       if (task.parent != kNoParent) nodes_[task.parent].offset = index;
       depth = std::max(depth, task.level);
@@ -205,6 +210,7 @@ class Builder {
   std::uint32_t max_leaf_;
   std::vector<BvhNode>& nodes_;
   std::vector<std::uint32_t>& order_;
+  CancelPoll poll_;  // counts the primitives each node's split goes over
   std::vector<glm::vec3> centroids_;
 };
 

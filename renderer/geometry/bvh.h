@@ -12,6 +12,7 @@
 #include "renderer/geometry/aabb.h"
 #include "renderer/geometry/ray.h"
 #include "renderer/geometry/traversal_stats.h"
+#include "renderer/util/cancel_flag.h"
 
 namespace farm {
 
@@ -42,6 +43,9 @@ class Bvh {
   struct Options {
     BvhSplit split = BvhSplit::Sah;
     int max_leaf_size = 8;
+    // Polled as the build goes (every few tens of thousands of primitives split): a stop throws
+    // RenderStopped. Null: never stops.
+    const CancelFlag* cancel = nullptr;
   };
 
   // Primitive i has bounds primitive_bounds[i]. Empty boxes (e.g. objects without triangles)

@@ -65,7 +65,7 @@ struct ErrorLog {
 
 class EmbreeIntersector final : public SceneIntersector {
  public:
-  explicit EmbreeIntersector(const PreparedScene& scene);
+  EmbreeIntersector(const PreparedScene& scene, const CancelFlag& cancel);
 
   bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const override;
   bool occluded(const Ray& ray, TraversalStats* stats) const override;
@@ -76,6 +76,9 @@ class EmbreeIntersector final : public SceneIntersector {
   SceneHandle build_model_scene(const ModelTriangles& triangles);
 
   const PreparedScene& prepared_;
+  // The caller's, during the constructor's builds only: the flag does not outlive the call that
+  // built the intersector, so nothing refers to it afterwards.
+  const CancelFlag* cancel_;
   ErrorLog errors_;
   // Declared first so it is released last, after the scenes that belong to it.
   DeviceHandle device_;
@@ -84,6 +87,11 @@ class EmbreeIntersector final : public SceneIntersector {
 };
 
 void EmbreeIntersector::check(const char* step) {
+  // A build the progress callback cancelled fails with RTC_ERROR_CANCELLED: a stop, not an error.
+  if (cancel_ && cancel_->reason() != StopReason::None) {
+    errors_.take();
+    throw RenderStopped(cancel_->reason());
+  }
   const RTCError code = rtcGetDeviceError(device_.get());
   std::string message = errors_.take();
   if (code == RTC_ERROR_NONE && message.empty()) return;
@@ -98,6 +106,10 @@ SceneHandle EmbreeIntersector::new_scene() {
   rtcSetSceneFlags(scene.get(), RTC_SCENE_FLAG_ROBUST);
   // High quality (spatial splits): built once per model and per job, then traced many times.
   rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_HIGH);
+  // Embree asks now and then during a build whether to go on.
+  rtcSetSceneProgressMonitorFunction(
+      scene.get(), [](void* flag, double) { return !static_cast<const CancelFlag*>(flag)->stop_requested(); },
+      const_cast<CancelFlag*>(cancel_));
   return scene;
 }
 
@@ -128,7 +140,8 @@ SceneHandle EmbreeIntersector::build_model_scene(const ModelTriangles& model) {
   return scene;
 }
 
-EmbreeIntersector::EmbreeIntersector(const PreparedScene& prepared) : prepared_(prepared) {
+EmbreeIntersector::EmbreeIntersector(const PreparedScene& prepared, const CancelFlag& cancel)
+    : prepared_(prepared), cancel_(&cancel) {
   device_.reset(rtcNewDevice(nullptr));
   if (!device_) {
     throw std::runtime_error(fmt::format("Embree: creating a device failed: {}",
@@ -168,6 +181,9 @@ EmbreeIntersector::EmbreeIntersector(const PreparedScene& prepared) : prepared_(
   }
   rtcCommitScene(scene_.get());
   check("building the scene's top-level BVH");
+  for (const SceneHandle& built : model_scenes_) rtcSetSceneProgressMonitorFunction(built.get(), nullptr, nullptr);
+  rtcSetSceneProgressMonitorFunction(scene_.get(), nullptr, nullptr);
+  cancel_ = nullptr;
 }
 
 bool finite(const glm::vec3& v) {
@@ -224,8 +240,9 @@ bool EmbreeIntersector::occluded(const Ray& ray, TraversalStats*) const {
 
 }  // namespace
 
-std::unique_ptr<SceneIntersector> build_embree_intersector(const PreparedScene& scene) {
-  return std::make_unique<EmbreeIntersector>(scene);
+std::unique_ptr<SceneIntersector> build_embree_intersector(const PreparedScene& scene,
+                                                           const CancelFlag& cancel) {
+  return std::make_unique<EmbreeIntersector>(scene, cancel);
 }
 
 }  // namespace farm

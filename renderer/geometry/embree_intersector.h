@@ -9,7 +9,9 @@
 namespace farm {
 
 // `scene` must outlive the result: Embree reads its triangle indices in place. Throws
-// std::runtime_error naming the step when Embree reports an error.
-std::unique_ptr<SceneIntersector> build_embree_intersector(const PreparedScene& scene);
+// std::runtime_error naming the step when Embree reports an error, and RenderStopped when
+// `cancel` asks during a build (Embree's progress callback polls it).
+std::unique_ptr<SceneIntersector> build_embree_intersector(const PreparedScene& scene,
+                                                           const CancelFlag& cancel = CancelFlag::never());
 
 }  // namespace farm

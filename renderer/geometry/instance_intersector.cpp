@@ -36,7 +36,9 @@ Ray to_model(const PreparedObject& object, const Ray& ray, float t_max) {
 
 }  // namespace
 
-InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind accel) : scene_(scene) {
+InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind accel,
+                                         const CancelFlag& cancel)
+    : scene_(scene) {
   if (accel == AccelKind::Embree) {
     throw std::invalid_argument("InstanceIntersector: use build_embree_intersector for embree");
   }
@@ -46,7 +48,7 @@ InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind a
   for (const PreparedObject& object : objects) {
     const MeshAccel*& shared = accel_of[object.triangles];
     if (!shared) {
-      mesh_accels_.push_back(build_mesh_accel(*object.triangles, accel));
+      mesh_accels_.push_back(build_mesh_accel(*object.triangles, accel, cancel));
       shared = mesh_accels_.back().get();
     }
     object_accel_.push_back(shared);
@@ -56,7 +58,7 @@ InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind a
     bounds.reserve(objects.size());
     for (const PreparedObject& object : objects) bounds.push_back(world_bounds(object));
     // One instance per leaf: an instance test is a whole bottom-level traversal.
-    top_ = Bvh::build(bounds, Bvh::Options{BvhSplit::Sah, 1});
+    top_ = Bvh::build(bounds, Bvh::Options{BvhSplit::Sah, 1, &cancel});
   }
 }
 
@@ -125,13 +127,15 @@ void InstanceIntersector::visit_bvh_boxes(int max_level,
 }
 
 std::unique_ptr<InstanceIntersector> build_instance_intersector(const PreparedScene& scene,
-                                                                AccelKind accel) {
-  return std::make_unique<InstanceIntersector>(scene, accel);
+                                                                AccelKind accel,
+                                                                const CancelFlag& cancel) {
+  return std::make_unique<InstanceIntersector>(scene, accel, cancel);
 }
 
-std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel) {
-  if (accel == AccelKind::Embree) return build_embree_intersector(scene);
-  return build_instance_intersector(scene, accel);
+std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel,
+                                                          const CancelFlag& cancel) {
+  if (accel == AccelKind::Embree) return build_embree_intersector(scene, cancel);
+  return build_instance_intersector(scene, accel, cancel);
 }
 
 }  // namespace farm

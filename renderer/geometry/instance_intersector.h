@@ -28,7 +28,9 @@ class InstanceIntersector final : public SceneIntersector {
  public:
   // `accel` must be Naive, BvhMedian or Bvh; `scene` must outlive the intersector. With Naive
   // every triangle of every object is tested (no top-level tree either), as the lab's `naive`.
-  InstanceIntersector(const PreparedScene& scene, AccelKind accel);
+  // The builds poll `cancel`: throws RenderStopped when it asks.
+  InstanceIntersector(const PreparedScene& scene, AccelKind accel,
+                      const CancelFlag& cancel = CancelFlag::never());
 
   bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const override;
   bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const override;
@@ -55,7 +57,7 @@ class InstanceIntersector final : public SceneIntersector {
   std::optional<Bvh> top_;
 };
 
-std::unique_ptr<InstanceIntersector> build_instance_intersector(const PreparedScene& scene,
-                                                                AccelKind accel);
+std::unique_ptr<InstanceIntersector> build_instance_intersector(
+    const PreparedScene& scene, AccelKind accel, const CancelFlag& cancel = CancelFlag::never());
 
 }  // namespace farm

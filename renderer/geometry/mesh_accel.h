@@ -10,6 +10,7 @@
 #include "renderer/geometry/traversal_stats.h"
 #include "renderer/geometry/triangle_intersect.h"  // TriangleHit
 #include "renderer/render_settings.h"
+#include "renderer/util/cancel_flag.h"
 
 namespace farm {
 
@@ -28,6 +29,8 @@ class MeshAccel {
 
 // `accel` must be Naive, BvhMedian or Bvh (Embree works on whole scenes: embree_intersector.h).
 // `triangles` must outlive the result.
-std::unique_ptr<MeshAccel> build_mesh_accel(const ModelTriangles& triangles, AccelKind accel);
+// Polls `cancel` during the build: throws RenderStopped when it asks.
+std::unique_ptr<MeshAccel> build_mesh_accel(const ModelTriangles& triangles, AccelKind accel,
+                                            const CancelFlag& cancel = CancelFlag::never());
 
 }  // namespace farm

@@ -12,6 +12,7 @@
 #include "renderer/geometry/traversal_stats.h"
 #include "renderer/render_settings.h"
 #include "renderer/scene/material.h"
+#include "renderer/util/cancel_flag.h"
 
 namespace farm {
 
@@ -37,13 +38,15 @@ class SceneIntersector {
   virtual bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const = 0;
 };
 
-// Builds the intersector for `accel` (Embree included).
-std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel);
+// Builds the intersector for `accel` (Embree included), polling `cancel` as it goes: throws
+// RenderStopped when it asks.
+std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel,
+                                                          const CancelFlag& cancel = CancelFlag::never());
 
 // The same, built once per prepared scene and accel and then shared by every tile (cached in
 // the scene's frame cache).
-std::shared_ptr<const SceneIntersector> cached_scene_intersector(const PreparedScene& scene,
-                                                                 AccelKind accel);
+std::shared_ptr<const SceneIntersector> cached_scene_intersector(
+    const PreparedScene& scene, AccelKind accel, const CancelFlag& cancel = CancelFlag::never());
 
 // Fills position, normals and material of a hit given (object, triangle, u, v, t): shared by
 // every implementation so they agree on everything but the hit itself.

@@ -149,15 +149,16 @@ std::string frame_key(const RenderSettings& settings) {
 
 }  // namespace
 
-void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool) {
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool,
+                   const CancelFlag& cancel) {
   scene.frame_cache().get_or_build<RasterFrame>(
-      frame_key(settings), [&] { return build_raster_frame(scene, settings, &pool); });
+      frame_key(settings), cancel, [&] { return build_raster_frame(scene, settings, &pool, cancel); });
 }
 
 StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                        TileBuffer& out, const CancelFlag& cancel) {
   const auto frame = scene.frame_cache().get_or_build<RasterFrame>(
-      frame_key(settings), [&] { return build_raster_frame(scene, settings, nullptr); });
+      frame_key(settings), cancel, [&] { return build_raster_frame(scene, settings, nullptr, cancel); });
   return render_tile_from_frame(*frame, scene, settings, tile, out, cancel);
 }
 

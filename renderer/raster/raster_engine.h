@@ -16,7 +16,8 @@
 namespace farm::raster {
 
 // Builds the frame set-up on `pool` and caches it in the prepared scene for the tiles that follow.
-void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool);
+void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool,
+                   const CancelFlag& cancel);
 
 // Renders one tile; uses the cached frame set-up, building it on this thread if missing. Polls
 // `cancel` every few hundred triangles drawn and at every sample pass over a bin; see

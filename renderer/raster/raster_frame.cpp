@@ -1,16 +1,28 @@
 #include "renderer/raster/raster_frame.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
+
+#include <fmt/format.h>
+
+#include "renderer/scene/input_error.h"
 
 namespace farm::raster {
 namespace {
 
 constexpr std::size_t kVertexGrain = 4096;
 constexpr std::size_t kSetupGrain = 8192;
+// The set-up looks at the cancel flag every kSetupUnitsPerPoll units of work, a unit being one
+// triangle-in-bin entry filed and a triangle set up counting kUnitsPerTriangle (about their
+// relative costs): a look every 256 small triangles, or every 8192 entries of a large one, tens
+// of microseconds apart. A triangle that covers a 16384x16384 image fills 262,144 bins, so
+// counting triangles alone would let one poll cover seconds of binning.
+constexpr int kSetupUnitsPerPoll = 8192;
+constexpr int kUnitsPerTriangle = 32;
 
 // One mesh of one object: where its vertices and triangles sit in the frame's flat numbering.
 struct MeshRange {
@@ -33,8 +45,9 @@ constexpr std::uint32_t kFromClipping = 0x80000000u;
 
 class FrameBuilder {
  public:
-  FrameBuilder(const PreparedScene& scene, const RenderSettings& settings, RasterFrame& frame)
-      : frame_(frame), centres_only_(settings.spp <= 1) {
+  FrameBuilder(const PreparedScene& scene, const RenderSettings& settings, RasterFrame& frame,
+               const CancelFlag& cancel)
+      : frame_(frame), cancel_(cancel), centres_only_(settings.spp <= 1) {
     const Camera& camera = scene.scene().camera;
     view_ = camera.view_matrix();
     view_projection_ = camera.projection_matrix(camera.aspect_for(settings.width, settings.height)) * view_;
@@ -67,15 +80,26 @@ class FrameBuilder {
         for (std::size_t b = 0; b < count; b += grain) fn(b, std::min(count, b + grain), 0);
       }
     };
-    parallel(frame_.vertices.size(), kVertexGrain,
-             [this](std::size_t b, std::size_t e, int) { transform_vertices(b, e); });
+    // Each step looks at the cancel flag per chunk (set-up: every few hundred triangles), and a
+    // stop throws RenderStopped out of the pool's loop.
+    const auto check = [this] {
+      if (cancel_.stop_requested()) throw RenderStopped(cancel_.reason());
+    };
+    parallel(frame_.vertices.size(), kVertexGrain, [this, &check](std::size_t b, std::size_t e, int) {
+      check();
+      transform_vertices(b, e);
+    });
     chunks_.resize((frame_.input_triangles + kSetupGrain - 1) / kSetupGrain);
     parallel(frame_.input_triangles, kSetupGrain,
              [this](std::size_t b, std::size_t e, int) { set_up(b, e, chunks_[b / kSetupGrain]); });
+    check();
     plan_merge();
     frame_.triangle_chunks.resize(chunks_.size());
-    parallel(chunks_.size(), 1, [this](std::size_t b, std::size_t e, int) {
-      for (std::size_t c = b; c < e; ++c) merge_chunk(c);
+    parallel(chunks_.size(), 1, [this, &check](std::size_t b, std::size_t e, int) {
+      for (std::size_t c = b; c < e; ++c) {
+        check();
+        merge_chunk(c);
+      }
     });
   }
 
@@ -136,8 +160,8 @@ class FrameBuilder {
     return (index & kClippedVertex) ? chunk.clipped_vertices[index & ~kClippedVertex] : frame_.vertices[index];
   }
 
-  void emit(SetupChunk& chunk, bool from_clipping, std::uint32_t material, std::uint32_t i0,
-            std::uint32_t i1, std::uint32_t i2) const {
+  void emit(SetupChunk& chunk, CancelPoll& poll, bool from_clipping, std::uint32_t material,
+            std::uint32_t i0, std::uint32_t i1, std::uint32_t i2) const {
     const FixedPoint &p0 = vertex(chunk, i0).position, &p1 = vertex(chunk, i1).position,
                      &p2 = vertex(chunk, i2).position;
     const std::int64_t area = edge_function(p0, p1, p2);
@@ -177,7 +201,18 @@ class FrameBuilder {
       local = static_cast<std::uint32_t>(out.direct_count);
       out.direct[out.direct_count++] = t;
     }
+    const auto bins = static_cast<std::uint64_t>(t.y1 / kBinSize - t.y0 / kBinSize + 1) *
+                      static_cast<std::uint64_t>(t.x1 / kBinSize - t.x0 / kBinSize + 1);
+    if (bin_entries_.fetch_add(bins, std::memory_order_relaxed) + bins > kMaxBinEntries) {
+      throw InputError(fmt::format(
+          "render: the rasterizer would file more than {} triangle-in-bin entries for this {}x{} "
+          "frame (its triangles cover the image that many times over in {}-pixel bins); "
+          "render a smaller image, or fewer large triangles",
+          kMaxBinEntries, frame_.width, frame_.height, kBinSize));
+    }
+    const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
     for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by) {
+      poll.throw_if_stopped(row_bins);
       for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) {
         const auto bin = static_cast<std::uint32_t>(by * frame_.bins_x + bx);
         chunk.binned.emplace_back(bin, local);
@@ -191,7 +226,9 @@ class FrameBuilder {
     chunk.bin_counts.assign(static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y), 0);
     chunk.binned.reserve(end - begin + (end - begin) / 4);
     std::size_t r = range_of_triangle(begin);
+    CancelPoll poll(cancel_, kSetupUnitsPerPoll);
     for (std::size_t i = begin; i < end; ++i) {
+      poll.throw_if_stopped(kUnitsPerTriangle);
       while (i >= ranges_[r].first_triangle + ranges_[r].mesh->triangles.size()) ++r;
       const MeshRange& range = ranges_[r];
       const glm::uvec3 local = range.mesh->triangles[i - range.first_triangle];
@@ -201,7 +238,7 @@ class FrameBuilder {
       const ScreenVertex &a = frame_.vertices[ia], &b = frame_.vertices[ib], &c = frame_.vertices[ic];
       if (a.outcode & b.outcode & c.outcode) continue;  // wholly outside one plane
       if ((a.outcode | b.outcode | c.outcode) == 0) {
-        emit(chunk, false, material, ia, ib, ic);
+        emit(chunk, poll, false, material, ia, ib, ic);
         continue;
       }
       const ClippedPolygon poly = clip_triangle(a.attributes, b.attributes, c.attributes);
@@ -214,7 +251,7 @@ class FrameBuilder {
         chunk.clipped_vertices.push_back(v);
       }
       for (std::uint32_t k = 2; k < poly.size; ++k) {
-        emit(chunk, true, material, first, first + k - 1, first + k);
+        emit(chunk, poll, true, material, first, first + k - 1, first + k);
       }
     }
   }
@@ -277,7 +314,11 @@ class FrameBuilder {
   }
 
   RasterFrame& frame_;
+  const CancelFlag& cancel_;
   bool centres_only_;  // spp 1: a triangle between pixel centres can be dropped here
+  // Bin entries filed so far by every chunk: bounded, as their memory and the tiles' work grow
+  // with it (a frame's total must also fit the 32-bit bin cursors).
+  mutable std::atomic<std::uint64_t> bin_entries_{0};  // counted by the const set-up steps
   glm::mat4 view_{1.0f}, view_projection_{1.0f};
   std::vector<MeshRange> ranges_;
   std::vector<std::uint8_t> mirrored_;  // per range: its object's transform flips handedness
@@ -295,9 +336,9 @@ Rect RasterFrame::bin_rect(int bx, int by) const {
 
 std::shared_ptr<const RasterFrame> build_raster_frame(const PreparedScene& scene,
                                                       const RenderSettings& settings,
-                                                      ThreadPool* pool) {
+                                                      ThreadPool* pool, const CancelFlag& cancel) {
   auto frame = std::make_shared<RasterFrame>();
-  FrameBuilder builder(scene, settings, *frame);
+  FrameBuilder builder(scene, settings, *frame, cancel);
   builder.run(pool);
   return frame;
 }

@@ -15,6 +15,7 @@
 #include "renderer/raster/clip_polygon.h"
 #include "renderer/raster/edge_function.h"
 #include "renderer/render_settings.h"
+#include "renderer/util/cancel_flag.h"
 #include "renderer/util/thread_pool.h"
 #include "renderer/util/uninitialized_array.h"
 
@@ -84,9 +85,17 @@ struct RasterFrame {
   Rect bin_rect(int bx, int by) const;
 };
 
-// Builds the frame's set-up on `pool` (or on the calling thread when null).
+// At most this many (triangle, bin) pairs in a frame: 1 GiB at the peak of the set-up (16 bytes
+// each: the chunks' pairs and the frame's pointers), and far more than an honest scene files
+// (each triangle lands in one bin or a few: a 10M-triangle model at 4K files about 20M). Beyond it, the frame is refused with an InputError that says
+// why, before its memory or its tiles' work can grow with resolution x triangle area.
+inline constexpr std::uint64_t kMaxBinEntries = std::uint64_t{1} << 26;
+
+// Builds the frame's set-up on `pool` (or on the calling thread when null). Polls `cancel` every
+// few hundred triangles or few thousand bin entries filed, and throws RenderStopped when it asks; throws InputError for a frame of
+// more than kMaxBinEntries bin entries.
 std::shared_ptr<const RasterFrame> build_raster_frame(const PreparedScene& scene,
                                                       const RenderSettings& settings,
-                                                      ThreadPool* pool);
+                                                      ThreadPool* pool, const CancelFlag& cancel);
 
 }  // namespace farm::raster

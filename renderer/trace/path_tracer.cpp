@@ -230,9 +230,9 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
                        TileBuffer& out, const CancelFlag& cancel) {
   out.reset(tile, settings.aovs);
   if (tile.empty()) return StopReason::None;
-  const auto intersector = cached_scene_intersector(scene, settings.accel);
+  const auto intersector = cached_scene_intersector(scene, settings.accel, cancel);
   const auto emitters = scene.frame_cache().get_or_build<Emitters>(
-      "emitters", [&] { return std::make_shared<const Emitters>(scene); });
+      "emitters", cancel, [&] { return std::make_shared<const Emitters>(scene); });
   CancelPoll poll(cancel, kSegmentsPerPoll);
   const PathTracer tracer(scene, settings, *intersector, *emitters, poll);
   const Camera& camera = scene.scene().camera;

@@ -134,7 +134,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   // in it to report.
   out.reset(tile, settings.aovs);
   if (tile.empty()) return StopReason::None;
-  const auto intersector = cached_scene_intersector(scene, settings.accel);
+  const auto intersector = cached_scene_intersector(scene, settings.accel, cancel);
   CancelPoll poll(cancel, kRaysPerPoll);
   const WhittedTracer tracer(scene, settings, *intersector, poll);
   const Camera& camera = scene.scene().camera;

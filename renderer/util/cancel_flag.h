@@ -14,6 +14,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <exception>
 
 namespace farm {
 
@@ -77,6 +78,21 @@ class CancelFlag {
   mutable std::atomic<std::int64_t> polls_left_{0};
 };
 
+// Thrown by set-up work that a CancelFlag stopped (a frame's raster set-up, a BVH build): unlike
+// a tile, which returns its StopReason, such work has nothing partial to give back, and it runs
+// under callers (caches, thread pools) that pass exceptions through.
+class RenderStopped : public std::exception {
+ public:
+  explicit RenderStopped(StopReason reason) : reason_(reason) {}
+  StopReason reason() const noexcept { return reason_; }
+  const char* what() const noexcept override {
+    return reason_ == StopReason::Deadline ? "the deadline passed during set-up" : "cancelled during set-up";
+  }
+
+ private:
+  StopReason reason_;
+};
+
 // Polls a CancelFlag once every `every` units of work, the unit being whatever the loop counts (a
 // ray traced, a triangle drawn): between looks a hot loop pays one decrement. The first unit
 // looks at once, so a render given a stopped flag does no work. Once it has said stop it keeps
@@ -95,6 +111,11 @@ class CancelPoll {
     left_ = every_;
     stopped_ = flag_.stop_requested();
     return stopped_;
+  }
+
+  // The same, throwing RenderStopped instead of returning true: for set-up work.
+  void throw_if_stopped(int units = 1) {
+    if ((*this)(units)) throw RenderStopped(flag_.reason());
   }
 
   // Whether a look has said stop.

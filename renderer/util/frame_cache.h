@@ -1,8 +1,10 @@
 #pragma once
 // Per-frame data an engine derives from a prepared scene and a frame's settings (the
 // rasterizer's transformed, set-up and binned triangles), built once and shared by every tile of
-// that frame. Concurrent requests for the same key wait for a single build. A few recent frames
+// that frame. Concurrent requests for the same key wait for a single build (each able to stop
+// waiting when its own CancelFlag asks). A few recent frames
 // are kept: a job renders one frame size, but a worker may interleave several jobs' tiles.
+#include <chrono>
 #include <future>
 #include <list>
 #include <memory>
@@ -10,37 +12,54 @@
 #include <string>
 #include <utility>
 
+#include "renderer/util/cancel_flag.h"
+
 namespace farm {
 
 class FrameCache {
  public:
+  // The value for `key`, built here by build() when no one has (or is building) it. A caller
+  // waiting for another's build polls `cancel` and throws RenderStopped when it asks; a build
+  // that its own caller's flag stopped (build() threw RenderStopped) is not cached, and its
+  // waiters, whose flags have not stopped, build it again themselves.
   template <typename T, typename Build>
-  std::shared_ptr<const T> get_or_build(const std::string& key, Build&& build) {
-    std::promise<std::shared_ptr<const void>> promise;
-    std::shared_future<std::shared_ptr<const void>> future;
-    {
-      std::lock_guard lock(mutex_);
-      for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-        if (it->first == key) {
-          entries_.splice(entries_.begin(), entries_, it);  // most recently used first
-          future = it->second;
-          break;
+  std::shared_ptr<const T> get_or_build(const std::string& key, const CancelFlag& cancel, Build&& build) {
+    for (;;) {
+      std::promise<std::shared_ptr<const void>> promise;
+      std::shared_future<std::shared_ptr<const void>> future;
+      {
+        std::lock_guard lock(mutex_);
+        for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+          if (it->first == key) {
+            entries_.splice(entries_.begin(), entries_, it);  // most recently used first
+            future = it->second;
+            break;
+          }
+        }
+        if (!future.valid()) {
+          entries_.emplace_front(key, promise.get_future().share());
+          if (entries_.size() > kCapacity) entries_.pop_back();
         }
       }
-      if (!future.valid()) {
-        entries_.emplace_front(key, promise.get_future().share());
-        if (entries_.size() > kCapacity) entries_.pop_back();
+      if (future.valid()) {
+        while (future.wait_for(kWaitPoll) != std::future_status::ready) {
+          if (cancel.stop_requested()) throw RenderStopped(cancel.reason());
+        }
+        try {
+          return std::static_pointer_cast<const T>(future.get());
+        } catch (const RenderStopped&) {
+          continue;  // the builder's caller gave up, not this one: build it here
+        }
       }
-    }
-    if (future.valid()) return std::static_pointer_cast<const T>(future.get());
-    try {
-      std::shared_ptr<const T> value = build();
-      promise.set_value(value);
-      return value;
-    } catch (...) {
-      forget(key);  // let a later request try again
-      promise.set_exception(std::current_exception());
-      throw;
+      try {
+        std::shared_ptr<const T> value = build();
+        promise.set_value(value);
+        return value;
+      } catch (...) {
+        forget(key);  // let a later request (or a waiter) try again
+        promise.set_exception(std::current_exception());
+        throw;
+      }
     }
   }
 
@@ -51,6 +70,7 @@ class FrameCache {
   }
 
   static constexpr std::size_t kCapacity = 4;
+  static constexpr std::chrono::milliseconds kWaitPoll{5};
   std::mutex mutex_;
   std::list<std::pair<std::string, std::shared_future<std::shared_ptr<const void>>>> entries_;
 };

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <exception>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <set>
@@ -115,6 +116,19 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
   std::lock_guard lock(r.mutex);
   r.stats += stats;
   r.cpu_ms += cpu_ms;
+}
+
+// Waits for `work` while polling the call's stop; false when it stopped first. Chunks not
+// started are then skipped; those running see the flag within a few samples or triangles and
+// return without pasting: the pool is free again in a millisecond or so.
+bool finish_unless_stopped(ThreadPool::Work& work, const std::function<bool()>& is_stopped) {
+  while (!work.wait_for(kPollInterval)) {
+    if (is_stopped()) {
+      work.cancel();
+      return false;
+    }
+  }
+  return true;
 }
 
 // InputError naming the hash of an inline file the spec does not list: a worker keeps the files
@@ -295,11 +309,25 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
     }
 
     const Clock::time_point render_start = Clock::now();
-    // The engine's per-frame set-up (the rasterizer's transformed and binned triangles) on all
-    // render threads, once per frame: the sub-tiles then find it built.
-    prepare_frame(lookup.scene->prepared, settings, pool_);
-    if (is_stopped()) return stopped(r->flag);
     r->scene = lookup.scene;
+    // The engine's per-frame set-up (the rasterizer's transformed and binned triangles, the BVHs)
+    // on all render threads, once per frame: the sub-tiles then find it built. It runs as pool
+    // work so that this thread goes on polling the client's cancel, which the set-up sees
+    // through the flag (it throws RenderStopped, kept by the work this call then abandons).
+    const std::shared_ptr<ThreadPool::Work> setup =
+        pool_.start(1, 1, [this, r, job_id = request->job_id()](std::size_t, std::size_t, int) {
+          try {
+            prepare_frame(r->scene->prepared, r->scene->job.render, pool_, r->flag);
+          } catch (const RenderStopped& e) {
+            log_->debug("job {}: the frame's set-up stopped: {}", job_id, e.what());
+            throw;
+          }
+        });
+    if (!finish_unless_stopped(*setup, is_stopped)) return stopped(r->flag);
+    if (const std::exception_ptr failure = setup->failure()) {
+      if (r->flag.stop_requested()) return stopped(r->flag);
+      std::rethrow_exception(failure);
+    }
     r->out.reset_for_overwrite(rect, settings.aovs);
     r->subs = split_into_tiles(rect.width(), rect.height(), sub_tile_size(settings, rect, pool_.size()));
     for (Rect& sub : r->subs) sub = {sub.x0 + rect.x0, sub.y0 + rect.y0, sub.x1 + rect.x0, sub.y1 + rect.y0};
@@ -307,15 +335,7 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
         pool_.start(r->subs.size(), 1, [r](std::size_t begin, std::size_t end, int) {
           for (std::size_t i = begin; i < end; ++i) render_sub_tile(*r, r->subs[i]);
         });
-    bool finished = false;
-    while (!(finished = work->wait_for(kPollInterval))) {
-      if (is_stopped()) {
-        // Sub-tiles not started are skipped; those rendering see the flag within a few samples
-        // and return without pasting. The pool is free again in a millisecond or so.
-        work->cancel();
-        break;
-      }
-    }
+    const bool finished = finish_unless_stopped(*work, is_stopped);
     {
       std::lock_guard lock(r->mutex);
       if (r->failure) std::rethrow_exception(r->failure);

@@ -7,6 +7,7 @@
 #include <signal.h>
 
 #include <chrono>
+#include <fstream>
 #include <future>
 #include <memory>
 #include <string>
@@ -86,11 +87,12 @@ void expect_bit_identical(const v1::TileData& got, const v1::TileData& want, con
 class FarmWorkerTest : public ::testing::Test {
  protected:
   // A worker fetching assets from a fake scheduler that has the Cornell box's files.
-  std::unique_ptr<test::WorkerProcess> start_worker_with_scheduler(int threads = 2) {
+  std::unique_ptr<test::WorkerProcess> start_worker_with_scheduler(int threads = 2,
+                                                                   const std::string& log_level = "info") {
     for (const auto& [path, file] : test::cornell_assets()) scheduler_.add_asset(test::read_file(file));
     auto worker = std::make_unique<test::WorkerProcess>(std::vector<std::string>{
         "--threads", std::to_string(threads), "--scheduler", scheduler_.address(), "--cache-dir",
-        (dir_ / "cache").string()});
+        (dir_ / "cache").string(), "--log-level", log_level});
     EXPECT_FALSE(worker->address().empty()) << worker->process().output();
     return worker;
   }
@@ -466,6 +468,56 @@ TEST_F(FarmWorkerTest, HugeSppCancelledMidTileFreesTheWorkerForEveryEngine) {
     call.cancel();
     EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::CANCELLED) << huge.engine;
     expect_next_call_served(*stub, *worker, std::string(huge.engine) + ": the worker is still busy with the cancelled tile");
+  }
+}
+
+// A raster frame whose set-up (binning) is about the largest one allowed: 128 quads that each
+// cover nearly all of a 16384x16384 image (and stay inside it, so that clipping splits none),
+// 63 million triangle-in-bin entries to file before any pixel.
+v1::JobSpec huge_setup_spec(const fs::path& dir) {
+  const fs::path obj = dir / "quads.obj";
+  {
+    std::ofstream out(obj);
+    for (int i = 0; i < 128; ++i) {
+      const double z = -0.001 * i;
+      out << "v -2 -2 " << z << "\nv 2 -2 " << z << "\nv 2 2 " << z << "\nv -2 2 " << z << "\n";
+      out << "f " << 4 * i + 1 << ' ' << 4 * i + 2 << ' ' << 4 * i + 3 << ' ' << 4 * i + 4 << "\n";
+    }
+  }
+  const std::string json = R"({"version": 1, "name": "quads",
+    "scene": {"objects": [{"file": "quads.obj"}], "camera": {"position": [0, 0, 5], "target": [0, 0, 0]}},
+    "render": {"engine": "raster", "width": 16384, "height": 16384, "spp": 4},
+    "output": {"image": "out/quads.exr"}})";
+  return test::make_job_spec(json, {{"quads.obj", obj}});
+}
+
+// A stop that arrives while the frame is being set up stops the set-up itself (the worker logs
+// it from the set-up's own thread), and the worker's one render thread serves the next call.
+TEST_F(FarmWorkerTest, ADeadlineOrACancelDuringTheFramesSetUpStopsItAndFreesTheWorker) {
+  const v1::JobSpec spec = huge_setup_spec(dir_.path());
+  for (const v1::AssetRef& ref : spec.assets()) scheduler_.add_asset(test::read_file(dir_ / ref.path()));
+  auto worker = start_worker_with_scheduler(1, "debug");
+  ASSERT_FALSE(worker->address().empty());
+  auto stub = worker_stub(worker->address());
+  {
+    v1::RenderTileRequest request = tile_request(spec, {0, 0, 16, 16});
+    request.set_job_id("late-setup");
+    v1::RenderTileResponse response;
+    EXPECT_EQ(render(*stub, request, response, 300ms).error_code(), grpc::StatusCode::DEADLINE_EXCEEDED);
+    EXPECT_TRUE(worker->process().wait_for_line("job late-setup: the frame's set-up stopped", 30s))
+        << worker->process().output();
+    expect_next_call_served(*stub, *worker, "the worker is still busy with the late set-up");
+  }
+  {
+    v1::RenderTileRequest request = tile_request(spec, {0, 0, 16, 16});
+    request.set_job_id("cancelled-setup");
+    CallInFlight call(*stub, request);
+    std::this_thread::sleep_for(100ms);  // into the set-up (an earlier cancel proves less, never fails)
+    call.cancel();
+    EXPECT_EQ(call.finish().error_code(), grpc::StatusCode::CANCELLED);
+    EXPECT_TRUE(worker->process().wait_for_line("job cancelled-setup: the frame's set-up stopped", 30s))
+        << worker->process().output();
+    expect_next_call_served(*stub, *worker, "the worker is still busy with the cancelled set-up");
   }
 }
 
