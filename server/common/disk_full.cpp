@@ -1,5 +1,6 @@
 #include "server/common/disk_full.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -46,6 +47,19 @@ void write_all(int fd, std::string_view bytes, const fs::path& file) {
     }
     written += static_cast<std::size_t>(n);
   }
+}
+
+void write_file(const fs::path& file, std::string_view bytes) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw_write_error(errno, file, bytes.size());
+  try {
+    write_all(fd, bytes, file);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  // A file system may only report the lack of space when the file is closed (NFS, quotas).
+  if (::close(fd) != 0) throw_write_error(errno, file, bytes.size());
 }
 
 void rethrow_as_disk_full(const fs::path& folder) {

@@ -39,6 +39,11 @@ bool is_disk_full_errno(int error);
 // on failure.
 void write_all(int fd, std::string_view bytes, const std::filesystem::path& file);
 
+// Creates (or truncates) `file` and writes all of `bytes` to it, checking the close too (where some
+// file systems first report a lack of space); throw_write_error on failure, the file then being
+// left partial for the caller to remove.
+void write_file(const std::filesystem::path& file, std::string_view bytes);
+
 // Inside a catch block: the exception being handled again, as DiskFull naming `folder` when it is
 // a std::system_error (std::filesystem::filesystem_error too) for a full disk, else unchanged.
 [[noreturn]] void rethrow_as_disk_full(const std::filesystem::path& folder);

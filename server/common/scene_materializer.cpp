@@ -1,6 +1,5 @@
 #include "server/common/scene_materializer.h"
 
-#include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -113,19 +112,6 @@ void link_or_copy(const fs::path& blob, const fs::path& to) {
   if (ec) fs::copy_file(blob, to);  // e.g. the cache and the blobs on different file systems
 }
 
-// Checked: a job file cut short by a full disk would be published as the scene's for good.
-void write_job_file(const fs::path& file, const std::string& json) {
-  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw_write_error(errno, file, json.size());
-  try {
-    write_all(fd, json, file);
-  } catch (...) {
-    ::close(fd);
-    throw;
-  }
-  if (::close(fd) != 0) throw_write_error(errno, file, json.size());
-}
-
 void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& dir,
              const std::string& job_name) {
   static std::atomic<std::uint64_t> counter{0};
@@ -146,7 +132,7 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
       }
       link_or_copy(store.path_of(ref.sha256()), to);
     }
-    write_job_file(temp / job_name, spec.job_json());
+    write_file(temp / job_name, spec.job_json());
     std::error_code ec;
     fs::rename(temp, dir, ec);
     // Someone else published the same scene first: theirs has the same contents.
@@ -169,7 +155,7 @@ void ensure_job_file(const fs::path& dir, const std::string& job_name, const std
   static std::atomic<std::uint64_t> counter{0};
   const fs::path temp = dir / fmt::format(".tmp-job-{}-{}", ::getpid(), counter++);
   try {
-    write_job_file(temp, job_json);  // DiskFull naming the folder when there is no room
+    write_file(temp, job_json);  // DiskFull naming the folder when there is no room
   } catch (...) {
     fs::remove(temp, ec);
     throw;

@@ -137,15 +137,7 @@ bool Finisher::make_room() {
   log_.warn("the disk is full: the {} done tiles of job {} (the youngest of {} running jobs holding tiles) are "
             "thrown away to make room for the older ones, and rendered again later",
             tiles, id, holding);
-  for (const TileBatch& b : taken) {
-    events_.publish(id, [&](v1::JobEvent& event) {
-      v1::TileFailed& f = *event.mutable_tile_failed();
-      f.set_tile_index(b.first);
-      f.set_tile_count(b.count);
-      f.set_reason("the scheduler's disk is full: thrown away to make room for older jobs, rendered again");
-      f.set_will_retry(true);
-    });
-  }
+  publish_requeued(id, taken, "the scheduler's disk is full: thrown away to make room for older jobs, rendered again");
   return true;
 }
 
@@ -157,17 +149,22 @@ bool Finisher::render_again(const std::string& job_id, const DamagedParts& damag
   for (const DamagedParts::Part& p : damaged.parts()) {
     log_.warn("job {}: {}; its tiles are rendered again, not merged", job_id, p.problem);
   }
+  publish_requeued(job_id, taken, "the scheduler's copy of the result is damaged: rendered again");
+  if (on_requeued_) on_requeued_();
+  return true;
+}
+
+void Finisher::publish_requeued(const std::string& job_id, const std::vector<TileBatch>& taken,
+                                const std::string& reason) {
   for (const TileBatch& b : taken) {
     events_.publish(job_id, [&](v1::JobEvent& event) {
       v1::TileFailed& f = *event.mutable_tile_failed();
       f.set_tile_index(b.first);
       f.set_tile_count(b.count);
-      f.set_reason("the scheduler's copy of the result is damaged: rendered again");
+      f.set_reason(reason);
       f.set_will_retry(true);
     });
   }
-  if (on_requeued_) on_requeued_();
-  return true;
 }
 
 MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info) const {

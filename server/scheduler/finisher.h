@@ -19,6 +19,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <spdlog/logger.h>
 
@@ -59,6 +60,8 @@ class Finisher {
   void merge(const std::string& job_id);
   // Queues the damaged parts' tiles again; false when the job had none done any more (final).
   bool render_again(const std::string& job_id, const DamagedParts& damaged);
+  // Tells the job's watchers that `taken` was queued again for `reason` (no attempt counted).
+  void publish_requeued(const std::string& job_id, const std::vector<TileBatch>& taken, const std::string& reason);
   // Where the job's frame goes: where its submitter said, or results/<job id>/<stem>.exr and .png.
   MergedFiles files_of(const std::string& job_id, const JobInfo& info) const;
   std::filesystem::path results_dir(const std::string& job_id) const;

@@ -53,20 +53,11 @@ void TileResults::write(const std::string& job_id, std::uint32_t part,
   } catch (const std::exception&) {
     rethrow_as_disk_full(dir_);
   }
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw_write_error(errno, temp, bytes.size());
   try {
-    write_all(fd, bytes, temp);
+    write_file(temp, bytes);
   } catch (...) {
-    ::close(fd);
     ::unlink(temp.c_str());
     throw;
-  }
-  // A file system may only report the lack of space when the file is closed (NFS, quotas).
-  if (::close(fd) != 0) {
-    const int error = errno;
-    ::unlink(temp.c_str());
-    throw_write_error(error, temp, bytes.size());
   }
   fs::rename(temp, final_path);
 }
