@@ -94,26 +94,6 @@ std::string oddities(const TileBuffer& t) {
   return s.str();
 }
 
-struct ProcStatus {
-  long threads = 0, vm_size_kb = 0, vm_rss_kb = 0;
-};
-
-ProcStatus proc_status(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  ProcStatus s;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream fields(line);
-    std::string key;
-    long value = 0;
-    fields >> key >> value;
-    if (key == "Threads:") s.threads = value;
-    if (key == "VmSize:") s.vm_size_kb = value;
-    if (key == "VmRSS:") s.vm_rss_kb = value;
-  }
-  return s;
-}
-
 class UntrustedWorkersTest : public ::testing::Test {
  protected:
   // The path-traced Cornell box with depth, normal, albedo and variance, in 8 px tiles: 24 units
@@ -400,11 +380,11 @@ TEST_F(UntrustedWorkersTest, AThousandRegistrationsLeaveThreadsAndMemoryFlat) {
       ASSERT_TRUE(status.ok()) << status.error_message();
     }
   };
-  const ProcStatus start = proc_status(pid);
+  const test::ProcStatus start = test::proc_status(pid);
   ASSERT_NO_FATAL_FAILURE(register_some(100));  // gRPC and the allocator warm up
-  const ProcStatus warm = proc_status(pid);
+  const test::ProcStatus warm = test::proc_status(pid);
   ASSERT_NO_FATAL_FAILURE(register_some(1000));
-  const ProcStatus end = proc_status(pid);
+  const test::ProcStatus end = test::proc_status(pid);
   std::printf("scheduler threads %ld -> %ld (after 100 calls) -> %ld (after 1000 more); "
               "VmSize %ld -> %ld -> %ld MiB; VmRSS %ld -> %ld -> %ld MiB\n",
               start.threads, warm.threads, end.threads, start.vm_size_kb / 1024, warm.vm_size_kb / 1024,

@@ -33,4 +33,20 @@ std::size_t children_of(int pid) {
   return children;
 }
 
+ProcStatus proc_status(int pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  ProcStatus s;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string key;
+    long value = 0;
+    fields >> key >> value;
+    if (key == "Threads:") s.threads = value;
+    if (key == "VmSize:") s.vm_size_kb = value;
+    if (key == "VmRSS:") s.vm_rss_kb = value;
+  }
+  return s;
+}
+
 }  // namespace farm::test

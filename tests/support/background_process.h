@@ -26,4 +26,10 @@ class WorkerProcess {
 // How many processes have `pid` as their parent now (from /proc/*/stat).
 std::size_t children_of(int pid);
 
+// What /proc/PID/status says a process costs now.
+struct ProcStatus {
+  long threads = 0, vm_size_kb = 0, vm_rss_kb = 0;
+};
+ProcStatus proc_status(int pid);
+
 }  // namespace farm::test
