@@ -131,9 +131,10 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   s->add_option("--max-lost-worker-attempts", o->max_lost_worker_attempts,
-                "Workers one tile may lose while rendering it (the process died, or stopped answering "
-                "or heartbeating) before its job fails: counted apart from --max-attempts, and bounded "
-                "so that a tile that crashes every worker it is sent to still ends its job")
+                "Workers one tile may lose while rendering it (the call ended UNAVAILABLE: its process "
+                "died; or it missed its heartbeats) before its job fails: counted apart from "
+                "--max-attempts, and bounded so that a tile that crashes every worker it is sent to "
+                "still ends its job")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   s->add_option("--tiles-per-worker", o->tiles_per_worker,
