@@ -53,6 +53,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.data_dir = o.data_dir;
   options.tile_deadline = ms(o.tile_deadline_s);
   options.max_attempts = o.max_attempts;
+  options.max_lost_worker_attempts = o.max_lost_worker_attempts;
   options.tiles_per_worker = o.tiles_per_worker;
   options.batch_target = std::chrono::milliseconds(o.batch_ms);
   options.heartbeat_interval = ms(o.heartbeat_interval_s);
@@ -125,7 +126,15 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->check(CLI::Range(0.05, 86400.0))
       ->capture_default_str();
   s->add_option("--max-attempts", o->max_attempts,
-                "Failed attempts of one tile (worker died, deadline, error) before its job fails")
+                "Failed attempts of one tile (deadline, error, bad result) before its job fails; a "
+                "worker lost while rendering it counts under --max-lost-worker-attempts instead")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  s->add_option("--max-lost-worker-attempts", o->max_lost_worker_attempts,
+                "Workers one tile may lose while rendering it (the call ended UNAVAILABLE: its process "
+                "died; or it missed its heartbeats) before its job fails: counted apart from "
+                "--max-attempts, and bounded so that a tile that crashes every worker it is sent to "
+                "still ends its job")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   s->add_option("--tiles-per-worker", o->tiles_per_worker,

@@ -18,6 +18,7 @@ struct SchedulerCommandOptions {
   std::vector<std::string> workers;   // static `farm worker` addresses
   double tile_deadline_s = 600;
   int max_attempts = 3;
+  int max_lost_worker_attempts = 10;  // SchedulerOptions::max_lost_worker_attempts
   int tiles_per_worker = 2;
   int batch_ms = 200;
   double heartbeat_interval_s = 1;

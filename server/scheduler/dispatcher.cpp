@@ -658,8 +658,11 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
   std::string why;
   int max_attempts = options_.max_attempts;
   bool went_down = false;
+  // The worker, not the tile: its process died or it stopped answering.
+  bool worker_lost = false;
   if (reason == CancelReason::WorkerLeft) {
     why = fmt::format("worker {} left: {}", worker, reason_text);
+    worker_lost = true;
   } else if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
     why = fmt::format("worker {}: no result within the tile deadline of {} ms{}", worker,
                       options_.tile_deadline.count(),
@@ -678,9 +681,14 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
     if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
       workers_.mark_down(w, options_.probe_interval);
       went_down = true;
+      worker_lost = true;
     }
   }
-  fail_batch(w.id, worker, batch, why, max_attempts);
+  if (worker_lost) {
+    lose_batch(w.id, worker, batch, why);
+  } else {
+    fail_batch(w.id, worker, batch, why, max_attempts);
+  }
   if (went_down) settle_stranded();  // a check that only this worker could have taken
 }
 
@@ -692,6 +700,22 @@ void Dispatcher::fail_batch(const std::string& worker_id, const std::string& wor
   const v1::JobState before = job->state();
   const TileFailure failure =
       store_.batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now(), worker_id);
+  after_failure(worker, batch, why, before, failure);
+}
+
+void Dispatcher::lose_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                            const std::string& why) {
+  log_.warn("job {} {}: {} (its worker was lost: no attempt counted)", batch.job_id, describe(batch), why);
+  const std::optional<v1::Job> job = store_.get_job(batch.job_id);
+  if (!job) return;
+  const v1::JobState before = job->state();
+  const TileFailure failure = store_.batch_lost(batch.job_id, batch.first, batch.count, why,
+                                                options_.max_lost_worker_attempts, unix_ms_now(), worker_id);
+  after_failure(worker, batch, why, before, failure);
+}
+
+void Dispatcher::after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
+                               v1::JobState before, const TileFailure& failure) {
   events_.publish(batch.job_id, [&](v1::JobEvent& event) {
     v1::TileFailed& f = *event.mutable_tile_failed();
     f.set_tile_index(batch.first);

@@ -9,9 +9,13 @@
 // tile, divided by the threads; one tile until a cost is known, and smaller batches toward the
 // end of a job), so cheap tiles do not drown in per-call costs.
 // A failed or late batch goes back to the queue with attempts + 1 and the reason (a tile that
-// failed goes out alone from then on); at max_attempts the job fails with it. A worker that
-// cannot be reached, or misses a deadline, is marked down in the registry until it answers a
-// probe. A job whose tiles are all done goes to the Finisher.
+// failed goes out alone from then on); at max_attempts the job fails with it. A batch whose
+// worker was lost (the call ended UNAVAILABLE, or the worker left the registry for missed
+// heartbeats) counts no attempt: it goes back with a lost-worker attempt, and the job fails only
+// at max_lost_worker_attempts, so a farm whose workers die now and then loses no job to it while a
+// tile that kills every worker still ends. A worker that cannot be reached, or misses a deadline,
+// is marked down in the registry until it answers a probe. A job whose tiles are all done goes to
+// the Finisher.
 //
 // Workers are not trusted. A reply that came over the wire is checked (tile_result_check.h)
 // before anything of it is stored: one that fails the check fails its batch, naming the worker
@@ -96,7 +100,8 @@ class Dispatcher {
   // Cancels the job in the store and its calls in flight; their tiles stay as they are. Returns
   // the job as the store has it now.
   v1::Job cancel_job(const std::string& job_id);
-  // Cancels the worker's calls in flight: their tiles are retried on others (an attempt counted).
+  // Cancels the worker's calls in flight: their tiles are retried on others (a lost-worker attempt
+  // counted, not a failed one).
   void worker_left(const std::string& worker_id, const std::string& reason);
   // The worker (its address `worker`) gets no more tiles: its calls in flight are cancelled and
   // their tiles queued again, and its results for jobs still running are thrown away and rendered
@@ -150,6 +155,14 @@ class Dispatcher {
   // watchers, and fails the job at max_attempts.
   void fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
                   const std::string& why, int max_attempts);
+  // The batch's worker was lost while it rendered: a lost-worker attempt counted instead of a
+  // failed one (max_lost_worker_attempts), otherwise as fail_batch.
+  void lose_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                  const std::string& why);
+  // What fail_batch and lose_batch do once the store has counted: the watchers told, and a job
+  // that failed by it ended here.
+  void after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
+                     v1::JobState before, const TileFailure& failure);
   // The settings of the batch's job; nullopt (logged) when the job is gone.
   std::optional<RenderSettings> settings_of(const TileBatch& batch);
   // Cancels the calls in flight that `which` picks, for `reason`.

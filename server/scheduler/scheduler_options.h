@@ -18,6 +18,11 @@ struct SchedulerOptions {
   std::filesystem::path data_dir;  // jobs.db, assets/, scenes/, tiles/, results/
   std::chrono::milliseconds tile_deadline = std::chrono::minutes(10);
   int max_attempts = 3;            // failed attempts of one tile before its job fails
+  // Workers a tile may lose while rendering it (their process died: the call ended UNAVAILABLE;
+  // or they stopped heartbeating) before its job fails. Counted apart from max_attempts, since a
+  // lost worker says nothing about the tile; bounded all the same, since a tile that crashes every
+  // worker it is sent to would otherwise go round for ever.
+  int max_lost_worker_attempts = 10;
   int tiles_per_worker = 2;        // calls in flight per worker, so it never idles between calls
   // Rendering time a call aims at; 0 sends one tile per call.
   std::chrono::milliseconds batch_target = std::chrono::milliseconds(200);

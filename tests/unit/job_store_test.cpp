@@ -205,7 +205,7 @@ TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
     for (const char* sql : {"ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
-                            "UPDATE schema_version SET version = 1"}) {
+                            "ALTER TABLE tiles DROP COLUMN lost_attempts", "UPDATE schema_version SET version = 1"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
@@ -225,10 +225,11 @@ TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     store.add_job(make_job("old", 0, 1), 1);
   }
   {
-    // Back to what version 2 had: no owner column.
+    // Back to what version 2 had: no owner column, no lost_attempts.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN owner", "UPDATE schema_version SET version = 2"}) {
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN owner", "ALTER TABLE tiles DROP COLUMN lost_attempts",
+                            "UPDATE schema_version SET version = 2"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
@@ -242,6 +243,99 @@ TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
   EXPECT_EQ(store.list_jobs({}, 10, 0, std::string("alice")).first.size(), 1u);
   EXPECT_EQ(store.list_jobs({}, 10, 0, std::string("bob")).first.size(), 0u);
   EXPECT_EQ(store.list_jobs({}, 10, 0).first.size(), 2u);
+}
+
+// A store of the scheduler before lost workers were counted apart (schema 3): its tiles keep their
+// failed attempts, and count lost workers from zero.
+TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) {
+  test::TempDir dir;
+  {
+    JobStore store(dir / "jobs.db");
+    store.add_job(make_job("a", 0, 2), 1);
+    ASSERT_TRUE(store.claim_next_batch("w", 2));
+    ASSERT_TRUE(store.batch_failed("a", 0, 1, "worker died", 3, 3).will_retry);
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN lost_attempts", "UPDATE schema_version SET version = 3"}) {
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    }
+    sqlite3_close(db);
+  }
+  {
+    JobStore store(dir / "jobs.db");
+    const std::vector<TileRecord> tiles = store.tiles("a");
+    ASSERT_EQ(tiles.size(), 2u);
+    EXPECT_EQ(tiles[0].attempts, 1);
+    EXPECT_EQ(tiles[0].lost_attempts, 0);
+    ASSERT_TRUE(store.claim_next_batch("w", 4));
+    EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
+    EXPECT_EQ(store.tiles("a")[0].lost_attempts, 1);
+  }
+  // Upgraded once: it opens as version 4 from now on.
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+  sqlite3_stmt* s = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 4);
+  sqlite3_finalize(s);
+  sqlite3_close(db);
+}
+
+// Lost workers count against their own limit, never against max_attempts, and a tile that lost
+// one goes out alone, as a failed one does.
+TEST(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLimit) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  store.add_job(make_job("a", 0, 3), 1);
+  const BatchSize three = [](const std::string&, int) { return 3; };
+  const auto batch = store.claim_next_batch("w", 2, three);
+  ASSERT_TRUE(batch);
+  ASSERT_EQ(batch->count, 3u);
+  EXPECT_TRUE(store.batch_lost("a", 0, 3, "worker w: UNAVAILABLE", 5, 3, "w").will_retry);
+  // Each of the three goes out alone now.
+  for (std::uint32_t i = 0; i < 3; ++i) {
+    const auto claim = store.claim_next_batch("w", 3, three);
+    ASSERT_TRUE(claim);
+    EXPECT_EQ(claim->first, i);
+    EXPECT_EQ(claim->count, 1u);
+    EXPECT_EQ(claim->attempts, 0);
+    EXPECT_EQ(claim->lost_attempts, 1);
+  }
+  ASSERT_TRUE(store.batch_done("a", 1, 1, {}, "w"));
+  ASSERT_TRUE(store.batch_done("a", 2, 1, {}, "w"));
+  // Tile 0 loses its worker again and again: well past max_attempts, and still queued.
+  EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 5, 3, "w").will_retry);
+  for (int loss = 3; loss <= 4; ++loss) {
+    const auto claim = store.claim_next_batch("w", 4, three);
+    ASSERT_TRUE(claim);
+    EXPECT_EQ(claim->lost_attempts, loss - 1);
+    const TileFailure f = store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 5, 4, "w");
+    EXPECT_TRUE(f.will_retry);
+    EXPECT_EQ(f.job.state(), v1::JOB_STATE_RUNNING);
+  }
+  const std::vector<TileRecord> tiles = store.tiles("a");
+  EXPECT_EQ(tiles[0].attempts, 0);
+  EXPECT_EQ(tiles[0].lost_attempts, 4);
+  EXPECT_EQ(tiles[0].last_error, "worker w: UNAVAILABLE");
+  // A failure the tile's worker reported counts as ever, against max_attempts.
+  ASSERT_TRUE(store.claim_next_batch("w", 4, three));
+  EXPECT_TRUE(store.batch_failed("a", 0, 1, "worker w: INTERNAL: boom", 2, 4, "w").will_retry);
+  EXPECT_EQ(store.tiles("a")[0].attempts, 1);
+  ASSERT_TRUE(store.claim_next_batch("w", 5, three));
+  const TileFailure last = store.batch_lost("a", 0, 1, "worker w left: no heartbeat", 5, 6, "w");
+  EXPECT_FALSE(last.will_retry);
+  EXPECT_EQ(last.job.state(), v1::JOB_STATE_FAILED);
+  EXPECT_NE(last.job.failure_reason().find("tile 0 lost 5 workers while rendering"), std::string::npos)
+      << last.job.failure_reason();
+  EXPECT_NE(last.job.failure_reason().find("lost-worker attempts limit"), std::string::npos);
+  EXPECT_NE(last.job.failure_reason().find("no heartbeat"), std::string::npos);
+  // Every rendering that came to nothing: the batch of 3, tile 0's three losses alone, its failure
+  // and its last loss.
+  EXPECT_EQ(last.job.tile_failures(), 3u + 3u + 1u + 1u);
+  EXPECT_EQ(store.tiles("a")[0].state, TileState::Failed);
 }
 
 TEST(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {

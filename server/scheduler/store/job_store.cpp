@@ -16,7 +16,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 3;
+constexpr int kSchemaVersion = 4;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
@@ -50,6 +50,7 @@ CREATE TABLE IF NOT EXISTS tiles (
   x0 INTEGER NOT NULL, y0 INTEGER NOT NULL, x1 INTEGER NOT NULL, y1 INTEGER NOT NULL,
   state INTEGER NOT NULL DEFAULT 0,
   attempts INTEGER NOT NULL DEFAULT 0,
+  lost_attempts INTEGER NOT NULL DEFAULT 0,
   last_error TEXT NOT NULL DEFAULT '',
   worker TEXT NOT NULL DEFAULT '',
   part INTEGER NOT NULL DEFAULT 0,
@@ -238,17 +239,22 @@ JobStore::JobStore(const std::filesystem::path& file) {
   }
   if (version == 0) {
     Stmt(db_, prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
-  } else if (version == 1 || version == 2) {
+  } else if (version >= 1 && version < kSchemaVersion) {
     Transaction t(db_);
     if (version == 1) {
       // Version 1 kept one file per tile: each done tile is its own part.
       exec("ALTER TABLE tiles ADD COLUMN part INTEGER NOT NULL DEFAULT 0");
       exec("UPDATE tiles SET part = idx");
     }
-    // Version 3 records who submitted each job (older jobs have no owner), and adds parts
-    // (kSchema made it): the stats of each batch, so that a batch thrown away is taken out of its
-    // job's stats. Parts done before have none, and stay counted.
-    exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
+    if (version <= 2) {
+      // Version 3 records who submitted each job (older jobs have no owner), and adds parts
+      // (kSchema made it): the stats of each batch, so that a batch thrown away is taken out of
+      // its job's stats. Parts done before have none, and stay counted.
+      exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
+    }
+    // Version 4 counts the tiles' lost workers apart from their failed attempts. Losses before
+    // were counted as attempts, and stay so.
+    exec("ALTER TABLE tiles ADD COLUMN lost_attempts INTEGER NOT NULL DEFAULT 0");
     exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
     t.commit();
   } else if (version != kSchemaVersion) {
@@ -370,7 +376,8 @@ std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
 
 std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part "
+  Stmt s(db_, prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part, "
+                       "t.lost_attempts "
                        "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx"));
   s.bind(1, id);
   std::vector<TileRecord> out;
@@ -384,6 +391,7 @@ std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
     t.last_error = s.text(7);
     t.worker = s.text(8);
     t.part = static_cast<std::uint32_t>(s.i64(9));
+    t.lost_attempts = s.i32(10);
     out.push_back(std::move(t));
   }
   return out;
@@ -405,7 +413,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
   std::int64_t seq = 0;
   {
     Stmt pick(db_, prepared(fmt::format(
-                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts FROM jobs j "
+                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts, t.lost_attempts FROM jobs j "
                        "JOIN tiles t ON t.job_seq = j.seq WHERE j.state IN {} AND t.state = 0 "
                        "ORDER BY j.priority DESC, j.seq ASC, t.idx ASC LIMIT 1",
                        kActiveSql)));
@@ -415,9 +423,11 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     batch.first = static_cast<std::uint32_t>(pick.i64(2));
     batch.rect = {pick.i32(3), pick.i32(4), pick.i32(5), pick.i32(6)};
     batch.attempts = pick.i32(7);
+    batch.lost_attempts = pick.i32(8);
   }
-  // A tile that failed before goes alone, so it cannot take fresh neighbours down with it.
-  if (batch_size && batch.attempts == 0) {
+  // A tile that failed before, or lost its worker, goes alone, so it cannot take fresh
+  // neighbours down with it (nor a worker's loss count them all).
+  if (batch_size && batch.attempts == 0 && batch.lost_attempts == 0) {
     int queued = 0;
     {
       Stmt count(db_, prepared("SELECT COUNT(*) FROM tiles WHERE state = 0 AND job_seq = ?"));
@@ -428,7 +438,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     if (wanted > 1) {
       // The following tiles while they continue the same row of the grid: the batch's union is
       // then one rectangle, rendered in one call.
-      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts FROM tiles "
+      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts + lost_attempts FROM tiles "
                               "WHERE job_seq = ? AND idx > ? AND idx < ? ORDER BY idx"));
       next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
       while (next.step()) {
@@ -490,6 +500,18 @@ bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::u
 TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                                    const std::string& reason, int max_attempts, std::int64_t now_ms,
                                    const std::string& worker) {
+  return count_attempt(AttemptKind::Failed, job_id, first, count, reason, max_attempts, now_ms, worker);
+}
+
+TileFailure JobStore::batch_lost(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                                 const std::string& reason, int max_lost_attempts, std::int64_t now_ms,
+                                 const std::string& worker) {
+  return count_attempt(AttemptKind::WorkerLost, job_id, first, count, reason, max_lost_attempts, now_ms, worker);
+}
+
+TileFailure JobStore::count_attempt(AttemptKind kind, const std::string& job_id, std::uint32_t first,
+                                    std::uint32_t count, const std::string& reason, int max, std::int64_t now_ms,
+                                    const std::string& worker) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   TileFailure result;
@@ -498,24 +520,33 @@ TileFailure JobStore::batch_failed(const std::string& job_id, std::uint32_t firs
     result.job = load_job_locked(job_id);
     return result;
   }
+  // The two counts are columns of their own, each against its own limit.
+  const char* column = kind == AttemptKind::Failed ? "attempts" : "lost_attempts";
   int attempts = 0;
   {
-    Stmt s(db_, prepared("SELECT MAX(attempts) FROM tiles WHERE job_seq = ? AND idx >= ? AND idx < ?"));
+    Stmt s(db_, prepared(fmt::format("SELECT MAX({}) FROM tiles WHERE job_seq = ? AND idx >= ? AND idx < ?", column)));
     s.bind(1, *seq).bind(2, first).bind(3, first + count);
     if (s.step()) attempts = s.i32(0) + 1;
   }
-  result.will_retry = attempts < max_attempts;
-  Stmt(db_, prepared("UPDATE tiles SET state = ?, attempts = attempts + 1, last_error = ?, worker = '' "
-                     "WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+  result.will_retry = attempts < max;
+  Stmt(db_, prepared(fmt::format("UPDATE tiles SET state = ?, {0} = {0} + 1, last_error = ?, worker = '' "
+                                 "WHERE job_seq = ? AND idx >= ? AND idx < ?",
+                                 column)))
       .bind(1, static_cast<int>(result.will_retry ? TileState::Queued : TileState::Failed))
       .bind(2, reason).bind(3, *seq).bind(4, first).bind(5, first + count).run();
+  // tile_failures counts every rendering of a tile that came to nothing, whatever the cause.
   Stmt(db_, prepared("UPDATE jobs SET tile_failures = tile_failures + ? WHERE seq = ?")).bind(1, count).bind(2, *seq).run();
   if (!result.will_retry) {
     const std::string tiles = describe_tiles(first, count);
+    const std::string why =
+        kind == AttemptKind::Failed
+            ? fmt::format("{} failed {} time{}; last error: {}", tiles, attempts, attempts == 1 ? "" : "s", reason)
+            : fmt::format("{} lost {} worker{} while rendering, the most a tile may lose (the lost-worker attempts "
+                          "limit): it may take down every worker it is sent to; last error: {}",
+                          tiles, attempts, attempts == 1 ? "" : "s", reason);
     Stmt(db_, prepared("UPDATE jobs SET state = ?, failure_reason = ?, finished_ms = ? WHERE seq = ?"))
         .bind(1, static_cast<int>(v1::JOB_STATE_FAILED))
-        .bind(2, fmt::format("{} failed {} time{}; last error: {}", tiles, attempts, attempts == 1 ? "" : "s", reason))
-        .bind(3, now_ms).bind(4, *seq).run();
+        .bind(2, why).bind(3, now_ms).bind(4, *seq).run();
   }
   t.commit();
   result.job = load_job_locked(job_id);

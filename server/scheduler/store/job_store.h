@@ -4,7 +4,7 @@
 // store; open() puts tiles that were running back in the queue (their results were lost with the
 // process) and keeps done tiles done (their data is on disk, written before they were marked).
 //
-// Schema (version 3; a version 1 or 2 store is upgraded in place):
+// Schema (version 4; a version 1, 2 or 3 store is upgraded in place):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
@@ -14,7 +14,8 @@
 //        owner (version 3: the submitter's token name, '' without tokens))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
-//         holds them); PRIMARY KEY (job_seq, idx))
+//         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart
+//         from attempts); PRIMARY KEY (job_seq, idx))
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 // Tiles go out in batches: consecutive tiles of one row of the job's grid, rendered by one call
 // as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
@@ -59,6 +60,7 @@ struct TileRecord {
   Rect rect;
   TileState state = TileState::Queued;
   int attempts = 0;
+  int lost_attempts = 0;  // renderings lost with their worker (batch_lost), not counted in attempts
   std::string last_error;
   std::string worker;
   std::uint32_t part = 0;  // done tiles: the result file that holds them (TileResults)
@@ -71,7 +73,8 @@ struct TileBatch {
   std::uint32_t first = 0;
   std::uint32_t count = 1;
   Rect rect;
-  int attempts = 0;  // failed attempts before this one (a batch of more than one: 0)
+  int attempts = 0;       // failed attempts before this one (a batch of more than one: 0)
+  int lost_attempts = 0;  // workers lost while rendering it before (a batch of more than one: 0)
 };
 
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued.
@@ -128,6 +131,15 @@ class JobStore {
   TileFailure batch_failed(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                            const std::string& reason, int max_attempts, std::int64_t now_ms,
                            const std::string& worker = {});
+  // The batch's worker was lost while it rendered (its process died or stopped answering), which
+  // says nothing about the tiles: no attempt counts against max_attempts. A lost-worker attempt
+  // is counted instead, against its own limit: below max_lost_attempts the tiles are queued
+  // again; at it the job FAILS, naming the losses, so that a tile that takes down every worker it
+  // is sent to cannot go round for ever. Nothing happens unless the batch is running on an active
+  // job, as with batch_failed.
+  TileFailure batch_lost(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                         const std::string& reason, int max_lost_attempts, std::int64_t now_ms,
+                         const std::string& worker = {});
   // Puts a running batch back in the queue without counting an attempt (a shutdown, not a failure).
   void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                      const std::string& worker = {});
@@ -149,6 +161,10 @@ class JobStore {
   v1::Job cancel_job(const std::string& id, std::int64_t now_ms);
 
  private:
+  enum class AttemptKind { Failed, WorkerLost };
+  // batch_failed and batch_lost: the same bookkeeping on their own count and limit.
+  TileFailure count_attempt(AttemptKind kind, const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                            const std::string& reason, int max, std::int64_t now_ms, const std::string& worker);
   void exec(const char* sql) const;
   sqlite3_stmt* prepare(const std::string& sql, unsigned flags) const;  // the caller finalizes it
   sqlite3_stmt* prepared(const std::string& sql) const;  // cached; under mutex_
