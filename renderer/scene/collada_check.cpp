@@ -4,6 +4,8 @@
 #include <charconv>
 #include <cstdint>
 #include <initializer_list>
+#include <map>
+#include <string>
 #include <vector>
 #include <pugixml.hpp>
 
@@ -47,14 +49,17 @@ class ColladaCheck {
     }
     // Depth-first with an explicit stack: a hostile file cannot exhaust the call stack.
     std::vector<pugi::xml_node> stack{doc.document_element()};
+    std::vector<pugi::xml_node> accessors;
     while (!stack.empty()) {
       const pugi::xml_node node = stack.back();
       stack.pop_back();
       check(node);
+      if (named(node, {"accessor"})) accessors.push_back(node);
       for (pugi::xml_node child = node.last_child(); child; child = child.previous_sibling()) {
         if (child.type() == pugi::node_element) stack.push_back(child);
       }
     }
+    for (const pugi::xml_node& accessor : accessors) check_accessor(accessor);
   }
 
  private:
@@ -71,15 +76,7 @@ class ColladaCheck {
   }
 
   std::uint64_t count_attribute(const pugi::xml_node& node) const {
-    const pugi::xml_attribute a = node.attribute("count");
-    if (!a) return 0;
-    const std::string_view value = a.value();
-    std::uint64_t count = 0;
-    const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), count);
-    if (ec != std::errc() || end != value.data() + value.size()) {
-      fail(node, "count \"" + std::string(value.substr(0, 40)) + "\" is not a whole number");
-    }
-    return count;
+    return whole_number_attribute(node, "count", 0);
   }
 
   // The integers of an index list; throws naming the first character that is not one.
@@ -93,7 +90,52 @@ class ColladaCheck {
     return token_count(text);
   }
 
-  void check(const pugi::xml_node& node) const {
+  std::uint64_t whole_number_attribute(const pugi::xml_node& node, const char* name,
+                                       std::uint64_t absent) const {
+    const pugi::xml_attribute a = node.attribute(name);
+    if (!a) return absent;
+    const std::string_view value = a.value();
+    std::uint64_t n = 0;
+    const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), n);
+    if (ec != std::errc() || end != value.data() + value.size()) {
+      fail(node, std::string(name) + " \"" + std::string(value.substr(0, 40)) + "\" is not a whole number");
+    }
+    return n;
+  }
+
+  // Assimp reads an accessor's values at offset + stride * i + k for i below its count, and
+  // checks i against the count but never the reach against the array: an accessor reaching past
+  // its array (an empty one: past nothing at all) is read out of bounds, and crashed the process.
+  void check_accessor(const pugi::xml_node& accessor) {
+    const std::string_view source = accessor.attribute("source").value();
+    if (source.size() < 2 || source[0] != '#') return;  // not a local array: Assimp refuses it
+    const auto it = arrays_.find(std::string(source.substr(1)));
+    if (it == arrays_.end()) return;  // unresolved: Assimp refuses it
+    const std::uint64_t count = whole_number_attribute(accessor, "count", 0);
+    const std::uint64_t stride = whole_number_attribute(accessor, "stride", 1);
+    const std::uint64_t offset = whole_number_attribute(accessor, "offset", 0);
+    if (count == 0) return;
+    std::uint64_t params = 0;
+    for (const pugi::xml_node param : accessor.children("param")) {
+      (void)param;
+      ++params;
+    }
+    // The values one element takes: its params (at least one).
+    const std::uint64_t width = std::max<std::uint64_t>(params, 1);
+    const std::uint64_t values = it->second;
+    // Each term is checked against `values` (at most the file's size) before it is added or
+    // multiplied, so nothing below wraps around.
+    const std::uint64_t last = count - 1;
+    const bool fits = offset <= values && stride <= values && width <= values - offset &&
+                      (stride == 0 || last <= (values - offset - width) / stride);
+    if (!fits) {
+      fail(accessor, "count " + std::to_string(count) + ", stride " + std::to_string(stride) +
+                         " and offset " + std::to_string(offset) + " reach past the " +
+                         std::to_string(values) + " values of '" + it->first + "'");
+    }
+  }
+
+  void check(const pugi::xml_node& node) {
     if (named(node, {"p", "v", "vcount", "h"})) {
       (void)index_count(node);
     } else if (named(node, {"float_array", "int_array", "bool_array", "Name_array", "IDREF_array"})) {
@@ -102,6 +144,7 @@ class ColladaCheck {
       if (count > values) {
         fail(node, "count " + std::to_string(count) + " but " + std::to_string(values) + " values");
       }
+      if (const std::string_view id = node.attribute("id").value(); !id.empty()) arrays_[std::string(id)] = count;
     } else if (named(node, {"triangles", "polylist", "polygons", "lines", "linestrips", "trifans",
                             "tristrips"})) {
       const std::uint64_t count = count_attribute(node);
@@ -124,6 +167,7 @@ class ColladaCheck {
 
   std::string_view text_;
   const std::string& file_;
+  std::map<std::string, std::uint64_t> arrays_;  // by id: the values Assimp reads of each
 };
 
 }  // namespace
