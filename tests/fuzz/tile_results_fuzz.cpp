@@ -8,6 +8,7 @@
 // Properties: read() throws DamagedTileResult or returns a reply; a reply it returns writes and
 // reads back to the same bytes, and its tile decodes or is an InputError (never a crash).
 #include <cstdint>
+#include <filesystem>
 #include <string>
 
 #include "proto/farm.pb.h"
@@ -33,6 +34,9 @@ std::string framed(std::string_view payload, std::uint64_t length) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   static const farm::TileResults results(farm::fuzz::scratch_dir() / "tiles");
+  // The job's folder, as TileResults::write makes it for a job's first result.
+  static const bool job_folder = std::filesystem::create_directories(results.path_of("job", 0).parent_path());
+  (void)job_folder;
   const std::string job_id = "job";
   const std::uint32_t part = 7;
   const std::string_view rest = farm::fuzz::as_bytes(data + 1, size - 1);
