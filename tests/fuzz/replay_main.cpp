@@ -22,7 +22,7 @@
 
 namespace {
 
-constexpr unsigned kSecondsPerInput = 20;
+constexpr unsigned kSecondsPerInput = 5;
 constexpr long kMaxResidentMiB = 2048;
 
 const char* g_current = "";
