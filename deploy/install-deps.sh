@@ -23,6 +23,9 @@ packages=(
   bubblewrap
   # tests and benchmarks
   libgtest-dev libbenchmark-dev python3 python3-venv
+  # fuzzing (tests/fuzz, the `fuzz` preset): clang, and libFuzzer with the sanitizer runtimes,
+  # which Debian ships in compiler-rt's package rather than a libfuzzer one of its own
+  clang-14 libclang-rt-14-dev
   # the Python client test (stubs generated from proto/farm.proto by grpc_tools)
   python3-grpcio python3-grpc-tools python3-protobuf
 )

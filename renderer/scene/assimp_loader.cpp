@@ -143,6 +143,38 @@ std::optional<Light> convert_light(const aiLight& in, const glm::mat4& node_to_r
   return light;
 }
 
+// What Assimp's post-processing trusts of an importer's meshes without looking: every face has
+// indices, each of them names a vertex, and mPrimitiveTypes says which face sizes occur. A
+// malformed file can break any of them (a PLY whose face list runs into its vertex data has faces
+// of no indices, flagged as polygons), and Triangulate then aborts the process on an assertion
+// (`numOut != pMesh->mNumFaces`) instead of failing. So the meshes are checked here between the
+// import and the post-processing, and the flags are recomputed from the faces themselves.
+void check_imported_meshes(aiScene& scene, const std::string& name) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    aiMesh& mesh = *scene.mMeshes[m];
+    unsigned types = 0;
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices == 0 || face.mIndices == nullptr) {
+        throw InputError(name + ": mesh " + std::to_string(m) + ", face " + std::to_string(f) +
+                         ": a face with no vertices");
+      }
+      for (unsigned i = 0; i < face.mNumIndices; ++i) {
+        if (face.mIndices[i] >= mesh.mNumVertices) {
+          throw InputError(name + ": mesh " + std::to_string(m) + ", face " + std::to_string(f) +
+                           ": vertex index " + std::to_string(face.mIndices[i]) + " of " +
+                           std::to_string(mesh.mNumVertices) + " vertices");
+        }
+      }
+      types |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
+               : face.mNumIndices == 2 ? aiPrimitiveType_LINE
+               : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                       : aiPrimitiveType_POLYGON;
+    }
+    mesh.mPrimitiveTypes = types;
+  }
+}
+
 }  // namespace
 
 Model load_with_assimp(const ModelFile& file) {
@@ -155,17 +187,26 @@ Model load_with_assimp(const ModelFile& file) {
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // FindDegenerates/FindInvalidData are left out on purpose: they change triangle counts.
-  constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_SortByPType |
-                              aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
+  // Import and post-processing are two calls, so that the imported meshes are checked between
+  // them (check_imported_meshes).
+  constexpr unsigned kPostProcess = aiProcess_Triangulate | aiProcess_SortByPType |
+                                    aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure;
   const aiScene* scene = nullptr;
   try {
-    scene = importer.ReadFile(file.file.resolved.string(), kFlags);
+    scene = importer.ReadFile(file.file.resolved.string(), aiProcess_ValidateDataStructure);
+    // Before anything else: the importer may have carried on without the file (an OBJ does
+    // without its material library), and a model that names a file it may not read is refused.
+    if (!io->refusal().empty()) throw InputError(name + ": " + io->refusal());
+    if (scene == nullptr) throw InputError(name + ": " + importer.GetErrorString());
+    // The importer's own scene, not yet handed out: Assimp's post-processing steps rewrite it in
+    // place the same way.
+    check_imported_meshes(const_cast<aiScene&>(*scene), name);
+    scene = importer.ApplyPostProcessing(kPostProcess);
+  } catch (const InputError&) {
+    throw;
   } catch (const std::exception& e) {  // Assimp catches its own; this is for allocation failures
     throw InputError(name + ": " + e.what());
   }
-  // Before anything else: the importer may have carried on without the file (an OBJ does without
-  // its material library), and a model that names a file it may not read is refused.
-  if (!io->refusal().empty()) throw InputError(name + ": " + io->refusal());
   if (scene == nullptr) throw InputError(name + ": " + importer.GetErrorString());
   if (scene->mRootNode == nullptr) throw InputError(name + ": the file has no scene hierarchy");
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <system_error>
 
+#include "renderer/scene/collada_check.h"
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/loaders.h"
 #include "renderer/scene/model.h"
@@ -49,6 +50,8 @@ Model load_model(const fs::path& file, const fs::path& asset_root) {
   if (!model.file.allowed()) throw InputError(file.string() + ": " + model.file.reason);
   // Assimp trusts a PLY header's element counts: they are held against the file's size first.
   if (ext == ".ply") check_ply_file(model.file, file.string());
+  // Assimp trusts a COLLADA file's counts and index lists alike (collada_check.h).
+  if (ext == ".dae") check_collada_file(model.file, file.string());
   return assimp ? load_with_assimp(model) : load_gltf(model);
 }
 

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -67,6 +68,13 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
       format_seen = true;
     } else if (w[0] == "element") {
       if (w.size() != 3) fail("expected 'element NAME COUNT'");
+      // Assimp reads the count from where the name starts when the name starts with a digit
+      // ("element 900000000vertex 3" is 900 million vertices to it, 3 to a reader of words), so
+      // such a name would slip a count past the check below: names start with a letter or '_'.
+      const unsigned char first = static_cast<unsigned char>(w[1][0]);
+      if (!std::isalpha(first) && first != '_') {
+        fail("element name '" + w[1] + "' does not start with a letter");
+      }
       PlyElement e{w[1], 0, 0};
       const auto [p, ec] = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
       if (ec != std::errc() || p != w[2].data() + w[2].size()) {

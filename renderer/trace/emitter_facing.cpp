@@ -151,8 +151,9 @@ std::vector<EmitterFacingAway> find_emitters_facing_away(const PreparedScene& sc
     // own inside, which is what tells its sides apart.
     const auto [object_index, material_index] = keys[g];
     const ModelTriangles& mesh = *scene.objects()[object_index].triangles;
-    const auto own = [&](const SurfaceHit& hit) {
-      return !closed && hit.object == object_index && mesh.material[hit.triangle] == material_index;
+    // Init-captures: clang before 16 cannot capture structured bindings (the fuzz preset's clang-14).
+    const auto own = [&, object = object_index, material = material_index](const SurfaceHit& hit) {
+      return !closed && hit.object == object && mesh.material[hit.triangle] == material;
     };
     Side front_of_all, back_of_all;
     for (std::size_t k = 0; k < report.checked; ++k) {

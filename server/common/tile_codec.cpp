@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <bit>
+#include <cstdint>
 #include <cstring>
 #include <string>
 
@@ -79,10 +80,31 @@ void encode_stats(const RenderStats& s, v1::TileStats& out) {
 
 TileBuffer decode_tile(const v1::TileData& d) {
   const Rect r{d.rect().x0(), d.rect().y0(), d.rect().x1(), d.rect().y1()};
-  if (r.empty() || r.width() != d.width() || r.height() != d.height()) {
+  // In 64 bits: the corners come off the wire, and x1 - x0 of two int32 can overflow an int.
+  const std::int64_t width = std::int64_t{r.x1} - r.x0;
+  const std::int64_t height = std::int64_t{r.y1} - r.y0;
+  if (width <= 0 || height <= 0 || width != d.width() || height != d.height()) {
     throw InputError(fmt::format("tile rect [{}, {}) x [{}, {}) is empty or disagrees with its "
                                  "size {}x{}", r.x0, r.x1, r.y0, r.y1, d.width(), d.height()));
   }
+  // Every plane's size is held against the rect before the buffer is made: a reply of a few
+  // bytes claiming a 60000x60000 rect would otherwise allocate 57 GB first and be refused after.
+  const auto pixels = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+  const auto check_size = [&](const std::string& plane, std::uint64_t components, const char* name,
+                              bool optional) {
+    if (optional && plane.empty()) return;
+    if (plane.size() / sizeof(float) / components != pixels ||
+        plane.size() % (sizeof(float) * components) != 0) {
+      throw InputError(fmt::format("tile {}: {} bytes for {}x{} pixels, expected {}", name,
+                                   plane.size(), width, height, pixels * components * sizeof(float)));
+    }
+  };
+  check_size(d.rgba(), 4, "rgba", false);
+  check_size(d.depth(), 1, "depth", true);
+  check_size(d.normal(), 3, "normal", true);
+  check_size(d.albedo(), 3, "albedo", true);
+  check_size(d.bvh_cost(), 1, "bvh_cost", true);
+  check_size(d.variance(), 3, "variance", true);
   AovSet aovs;
   aovs.depth = !d.depth().empty();
   aovs.normal = !d.normal().empty();
