@@ -98,7 +98,13 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
         fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
       }
       header.elements.back().min_bytes += bytes_needed;
-    }  // other keywords (some writers add their own) declare nothing that is counted
+    } else {
+      // Not a PLY keyword: Assimp's reader does not skip such a line cleanly (a header with
+      // 'pro[perty float x' made it allocate 32 GiB), and the counts above would no longer
+      // describe the body it reads.
+      fail("unknown keyword '" + w[0].substr(0, 64) +
+           "' (a PLY header has only ply, format, comment, obj_info, element, property and end_header lines)");
+    }
   }
   if (!format_seen) throw InputError(file + ": PLY header has no format line");
   header.header_bytes = pos;
