@@ -127,7 +127,11 @@ Watched watch(SandboxProcess& process, const SandboxRun& run, uid_t uid, const s
       const std::uint64_t used = disk_usage(writable);
       const Clock::duration took = Clock::now() - now;
       next_folder_scan = Clock::now() + std::max<Clock::duration>(200ms, 10 * took);
-      if (used > (run.limits.work_folder_mib << 20)) watched.stop = SandboxStop::work_folder;
+      // The folders' own blocks and a large file's extent blocks are counted too: a program that
+      // wrote no more than the limit in data (one file stopped at RLIMIT_FSIZE, whose own
+      // SIGXFSZ is then the verdict) must not be over it by a block or two.
+      const std::uint64_t limit = run.limits.work_folder_mib << 20;
+      if (used > limit + limit / 64 + (std::uint64_t{1} << 20)) watched.stop = SandboxStop::work_folder;
     }
     if (watched.stop != SandboxStop::none) process.kill();
   }
