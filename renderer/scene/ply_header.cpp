@@ -1,19 +1,33 @@
 #include "renderer/scene/ply_header.h"
 
+#include <fmt/format.h>
+
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "renderer/scene/input_error.h"
 
 namespace farm {
 namespace {
+
+// The largest list length each integer type can count.
+const std::map<std::string, std::uint64_t, std::less<>>& count_type_max() {
+  static const std::map<std::string, std::uint64_t, std::less<>> max{
+      {"char", 127},     {"uchar", 255},          {"int8", 127},    {"uint8", 255},
+      {"short", 32767},  {"ushort", 65535},       {"int16", 32767}, {"uint16", 65535},
+      {"int", 2147483647}, {"uint", 4294967295u}, {"int32", 2147483647}, {"uint32", 4294967295u}};
+  return max;
+}
 
 // Bytes of each scalar type PLY names, under both spellings.
 const std::map<std::string, std::uint64_t, std::less<>>& scalar_sizes() {
@@ -51,14 +65,22 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
                ? "no end_header within the first " + std::to_string(kMaxPlyHeaderBytes) + " bytes"
                : "the file ends before end_header");
     }
-    const std::vector<std::string> w = words_of(head.substr(pos, end - pos));
+    const std::string_view line = head.substr(pos, end - pos);
+    const std::vector<std::string> w = words_of(line);
     pos = end + 1;
     if (line_number == 1) {
       if (w.size() != 1 || w[0] != "ply") fail("a PLY file starts with the line 'ply'");
       continue;
     }
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
-    if (w[0] == "end_header") break;
+    if (w[0] == "end_header") {
+      // The body starts after this line's newline, for Assimp as for the counts below: anything
+      // else on it (a vertical tab, then data) would put the two readers in different places.
+      if (line.substr(0, line.find_last_not_of(" \t\r") + 1) != "end_header") {
+        fail("end_header must stand alone on its line");
+      }
+      break;
+    }
     if (w[0] == "format") {
       if (w.size() != 3) fail("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
       if (w[1] == "ascii") header.format = PlyHeader::Format::ascii;
@@ -75,7 +97,7 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
       if (!std::isalpha(first) && first != '_') {
         fail("element name '" + w[1] + "' does not start with a letter");
       }
-      PlyElement e{w[1], 0, 0};
+      PlyElement e{w[1], 0, 0, {}};
       const auto [p, ec] = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
       if (ec != std::errc() || p != w[2].data() + w[2].size()) {
         fail("element '" + w[1] + "' has count '" + w[2] + "', not a whole number");
@@ -89,11 +111,15 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
       if (w.size() == 5 && w[1] == "list") {
         const auto length = sizes.find(w[2]);
         if (length == sizes.end() || sizes.find(w[3]) == sizes.end()) fail("unknown type in a list property");
+        const auto count_max = count_type_max().find(w[2]);
+        if (count_max == count_type_max().end()) fail("a list's length type '" + w[2] + "' is not an integer type");
         bytes_needed = ascii ? 2 : length->second;  // an empty list is its length alone
+        header.elements.back().list_max.push_back(count_max->second);
       } else if (w.size() == 3) {
         const auto scalar = sizes.find(w[1]);
         if (scalar == sizes.end()) fail("unknown type '" + w[1] + "'");
         bytes_needed = ascii ? 2 : scalar->second;
+        header.elements.back().list_max.push_back(0);
       } else {
         fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
       }
@@ -126,6 +152,54 @@ void check_ply_counts(const PlyHeader& header, std::uint64_t file_bytes, const s
   }
 }
 
+void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::uint64_t body_offset,
+                          const std::string& file) {
+  for (std::size_t i = 0; i < body.size(); ++i) {
+    const auto c = static_cast<unsigned char>(body[i]);
+    if ((c >= 0x20 && c < 0x7f) || c == '\n' || c == '\r' || c == '\t') continue;
+    throw InputError(fmt::format("{}: byte {} of this ASCII PLY file is {:#04x}, which no number or "
+                                 "separator holds (is it binary?)",
+                                 file, body_offset + i, c));
+  }
+  std::size_t pos = 0;
+  const auto next = [&]() -> std::optional<std::string_view> {
+    pos = body.find_first_not_of(" \t\r\n", pos);
+    if (pos == std::string_view::npos) return std::nullopt;
+    const std::size_t end = std::min(body.find_first_of(" \t\r\n", pos), body.size());
+    const std::string_view word = body.substr(pos, end - pos);
+    pos = end;
+    return word;
+  };
+  for (const PlyElement& e : header.elements) {
+    for (std::uint64_t k = 0; k < e.count; ++k) {
+      const auto fail = [&](const std::string& why) {
+        throw InputError(fmt::format("{}: PLY '{}' element {}: {}", file, e.name, k, why));
+      };
+      const auto number = [&](const char* what) {
+        const std::optional<std::string_view> word = next();
+        if (!word) fail(std::string("the file ends before its ") + what);
+        double value = 0;
+        const auto [end, ec] = std::from_chars(word->data(), word->data() + word->size(), value);
+        if (ec != std::errc() || end != word->data() + word->size()) {
+          fail(fmt::format("'{}' is not a number", word->substr(0, 32)));
+        }
+        return value;
+      };
+      for (const std::uint64_t list_max : e.list_max) {
+        if (list_max == 0) {
+          number("value");
+          continue;
+        }
+        const double length = number("list length");
+        if (!(length >= 0 && length <= static_cast<double>(list_max)) || length != std::floor(length)) {
+          fail(fmt::format("a list length of {} (at most {} for its type)", length, list_max));
+        }
+        for (auto v = static_cast<std::uint64_t>(length); v > 0; --v) number("list values");
+      }
+    }
+  }
+}
+
 void check_ply_file(const ConfinedFile& file, const std::string& name) {
   std::string why;
   const int fd = open_confined(file, &why);
@@ -143,9 +217,28 @@ void check_ply_file(const ConfinedFile& file, const std::string& name) {
     if (n == 0) break;
     got += static_cast<std::size_t>(n);
   }
-  ::close(fd);
   head.resize(got);
-  check_ply_counts(parse_ply_header(head, name), file.size, name);
+  try {
+    const PlyHeader header = parse_ply_header(head, name);
+    check_ply_counts(header, file.size, name);
+    if (header.format == PlyHeader::Format::ascii) {
+      // The rest of the file, as Assimp will read it whole too.
+      std::string body = head.substr(header.header_bytes);
+      std::string chunk(std::size_t{1} << 16, '\0');
+      for (;;) {
+        const ssize_t n = ::read(fd, chunk.data(), chunk.size());
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw InputError(name + ": cannot read: " + std::strerror(errno));
+        if (n == 0) break;
+        body.append(chunk.data(), static_cast<std::size_t>(n));
+      }
+      check_ply_ascii_body(header, body, header.header_bytes, name);
+    }
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
 }
 
 }  // namespace farm

@@ -18,6 +18,8 @@ struct PlyElement {
   std::string name;
   std::uint64_t count = 0;
   std::uint64_t min_bytes = 0;  // the fewest bytes one element can take in the file's format
+  // Per property: 0 for a scalar, else the largest length its list's count type holds.
+  std::vector<std::uint64_t> list_max;
 };
 
 struct PlyHeader {
@@ -36,7 +38,15 @@ void check_ply_counts(const PlyHeader& header, std::uint64_t file_bytes, const s
 
 inline constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 
-// Both of the above for an allowed file, reading no more than its header.
+// An ASCII body read against its header: every element's values are numbers, every list's
+// length is a whole number its count type holds and no more than the values left. Assimp's
+// ASCII reader trusts all of this (a list length of 1111111111111113 in a 200-byte file, a NUL
+// among the numbers), so the body is checked before it reads it. Throws InputError naming
+// `file`, the element and its index, or the byte.
+void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::uint64_t body_offset,
+                          const std::string& file);
+
+// All of the above for an allowed file, reading no more than its header when it is binary.
 void check_ply_file(const ConfinedFile& file, const std::string& name);
 
 }  // namespace farm

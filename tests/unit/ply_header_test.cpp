@@ -85,6 +85,41 @@ TEST(PlyHeader, CountsThatWouldOverflowAreRefused) {
   EXPECT_THROW(parse_ply_header(ascii_triangle("-1"), "t.ply"), InputError);
 }
 
+// Found by the fuzzer: Assimp's ASCII reader looped for ever on a NUL among the numbers, and on
+// data that shared the end_header line, and allocated for whatever list length a face gave.
+TEST(PlyHeader, AnAsciiBodyThatDoesNotFitItsHeaderIsRefusedNamingThePlace) {
+  TempDir dir;
+  std::string text = ascii_triangle("1");
+  const std::size_t at = text.find("\n1 0 0") + 2;
+  text[at] = '\0';
+  const auto nul = dir.write("nul.ply", text);
+  EXPECT_NE(load_error(nul).find("byte " + std::to_string(at) + " of this ASCII PLY file is 0x00"), std::string::npos)
+      << load_error(nul);
+  std::string shared = ascii_triangle("1");
+  shared.replace(shared.find("end_header\n"), 11, "end_header\v");
+  const auto joined = dir.write("joined.ply", shared);
+  EXPECT_NE(load_error(joined).find("end_header must stand alone on its line"), std::string::npos) << load_error(joined);
+  // A face whose list length its uchar type cannot hold (Assimp allocated for all of it), and one
+  // whose values run out.
+  std::string long_list = ascii_triangle("1");
+  long_list.replace(long_list.find("3 0 1 2"), 7, "1111111111111113 0 1 2");
+  const auto listed = dir.write("long.ply", long_list);
+  EXPECT_NE(load_error(listed).find("PLY 'face' element 0: a list length of 1111111111111113 (at most 255"),
+            std::string::npos) << load_error(listed);
+  std::string short_list = ascii_triangle("1");
+  short_list.replace(short_list.find("3 0 1 2"), 7, "9 0 1 2");
+  const auto cut = dir.write("cut.ply", short_list);
+  EXPECT_NE(load_error(cut).find("PLY 'face' element 0: the file ends before its list values"), std::string::npos)
+      << load_error(cut);
+  std::string word = ascii_triangle("1");
+  word.replace(word.find("1 0 0"), 1, "x");
+  const auto worded = dir.write("word.ply", word);
+  EXPECT_NE(load_error(worded).find("PLY 'vertex' element 1: 'x' is not a number"), std::string::npos)
+      << load_error(worded);
+  const auto honest = dir.write("honest.ply", ascii_triangle("1"));
+  EXPECT_EQ(load_error(honest), "");
+}
+
 TEST(PlyHeader, MalformedHeadersNameTheFileAndTheLine) {
   auto error_of = [](const std::string& text) {
     try {
