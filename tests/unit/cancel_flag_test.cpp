@@ -12,17 +12,10 @@
 
 #include "renderer/engine.h"
 #include "renderer/util/cancel_flag.h"
+#include "tests/support/print_values.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {
-
-// Readable values in failure messages and test names (found by argument-dependent lookup).
-void PrintTo(StopReason reason, std::ostream* os) {
-  constexpr const char* kNames[] = {"None", "Cancelled", "Deadline"};
-  *os << "StopReason::" << kNames[static_cast<int>(reason)];
-}
-void PrintTo(EngineKind engine, std::ostream* os) { *os << to_string(engine); }
-
 namespace {
 
 using namespace std::chrono_literals;

@@ -20,6 +20,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/util/cancel_flag.h"
 #include "renderer/util/frame_cache.h"
+#include "tests/support/print_values.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {
