@@ -201,8 +201,9 @@ class FrameBuilder {
       local = static_cast<std::uint32_t>(out.direct_count);
       out.direct[out.direct_count++] = t;
     }
+    const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
     const auto bins = static_cast<std::uint64_t>(t.y1 / kBinSize - t.y0 / kBinSize + 1) *
-                      static_cast<std::uint64_t>(t.x1 / kBinSize - t.x0 / kBinSize + 1);
+                      static_cast<std::uint64_t>(row_bins);
     if (bin_entries_.fetch_add(bins, std::memory_order_relaxed) + bins > kMaxBinEntries) {
       throw InputError(fmt::format(
           "render: the rasterizer would file more than {} triangle-in-bin entries for this {}x{} "
@@ -210,7 +211,6 @@ class FrameBuilder {
           "render a smaller image, or fewer large triangles",
           kMaxBinEntries, frame_.width, frame_.height, kBinSize));
     }
-    const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
     for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by) {
       poll.throw_if_stopped(row_bins);
       for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) {

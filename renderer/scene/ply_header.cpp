@@ -217,28 +217,15 @@ void check_ply_file(const ConfinedFile& file, const std::string& name) {
     if (n == 0) break;
     got += static_cast<std::size_t>(n);
   }
-  head.resize(got);
-  try {
-    const PlyHeader header = parse_ply_header(head, name);
-    check_ply_counts(header, file.size, name);
-    if (header.format == PlyHeader::Format::ascii) {
-      // The rest of the file, as Assimp will read it whole too.
-      std::string body = head.substr(header.header_bytes);
-      std::string chunk(std::size_t{1} << 16, '\0');
-      for (;;) {
-        const ssize_t n = ::read(fd, chunk.data(), chunk.size());
-        if (n < 0 && errno == EINTR) continue;
-        if (n < 0) throw InputError(name + ": cannot read: " + std::strerror(errno));
-        if (n == 0) break;
-        body.append(chunk.data(), static_cast<std::size_t>(n));
-      }
-      check_ply_ascii_body(header, body, header.header_bytes, name);
-    }
-  } catch (...) {
-    ::close(fd);
-    throw;
-  }
   ::close(fd);
+  head.resize(got);
+  const PlyHeader header = parse_ply_header(head, name);
+  check_ply_counts(header, file.size, name);
+  if (header.format != PlyHeader::Format::ascii) return;
+  // The whole file, as Assimp will read it whole too.
+  std::string text;
+  if (!read_confined(file, text, &why)) throw InputError(name + ": " + why);
+  check_ply_ascii_body(header, std::string_view(text).substr(header.header_bytes), header.header_bytes, name);
 }
 
 }  // namespace farm

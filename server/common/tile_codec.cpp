@@ -36,15 +36,11 @@ std::string pack(const Rect& r, int components, Get&& get) {
   return plane;
 }
 
+// `plane` holds exactly r's pixels of `components` floats: decode_tile checked every plane's size
+// before it made the buffer.
 template <typename Get>
-void unpack(const Rect& r, int components, const std::string& plane, const char* name, Get&& get) {
+void unpack(const Rect& r, int components, const std::string& plane, Get&& get) {
   const std::size_t pixel_bytes = sizeof(float) * static_cast<std::size_t>(components);
-  const std::size_t expected =
-      static_cast<std::size_t>(r.width()) * static_cast<std::size_t>(r.height()) * pixel_bytes;
-  if (plane.size() != expected) {
-    throw InputError(fmt::format("tile {}: {} bytes for {}x{} pixels, expected {}", name,
-                                 plane.size(), r.width(), r.height(), expected));
-  }
   const char* at = plane.data();
   for (int y = r.y0; y < r.y1; ++y) {
     for (int x = r.x0; x < r.x1; ++x, at += pixel_bytes) std::memcpy(get(x, y), at, pixel_bytes);
@@ -113,15 +109,15 @@ TileBuffer decode_tile(const v1::TileData& d) {
   aovs.variance = !d.variance().empty();
   TileBuffer t;
   t.reset_for_overwrite(r, aovs);
-  unpack(r, 4, d.rgba(), "rgba", [&](int x, int y) { return &t.rgba(x, y); });
-  if (aovs.depth) unpack(r, 1, d.depth(), "depth", [&](int x, int y) { return &t.depth(x, y); });
-  if (aovs.normal) unpack(r, 3, d.normal(), "normal", [&](int x, int y) { return &t.normal(x, y); });
-  if (aovs.albedo) unpack(r, 3, d.albedo(), "albedo", [&](int x, int y) { return &t.albedo(x, y); });
+  unpack(r, 4, d.rgba(), [&](int x, int y) { return &t.rgba(x, y); });
+  if (aovs.depth) unpack(r, 1, d.depth(), [&](int x, int y) { return &t.depth(x, y); });
+  if (aovs.normal) unpack(r, 3, d.normal(), [&](int x, int y) { return &t.normal(x, y); });
+  if (aovs.albedo) unpack(r, 3, d.albedo(), [&](int x, int y) { return &t.albedo(x, y); });
   if (aovs.bvh_cost) {
-    unpack(r, 1, d.bvh_cost(), "bvh_cost", [&](int x, int y) { return &t.bvh_cost(x, y); });
+    unpack(r, 1, d.bvh_cost(), [&](int x, int y) { return &t.bvh_cost(x, y); });
   }
   if (aovs.variance) {
-    unpack(r, 3, d.variance(), "variance", [&](int x, int y) { return &t.variance(x, y); });
+    unpack(r, 3, d.variance(), [&](int x, int y) { return &t.variance(x, y); });
   }
   return t;
 }
