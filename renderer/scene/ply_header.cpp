@@ -12,7 +12,6 @@
 #include <cstring>
 #include <limits>
 #include <map>
-#include <optional>
 #include <sstream>
 
 #include "renderer/scene/input_error.h"
@@ -161,27 +160,30 @@ void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::u
                                  "separator holds (is it binary?)",
                                  file, body_offset + i, c));
   }
-  std::size_t pos = 0;
-  const auto next = [&]() -> std::optional<std::string_view> {
-    pos = body.find_first_not_of(" \t\r\n", pos);
-    if (pos == std::string_view::npos) return std::nullopt;
-    const std::size_t end = std::min(body.find_first_of(" \t\r\n", pos), body.size());
-    const std::string_view word = body.substr(pos, end - pos);
-    pos = end;
-    return word;
-  };
+  // Assimp reads an ASCII body a line per element, so each element must be one line holding
+  // exactly the values its properties take: a token count alone would let a value on the next
+  // line, read by Assimp as the next element's list length, slip by.
+  std::size_t line_start = 0;
   for (const PlyElement& e : header.elements) {
     for (std::uint64_t k = 0; k < e.count; ++k) {
       const auto fail = [&](const std::string& why) {
         throw InputError(fmt::format("{}: PLY '{}' element {}: {}", file, e.name, k, why));
       };
+      if (line_start >= body.size()) fail("the file ends before it");
+      const std::size_t line_end = std::min(body.find('\n', line_start), body.size());
+      const std::string_view line = body.substr(line_start, line_end - line_start);
+      line_start = line_end + 1;
+      std::size_t pos = 0;
       const auto number = [&](const char* what) {
-        const std::optional<std::string_view> word = next();
-        if (!word) fail(std::string("the file ends before its ") + what);
+        pos = line.find_first_not_of(" \t\r", pos);
+        if (pos == std::string_view::npos) fail(std::string("its line ends before its ") + what);
+        const std::size_t end = std::min(line.find_first_of(" \t\r", pos), line.size());
+        const std::string_view word = line.substr(pos, end - pos);
+        pos = end;
         double value = 0;
-        const auto [end, ec] = std::from_chars(word->data(), word->data() + word->size(), value);
-        if (ec != std::errc() || end != word->data() + word->size()) {
-          fail(fmt::format("'{}' is not a number", word->substr(0, 32)));
+        const auto [stop, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
+        if (ec != std::errc() || stop != word.data() + word.size()) {
+          fail(fmt::format("'{}' is not a number", word.substr(0, 32)));
         }
         return value;
       };
@@ -195,6 +197,9 @@ void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::u
           fail(fmt::format("a list length of {} (at most {} for its type)", length, list_max));
         }
         for (auto v = static_cast<std::uint64_t>(length); v > 0; --v) number("list values");
+      }
+      if (line.find_first_not_of(" \t\r", pos) != std::string_view::npos) {
+        fail("its line holds more values than its properties take");
       }
     }
   }

@@ -38,8 +38,8 @@ void check_ply_counts(const PlyHeader& header, std::uint64_t file_bytes, const s
 
 inline constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 
-// An ASCII body read against its header: every element's values are numbers, every list's
-// length is a whole number its count type holds and no more than the values left. Assimp's
+// An ASCII body read against its header: each element is one line of exactly the values its
+// properties take, every value a number, every list's length a whole number its count type holds. Assimp's
 // ASCII reader trusts all of this (a list length of 1111111111111113 in a 200-byte file, a NUL
 // among the numbers), so the body is checked before it reads it. Throws InputError naming
 // `file`, the element and its index, or the byte.

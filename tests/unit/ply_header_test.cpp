@@ -109,13 +109,20 @@ TEST(PlyHeader, AnAsciiBodyThatDoesNotFitItsHeaderIsRefusedNamingThePlace) {
   std::string short_list = ascii_triangle("1");
   short_list.replace(short_list.find("3 0 1 2"), 7, "9 0 1 2");
   const auto cut = dir.write("cut.ply", short_list);
-  EXPECT_NE(load_error(cut).find("PLY 'face' element 0: the file ends before its list values"), std::string::npos)
+  EXPECT_NE(load_error(cut).find("PLY 'face' element 0: its line ends before its list values"), std::string::npos)
       << load_error(cut);
   std::string word = ascii_triangle("1");
   word.replace(word.find("1 0 0"), 1, "x");
   const auto worded = dir.write("word.ply", word);
   EXPECT_NE(load_error(worded).find("PLY 'vertex' element 1: 'x' is not a number"), std::string::npos)
       << load_error(worded);
+  // One vertex too many for its header: Assimp reads the extra line as the face, and then the
+  // face's line as a list length of 3 with its values missing; here, the face line is refused.
+  std::string shifted = ascii_triangle("1");
+  shifted.replace(shifted.find("element vertex 3"), 16, "element vertex 2");
+  const auto extra = dir.write("extra.ply", shifted);
+  EXPECT_NE(load_error(extra).find("PLY 'face' element 0: its line holds more values than its properties take"),
+            std::string::npos) << load_error(extra);
   const auto honest = dir.write("honest.ply", ascii_triangle("1"));
   EXPECT_EQ(load_error(honest), "");
 }
