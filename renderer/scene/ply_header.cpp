@@ -113,12 +113,12 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
         const auto count_max = count_type_max().find(w[2]);
         if (count_max == count_type_max().end()) fail("a list's length type '" + w[2] + "' is not an integer type");
         bytes_needed = ascii ? 2 : length->second;  // an empty list is its length alone
-        header.elements.back().list_max.push_back(count_max->second);
+        header.elements.back().properties.push_back({count_max->second, length->second, sizes.find(w[3])->second});
       } else if (w.size() == 3) {
         const auto scalar = sizes.find(w[1]);
         if (scalar == sizes.end()) fail("unknown type '" + w[1] + "'");
         bytes_needed = ascii ? 2 : scalar->second;
-        header.elements.back().list_max.push_back(0);
+        header.elements.back().properties.push_back({0, 0, scalar->second});
       } else {
         fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
       }
@@ -187,7 +187,8 @@ void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::u
         }
         return value;
       };
-      for (const std::uint64_t list_max : e.list_max) {
+      for (const PlyElement::Property& property : e.properties) {
+        const std::uint64_t list_max = property.list_max;
         if (list_max == 0) {
           number("value");
           continue;
@@ -200,6 +201,45 @@ void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::u
       }
       if (line.find_first_not_of(" \t\r", pos) != std::string_view::npos) {
         fail("its line holds more values than its properties take");
+      }
+    }
+  }
+}
+
+void check_ply_binary_body(const PlyHeader& header, std::string_view body, const std::string& file) {
+  const bool big_endian = header.format == PlyHeader::Format::binary_big_endian;
+  std::uint64_t pos = 0;
+  for (const PlyElement& e : header.elements) {
+    for (std::uint64_t k = 0; k < e.count; ++k) {
+      const auto fail = [&](const std::string& why) {
+        throw InputError(fmt::format("{}: PLY '{}' element {}: {}", file, e.name, k, why));
+      };
+      for (const PlyElement::Property& property : e.properties) {
+        if (property.list_max == 0) {
+          if (property.value_bytes > body.size() - std::min<std::uint64_t>(pos, body.size())) {
+            fail("the file ends before it");
+          }
+          pos += property.value_bytes;
+          continue;
+        }
+        if (property.count_bytes > body.size() - std::min<std::uint64_t>(pos, body.size())) {
+          fail("the file ends before its list length");
+        }
+        std::uint64_t raw = 0;
+        for (std::uint64_t b = 0; b < property.count_bytes; ++b) {
+          const std::uint64_t at = big_endian ? b : property.count_bytes - 1 - b;
+          raw = (raw << 8) | static_cast<unsigned char>(body[pos + at]);
+        }
+        pos += property.count_bytes;
+        // A signed type's limit is below its top bit: a length with the top bit set is negative
+        // there, and over the limit either way.
+        if (raw > property.list_max) {
+          fail(fmt::format("a list length field of {:#x} (at most {} for its type)", raw, property.list_max));
+        }
+        if (raw > (body.size() - pos) / std::max<std::uint64_t>(property.value_bytes, 1)) {
+          fail(fmt::format("a list of {} values runs past the end of the file", raw));
+        }
+        pos += raw * property.value_bytes;
       }
     }
   }
@@ -226,11 +266,15 @@ void check_ply_file(const ConfinedFile& file, const std::string& name) {
   head.resize(got);
   const PlyHeader header = parse_ply_header(head, name);
   check_ply_counts(header, file.size, name);
-  if (header.format != PlyHeader::Format::ascii) return;
   // The whole file, as Assimp will read it whole too.
   std::string text;
   if (!read_confined(file, text, &why)) throw InputError(name + ": " + why);
-  check_ply_ascii_body(header, std::string_view(text).substr(header.header_bytes), header.header_bytes, name);
+  const std::string_view body = std::string_view(text).substr(std::min<std::size_t>(header.header_bytes, text.size()));
+  if (header.format == PlyHeader::Format::ascii) {
+    check_ply_ascii_body(header, body, header.header_bytes, name);
+  } else {
+    check_ply_binary_body(header, body, name);
+  }
 }
 
 }  // namespace farm

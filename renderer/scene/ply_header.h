@@ -18,8 +18,13 @@ struct PlyElement {
   std::string name;
   std::uint64_t count = 0;
   std::uint64_t min_bytes = 0;  // the fewest bytes one element can take in the file's format
-  // Per property: 0 for a scalar, else the largest length its list's count type holds.
-  std::vector<std::uint64_t> list_max;
+  // Per property, in order.
+  struct Property {
+    std::uint64_t list_max = 0;     // 0 for a scalar, else the largest length its count type holds
+    std::uint64_t count_bytes = 0;  // a list's length field (binary)
+    std::uint64_t value_bytes = 0;  // a scalar, or each value of a list (binary)
+  };
+  std::vector<Property> properties;
 };
 
 struct PlyHeader {
@@ -46,7 +51,12 @@ inline constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::uint64_t body_offset,
                           const std::string& file);
 
-// All of the above for an allowed file, reading no more than its header when it is binary.
+// A binary body walked against its header: every list's length field (in the file's byte order,
+// signed where its type is) is no more than its type's limit, at least 0, and its values lie
+// inside the file. Assimp takes a char length of -1 for 4 billion and allocates 32 GiB.
+void check_ply_binary_body(const PlyHeader& header, std::string_view body, const std::string& file);
+
+// All of the above for an allowed file.
 void check_ply_file(const ConfinedFile& file, const std::string& name);
 
 }  // namespace farm

@@ -127,6 +127,22 @@ TEST(PlyHeader, AnAsciiBodyThatDoesNotFitItsHeaderIsRefusedNamingThePlace) {
   EXPECT_EQ(load_error(honest), "");
 }
 
+// Found by the fuzzer: a binary face whose char length field is -1 (0xff), which Assimp takes
+// for 4 billion indices and allocates 32 GiB for; and a length whose values run past the file.
+TEST(PlyHeader, ABinaryListLengthOutsideItsTypeOrTheFileIsRefused) {
+  TempDir dir;
+  std::string negative = binary_triangle();
+  negative.replace(negative.find("list uchar int"), 14, "list char int");
+  negative[negative.size() - 13] = static_cast<char>(0xff);
+  EXPECT_NE(load_error(dir.write("negative.ply", negative)).find("PLY 'face' element 0: a list length field of 0xff (at most 127"),
+            std::string::npos) << load_error(dir.write("negative.ply", negative));
+  std::string past = binary_triangle();
+  past[past.size() - 13] = 4;  // four ints where three are
+  EXPECT_NE(load_error(dir.write("past.ply", past)).find("a list of 4 values runs past the end of the file"),
+            std::string::npos) << load_error(dir.write("past.ply", past));
+  EXPECT_EQ(load_error(dir.write("honest.ply", binary_triangle())), "");
+}
+
 TEST(PlyHeader, MalformedHeadersNameTheFileAndTheLine) {
   auto error_of = [](const std::string& text) {
     try {
