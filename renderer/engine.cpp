@@ -33,6 +33,9 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
                        TileBuffer& out, const CancelFlag& cancel) {
   const Rect image{0, 0, settings.width, settings.height};
   const Rect clipped = tile.intersect(image);
+  // A pass the frame does not have (pass 1 of a raster frame, pass 4 of 4) is refused before any
+  // work: rendering nothing, or all samples again, would merge into a wrong image.
+  static_cast<void>(samples_to_render(settings));
   try {
     switch (settings.engine) {
       case EngineKind::Raster:

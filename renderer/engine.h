@@ -20,7 +20,10 @@ void prepare_frame(const PreparedScene& scene, const RenderSettings& settings, T
                    const CancelFlag& cancel = CancelFlag::never());
 
 // Renders `tile` (clipped to the image) into `out`, which it resizes to the tile and the
-// settings' AOVs. Throws InputError for an engine this build cannot run.
+// settings' AOVs. Renders the samples of settings.pass (all of them for pass -1; see
+// samples_to_render): a pass's buffer is an image of its own samples only, which
+// PassAccumulator merges with the frame's other passes. Throws InputError for an engine this
+// build cannot run, a negative pass_spp, or a pass out of range (pass_count).
 void render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                  TileBuffer& out);
 

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "renderer/image/aov.h"
+#include "renderer/image/sample_range.h"
 
 namespace farm {
 
@@ -32,6 +33,15 @@ struct RenderSettings {
   int width = 640;
   int height = 480;
   int spp = 1;
+  // Sample passes (path engine): each pixel's spp samples split into passes of pass_spp samples,
+  // pass p taking the global samples [p * pass_spp, min(spp, (p + 1) * pass_spp)), so that a farm
+  // can render (frame, tile, pass) units anywhere and merge them (PassAccumulator). 0 = one pass
+  // of all spp samples. Raster and whitted ignore it: their extra samples only antialias, and
+  // they render all of them in their one pass, pass 0.
+  int pass_spp = 0;
+  // The pass render_tile renders, 0 <= pass < pass_count(); -1 = all spp samples at once (what a
+  // render without passes does; render_frame then renders every pass and merges them).
+  int pass = -1;
   int max_depth = 5;         // scattering events; -1 = unbounded (path tracer, Russian roulette)
   std::uint64_t seed = 0;
   int tile_size = 32;
@@ -41,5 +51,19 @@ struct RenderSettings {
   LightSampling light_sampling = LightSampling::NeeMis;  // path
   AovSet aovs;               // extra channels beyond RGBA
 };
+
+// Passes a frame of `settings` is split into: ceil(spp / pass_spp) for the path engine, 1 when
+// pass_spp is 0 or at least spp, and always 1 for raster and whitted (see pass_spp). Throws
+// InputError for a negative pass_spp.
+int pass_count(const RenderSettings& settings);
+
+// The global sample indices of pass `pass` (0 <= pass < pass_count(settings)): the whole
+// [0, spp) for a frame of one pass. Throws InputError for a pass out of range. spp below 1
+// counts as 1, as the engines render it.
+SampleRange pass_samples(const RenderSettings& settings, int pass);
+
+// What one render_tile call with these settings renders: pass_samples(settings, settings.pass),
+// or all of [0, spp) for pass -1. Throws InputError for a pass out of range.
+SampleRange samples_to_render(const RenderSettings& settings);
 
 }  // namespace farm

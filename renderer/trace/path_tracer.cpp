@@ -236,7 +236,9 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   CancelPoll poll(cancel, kSegmentsPerPoll);
   const PathTracer tracer(scene, settings, *intersector, *emitters, poll);
   const Camera& camera = scene.scene().camera;
-  const int samples = std::max(1, settings.spp);
+  // This call's samples of each pixel: a pass's, or all spp. Indices are global within the pixel
+  // (pass 1 starts at pass_spp), so the sampler never repeats a sample between passes.
+  const SampleRange range = samples_to_render(settings);
 
   for (int y = tile.y0; y < tile.y1; ++y) {
     for (int x = tile.x0; x < tile.x1; ++x) {
@@ -245,7 +247,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
       SampleVariance variance;
       const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
                                   static_cast<std::uint64_t>(x);
-      for (int s = 0; s < samples; ++s) {
+      for (int s = range.begin; s < range.end; ++s) {
         const SampleKey key{settings.seed, pixel, static_cast<std::uint32_t>(s)};
         // Box filter: the sample lands uniformly anywhere in the pixel.
         const Ray ray = camera.primary_ray(static_cast<float>(x) + sample_uniform(key, 0),
@@ -268,12 +270,15 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         }
         if (out.aovs().variance) variance.add(valid ? r.radiance : glm::vec3(0.0f));
         coverage += r.hit ? 1.0f : 0.0f;
-        if (s != 0 || !r.hit) continue;
+        // The first-hit AOVs are those of the buffer's first sample: global sample 0 in pass 0
+        // (what the merged frame keeps), and each later pass's own first so that a pass's
+        // buffer is a complete image by itself.
+        if (s != range.begin || !r.hit) continue;
         if (out.aovs().depth) out.depth(x, y) = r.first.t;
         if (out.aovs().normal) out.normal(x, y) = r.first_normal;
         if (out.aovs().albedo) out.albedo(x, y) = r.first.material->diffuse;
       }
-      const float inv = 1.0f / static_cast<float>(samples);
+      const float inv = 1.0f / static_cast<float>(range.count());
       out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);
       if (out.aovs().variance) out.variance(x, y) = variance.of_mean();
     }

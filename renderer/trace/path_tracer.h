@@ -3,7 +3,9 @@
 // non-specular vertex (area lights sampled by power, point lights), combined with BSDF sampling
 // by multiple importance sampling (power heuristic), and Russian roulette after a few bounces.
 // Samples are box-filtered over the pixel; every random number comes from the counter-based
-// sampler, so any tiling gives the same image.
+// sampler, so any tiling gives the same image. With sample passes (RenderSettings::pass) a call
+// traces only its pass's samples, by their global index in the pixel, and writes their mean,
+// coverage and variance: what PassAccumulator merges with the other passes.
 #include "renderer/image/tile_buffer.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_settings.h"
