@@ -30,7 +30,10 @@ struct FrameTimings {
 
 // Renders the whole frame on `pool` into `film` (resized to the image; its memory is reused when
 // it is big enough, as a frame loop would). The result does not depend on tile size or thread
-// count.
+// count. With settings.pass -1 and a frame of several passes (pass_count), renders every pass
+// and merges them in order with a PassAccumulator: the frame a farm merges from the same
+// passes, bit for bit. With settings.pass >= 0, renders that pass alone (its own samples'
+// image, unmerged). Throws InputError for a bad pass or pass_spp before rendering anything.
 void render_frame(const PreparedScene& scene, const RenderSettings& settings, ThreadPool& pool,
                   TileBuffer& film, const ProgressCallback& progress = {},
                   FrameTimings* timings = nullptr);
