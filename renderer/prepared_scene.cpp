@@ -1,21 +1,16 @@
 #include "renderer/prepared_scene.h"
 
 #include <glm/matrix.hpp>
-#include <map>
 
 #include "renderer/scene/transform.h"
 
 namespace farm {
 
-PreparedScene::PreparedScene(Scene scene) : scene_(std::move(scene)) {
-  std::map<const Model*, const ModelTriangles*> triangles_of;
+PreparedScene::PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometry)
+    : scene_(std::move(scene)), geometry_(geometry ? std::move(geometry) : std::make_shared<ModelGeometry>()) {
   objects_.reserve(scene_.objects.size());
   for (const SceneObject& object : scene_.objects) {
-    const ModelTriangles*& triangles = triangles_of[object.model.get()];
-    if (!triangles) {
-      model_triangles_.push_back(std::make_unique<ModelTriangles>(*object.model));
-      triangles = model_triangles_.back().get();
-    }
+    const ModelTriangles* triangles = &geometry_->triangles(object.model);
     objects_.push_back({&object, triangles, object.model_to_world,
                         glm::inverse(object.model_to_world), normal_matrix(object.model_to_world)});
   }

@@ -8,6 +8,7 @@
 
 #include <memory>
 
+#include "renderer/geometry/model_geometry.h"
 #include "renderer/geometry/model_triangles.h"
 #include "renderer/scene/scene.h"
 #include "renderer/util/frame_cache.h"
@@ -24,7 +25,9 @@ struct PreparedObject {
 
 class PreparedScene {
  public:
-  explicit PreparedScene(Scene scene);
+  // `geometry`: what other frames of the job built already (their models' triangles and
+  // BVHs), shared; null: this scene's own.
+  explicit PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometry = nullptr);
   PreparedScene(const PreparedScene&) = delete;
   PreparedScene& operator=(const PreparedScene&) = delete;
 
@@ -32,13 +35,17 @@ class PreparedScene {
   const std::vector<PreparedObject>& objects() const { return objects_; }
   std::size_t triangle_count() const { return scene_.triangle_count(); }
 
+  // The models' triangles and bottom-level structures, shared with the job's other frames.
+  ModelGeometry& geometry() const { return *geometry_; }
+  const std::shared_ptr<ModelGeometry>& shared_geometry() const { return geometry_; }
+
   // Engines keep per-frame set-up here; it is derived data, so a const scene may fill it.
   FrameCache& frame_cache() const { return frame_cache_; }
 
  private:
   Scene scene_;
   std::vector<PreparedObject> objects_;
-  std::vector<std::unique_ptr<ModelTriangles>> model_triangles_;  // one per distinct model
+  std::shared_ptr<ModelGeometry> geometry_;
   mutable FrameCache frame_cache_;
 };
 

@@ -44,6 +44,7 @@ struct RenderSettings {
   int pass = -1;
   int max_depth = 5;         // scattering events; -1 = unbounded (path tracer, Russian roulette)
   std::uint64_t seed = 0;
+  int frame = 0;             // keys the random numbers with the seed (trace/sampler.h)
   int tile_size = 32;
   int threads = 0;           // 0 = all hardware threads
   AccelKind accel = AccelKind::Bvh;

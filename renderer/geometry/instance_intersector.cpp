@@ -48,7 +48,7 @@ InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind a
   for (const PreparedObject& object : objects) {
     const MeshAccel*& shared = accel_of[object.triangles];
     if (!shared) {
-      mesh_accels_.push_back(build_mesh_accel(*object.triangles, accel, cancel));
+      mesh_accels_.push_back(scene.geometry().mesh_accel(*object.triangles, accel, cancel));
       shared = mesh_accels_.back().get();
     }
     object_accel_.push_back(shared);

@@ -52,7 +52,9 @@ class InstanceIntersector final : public SceneIntersector {
   bool any_in_object(std::uint32_t o, const Ray& world_ray, TraversalStats* stats) const;
 
   const PreparedScene& scene_;
-  std::vector<std::unique_ptr<MeshAccel>> mesh_accels_;  // one per distinct ModelTriangles
+  // One per distinct ModelTriangles, from the scene's ModelGeometry: built by the first frame
+  // of a job that needs it, shared by the rest.
+  std::vector<std::shared_ptr<const MeshAccel>> mesh_accels_;
   std::vector<const MeshAccel*> object_accel_;           // per object
   std::optional<Bvh> top_;
 };

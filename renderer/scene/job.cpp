@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_animation.h"
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/json_reader.h"
 #include "renderer/util/confined_file.h"
@@ -236,6 +237,42 @@ void parse_render(const JsonValue& v, RenderSettings& r) {
   }
 }
 
+FrameRange parse_frames(const JsonValue& v) {
+  const JsonObject obj = v.object({"start", "end", "step", "fps", "only"});
+  FrameRange r;
+  const JsonValue start = obj.require("start");
+  r.start = start.int32(0, kMaxFrameNumber);
+  const JsonValue end = obj.require("end");
+  r.end = end.int32(0, kMaxFrameNumber);
+  if (r.end < r.start) end.fail(fmt::format("expected an end >= start ({}), got {}", r.start, r.end));
+  if (auto x = obj.get("step")) r.step = x->int32(1, kMaxFrameNumber);
+  if (auto x = obj.get("fps")) r.fps = x->real(NumberRange{0.0, 1000.0, true, false});
+  if (auto x = obj.get("only")) {
+    const std::vector<JsonValue> pair = x->array();
+    if (pair.size() != 2) x->fail(fmt::format("expected [first, last], got an array of {}", pair.size()));
+    const int first = pair[0].int32(r.start, r.end);
+    const int last = pair[1].int32(first, r.end);
+    r.only = std::pair{first, last};
+    if (r.frames().empty()) {
+      x->fail(fmt::format("frames {}-{} pick no frame of {}-{} step {}", first, last, r.start, r.end, r.step));
+    }
+  }
+  const std::size_t count = static_cast<std::size_t>((r.end - r.start) / r.step) + 1;
+  if (count > static_cast<std::size_t>(kMaxFramesPerJob)) {
+    v.fail(fmt::format("{} frames; a job renders at most {}", count, kMaxFramesPerJob));
+  }
+  return r;
+}
+
+// With a frame range every output names its frame: a '#' run for the number.
+void check_frame_pattern(const std::optional<JsonValue>& written, const fs::path& file, const JsonValue& output) {
+  if (file.empty() || has_frame_pattern(file.string())) return;
+  const JsonValue at = written ? *written : output;
+  at.fail(fmt::format("'{}' has no '#' for the frame number: a job with frames writes one file a frame "
+                      "(for example out/{}.####{})",
+                      shown(file.string()), file.stem().string(), file.extension().string()));
+}
+
 void parse_output(const JsonValue& v, Job& job) {
   const JsonObject obj = v.object({"image", "preview", "aovs"});
   const auto image = obj.get("image");
@@ -259,6 +296,10 @@ void parse_output(const JsonValue& v, Job& job) {
     const JsonValue& at = preview ? *preview : *image;
     at.fail(fmt::format("output.image and output.preview are the same file '{}'",
                         shown(job.output.image.string())));
+  }
+  if (job.frames) {
+    check_frame_pattern(image, job.output.image, v);
+    check_frame_pattern(preview, job.output.preview, v);
   }
 }
 
@@ -286,11 +327,31 @@ std::string default_name(const fs::path& job_path) {
 
 }  // namespace
 
+struct JobAnimation {
+  nlohmann::json document;
+  std::vector<AnimatedValue> values;
+  Context ctx;
+};
+
+namespace {
+
+// The scene of `job` at `frame`, from its animated document.
+JobScene animated_scene(const JobAnimation& a, const std::string& file, int frame) {
+  const nlohmann::json doc = animated_document(a.document, a.values, frame);
+  try {
+    return parse_scene(JsonValue(doc.at("scene"), "scene", file), a.ctx);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{} (at frame {}, with the animated values)", e.what(), frame));
+  }
+}
+
+}  // namespace
+
 Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadOptions& options) {
   const std::string file = path.string();
-  const nlohmann::json doc = parse_json_strict(json_text, file);
+  nlohmann::json doc = parse_json_strict(json_text, file);
   const JsonObject top(JsonValue(doc, "", file),
-                       {"version", "name", "scene", "render", "output", "validate"});
+                       {"version", "name", "frames", "animate", "scene", "render", "output", "validate"});
 
   // The version decides which keys exist, so it is checked before any of them.
   const JsonValue version = top.require("version");
@@ -316,16 +377,45 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
   job.asset_root = ctx.asset_root;
   job.name = default_name(path);
   if (auto x = top.get("name")) job.name = parse_name(*x);
+  if (auto x = top.get("frames")) job.frames = parse_frames(*x);
   job.scene = parse_scene(top.require("scene"), ctx);
   if (auto x = top.get("render")) parse_render(*x, job.render);
-  job.output.image = fs::path("out") / (job.name + ".exr");
-  job.output.preview = fs::path("out") / (job.name + ".png");
+  const std::string numbered = job.frames ? ".####" : "";
+  job.output.image = fs::path("out") / (job.name + numbered + ".exr");
+  job.output.preview = fs::path("out") / (job.name + numbered + ".png");
   if (auto x = top.get("output")) parse_output(*x, job);
   if (auto x = top.get("validate")) {
     const JsonObject obj = x->object({"embree_rays"});
     if (auto rays = obj.get("embree_rays")) job.embree_rays = rays->integer(0);
   }
-  return job;
+  if (auto x = top.get("animate")) {
+    if (!job.frames) x->fail("keyframes need a frame range: give \"frames\": {\"start\": 1, \"end\": 48}");
+    auto animation = std::make_shared<JobAnimation>();
+    animation->values = parse_animate(*x, doc);
+    if (!animation->values.empty()) {
+      animation->ctx = ctx;
+      animation->document = std::move(doc);
+      // Every frame is read once here, so that no value an animation reaches (a negative
+      // intensity where a smooth curve overshoots, a camera on its target) fails a job halfway.
+      for (int f : job.frames->frames()) animated_scene(*animation, file, f);
+      job.animation = std::move(animation);
+    }
+  }
+  job.output_patterns = job.output;
+  return job.frames ? job_at_frame(job, job.frames->frames().front()) : job;
+}
+
+std::vector<int> job_frames(const Job& job) { return job.frames ? job.frames->frames() : std::vector<int>{0}; }
+
+Job job_at_frame(const Job& job, int frame) {
+  Job out = job;
+  out.frame = frame;
+  out.render.frame = frame;
+  if (!job.frames) return out;
+  if (job.animation) out.scene = animated_scene(*job.animation, job.path.string(), frame);
+  out.output.image = frame_file_name(job.output_patterns.image.string(), frame);
+  out.output.preview = frame_file_name(job.output_patterns.preview.string(), frame);
+  return out;
 }
 
 std::string read_job_file(const fs::path& path) {

@@ -4,12 +4,14 @@
 //   jobs/cow.json: scene.objects[2].scale: expected 3 numbers
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "renderer/render_settings.h"
 #include "renderer/scene/camera.h"
+#include "renderer/scene/frame_range.h"
 #include "renderer/scene/light.h"
 #include "renderer/scene/material.h"
 #include "renderer/scene/transform.h"
@@ -36,6 +38,8 @@ struct JobOutput {
   std::filesystem::path preview;  // PNG/JPEG; empty = none
 };
 
+struct JobAnimation;  // the job's keyframe tracks and the document they animate (job.cpp)
+
 struct Job {
   std::filesystem::path path;     // the job file
   // Absolute, symlinks resolved: every file the job reads, and every file its models name, lies
@@ -46,7 +50,21 @@ struct Job {
   RenderSettings render;          // includes the output AOVs
   JobOutput output;
   std::int64_t embree_rays = 0;   // validate.embree_rays
+  // The job's frames; absent: one still (frame 0). A Job is always one frame's still: the values
+  // above, output included, are those of `frame` (the first frame rendered, as parsed; any other
+  // through job_at_frame()). `output_patterns` keeps the names with their '#' runs.
+  std::optional<FrameRange> frames;
+  int frame = 0;
+  JobOutput output_patterns;
+  std::shared_ptr<const JobAnimation> animation;  // null: nothing is keyframed
 };
+
+// The frames the job renders: its range's, or the still's frame 0.
+std::vector<int> job_frames(const Job& job);
+// The job at `frame` (one of job_frames): keyframed values evaluated there, render.frame and
+// `frame` set, the output patterns' '#' runs replaced by the frame number. The result is the job
+// a still with those values written in by hand would be (with a range of that one frame).
+Job job_at_frame(const Job& job, int frame);
 
 struct JobLoadOptions {
   // Model files must resolve inside this folder; empty = the job file's folder.

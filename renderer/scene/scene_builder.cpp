@@ -42,6 +42,12 @@ Light place_light(const Light& l, const glm::mat4& model_to_world) {
 }  // namespace
 
 Scene build_scene(const Job& job) {
+  // A job put together in code may have no asset root, and then each model's own folder is its root.
+  ModelLibrary models(job.asset_root);
+  return build_scene(job, models);
+}
+
+Scene build_scene(const Job& job, ModelLibrary& models) {
   Scene scene;
   scene.ambient = job.scene.ambient;
   scene.background = job.scene.background;
@@ -50,20 +56,13 @@ Scene build_scene(const Job& job) {
   std::map<std::string, int> stem_uses;
   for (const JobObject& o : job.scene.objects) ++stem_uses[o.file.stem().string()];
 
-  std::map<std::filesystem::path, std::shared_ptr<const Model>> models;  // one load per file
   for (std::size_t i = 0; i < job.scene.objects.size(); ++i) {
     const JobObject& o = job.scene.objects[i];
-    std::shared_ptr<const Model>& model = models[o.file];
-    if (!model) {
-      try {
-        // Confined to the job's asset root; a job put together in code may have none, and then
-        // each model's own folder is its root.
-        model = std::make_shared<const Model>(job.asset_root.empty() ? load_model(o.file)
-                                                                     : load_model(o.file, job.asset_root));
-      } catch (const InputError& e) {
-        throw InputError(fmt::format("{}: scene.objects[{}].file: {}", job.path.string(), i,
-                                     e.what()));
-      }
+    std::shared_ptr<const Model> model;
+    try {
+      model = models.load(o.file);
+    } catch (const InputError& e) {
+      throw InputError(fmt::format("{}: scene.objects[{}].file: {}", job.path.string(), i, e.what()));
     }
 
     SceneObject so;

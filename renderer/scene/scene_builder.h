@@ -3,10 +3,13 @@
 // transforms and material overrides, and picks the camera and lights (the job's, else the first
 // model's).
 #include "renderer/scene/job.h"
+#include "renderer/scene/model_library.h"
 #include "renderer/scene/scene.h"
 
 namespace farm {
 
 Scene build_scene(const Job& job);
+// The same with the models from `models`, which keeps them for the job's other frames.
+Scene build_scene(const Job& job, ModelLibrary& models);
 
 }  // namespace farm

@@ -239,6 +239,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   // This call's samples of each pixel: a pass's, or all spp. Indices are global within the pixel
   // (pass 1 starts at pass_spp), so the sampler never repeats a sample between passes.
   const SampleRange range = samples_to_render(settings);
+  const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
 
   for (int y = tile.y0; y < tile.y1; ++y) {
     for (int x = tile.x0; x < tile.x1; ++x) {
@@ -248,7 +249,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
       const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
                                   static_cast<std::uint64_t>(x);
       for (int s = range.begin; s < range.end; ++s) {
-        const SampleKey key{settings.seed, pixel, static_cast<std::uint32_t>(s)};
+        const SampleKey key{seed, pixel, static_cast<std::uint32_t>(s)};
         // Box filter: the sample lands uniformly anywhere in the pixel.
         const Ray ray = camera.primary_ray(static_cast<float>(x) + sample_uniform(key, 0),
                                            static_cast<float>(y) + sample_uniform(key, 1),

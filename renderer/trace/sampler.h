@@ -1,6 +1,7 @@
 #pragma once
 // Counter-based random numbers (DESIGN.md, engine contract): a value is a pure function of
-// (seed, pixel, sample index, dimension), so an image never depends on tiling, threads or retries.
+// (seed, frame, pixel, sample index,
+// dimension), so an image never depends on tiling, threads or retries.
 #include <cstdint>
 
 namespace farm {
@@ -10,6 +11,14 @@ inline std::uint64_t mix64(std::uint64_t z) {
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
   return z ^ (z >> 31);
+}
+
+// The seed a frame's random numbers are keyed by: the job's seed itself at frame 0 (a still), so
+// that a frame range leaves a still's pixels as they were, and one mixed with the frame number
+// otherwise, so that frames do not share their noise.
+inline std::uint64_t frame_seed(std::uint64_t seed, int frame) {
+  if (frame == 0) return seed;
+  return mix64(seed ^ mix64(0xd1b54a32d192ed03ULL + static_cast<std::uint64_t>(frame)));
 }
 
 struct SampleKey {

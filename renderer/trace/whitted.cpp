@@ -143,7 +143,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   for (int y = tile.y0; y < tile.y1; ++y) {
     for (int x = tile.x0; x < tile.x1; ++x) {
       glm::vec4 sum(0.0f);
-      const SampleKey key{settings.seed, static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
+      const SampleKey key{frame_seed(settings.seed, settings.frame), static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
                                              static_cast<std::uint64_t>(x), 0};
       for (int s = 0; s < samples; ++s) {
         // Sample 0 is the pixel centre; further samples are jittered within the pixel.

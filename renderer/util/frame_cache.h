@@ -1,7 +1,7 @@
 #pragma once
 // Per-frame data an engine derives from a prepared scene and a frame's settings (the
 // rasterizer's transformed, set-up and binned triangles), built once and shared by every tile of
-// that frame. Concurrent requests for the same key wait for a single build (each able to stop
+// that frame (or, unbounded, what every frame of a job shares: model_geometry.h). Concurrent requests for the same key wait for a single build (each able to stop
 // waiting when its own CancelFlag asks). A few recent frames
 // are kept: a job renders one frame size, but a worker may interleave several jobs' tiles.
 #include <chrono>
@@ -18,6 +18,9 @@ namespace farm {
 
 class FrameCache {
  public:
+  static constexpr std::size_t kUnbounded = static_cast<std::size_t>(-1);
+  explicit FrameCache(std::size_t capacity = kDefaultCapacity) : capacity_(capacity) {}
+
   // The value for `key`, built here by build() when no one has (or is building) it. A caller
   // waiting for another's build polls `cancel` and throws RenderStopped when it asks; a build
   // that its own caller's flag stopped (build() threw RenderStopped) is not cached, and its
@@ -38,7 +41,7 @@ class FrameCache {
         }
         if (!future.valid()) {
           entries_.emplace_front(key, promise.get_future().share());
-          if (entries_.size() > kCapacity) entries_.pop_back();
+          if (entries_.size() > capacity_) entries_.pop_back();
         }
       }
       if (future.valid()) {
@@ -69,7 +72,8 @@ class FrameCache {
     entries_.remove_if([&](const auto& e) { return e.first == key; });
   }
 
-  static constexpr std::size_t kCapacity = 4;
+  static constexpr std::size_t kDefaultCapacity = 4;
+  const std::size_t capacity_;
   static constexpr std::chrono::milliseconds kWaitPoll{5};
   std::mutex mutex_;
   std::list<std::pair<std::string, std::shared_future<std::shared_ptr<const void>>>> entries_;

@@ -6,6 +6,7 @@
 
 #include "renderer/scene/job_limits.h"
 #include "server/bench/farm_bench.h"
+#include "server/bench/frames_bench.h"
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
 #include "server/bench/flip_bench.h"
@@ -154,6 +155,22 @@ void add_render_bench(CLI::App& bench, CommandTable& commands) {
   add_runner(commands, render, o, run_render_bench);
 }
 
+void add_frames_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<FramesBenchOptions>();
+  CLI::App* frames = bench.add_subcommand(
+      "frames", "A frame range against its frames: the cow turntable (48 frames, raster, 1 thread) through "
+                "`farm render` vs the engine's frames plus one model load; a 16-frame path animation on a "
+                "scheduler with 1 and 2 workers");
+  frames->add_option("--cow", o->cow, "The lab's cow.dae")->capture_default_str();
+  frames->add_option("--path-job", o->path_job, "The path-traced animation")->capture_default_str();
+  frames->add_option("--frames", o->frames, "Frames of the turntable")->check(CLI::Range(1, 1000))->capture_default_str();
+  frames->add_option("--repeats", o->repeats, "Rounds (medians reported)")->check(CLI::Range(1, 100))->capture_default_str();
+  frames->add_option("--scene", o->scene, "turntable, path or all")
+      ->check(CLI::IsMember({"turntable", "path", "all"}))
+      ->capture_default_str();
+  add_runner(commands, frames, o, run_frames_bench);
+}
+
 void add_regress_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<RegressBenchOptions>();
   CLI::App* regress = bench.add_subcommand(
@@ -207,6 +224,7 @@ void add_bench_command(CLI::App& app, CommandTable& commands) {
   add_farm_bench(*bench, commands);
   add_render_bench(*bench, commands);
   add_regress_bench(*bench, commands);
+  add_frames_bench(*bench, commands);
   add_flip_bench(*bench, commands);
   add_grade_bench(*bench, commands);
 }

@@ -11,8 +11,14 @@
 
 namespace farm {
 
+std::string frames_of(const v1::Job& job) {
+  if (job.frames_total() <= 1 && job.frame_first() == 0) return {};  // a still
+  return fmt::format("{}/{} frames", job.frames_done(), job.frames_total());
+}
+
 std::string progress_of(const v1::Job& job) {
-  return fmt::format("{}/{} tiles", job.tiles_done(), job.tiles_total());
+  const std::string frames = frames_of(job);
+  return fmt::format("{}{}/{} tiles", frames.empty() ? "" : frames + ", ", job.tiles_done(), job.tiles_total());
 }
 
 std::string local_time(const google::protobuf::Timestamp& t) {
@@ -29,6 +35,10 @@ void print_job(const v1::Job& job) {
   fmt::print("job {} '{}': {}, {}\n", job.job_id(), job.name(), to_string(job.state()), progress_of(job));
   fmt::print("  {} engine, {}x{}, scene {}\n", job.engine(), job.width(), job.height(),
              job.scene_hash().substr(0, 16));
+  if (!frames_of(job).empty()) {
+    fmt::print("  frames {} to {} by {}: {} of {} merged\n", job.frame_first(), job.frame_last(), job.frame_step(),
+               job.frames_done(), job.frames_total());
+  }
   fmt::print("  submitted {}{}, started {}, finished {}\n", local_time(job.submitted_at()),
              job.owner().empty() ? "" : " by " + job.owner(), local_time(job.started_at()),
              local_time(job.finished_at()));
@@ -50,7 +60,7 @@ v1::Job follow(SchedulerClient& client, const std::string& job_id) {
   v1::JobState shown = v1::JOB_STATE_UNSPECIFIED;
   const v1::Job last = client.watch(job_id, [&](const v1::JobEvent& event) {
     const v1::Job& job = event.job();
-    bar.update(job.tiles_done(), std::max<std::size_t>(1, job.tiles_total()));
+    bar.update(job.tiles_done(), std::max<std::size_t>(1, job.tiles_total()), frames_of(job));
     if (!terminal && job.state() != shown) {
       fmt::print("job {}: {} ({})\n", job_id, to_string(job.state()), progress_of(job));
       std::fflush(stdout);

@@ -8,8 +8,10 @@
 
 namespace farm {
 
-// "3/12 tiles".
+// "3/12 tiles"; for a job with frames "2/48 frames, 610/14400 tiles".
 std::string progress_of(const v1::Job& job);
+// "2/48 frames"; empty for a still.
+std::string frames_of(const v1::Job& job);
 
 // A Timestamp in local time, "2024-05-01 12:00:00"; "-" when unset.
 std::string local_time(const google::protobuf::Timestamp& t);

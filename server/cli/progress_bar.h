@@ -12,7 +12,8 @@ class ProgressBar {
   explicit ProgressBar(std::string label, bool enabled);
   ~ProgressBar();  // finishes the line if anything was drawn
 
-  void update(std::size_t done, std::size_t total);
+  // `note` follows the counts (a job's "frame 3/48"); a new note redraws the line.
+  void update(std::size_t done, std::size_t total, const std::string& note = {});
   // Erases the bar's line, if drawn, so that a line of output can take its place; the next
   // update draws the bar again below it.
   void clear();
@@ -24,6 +25,7 @@ class ProgressBar {
   bool enabled_;
   bool drawn_ = false;
   int last_permille_ = -1;
+  std::string last_note_;
   std::chrono::steady_clock::time_point start_;
 };
 

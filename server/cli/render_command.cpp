@@ -15,6 +15,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
+#include "server/cli/job_display.h"
 #include "server/cli/job_file_options.h"
 #include "server/cli/log_level_option.h"
 #include "server/cli/progress_bar.h"
@@ -93,8 +94,8 @@ void run_render_command(const RenderCommandOptions& options) {
     // --show-bvh: the preview is drawn here, over the merged frame, instead of by the merge.
     run.write_preview = !options.overrides.show_bvh;
     run.keep_frame = options.overrides.show_bvh.has_value();
-    result = farm.run_local(submission, [&](const v1::Job& j) { bar.update(j.tiles_done(), j.tiles_total()); },
-                            run);
+    result = farm.run_local(
+        submission, [&](const v1::Job& j) { bar.update(j.tiles_done(), j.tiles_total(), frames_of(j)); }, run);
   }
   const double render_ms = ms_since(t_render);
   if (result.job.state() != v1::JOB_STATE_SUCCEEDED) {
@@ -113,10 +114,17 @@ void run_render_command(const RenderCommandOptions& options) {
   const v1::TileStats& stats = result.job.stats();
   fmt::print("job '{}': {} engine, {}x{}, {} spp, {} object(s)\n", job.name, to_string(r.engine), r.width,
              r.height, r.spp, job.scene.objects.size());
-  fmt::print("wrote {} ({}, {} EXR)\n", job.output.image.string(), aov_list(r.aovs),
+  // A job with frames: how many, and the first and last frame's files.
+  const std::vector<int> frames = job_frames(job);
+  const Job last = job_at_frame(job, frames.back());
+  const auto written = [&](const std::filesystem::path& first, const std::filesystem::path& final_frame) {
+    if (frames.size() == 1) return first.string();
+    return fmt::format("{} frames, {} .. {}", frames.size(), first.string(), final_frame.string());
+  };
+  fmt::print("wrote {} ({}, {} EXR)\n", written(job.output.image, last.output.image), aov_list(r.aovs),
              farm_options.exr_type == ExrPixelType::Half ? "half" : "float");
   if (!job.output.preview.empty()) {
-    fmt::print("wrote {} (sRGB preview{})\n", job.output.preview.string(),
+    fmt::print("wrote {} (sRGB preview{})\n", written(job.output.preview, last.output.preview),
                options.overrides.show_bvh
                    ? fmt::format(", BVH levels <= {} drawn over it", *options.overrides.show_bvh)
                    : std::string());

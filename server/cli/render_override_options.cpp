@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "renderer/render_settings.h"
+#include "renderer/scene/frame_range.h"
 #include "renderer/scene/job_limits.h"
 
 namespace farm {
@@ -30,6 +31,17 @@ void add_render_override_options(CLI::App& command, RenderOverrides& o) {
       ->group(kGroup);
   command.add_option("--tile-size", o.tile_size, "Tile edge in pixels (render.tile_size)")
       ->check(CLI::Range(1, kMaxTileSize))
+      ->group(kGroup);
+  command
+      .add_option_function<std::string>(
+          "--frames",
+          [&o](const std::string& text) {
+            const auto pick = parse_frame_pick(text);
+            if (!pick) throw CLI::ValidationError("--frames", "expected FIRST-LAST or FRAME, such as 10-20 or 5");
+            o.frames = *pick;
+          },
+          "Frames of the job's range to render, FIRST-LAST or one FRAME (frames.only)")
+      ->type_name("RANGE")
       ->group(kGroup);
 }
 

@@ -7,10 +7,10 @@
 namespace farm {
 
 void download_results(SchedulerClient& client, const std::string& job_id, const ResultPath& where,
-                      bool want_preview) {
+                      bool want_preview, std::optional<int> frame) {
   const auto fetch = [&](v1::ResultKind kind) {
     const std::filesystem::path file =
-        client.fetch(job_id, kind, [&](const std::string& name) { return where(kind, name); });
+        client.fetch(job_id, kind, [&](const std::string& name) { return where(kind, name); }, frame);
     fmt::print("wrote {}\n", file.string());
   };
   fetch(v1::RESULT_KIND_EXR);

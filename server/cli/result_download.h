@@ -13,7 +13,8 @@ using ResultPath = std::function<std::filesystem::path(v1::ResultKind, const std
 
 // Fetches the EXR and, when `want_preview`, the preview (none is fine: the job may not have
 // one), printing "wrote PATH" for each.
+// `frame`: that frame of a job with frames; none: the job's first.
 void download_results(SchedulerClient& client, const std::string& job_id, const ResultPath& where,
-                      bool want_preview);
+                      bool want_preview, std::optional<int> frame = std::nullopt);
 
 }  // namespace farm

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 bool any_override(const RenderOverrides& o) {
   return o.engine || o.width || o.height || o.spp || o.threads || o.tile_size || o.max_depth || o.seed ||
-         !o.add_aovs.empty() || o.image || o.preview;
+         !o.add_aovs.empty() || o.image || o.preview || o.frames;
 }
 
 // The job text with model paths relative to the root and the overrides written in.
@@ -49,6 +49,7 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
       if (job.render.aovs.has(aov)) aovs.push_back(std::string(to_string(aov)));
     doc["output"]["aovs"] = aovs;
   }
+  if (o.frames) doc["frames"]["only"] = {o.frames->first, o.frames->second};
   if (o.image) doc["output"]["image"] = o.image->generic_string();
   if (o.preview) {
     if (o.preview->empty()) {

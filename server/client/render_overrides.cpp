@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <tuple>
+
 #include "renderer/scene/input_error.h"
 
 namespace farm {
@@ -27,6 +29,36 @@ void apply_overrides(Job& job, const RenderOverrides& o) {
   }
   if (o.image) job.output.image = *o.image;
   if (o.preview) job.output.preview = *o.preview;
+  if (!job.frames) {
+    if (o.frames) {
+      throw InputError(fmt::format("--frames {}-{}: the job renders one still; give it a range, such as "
+                                   "\"frames\": {{\"start\": 1, \"end\": 48}}",
+                                   o.frames->first, o.frames->second));
+    }
+    return;
+  }
+  // A job with frames: the outputs are patterns, and the job is re-evaluated at its first frame.
+  for (const auto& [given, pattern, option] :
+       {std::tuple{o.image, &job.output_patterns.image, "--out"}, std::tuple{o.preview, &job.output_patterns.preview, "--preview"}}) {
+    if (!given) continue;
+    if (!given->empty() && !has_frame_pattern(given->string())) {
+      throw InputError(fmt::format("{} {}: the job renders frames, one file each: give a '#' run for the frame "
+                                   "number (for example {}.####{})",
+                                   option, given->string(), (given->parent_path() / given->stem()).string(),
+                                   given->extension().string()));
+    }
+    *pattern = *given;
+  }
+  if (o.frames) {
+    FrameRange picked = *job.frames;
+    picked.only = *o.frames;
+    if (o.frames->first < job.frames->start || o.frames->second > job.frames->end || picked.frames().empty()) {
+      throw InputError(fmt::format("--frames {}-{}: the job's frames are {} to {} by {}", o.frames->first,
+                                   o.frames->second, job.frames->start, job.frames->end, job.frames->step));
+    }
+    job.frames = picked;
+  }
+  job = job_at_frame(job, job.frames->frames().front());
 }
 
 }  // namespace farm

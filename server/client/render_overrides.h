@@ -18,9 +18,13 @@ struct RenderOverrides {
   std::optional<std::filesystem::path> image, preview;  // preview "" = none
   bool full_float = false;                              // 32-bit EXR instead of half
   std::optional<int> show_bvh;  // draw BVH boxes of levels <= this over the preview
+  // Frames of the job's range to render ("10-20" or "5"): written as frames.only.
+  std::optional<std::pair<int, int>> frames;
 };
 
-// Applies overrides to a loaded job; throws InputError naming the option for a bad value.
+// Applies overrides to a loaded job; throws InputError naming the option for a bad value (a
+// --frames outside the job's range, or of a job without one; an --out without '#' for a job
+// with frames).
 void apply_overrides(Job& job, const RenderOverrides& overrides);
 
 }  // namespace farm

@@ -172,10 +172,12 @@ v1::Job SchedulerClient::cancel(const std::string& job_id) {
   return call<v1::CancelJobResponse>(&v1::Scheduler::Stub::CancelJob, request, "CancelJob").job();
 }
 
-fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where) {
+fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where,
+                               std::optional<int> frame) {
   v1::GetResultRequest request;
   request.set_job_id(job_id);
   request.set_kind(kind);
+  if (frame) request.set_frame(*frame);
   grpc::ClientContext context;
   auto reader = stub_->GetResult(&context, request);
   v1::FileChunk chunk;

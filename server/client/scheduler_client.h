@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,9 @@ class SchedulerClient {
   // suggests, a plain file name, possibly empty), through a temporary file, checking its size and
   // SHA-256; returns the file.
   using Destination = std::function<std::filesystem::path(const std::string& suggested_name)>;
-  std::filesystem::path fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where);
+  // `frame`: that frame of a job with frames (as soon as it is merged); none: the job's first.
+  std::filesystem::path fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where,
+                              std::optional<int> frame = std::nullopt);
 
  private:
   // One unary call; failures thrown as throw_for_status says.

@@ -42,8 +42,9 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   r.log_level = s.log_level;
   worker_ = std::make_shared<InProcessTileWorker>(r);
   // The scene validation built is the one the worker renders: the models load once.
-  s.validated_scene = [worker = worker_](const std::string& hash, const Job& job, Scene scene) {
-    worker->renderer().adopt(hash, job, std::move(scene));
+  s.validated_scene = [worker = worker_](const std::string& hash, const Job& job, Scene scene,
+                                          std::shared_ptr<ModelLibrary> models) {
+    worker->renderer().adopt(hash, job, std::move(scene), std::move(models));
   };
   core_ = std::make_unique<SchedulerCore>(s);
   core_->add_worker(worker_);
@@ -68,18 +69,24 @@ EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Pr
                                        LocalRunOptions options) {
   const Job& job = submission.job;
   const std::string hash = scene_hash(submission.spec);
-  const std::shared_ptr<const CachedScene> cached =
-      worker_->renderer().adopt(hash, job, build_scene(job));
+  auto models = std::make_shared<ModelLibrary>(job.asset_root);
+  Scene scene = build_scene(job, *models);
+  const std::shared_ptr<const CachedScene> cached = worker_->renderer().adopt(hash, job, std::move(scene), models);
   ValidatedJob v;
   v.spec = submission.spec;
   v.scene_hash = hash;
   v.job = std::shared_ptr<const Job>(cached, &cached->job);
   v.scene = std::shared_ptr<const PreparedScene>(cached, &cached->prepared);
-  v.exr = job.output.image;
-  if (options.write_preview) v.preview = job.output.preview;
+  // A job with frames writes each where its patterns say.
+  const JobOutput& output = job.frames ? job.output_patterns : job.output;
+  v.exr = output.image;
+  if (options.write_preview) v.preview = output.preview;
   EmbeddedResult result;
   if (options.keep_frame) {
-    v.merged = [&result](TileBuffer&& frame) { result.frame = std::move(frame); };
+    // The job's first frame, and its scene.
+    v.merged = [&result, first = job.frame](int frame, TileBuffer&& film) {
+      if (frame == first) result.frame = std::move(film);
+    };
     result.scene = v.scene;
   }
   const auto queue = std::make_shared<JobEventQueue>();

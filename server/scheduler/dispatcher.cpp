@@ -274,6 +274,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
     c->asked.insert(w.id);
     auto call = std::make_shared<InFlight>();
     call->batch = TileBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
+    call->batch.frame = c->batch.frame;
     call->worker_id = w.id;
     call->check = c;
     in_flight_.insert(call);
@@ -323,6 +324,7 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
     *request.mutable_rect() = to_proto(batch.rect);
     request.set_job_id(batch.job_id);
     request.set_tile_index(batch.first);
+    request.set_frame(batch.frame);
     // Each tile of the batch has its deadline.
     const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch.count;
     grpc::Status status = w.worker->render(request, result, deadline, *call.cancel);
@@ -570,7 +572,7 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
   const v1::TileStats stats = result.response.stats();
   try {
     // The data first, then the mark: a done tile always has its data.
-    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(), batch.first, result);
+    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(batch.frame), batch.first, result);
     if (!store_.batch_done(batch.job_id, batch.first, batch.count, stats, worker_id)) {
       // The job ended, or the tiles were taken back (the worker quarantined meanwhile).
       assembly_.discard(batch.job_id, batch.first);
@@ -585,13 +587,14 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       *f.mutable_rect() = to_proto(batch.rect);
       f.set_worker(worker);
       *f.mutable_stats() = stats;
+      f.set_frame(batch.frame);
     });
     pause_.written();
     {
       std::lock_guard lock(mutex_);
       worker_disk_full_.erase(worker_id);  // its disk had room for this one
     }
-    finisher_.finish_if_complete(batch.job_id);
+    finisher_.finish_if_complete(batch.job_id, batch.frame);
   } catch (const DiskFull& e) {
     // No room to keep it: rendered again once there is, with no attempt counted against the job
     // or the worker. Logged by the pause, once a minute at most, not once a batch.

@@ -10,6 +10,7 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/common/free_memory.h"
+#include "renderer/scene/frame_range.h"
 #include "server/common/job_state.h"
 
 namespace farm {
@@ -34,27 +35,40 @@ std::string check_against_embree(const JobInfo& info) {
 
 }  // namespace
 
-void Finisher::finish_if_complete(const std::string& job_id) {
-  const std::optional<v1::Job> job = store_.get_job(job_id);
-  if (!job || is_final(job->state()) || job->tiles_done() < job->tiles_total()) return;
+void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> frame) {
   {
     std::lock_guard lock(mutex_);
-    if (!merging_.insert(job_id).second) return;
+    const auto [it, added] = merging_.try_emplace(job_id, false);
+    if (!added) {
+      // Another thread merges the job's frames: it looks again once done, for this frame too.
+      it->second = true;
+      return;
+    }
   }
-  bool refused = false;
-  try {
-    merge(job_id);
-  } catch (const DiskFull& e) {
-    // The job stays as it is, its tiles done, until there is room for its frame.
-    log_.debug("job {}: merge refused: {}", job_id, e.what());
-    pause_.report(e);
-    refused = true;
-  } catch (const std::exception& e) {
-    log_.error("job {}: merging: {}", job_id, e.what());
+  std::optional<int> which = frame;
+  for (;;) {
+    bool refused = false;
+    try {
+      merge_complete(job_id, which);
+    } catch (const DiskFull& e) {
+      // The job stays as it is, its tiles done, until there is room for its frame.
+      log_.debug("job {}: merge refused: {}", job_id, e.what());
+      pause_.report(e);
+      refused = true;
+    } catch (const std::exception& e) {
+      log_.error("job {}: merging: {}", job_id, e.what());
+    }
+    std::lock_guard lock(mutex_);
+    const auto it = merging_.find(job_id);
+    if (it->second && !refused) {
+      it->second = false;
+      which.reset();  // frames completed meanwhile: every complete one
+      continue;
+    }
+    merging_.erase(it);
+    if (refused) refused_.insert(job_id);
+    return;
   }
-  std::lock_guard lock(mutex_);
-  merging_.erase(job_id);
-  if (refused) refused_.insert(job_id);
 }
 
 void Finisher::retry_refused() {
@@ -75,37 +89,72 @@ void Finisher::release(const std::string& job_id) {
   if (still_running == 0 || ++released_ % kTrimEvery == 0) return_free_memory_to_system();
 }
 
-void Finisher::merge(const std::string& job_id) {
-  const v1::Job before = *store_.get_job(job_id);
-  v1::Job after;
+void Finisher::merge_complete(const std::string& job_id, std::optional<int> frame) {
+  const std::optional<v1::Job> job = store_.get_job(job_id);
+  if (!job || is_final(job->state())) return;
+  for (int f : store_.complete_frames(job_id, frame)) {
+    if (!merge_frame(job_id, f)) return;
+  }
+  const v1::Job now = *store_.get_job(job_id);
+  if (is_final(now.state()) || now.frames_done() < now.frames_total() || now.tiles_done() < now.tiles_total()) return;
+  finish(job_id, now);
+}
+
+bool Finisher::merge_frame(const std::string& job_id, int frame) {
   try {
     const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
-    std::set<std::uint32_t> parts;
-    for (const TileRecord& t : store_.tiles(job_id)) parts.insert(t.part);
-    TileBuffer film = assembly_.assemble(job_id, info->frame(), {parts.begin(), parts.end()});
-    write_merged(film, files_of(job_id, *info), options_.exr_type);
-    const std::string validation = check_against_embree(*info);
-    if (info->merged) info->merged(std::move(film));
-    after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
-    if (!is_final(after.state())) {
+    const std::vector<std::uint32_t> parts = store_.frame_parts(job_id, frame);
+    TileBuffer film = assembly_.assemble(job_id, info->frame(frame), parts);
+    write_merged(film, files_of(job_id, *info, frame), options_.exr_type);
+    if (!store_.frame_merged(job_id, frame)) {
       // A worker was quarantined while the frame was merged, and some of its tiles taken back:
-      // they are being rendered again, and the job is merged once they are done.
-      log_.warn("job {}: merge abandoned, {} of its {} tiles are to be rendered again", job_id,
-                after.tiles_total() - after.tiles_done(), after.tiles_total());
-      return;
+      // they are being rendered again, and the frame is merged once they are done.
+      log_.warn("job {}: merge of frame {} abandoned, some of its tiles are to be rendered again", job_id, frame);
+      return false;
     }
-    log_.info("job {} done: {} tiles merged from {} calls", job_id, before.tiles_total(), parts.size());
+    if (info->merged) info->merged(frame, std::move(film));
+    assembly_.frame_merged(job_id, frame);
+    events_.publish(job_id, [&](v1::JobEvent& event) { event.mutable_frame_finished()->set_frame(frame); });
+    log_.debug("job {}: frame {} merged from {} calls", job_id, frame, parts.size());
+    return true;
   } catch (const DamagedParts& e) {
-    if (render_again(job_id, e)) return;
-    after = *store_.get_job(job_id);  // final meanwhile (cancelled): nothing to render again
+    render_again(job_id, e);  // or the job is final meanwhile (cancelled): nothing to render again
+    return false;
   } catch (const DiskFull&) {
     throw;  // not the job's fault: merged again once there is room (finish_if_complete)
   } catch (const std::exception& e) {
-    after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, fmt::format("merging the tiles: {}", e.what()),
-                              "", unix_ms_now());
-    log_.error("job {} failed: {}", job_id, after.failure_reason());
+    fail(job_id, fmt::format("merging the tiles of frame {}: {}", frame, e.what()));
+    return false;
   }
-  if (after.state() != before.state()) events_.publish_state(after, before.state());
+}
+
+void Finisher::finish(const std::string& job_id, const v1::Job& before) {
+  v1::Job after;
+  try {
+    const std::string validation = check_against_embree(*jobs_.get(job_id));
+    after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
+  } catch (const DiskFull&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(job_id, fmt::format("checking against Embree: {}", e.what()));
+    return;
+  }
+  if (!is_final(after.state())) {
+    log_.warn("job {}: not finished, {} of its {} tiles are to be rendered again", job_id,
+              after.tiles_total() - after.tiles_done(), after.tiles_total());
+    return;
+  }
+  log_.info("job {} done: {} tiles, {} frame{} merged", job_id, after.tiles_total(), after.frames_total(),
+            after.frames_total() == 1 ? "" : "s");
+  events_.publish_state(after, before.state());
+  release(job_id);
+}
+
+void Finisher::fail(const std::string& job_id, const std::string& reason) {
+  const v1::JobState before = store_.get_job(job_id)->state();
+  const v1::Job after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, reason, "", unix_ms_now());
+  log_.error("job {} failed: {}", job_id, after.failure_reason());
+  if (after.state() != before) events_.publish_state(after, before);
   release(job_id);
 }
 
@@ -167,11 +216,15 @@ void Finisher::publish_requeued(const std::string& job_id, const std::vector<Til
   }
 }
 
-MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info) const {
-  if (!info.files.exr.empty()) return info.files;
-  std::string stem = info.job->output.image.stem().string();
+MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info, int frame) const {
+  const bool framed = info.job->frames.has_value();
+  const auto numbered = [&](const fs::path& pattern) {
+    return framed && !pattern.empty() ? fs::path(frame_file_name(pattern.string(), frame)) : pattern;
+  };
+  if (!info.files.exr.empty()) return {numbered(info.files.exr), numbered(info.files.preview)};
+  std::string stem = numbered(info.job->output_patterns.image.filename()).stem().string();
   if (stem.empty() || stem.starts_with(".")) stem = "image";
-  const fs::path dir = results_dir(job_id);
+  const fs::path dir = results_dir(job_id) / std::to_string(frame);
   return {dir / (stem + ".exr"), dir / (stem + ".png")};
 }
 
@@ -179,15 +232,24 @@ fs::path Finisher::results_dir(const std::string& job_id) const {
   return options_.data_dir / "results" / job_id;
 }
 
-std::optional<fs::path> Finisher::result_file(const std::string& job_id, bool preview) const {
+std::optional<fs::path> Finisher::result_file(const std::string& job_id, bool preview, std::optional<int> frame) const {
   const std::optional<v1::Job> job = store_.get_job(job_id);
-  if (!job || job->state() != v1::JOB_STATE_SUCCEEDED) return std::nullopt;
-  std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(results_dir(job_id), ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.starts_with(".")) continue;
-    if (e.path().extension() == (preview ? ".png" : ".exr")) return e.path();
-  }
+  if (!job) return std::nullopt;
+  const int f = frame.value_or(job->frame_first());
+  // Without a frame, the job's first once it succeeded; a frame named, as soon as it is merged.
+  if (frame ? !store_.is_frame_merged(job_id, f) : job->state() != v1::JOB_STATE_SUCCEEDED) return std::nullopt;
+  const auto find_in = [&](const fs::path& dir) -> std::optional<fs::path> {
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.starts_with(".") || !e.is_regular_file(ec)) continue;
+      if (e.path().extension() == (preview ? ".png" : ".exr")) return e.path();
+    }
+    return std::nullopt;
+  };
+  if (auto file = find_in(results_dir(job_id) / std::to_string(f))) return file;
+  // A store from before frames kept a still's files in the job's folder itself.
+  if (f == 0) return find_in(results_dir(job_id));
   return std::nullopt;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
-// The end of a job: once its tiles are all done, its frame is assembled (FrameAssembly), written
-// (the EXR and the preview, job_merger.h), checked against Embree when the job asks for it, and
-// the job marked SUCCEEDED (FAILED when any of that throws). A part whose kept data is damaged
+// The end of each frame and of a job: once a frame's tiles are all done, the frame is assembled
+// (FrameAssembly), written (the EXR and the preview, job_merger.h), marked merged and announced
+// (FrameFinished), while the job's other frames render on. Once every frame is merged, the job is
+// checked against Embree when it asks for it and marked SUCCEEDED (FAILED when any of that throws). A part whose kept data is damaged
 // (DamagedParts: its file missing, truncated or failing its checksum) fails nothing: its tiles are
 // queued again (JobStore::requeue_parts), the job stays running and is merged once they are done.
 // A final job's memory and kept tiles then go (release()), whichever way it ended. A merge the disk
@@ -10,11 +11,13 @@
 // when dispatch resumes (retry_refused()). While the disk stays full, make_room() frees the tiles of
 // the youngest job holding some, so that the farm's own tiles never hold the disk for good.
 //
-// Lock: Finisher::mutex_ guards merging_ and refused_ only, and is a leaf: the merge itself runs
+// Lock: Finisher::mutex_ guards merging_ (a job being merged, and whether to look again) and
+// refused_ only, and is a leaf: the merge itself runs
 // without it.
 #include <atomic>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -39,9 +42,10 @@ class Finisher {
       : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), pause_(pause),
         log_(log) {}
 
-  // Merges the job if its tiles are all done and it is not final; one caller merges, others
-  // calling at the same time return at once.
-  void finish_if_complete(const std::string& job_id);
+  // Merges `frame` of the job if its tiles are all done (no frame: every complete frame), and ends
+  // the job once all are merged. One caller merges a job at a time; another calling meanwhile
+  // returns at once, and the first looks again for complete frames before it returns.
+  void finish_if_complete(const std::string& job_id, std::optional<int> frame = std::nullopt);
   // The job is final: what is kept of it in memory and its tiles go.
   void release(const std::string& job_id);
   // Merges again the jobs whose merge the disk refused (called when dispatch resumes).
@@ -51,19 +55,27 @@ class Finisher {
   // gives them back, their files removed and their tiles queued again (no attempt counted), so
   // that older jobs can finish and merge. False when fewer than two jobs hold done tiles.
   bool make_room();
-  // The merged EXR or PNG under results/ of a SUCCEEDED job; nullopt otherwise.
-  std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview) const;
+  // The merged EXR or PNG under results/ of the job's `frame` once it is merged; without a frame,
+  // the first frame of a SUCCEEDED job. nullopt otherwise.
+  std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
+                                                   std::optional<int> frame = std::nullopt) const;
   // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.
   void on_requeued(std::function<void()> f) { on_requeued_ = std::move(f); }
 
  private:
-  void merge(const std::string& job_id);
+  // The complete frames merged (`frame` alone when given), then the job finished if all are.
+  void merge_complete(const std::string& job_id, std::optional<int> frame);
+  // False when the job cannot go on to its next frame now: failed, or tiles to render again.
+  bool merge_frame(const std::string& job_id, int frame);
+  void finish(const std::string& job_id, const v1::Job& before);
+  void fail(const std::string& job_id, const std::string& reason);
   // Queues the damaged parts' tiles again; false when the job had none done any more (final).
   bool render_again(const std::string& job_id, const DamagedParts& damaged);
   // Tells the job's watchers that `taken` was queued again for `reason` (no attempt counted).
   void publish_requeued(const std::string& job_id, const std::vector<TileBatch>& taken, const std::string& reason);
-  // Where the job's frame goes: where its submitter said, or results/<job id>/<stem>.exr and .png.
-  MergedFiles files_of(const std::string& job_id, const JobInfo& info) const;
+  // Where the job's frame goes: where its submitter said (the frame's number in its '#' run), or
+  // results/<job id>/<frame>/<stem>.exr and .png.
+  MergedFiles files_of(const std::string& job_id, const JobInfo& info, int frame) const;
   std::filesystem::path results_dir(const std::string& job_id) const;
 
   const SchedulerOptions& options_;
@@ -74,7 +86,7 @@ class Finisher {
   DiskFullPause& pause_;
   spdlog::logger& log_;
   std::mutex mutex_;
-  std::set<std::string> merging_;
+  std::map<std::string, bool> merging_;  // job -> another frame completed meanwhile
   std::set<std::string> refused_;  // merges the disk refused, tried again by retry_refused()
   std::function<void()> on_requeued_;  // set once, before any merge
   static constexpr unsigned kTrimEvery = 16;

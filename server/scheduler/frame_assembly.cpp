@@ -1,5 +1,7 @@
 #include "server/scheduler/frame_assembly.h"
 
+#include <climits>
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -74,7 +76,7 @@ void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, 
   std::shared_ptr<Film> f;
   {
     std::lock_guard lock(mutex_);
-    std::shared_ptr<Film>& slot = films_[job_id];
+    std::shared_ptr<Film>& slot = films_[{job_id, frame.frame}];
     if (!slot) {
       slot = std::make_shared<Film>();
       // The batches cover the image exactly: no clearing needed.
@@ -90,17 +92,22 @@ void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, 
 }
 
 void InMemoryAssembly::discard(const std::string& job_id, std::uint32_t part) {
-  std::shared_ptr<Film> f;
+  std::vector<std::shared_ptr<Film>> films;  // the job's: part numbers are unique across its frames
   {
     std::lock_guard lock(mutex_);
-    const auto it = films_.find(job_id);
-    if (it == films_.end()) return;
-    f = it->second;
+    for (auto it = films_.lower_bound({job_id, INT_MIN}); it != films_.end() && it->first.first == job_id; ++it) {
+      films.push_back(it->second);
+    }
   }
-  std::lock_guard lock(f->mutex);
-  // The oldest paste of the part: one pasted again since is the one that stays.
-  const auto it = std::find_if(f->parts.begin(), f->parts.end(), [&](const auto& p) { return p.first == part; });
-  if (it != f->parts.end()) f->parts.erase(it);
+  for (const std::shared_ptr<Film>& f : films) {
+    std::lock_guard lock(f->mutex);
+    // The oldest paste of the part: one pasted again since is the one that stays.
+    const auto it = std::find_if(f->parts.begin(), f->parts.end(), [&](const auto& p) { return p.first == part; });
+    if (it != f->parts.end()) {
+      f->parts.erase(it);
+      return;
+    }
+  }
 }
 
 TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
@@ -108,10 +115,10 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
   std::shared_ptr<Film> f;
   {
     std::lock_guard lock(mutex_);
-    const auto it = films_.find(job_id);
+    const auto it = films_.find({job_id, frame.frame});
     if (it != films_.end()) f = it->second;
   }
-  if (!f) throw std::runtime_error(fmt::format("job {}: no tiles were kept for it", job_id));
+  if (!f) throw std::runtime_error(fmt::format("job {}: no tiles were kept for frame {}", job_id, frame.frame));
   std::lock_guard lock(f->mutex);
   std::vector<std::uint32_t> kept;
   RenderStats stats;
@@ -133,7 +140,12 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
 
 void InMemoryAssembly::remove_job(const std::string& job_id) {
   std::lock_guard lock(mutex_);
-  films_.erase(job_id);
+  films_.erase(films_.lower_bound({job_id, INT_MIN}), films_.lower_bound({job_id + '\0', INT_MIN}));
+}
+
+void InMemoryAssembly::frame_merged(const std::string& job_id, int frame) {
+  std::lock_guard lock(mutex_);
+  films_.erase({job_id, frame});
 }
 
 }  // namespace farm

@@ -36,10 +36,11 @@ class DamagedParts : public std::runtime_error {
   std::vector<Part> parts_;
 };
 
-// The frame a job's tiles make up.
+// The frame a batch of tiles belongs to.
 struct FrameLayout {
   Rect image;  // {0, 0, width, height}
   AovSet aovs;
+  int frame = 0;  // the frame number (a still: 0)
 };
 
 class FrameAssembly {
@@ -56,6 +57,8 @@ class FrameAssembly {
                               const std::vector<std::uint32_t>& parts) = 0;
   // Forgets the job (done, failed or cancelled).
   virtual void remove_job(const std::string& job_id) = 0;
+  // The frame is merged and written: what is kept of it only for the merge may go.
+  virtual void frame_merged(const std::string& job_id, int frame) = 0;
   // The part's tiles are no longer done (their worker was quarantined, or the store refused
   // them): whatever replaces them is added under its own part, maybe the same number.
   virtual void discard(const std::string& job_id, std::uint32_t part) = 0;
@@ -72,6 +75,9 @@ class TileFileAssembly final : public FrameAssembly {
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<std::uint32_t>& parts) override;
   void remove_job(const std::string& job_id) override { files_.remove_job(job_id); }
+  // The files stay until the job ends: a quarantine may yet take back some of the frame's parts,
+  // and its merge again needs the rest.
+  void frame_merged(const std::string&, int) override {}
   // Nothing to do: assemble() reads only the parts the store lists for done tiles, and a part
   // rendered again is written over the old file. Deleting the file here could delete its
   // replacement, written meanwhile under the same part.
@@ -91,6 +97,7 @@ class InMemoryAssembly final : public FrameAssembly {
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<std::uint32_t>& parts) override;
   void remove_job(const std::string& job_id) override;
+  void frame_merged(const std::string& job_id, int frame) override;  // its film goes
   void discard(const std::string& job_id, std::uint32_t part) override;
   void free_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) override {
     for (std::uint32_t part : parts) discard(job_id, part);
@@ -105,7 +112,7 @@ class InMemoryAssembly final : public FrameAssembly {
     std::vector<std::pair<std::uint32_t, RenderStats>> parts;
   };
   std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<Film>> films_;
+  std::map<std::pair<std::string, int>, std::shared_ptr<Film>> films_;  // by job and frame
 };
 
 }  // namespace farm

@@ -30,11 +30,13 @@ struct JobInfo {
   std::string scene_hash;
   std::shared_ptr<const Job> job;
   std::shared_ptr<const PreparedScene> scene;  // null: the merge builds one if it needs it
-  MergedFiles files;                            // empty: results/<job id>/<stem>.exr and .png
-  std::function<void(TileBuffer&&)> merged;
+  // Empty: results/<job id>/<stem>.exr and .png. A job with frames holds patterns here (a '#'
+  // run for the frame number, as the job's output).
+  MergedFiles files;
+  std::function<void(int frame, TileBuffer&&)> merged;
 
-  // The frame the job's tiles make up: its image and AOVs.
-  FrameLayout frame() const { return {Rect{0, 0, job->render.width, job->render.height}, job->render.aovs}; }
+  // The frame `f` of the job's tiles: its image and AOVs (the same for every frame).
+  FrameLayout frame(int f) const { return {Rect{0, 0, job->render.width, job->render.height}, job->render.aovs, f}; }
 };
 
 class RunningJobs {

@@ -112,9 +112,10 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
     if (scene_checker_) {
       scene_checker_->check(hash, m.job_file, m.dir, spec.file_name().empty() ? m.job.name : spec.file_name());
     } else {
-      Scene scene = build_scene(m.job);
+      auto models = std::make_shared<ModelLibrary>(m.job.asset_root);
+      Scene scene = build_scene(m.job, *models);
       if (options_.validated_scene) {
-        options_.validated_scene(hash, m.job, std::move(scene));
+        options_.validated_scene(hash, m.job, std::move(scene), std::move(models));
       } else if (m.job.embree_rays > 0) {
         info->scene = std::make_shared<const PreparedScene>(std::move(scene));  // for the merge's check
       }
@@ -155,6 +156,8 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
   job.priority = priority;
   job.owner = owner;
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
+  job.frames = job_frames(*info->job);
+  if (info->job->frames) job.frame_step = info->job->frames->step;
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
   v1::Job added;
@@ -166,8 +169,8 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
     if (watcher) events_.unsubscribe(job.id, watcher);
     throw;
   }
-  log_->info("job {} '{}' queued: {} {}x{}, {} tiles, priority {}{}", added.job_id(), added.name(),
-             added.engine(), added.width(), added.height(), added.tiles_total(), priority,
+  log_->info("job {} '{}' queued: {} {}x{}, {} frame(s), {} tiles, priority {}{}", added.job_id(), added.name(),
+             added.engine(), added.width(), added.height(), added.frames_total(), added.tiles_total(), priority,
              owner.empty() ? "" : ", owner " + owner);
   dispatcher_.work_queued();
   return added;
@@ -189,8 +192,9 @@ v1::Job SchedulerCore::cancel(const std::string& job_id) {
   return after;
 }
 
-std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bool preview) const {
-  return finisher_.result_file(job_id, preview);
+std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bool preview,
+                                                   std::optional<int> frame) const {
+  return finisher_.result_file(job_id, preview, frame);
 }
 
 // ---- Events --------------------------------------------------------------------------------------

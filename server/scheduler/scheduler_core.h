@@ -59,9 +59,10 @@ struct ValidatedJob {
   std::string scene_hash;                       // scene_hash(spec)
   std::shared_ptr<const Job> job;               // the spec's job, parsed
   std::shared_ptr<const PreparedScene> scene;   // reused by the merge's Embree check
-  std::filesystem::path exr, preview;           // preview empty: none
-  // Given the merged frame after its files are written (`farm render --show-bvh` draws on it).
-  std::function<void(TileBuffer&&)> merged;
+  // Preview empty: none. A job with frames gives patterns (a '#' run for the frame number).
+  std::filesystem::path exr, preview;
+  // Given each merged frame after its files are written (`farm render --show-bvh` draws on it).
+  std::function<void(int frame, TileBuffer&&)> merged;
 };
 
 class SchedulerCore {
@@ -99,8 +100,10 @@ class SchedulerCore {
   std::optional<v1::Job> get_job(const std::string& job_id) const;
   // Drops the job's queued tiles and cancels its calls in flight. ServiceError NOT_FOUND.
   v1::Job cancel(const std::string& job_id);
-  // The merged EXR or PNG of a SUCCEEDED job; nullopt otherwise.
-  std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview) const;
+  // The merged EXR or PNG of a frame once it is merged (no frame: the first, of a SUCCEEDED
+  // job); nullopt otherwise.
+  std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
+                                                   std::optional<int> frame = std::nullopt) const;
 
   // Events of `job_id` from now on; pass the queue to unwatch() when done.
   std::shared_ptr<JobEventQueue> watch(const std::string& job_id);

@@ -8,6 +8,7 @@
 
 #include "renderer/image/exr_io.h"
 #include "renderer/scene/job.h"
+#include "renderer/scene/model_library.h"
 #include "renderer/scene/scene.h"
 #include "server/common/log.h"
 #include "server/scheduler/submit_limits.h"
@@ -52,7 +53,9 @@ struct SchedulerOptions {
   std::filesystem::path scene_check_program;
   // Given each job's scene as submit() built it to validate the job: the embedded farm hands it
   // to its in-process worker, so that `farm render` loads the models once, not twice.
-  std::function<void(const std::string& scene_hash, const Job& job, Scene scene)> validated_scene;
+  std::function<void(const std::string& scene_hash, const Job& job, Scene scene,
+                     std::shared_ptr<ModelLibrary> models)>
+      validated_scene;
 };
 
 }  // namespace farm

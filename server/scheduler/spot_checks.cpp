@@ -48,7 +48,9 @@ std::optional<TileSpan> SpotCheckChooser::span(const TileBatch& batch, std::uint
   // The grid of split_into_tiles: row by row, tile_size squares clipped to the image.
   const int size = std::max(1, settings.tile_size);
   const auto columns = static_cast<std::uint32_t>((settings.width + size - 1) / size);
+  const auto rows = static_cast<std::uint32_t>((settings.height + size - 1) / size);
   const auto rect_of = [&](std::uint32_t i) {
+    i %= columns * rows;  // a job of several frames numbers its tiles on, frame after frame
     const int x = static_cast<int>(i % columns) * size, y = static_cast<int>(i / columns) * size;
     return Rect{x, y, std::min(x + size, settings.width), std::min(y + size, settings.height)};
   };

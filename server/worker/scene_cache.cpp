@@ -7,13 +7,18 @@ namespace farm {
 namespace {
 // Mesh (positions, normals, indices), flattened triangles and a BVH per model, per triangle.
 constexpr std::uint64_t kApproxBytesPerTriangle = 256;
+// A frame that shares its models with another: world-space boxes and the rasterizer's set-up.
+constexpr std::uint64_t kApproxFrameBytesPerTriangle = 64;
 constexpr auto kPollInterval = std::chrono::milliseconds(20);
 }  // namespace
 
-CachedScene::CachedScene(Job j, Scene s)
+CachedScene::CachedScene(Job j, Scene s, std::shared_ptr<ModelLibrary> m, std::shared_ptr<ModelGeometry> geometry,
+                         bool shares_models)
     : job(std::move(j)),
-      prepared(std::move(s)),
-      approx_bytes(kApproxBytesPerTriangle * prepared.triangle_count() + sizeof(CachedScene)) {}
+      models(m ? std::move(m) : std::make_shared<ModelLibrary>(job.asset_root)),
+      prepared(std::move(s), std::move(geometry)),
+      approx_bytes((shares_models ? kApproxFrameBytesPerTriangle : kApproxBytesPerTriangle) * prepared.triangle_count() +
+                   sizeof(CachedScene)) {}
 
 SceneCache::Lookup SceneCache::get(const std::string& scene_hash, const Prepare& prepare,
                                    const Cancelled& cancelled) {

@@ -12,13 +12,21 @@
 
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/job.h"
+#include "renderer/scene/model_library.h"
 
 namespace farm {
 
+// One frame of a job, prepared. The frames of a job share its loaded models and their BVHs:
+// the first frame prepared (the job's own entry, by its scene hash) makes `models` and
+// `geometry`, and every other frame's entry is built from them.
 struct CachedScene {
-  CachedScene(Job j, Scene s);
+  // `models` null: a library of its own (the scene's models were loaded elsewhere, and the
+  // job's other frames load them once more, into it).
+  CachedScene(Job j, Scene s, std::shared_ptr<ModelLibrary> models = nullptr,
+              std::shared_ptr<ModelGeometry> geometry = nullptr, bool shares_models = false);
 
-  Job job;
+  Job job;  // at its frame
+  std::shared_ptr<ModelLibrary> models;
   PreparedScene prepared;
   // An estimate, not a measurement: meshes, flattened triangles and the BVHs engines build
   // lazily all grow with the triangle count.

@@ -184,8 +184,9 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
     for (const v1::AssetRef& ref : missing) fetcher_->fetch(ref, store_);
   }
   MaterializedScene m = materialize_scene(spec, hash, store_, cache_dir_);
-  Scene scene = build_scene(m.job);
-  auto prepared = std::make_shared<const CachedScene>(std::move(m.job), std::move(scene));
+  auto models = std::make_shared<ModelLibrary>(m.job.asset_root);
+  Scene scene = build_scene(m.job, *models);
+  auto prepared = std::make_shared<const CachedScene>(std::move(m.job), std::move(scene), std::move(models));
   // Once per scene and worker: what an operator looks for when a job's first tiles are slow.
   log_->info("scene {} of job '{}' prepared in {:.0f} ms: {} triangles{}", hash.substr(0, 12),
              prepared->job.name, ms_since(start), prepared->prepared.triangle_count(),
@@ -195,11 +196,35 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
 }
 
 std::shared_ptr<const CachedScene> TileRenderer::adopt(const std::string& scene_hash, Job job,
-                                                         Scene scene) {
+                                                         Scene scene, std::shared_ptr<ModelLibrary> models) {
   return cache_
       .get(scene_hash,
-           [&] { return std::make_shared<const CachedScene>(std::move(job), std::move(scene)); }, nullptr)
+           [&] { return std::make_shared<const CachedScene>(std::move(job), std::move(scene), std::move(models)); },
+           nullptr)
       .scene;
+}
+
+SceneCache::Lookup TileRenderer::frame_of(const std::string& hash, const SceneCache::Lookup& base, int frame,
+                                          const SceneCache::Cancelled& cancelled) {
+  const Job& job = base.scene->job;
+  if (frame == job.frame) return base;
+  const std::vector<int> frames = job_frames(job);
+  if (!std::binary_search(frames.begin(), frames.end(), frame)) {
+    throw InputError(job.frames ? fmt::format("frame {} is not one the job renders ({} to {} by {})", frame,
+                                              frames.front(), frames.back(), job.frames->step)
+                                : fmt::format("frame {} of a job without frames (a still is frame 0)", frame));
+  }
+  SceneCache::Lookup lookup = cache_.get(
+      fmt::format("{}@{}", hash, frame),
+      [&] {
+        Job at = job_at_frame(job, frame);
+        Scene scene = build_scene(at, *base.scene->models);
+        return std::make_shared<const CachedScene>(std::move(at), std::move(scene), base.scene->models,
+                                                   base.scene->prepared.shared_geometry(), true);
+      },
+      cancelled);
+  lookup.hit = lookup.hit && base.hit;
+  return lookup;
 }
 
 grpc::Status TileRenderer::render(const v1::RenderTileRequest& request,
@@ -277,7 +302,7 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
       if (!store_.has(asset.sha256())) store_.put(asset.sha256(), asset.data());
     }
 
-    const SceneCache::Lookup lookup = [&] {
+    const SceneCache::Lookup job_lookup = [&] {
       try {
         return cache_.get(hash, prepare_from_job, is_stopped);
       } catch (const ServiceError& e) {
@@ -290,6 +315,8 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
         return cache_.get(hash, prepare_from_job, is_stopped);
       }
     }();
+    if (!job_lookup.scene || is_stopped()) return stopped(r->flag);
+    const SceneCache::Lookup lookup = frame_of(hash, job_lookup, request->frame(), is_stopped);
     if (!lookup.scene || is_stopped()) return stopped(r->flag);
     const double prepare_ms = lookup.hit ? 0.0 : ms_since(start);
     const RenderSettings& settings = lookup.scene->job.render;

@@ -58,9 +58,11 @@ class TileRenderer {
   grpc::Status render(const v1::RenderTileRequest& request, TileBuffer& pixels,
                       v1::TileStats& stats, const RenderControl& control);
 
-  // Caches a scene built elsewhere in this process from `job` as if a call had prepared it, and
-  // returns the cached one (the earlier one when the hash was cached already).
-  std::shared_ptr<const CachedScene> adopt(const std::string& scene_hash, Job job, Scene scene);
+  // Caches a scene built elsewhere in this process from `job` (its models loaded by `models`) as
+  // if a call had prepared it, and returns the cached one (the earlier one when the hash was
+  // cached already).
+  std::shared_ptr<const CachedScene> adopt(const std::string& scene_hash, Job job, Scene scene,
+                                           std::shared_ptr<ModelLibrary> models);
 
   int threads() const { return pool_.size(); }
   const SceneCache& scene_cache() const { return cache_; }
@@ -70,6 +72,10 @@ class TileRenderer {
 
  private:
   std::shared_ptr<const CachedScene> prepare(const v1::JobSpec& spec, const std::string& hash);
+  // Frame `frame` of the job `base` was prepared for (base itself when that is its frame), its
+  // models and BVHs shared with base. InputError for a frame the job does not render.
+  SceneCache::Lookup frame_of(const std::string& hash, const SceneCache::Lookup& base, int frame,
+                              const SceneCache::Cancelled& cancelled);
   // The body of render(): logs nothing, render() logs what it returns.
   grpc::Status render_rect(const v1::RenderTileRequest& request, TileBuffer& pixels,
                            v1::TileStats& stats, const RenderControl& control);

@@ -147,12 +147,13 @@ std::vector<v1::JobEvent> watch_job(v1::Scheduler::Stub& stub, const std::string
 }
 
 grpc::Status fetch_result(v1::Scheduler::Stub& stub, const std::string& id, v1::ResultKind kind,
-                          const std::filesystem::path& file) {
+                          const std::filesystem::path& file, std::optional<int> frame) {
   grpc::ClientContext context;
   set_deadline(context);
   v1::GetResultRequest request;
   request.set_job_id(id);
   request.set_kind(kind);
+  if (frame) request.set_frame(*frame);
   auto reader = stub.GetResult(&context, request);
   std::string bytes, sha;
   v1::FileChunk chunk;

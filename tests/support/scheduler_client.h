@@ -62,6 +62,6 @@ std::vector<v1::JobEvent> watch_job(v1::Scheduler::Stub& stub, const std::string
 
 // GetResult's bytes, written to `file`.
 grpc::Status fetch_result(v1::Scheduler::Stub& stub, const std::string& id, v1::ResultKind kind,
-                          const std::filesystem::path& file);
+                          const std::filesystem::path& file, std::optional<int> frame = std::nullopt);
 
 }  // namespace farm::test

@@ -16,7 +16,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 4;
+constexpr int kSchemaVersion = 5;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
@@ -41,7 +41,12 @@ CREATE TABLE IF NOT EXISTS jobs (
   tiles_rendered INTEGER NOT NULL DEFAULT 0,
   stats BLOB NOT NULL DEFAULT x'',
   validation TEXT NOT NULL DEFAULT '',
-  owner TEXT NOT NULL DEFAULT ''
+  owner TEXT NOT NULL DEFAULT '',
+  frame_first INTEGER NOT NULL DEFAULT 0,
+  frame_last INTEGER NOT NULL DEFAULT 0,
+  frame_step INTEGER NOT NULL DEFAULT 1,
+  frames_total INTEGER NOT NULL DEFAULT 1,
+  frames_done INTEGER NOT NULL DEFAULT 0
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -54,9 +59,15 @@ CREATE TABLE IF NOT EXISTS tiles (
   last_error TEXT NOT NULL DEFAULT '',
   worker TEXT NOT NULL DEFAULT '',
   part INTEGER NOT NULL DEFAULT 0,
+  frame INTEGER NOT NULL DEFAULT 0,
   PRIMARY KEY (job_seq, idx)
 );
 CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
+CREATE TABLE IF NOT EXISTS frames (
+  job_seq INTEGER NOT NULL REFERENCES jobs (seq),
+  frame INTEGER NOT NULL,
+  PRIMARY KEY (job_seq, frame)
+);
 CREATE TABLE IF NOT EXISTS parts (
   job_seq INTEGER NOT NULL REFERENCES jobs (seq),
   part INTEGER NOT NULL,
@@ -68,7 +79,7 @@ CREATE TABLE IF NOT EXISTS parts (
 constexpr const char* kJobColumns =
     "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
     "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
-    "validation, owner";
+    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done";
 
 const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
@@ -190,6 +201,11 @@ v1::Job job_from_row(const Stmt& s) {
   job.mutable_stats()->ParseFromString(s.blob(17));
   job.set_validation(s.text(18));
   job.set_owner(s.text(19));
+  job.set_frame_first(s.i32(20));
+  job.set_frame_last(s.i32(21));
+  job.set_frame_step(s.i32(22));
+  job.set_frames_total(static_cast<std::uint32_t>(s.i64(23)));
+  job.set_frames_done(static_cast<std::uint32_t>(s.i64(24)));
   return job;
 }
 
@@ -252,15 +268,31 @@ JobStore::JobStore(const std::filesystem::path& file) {
       // its job's stats. Parts done before have none, and stay counted.
       exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
     }
-    // Version 4 counts the tiles' lost workers apart from their failed attempts. Losses before
-    // were counted as attempts, and stay so.
-    exec("ALTER TABLE tiles ADD COLUMN lost_attempts INTEGER NOT NULL DEFAULT 0");
+    if (version <= 3) {
+      // Version 4 counts the tiles' lost workers apart from their failed attempts. Losses before
+      // were counted as attempts, and stay so.
+      exec("ALTER TABLE tiles ADD COLUMN lost_attempts INTEGER NOT NULL DEFAULT 0");
+    }
+    // Version 5 renders frame ranges (the frames table kSchema made). Every older job is a
+    // still: frame 0 alone, merged when the job succeeded.
+    exec("ALTER TABLE tiles ADD COLUMN frame INTEGER NOT NULL DEFAULT 0");
+    for (const char* column : {"frame_first INTEGER NOT NULL DEFAULT 0", "frame_last INTEGER NOT NULL DEFAULT 0",
+                               "frame_step INTEGER NOT NULL DEFAULT 1", "frames_total INTEGER NOT NULL DEFAULT 1",
+                               "frames_done INTEGER NOT NULL DEFAULT 0"}) {
+      exec(fmt::format("ALTER TABLE jobs ADD COLUMN {}", column).c_str());
+    }
+    exec(fmt::format("UPDATE jobs SET frames_done = 1 WHERE state = {}", static_cast<int>(v1::JOB_STATE_SUCCEEDED))
+             .c_str());
+    exec("INSERT INTO frames (job_seq, frame) SELECT seq, 0 FROM jobs WHERE frames_done = 1");
     exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
     t.commit();
   } else if (version != kSchemaVersion) {
     throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}",
                                          file.string(), version, kSchemaVersion));
   }
+  // After the upgrade, which adds the column in an older store: a frame's tiles, found by the
+  // checks for a complete frame after every batch.
+  exec("CREATE INDEX IF NOT EXISTS tiles_by_frame ON tiles (job_seq, frame, state)");
   // Tiles in flight when the last scheduler stopped: their results died with it.
   exec("UPDATE tiles SET state = 0, worker = '' WHERE state = 1");
 }
@@ -290,23 +322,28 @@ sqlite3_stmt* JobStore::prepared(const std::string& sql) const {
 }
 
 v1::Job JobStore::add_job(const NewJob& j, std::int64_t now_ms) {
+  if (j.frames.empty()) throw std::invalid_argument("job store: a job with no frames");
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   Stmt(db_, prepared("INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, "
-                     "state, submitted_ms, tiles_total, owner) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
+                     "state, submitted_ms, tiles_total, owner, frame_first, frame_last, frame_step, frames_total) "
+                     "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
       .bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
       .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
       .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
-      .bind(11, static_cast<std::int64_t>(j.tiles.size())).bind(12, j.owner)
+      .bind(11, static_cast<std::int64_t>(j.tiles.size() * j.frames.size())).bind(12, j.owner)
+      .bind(13, j.frames.front()).bind(14, j.frames.back()).bind(15, j.frame_step)
+      .bind(16, static_cast<std::int64_t>(j.frames.size()))
       .run();
   const std::int64_t seq = sqlite3_last_insert_rowid(db_);
-  Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1) VALUES (?, ?, ?, ?, ?, ?)"));
-  for (std::size_t i = 0; i < j.tiles.size(); ++i) {
-    const Rect& r = j.tiles[i];
-    tile.reset();
-    tile.bind(1, seq).bind(2, static_cast<std::int64_t>(i)).bind(3, r.x0).bind(4, r.y0)
-        .bind(5, r.x1).bind(6, r.y1);
-    tile.run();
+  Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1, frame) VALUES (?, ?, ?, ?, ?, ?, ?)"));
+  std::int64_t idx = 0;
+  for (int frame : j.frames) {
+    for (const Rect& r : j.tiles) {
+      tile.reset();
+      tile.bind(1, seq).bind(2, idx++).bind(3, r.x0).bind(4, r.y0).bind(5, r.x1).bind(6, r.y1).bind(7, frame);
+      tile.run();
+    }
   }
   t.commit();
   return load_job_locked(j.id);
@@ -377,7 +414,7 @@ std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
 std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
   std::lock_guard lock(mutex_);
   Stmt s(db_, prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part, "
-                       "t.lost_attempts "
+                       "t.lost_attempts, t.frame "
                        "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx"));
   s.bind(1, id);
   std::vector<TileRecord> out;
@@ -392,6 +429,7 @@ std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
     t.worker = s.text(8);
     t.part = static_cast<std::uint32_t>(s.i64(9));
     t.lost_attempts = s.i32(10);
+    t.frame = s.i32(11);
     out.push_back(std::move(t));
   }
   return out;
@@ -413,7 +451,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
   std::int64_t seq = 0;
   {
     Stmt pick(db_, prepared(fmt::format(
-                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts, t.lost_attempts FROM jobs j "
+                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts, t.lost_attempts, t.frame FROM jobs j "
                        "JOIN tiles t ON t.job_seq = j.seq WHERE j.state IN {} AND t.state = 0 "
                        "ORDER BY j.priority DESC, j.seq ASC, t.idx ASC LIMIT 1",
                        kActiveSql)));
@@ -424,6 +462,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     batch.rect = {pick.i32(3), pick.i32(4), pick.i32(5), pick.i32(6)};
     batch.attempts = pick.i32(7);
     batch.lost_attempts = pick.i32(8);
+    batch.frame = pick.i32(9);
   }
   // A tile that failed before, or lost its worker, goes alone, so it cannot take fresh
   // neighbours down with it (nor a worker's loss count them all).
@@ -436,14 +475,14 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     }
     const int wanted = batch_size(batch.job_id, queued);
     if (wanted > 1) {
-      // The following tiles while they continue the same row of the grid: the batch's union is
-      // then one rectangle, rendered in one call.
-      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts + lost_attempts FROM tiles "
+      // The following tiles while they continue the same row of the frame's grid: the batch's
+      // union is then one rectangle of one frame, rendered in one call.
+      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts + lost_attempts, frame FROM tiles "
                               "WHERE job_seq = ? AND idx > ? AND idx < ? ORDER BY idx"));
       next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
       while (next.step()) {
         const Rect r{next.i32(1), next.i32(2), next.i32(3), next.i32(4)};
-        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 ||
+        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 || next.i32(7) != batch.frame ||
             r.y0 != batch.rect.y0 || r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
           break;
         }
@@ -615,6 +654,12 @@ void JobStore::take_back_part_locked(std::int64_t seq, std::uint32_t part, std::
   }
   subtract_stats(sum, stats);
   Stmt(db_, prepared("DELETE FROM parts WHERE job_seq = ? AND part = ?")).bind(1, seq).bind(2, part).run();
+  // Its frame, if merged, is merged again once the part is rendered again.
+  Stmt(db_, prepared("DELETE FROM frames WHERE job_seq = ?1 AND frame = (SELECT frame FROM tiles WHERE job_seq = ?1 "
+                     "AND idx = ?2)"))
+      .bind(1, seq).bind(2, part).run();
+  Stmt(db_, prepared("UPDATE jobs SET frames_done = (SELECT COUNT(*) FROM frames WHERE job_seq = ?1) WHERE seq = ?1"))
+      .bind(1, seq).run();
   Stmt(db_, prepared("UPDATE jobs SET tiles_done = tiles_done - ?, stats = ? WHERE seq = ?"))
       .bind(1, count).bind_blob(2, sum.SerializeAsString()).bind(3, seq).run();
 }
@@ -651,13 +696,68 @@ std::vector<TileBatch> JobStore::requeue_parts(const std::string& job_id, const 
   return taken;
 }
 
+std::vector<int> JobStore::complete_frames(const std::string& job_id, std::optional<int> frame) const {
+  std::lock_guard lock(mutex_);
+  // The tiles of a frame not merged yet, grouped by frame: complete when none is other than done.
+  Stmt s(db_, prepared(fmt::format(
+                  "SELECT t.frame FROM jobs j JOIN tiles t ON t.job_seq = j.seq WHERE j.id = ?1 AND j.state IN {} "
+                  "AND (?2 = 0 OR t.frame = ?3) "
+                  "AND NOT EXISTS (SELECT 1 FROM frames f WHERE f.job_seq = j.seq AND f.frame = t.frame) "
+                  "GROUP BY t.frame HAVING SUM(t.state != 2) = 0 ORDER BY t.frame",
+                  kActiveSql)));
+  s.bind(1, job_id).bind(2, frame ? 1 : 0).bind(3, frame.value_or(0));
+  std::vector<int> out;
+  while (s.step()) out.push_back(s.i32(0));
+  return out;
+}
+
+std::vector<std::uint32_t> JobStore::frame_parts(const std::string& job_id, int frame) const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, prepared("SELECT DISTINCT t.part FROM tiles t JOIN jobs j ON t.job_seq = j.seq "
+                       "WHERE j.id = ? AND t.frame = ? AND t.state = 2 ORDER BY t.part"));
+  s.bind(1, job_id).bind(2, frame);
+  std::vector<std::uint32_t> out;
+  while (s.step()) out.push_back(static_cast<std::uint32_t>(s.i64(0)));
+  return out;
+}
+
+bool JobStore::frame_merged(const std::string& job_id, int frame) {
+  std::lock_guard lock(mutex_);
+  Transaction t(db_);
+  std::int64_t seq = 0;
+  {
+    Stmt s(db_, prepared(fmt::format(
+                    "SELECT j.seq, SUM(t.state != 2) FROM jobs j JOIN tiles t ON t.job_seq = j.seq "
+                    "WHERE j.id = ? AND j.state IN {} AND t.frame = ? GROUP BY j.seq",
+                    kActiveSql)));
+    s.bind(1, job_id).bind(2, frame);
+    if (!s.step() || s.i64(1) != 0) return false;
+    seq = s.i64(0);
+  }
+  Stmt insert(db_, prepared("INSERT OR IGNORE INTO frames (job_seq, frame) VALUES (?, ?)"));
+  insert.bind(1, seq).bind(2, frame).run();
+  if (sqlite3_changes(db_) > 0) {
+    Stmt(db_, prepared("UPDATE jobs SET frames_done = frames_done + 1 WHERE seq = ?")).bind(1, seq).run();
+  }
+  t.commit();
+  return true;
+}
+
+bool JobStore::is_frame_merged(const std::string& job_id, int frame) const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, prepared("SELECT 1 FROM frames f JOIN jobs j ON f.job_seq = j.seq WHERE j.id = ? AND f.frame = ?"));
+  s.bind(1, job_id).bind(2, frame);
+  return s.step();
+}
+
 v1::Job JobStore::finish_job(const std::string& id, v1::JobState state, const std::string& reason,
                              const std::string& validation, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
   // SUCCEEDED only while every tile is still done: a quarantine may have taken some back while
   // the frame was being merged.
   Stmt(db_, prepared(fmt::format("UPDATE jobs SET state = ?, failure_reason = ?, validation = ?, "
-                                 "finished_ms = ? WHERE id = ? AND state IN {} AND (? = 0 OR tiles_done = tiles_total)",
+                                 "finished_ms = ? WHERE id = ? AND state IN {} AND "
+                                 "(? = 0 OR (tiles_done = tiles_total AND frames_done = frames_total))",
                                  kActiveSql)))
       .bind(1, static_cast<int>(state)).bind(2, reason).bind(3, validation).bind(4, now_ms)
       .bind(5, id).bind(6, state == v1::JOB_STATE_SUCCEEDED ? 1 : 0).run();

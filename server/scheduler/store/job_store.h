@@ -4,20 +4,25 @@
 // store; open() puts tiles that were running back in the queue (their results were lost with the
 // process) and keeps done tiles done (their data is on disk, written before they were marked).
 //
-// Schema (version 4; a version 1, 2 or 3 store is upgraded in place):
+// Schema (version 5; a version 1 to 4 store is upgraded in place):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
 //        priority, state (farm.v1.JobState), submitted_ms, started_ms, finished_ms (Unix ms, 0 =
 //        not yet), failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered,
 //        stats BLOB (farm.v1.TileStats, summed over done tiles), validation, render_seconds,
-//        owner (version 3: the submitter's token name, '' without tokens))
+//        owner (version 3: the submitter's token name, '' without tokens), frame_first,
+//        frame_last, frame_step, frames_total, frames_done (version 5: the frames it renders and
+//        how many are merged; a still is frame 0 alone))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart
-//         from attempts); PRIMARY KEY (job_seq, idx))
+//         from attempts), frame (version 5: the frame it is a tile of); PRIMARY KEY (job_seq, idx))
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
-// Tiles go out in batches: consecutive tiles of one row of the job's grid, rendered by one call
+//   frames(job_seq, frame; PRIMARY KEY (job_seq, frame))  -- version 5: the frames merged
+// A job's tiles are numbered frame after frame: idx = k * (tiles of a frame) + tile, k the
+// frame's place among the job's frames.
+// Tiles go out in batches: consecutive tiles of one row of one frame's grid, rendered by one call
 // as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
 // The store is one connection behind a mutex, its statements prepared once. Any call may throw
 // DiskFull (server/common/disk_full.h) when SQLite finds no room (SQLITE_FULL): its transaction
@@ -51,7 +56,9 @@ struct NewJob {
   int width = 0, height = 0;
   int priority = 0;
   std::string owner;  // who submitted it: the name of the caller's token (empty: no tokens)
-  std::vector<Rect> tiles;
+  std::vector<int> frames{0};  // ascending, evenly `frame_step` apart; a still: frame 0
+  int frame_step = 1;
+  std::vector<Rect> tiles;     // one frame's grid: every frame has these tiles
 };
 
 struct TileRecord {
@@ -64,6 +71,7 @@ struct TileRecord {
   std::string last_error;
   std::string worker;
   std::uint32_t part = 0;  // done tiles: the result file that holds them (TileResults)
+  int frame = 0;
 };
 
 // Tiles first .. first + count - 1 of a job, handed to a worker by claim_next_batch (now
@@ -75,6 +83,7 @@ struct TileBatch {
   Rect rect;
   int attempts = 0;       // failed attempts before this one (a batch of more than one: 0)
   int lost_attempts = 0;  // workers lost while rendering it before (a batch of more than one: 0)
+  int frame = 0;          // the frame its tiles belong to
 };
 
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued.
@@ -154,8 +163,22 @@ class JobStore {
   // batches it took back (none when the job is final, or a part has no done tiles).
   std::vector<TileBatch> requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts);
 
+  // Frames. The job's frames whose tiles are all done and which are not merged yet: `frame`
+  // alone when given (after one of its batches was done), else every such frame (a restart).
+  std::vector<int> complete_frames(const std::string& job_id, std::optional<int> frame = std::nullopt) const;
+  // The parts (TileResults) that hold the frame's done tiles.
+  std::vector<std::uint32_t> frame_parts(const std::string& job_id, int frame) const;
+  // The frame is merged and its files written: counted in frames_done, if the job is active and
+  // the frame's tiles are all still done (false otherwise: a quarantine took some back, and the
+  // frame is merged again once they are rendered again). A part taken back later (quarantine,
+  // damage, room for other jobs) makes its frame unmerged again.
+  bool frame_merged(const std::string& job_id, int frame);
+  // Whether the frame of the job is merged (its files can be fetched).
+  bool is_frame_merged(const std::string& job_id, int frame) const;
+
   // Final states. Each is a no-op (returns the job as it is) when the job is already final, and
-  // SUCCEEDED also when not every tile is done (quarantine_worker took some back).
+  // SUCCEEDED also when not every tile is done (quarantine_worker took some back) or not every
+  // frame is merged.
   v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
                      const std::string& validation, std::int64_t now_ms);
   v1::Job cancel_job(const std::string& id, std::int64_t now_ms);

@@ -1,0 +1,152 @@
+#include "server/bench/frames_bench.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <thread>
+
+#include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
+#include "renderer/scene/input_error.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene_builder.h"
+#include "server/bench/bench_support.h"
+#include "server/bench/loopback_farm.h"
+#include "server/client/job_submission.h"
+#include "server/client/scheduler_client.h"
+#include "server/common/child_process.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using bench::median;
+using bench::ms_since;
+
+constexpr auto kCommandTimeout = std::chrono::minutes(10);
+
+// The cow on a turntable: one full turn over `frames` frames, the lab's camera and light.
+fs::path write_turntable(const fs::path& cow, const fs::path& dir, int frames) {
+  fs::copy_file(cow, dir / "cow.dae", fs::copy_options::overwrite_existing);
+  const nlohmann::json job = {
+      {"version", 1},
+      {"name", "cow_turntable"},
+      {"frames", {{"start", 1}, {"end", frames}}},
+      {"scene",
+       {{"objects", {{{"file", "cow.dae"}, {"rotate", {{"axis", {0, 1, 0}}, {"degrees", 0}}}}}},
+        {"camera", {{"position", {2, 2, 2}}, {"target", {0, 0, 0}}}},
+        {"lights", {{{"position", {2, 2, 2}}, {"intensity", 10}}}}}},
+      {"animate",
+       {{{"value", "scene.objects[0].rotate.degrees"},
+         {"keys", {{{"frame", 1}, {"value", 0}}, {{"frame", frames + 1}, {"value", 360}}}}}}},
+      {"render", {{"engine", "raster"}, {"width", 640}, {"height", 480}, {"threads", 1}}},
+      {"output", {{"image", (dir / "out" / "cow.####.exr").string()}, {"preview", (dir / "out" / "cow.####.png").string()}}}};
+  const fs::path file = dir / "cow_turntable.json";
+  std::ofstream(file) << job.dump(1) << '\n';
+  return file;
+}
+
+double time_render_command(const fs::path& job) {
+  const Clock::time_point start = Clock::now();
+  ChildProcess command({bench::self_binary(), "render", job.string(), "--threads", "1", "--quiet"});
+  const std::optional<int> code = command.wait_exit(kCommandTimeout);
+  const double ms = ms_since(start);
+  if (code != 0) throw std::runtime_error(fmt::format("farm render {} failed: {}", job.string(), command.output()));
+  return ms;
+}
+
+// One model load, as the farm does it once per job.
+double time_model_load(const fs::path& model) {
+  const Clock::time_point start = Clock::now();
+  const Model m = load_model(model);
+  const double ms = ms_since(start);
+  if (m.triangle_count() == 0) throw std::runtime_error("the cow has no triangles");
+  return ms;
+}
+
+// The engine alone over every frame: each frame's scene built from models loaded once, a fresh
+// PreparedScene each (so the per-frame set-up is counted), rendered on one thread.
+double time_engine_frames(const Job& job, ThreadPool& pool) {
+  ModelLibrary models(job.asset_root);
+  build_scene(job, models);  // the load, not counted here: time_model_load measures it
+  double total = 0.0;
+  TileBuffer film;
+  for (int frame : job_frames(job)) {
+    const Job at = job_at_frame(job, frame);
+    const PreparedScene prepared(build_scene(at, models));
+    FrameTimings timings;
+    render_frame(prepared, at.render, pool, film, {}, &timings);
+    total += timings.total_ms;
+  }
+  return total;
+}
+
+void bench_turntable(const FramesBenchOptions& o, const fs::path& dir) {
+  if (!fs::exists(o.cow)) throw InputError(fmt::format("{}: no such model (pass --cow PATH to cow.dae)", o.cow.string()));
+  const fs::path file = write_turntable(o.cow, dir, o.frames);
+  const Job job = load_job(file);
+  fmt::print("\nturntable: the cow, {} frames at {}x{}, raster, 1 thread, median of {} rounds\n", o.frames,
+             job.render.width, job.render.height, o.repeats);
+  ThreadPool pool(1);
+  time_engine_frames(job, pool);  // warm-up
+  time_render_command(file);
+  std::vector<double> engine, load, command, ratio;
+  for (int i = 0; i < o.repeats; ++i) {
+    engine.push_back(time_engine_frames(job, pool));
+    load.push_back(time_model_load(job.scene.objects[0].file));
+    command.push_back(time_render_command(file));
+    ratio.push_back(command.back() / (engine.back() + load.back()));
+  }
+  const double e = median(engine), l = median(load), c = median(command);
+  fmt::print("{:<48} {:>10.1f} ms ({:.2f} ms a frame)\n", fmt::format("engine, {} frames", o.frames), e, e / o.frames);
+  fmt::print("{:<48} {:>10.1f} ms\n", "one model load", l);
+  fmt::print("{:<48} {:>10.1f} ms\n", "farm render of the whole job (start to exit)", c);
+  fmt::print("whole job / (engine frames + one load): {:.3f} (paired by round, median); target <= 1.1: {}\n",
+             median(ratio), median(ratio) <= 1.1 ? "within" : "over");
+}
+
+double render_through(SchedulerClient& client, const JobSubmission& submission) {
+  const Clock::time_point start = Clock::now();
+  client.upload_missing(submission);
+  const v1::Job job = client.submit(submission, 0);
+  const v1::Job last = client.watch(job.job_id(), {});
+  if (last.state() != v1::JOB_STATE_SUCCEEDED) {
+    throw std::runtime_error(fmt::format("job {} {}: {}", job.job_id(), to_string(last.state()), last.failure_reason()));
+  }
+  return ms_since(start);
+}
+
+void bench_path(const FramesBenchOptions& o, const fs::path& dir) {
+  const JobSubmission submission = make_job_submission(o.path_job, {}, {});
+  const Job& job = submission.job;
+  fmt::print("\npath: {}, {} frames at {}x{}, {} spp, median of {} rounds\n", o.path_job.string(),
+             job_frames(job).size(), job.render.width, job.render.height, job.render.spp, o.repeats);
+  bench::LoopbackFarm one(dir / "one", 1, 2, 200, 0);
+  bench::LoopbackFarm two(dir / "two", 2, 2, 200, 0);
+  SchedulerClient client_one(one.address()), client_two(two.address());
+  std::vector<double> a, b, ratio;
+  for (int i = 0; i < o.repeats; ++i) {
+    a.push_back(render_through(client_one, submission));
+    b.push_back(render_through(client_two, submission));
+    ratio.push_back(a.back() / b.back());
+  }
+  fmt::print("{:<48} {:>10.1f} ms\n", "scheduler + 1 worker (all cores)", median(a));
+  fmt::print("{:<48} {:>10.1f} ms\n", "scheduler + 2 workers (all cores each)", median(b));
+  fmt::print("2 workers: {:.2f}x the speed of 1 (paired by round, median); target >= 1.0: {}\n", median(ratio),
+             median(ratio) >= 1.0 ? "within" : "over");
+}
+
+}  // namespace
+
+void run_frames_bench(const FramesBenchOptions& o) {
+  const bench::ScratchDir scratch("bench-frames");
+  fmt::print("farm bench frames ({} build, {} hardware threads)\n", FARM_BUILD_TYPE, std::thread::hardware_concurrency());
+  if (o.scene == "all" || o.scene == "turntable") bench_turntable(o, scratch.path());
+  if (o.scene == "all" || o.scene == "path") bench_path(o, scratch.path());
+}
+
+}  // namespace farm
