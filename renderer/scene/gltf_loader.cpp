@@ -542,7 +542,8 @@ void GltfReader::read_nodes() {
       }
       ModelNode& child = model_.nodes[static_cast<std::size_t>(c)];
       if (child.parent >= 0) {
-        fail("node " + std::to_string(c) + " appears twice in the node hierarchy (a child of node " +
+        fail("node " + std::to_string(c) +
+             " appears twice in the node hierarchy (a child of node " +
              std::to_string(child.parent) + " and of node " + std::to_string(i) + ")");
       }
       child.parent = static_cast<int>(i);
@@ -574,10 +575,12 @@ AnimationChannel GltfReader::read_channel(const tinygltf::Animation& animation,
   if (!valid_index(in.sampler, animation.samplers)) {
     fail(where + ": no such sampler " + std::to_string(in.sampler));
   }
-  const tinygltf::AnimationSampler& sampler = animation.samplers[static_cast<std::size_t>(in.sampler)];
-  if (sampler.interpolation == "LINEAR") out.sampler.interpolation = Interpolation::Linear;
-  else if (sampler.interpolation == "STEP") out.sampler.interpolation = Interpolation::Step;
-  else if (sampler.interpolation == "CUBICSPLINE") out.sampler.interpolation = Interpolation::CubicSpline;
+  const tinygltf::AnimationSampler& sampler =
+      animation.samplers[static_cast<std::size_t>(in.sampler)];
+  Interpolation& interpolation = out.sampler.interpolation;
+  if (sampler.interpolation == "LINEAR") interpolation = Interpolation::Linear;
+  else if (sampler.interpolation == "STEP") interpolation = Interpolation::Step;
+  else if (sampler.interpolation == "CUBICSPLINE") interpolation = Interpolation::CubicSpline;
   else fail(where + ": unknown interpolation '" + sampler.interpolation + "'");
 
   // The key count is known once the accessor is checked, before anything is read.
@@ -684,8 +687,8 @@ Model GltfReader::read() {
   for (auto it = roots.rbegin(); it != roots.rend(); ++it) {
     if (!valid_index(*it, gltf_.nodes)) fail("no such node " + std::to_string(*it));
     if (const int parent = model_.nodes[static_cast<std::size_t>(*it)].parent; parent >= 0) {
-      fail("node " + std::to_string(*it) + " is listed as a root of the scene but is a child of node " +
-           std::to_string(parent));
+      fail("node " + std::to_string(*it) +
+           " is listed as a root of the scene but is a child of node " + std::to_string(parent));
     }
     stack.emplace_back(*it, false);
   }

@@ -7,6 +7,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
 #include <glm/vec4.hpp>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -328,18 +329,23 @@ std::vector<glm::mat4> rest_to_posed_matrices(const Model& model, const ModelAni
   std::vector<glm::mat4> out(rest.size(), glm::mat4(1.0f));
   for (std::size_t i = 0; i < rest.size(); ++i) {
     if (posed[i] == rest[i]) continue;  // unmoved: exactly the identity, no rounding
-    if (!invertible_for_posing(rest[i])) {
-      throw InputError(node_name(model, i) +
-                       ": its rest transform is singular, so its baked meshes cannot be posed");
-    }
-    out[i] = glm::mat4(glm::dmat4(posed[i]) * glm::inverse(glm::dmat4(rest[i])));
+    // A node without meshes (say a group hidden by a zero scale at rest) may be singular: only a
+    // mesh that asks for its matrix is an error.
+    out[i] = invertible_for_posing(rest[i])
+                 ? glm::mat4(glm::dmat4(posed[i]) * glm::inverse(glm::dmat4(rest[i])))
+                 : glm::mat4(std::numeric_limits<float>::quiet_NaN());
   }
   return out;
 }
 
 glm::mat4 mesh_rest_to_posed(const Mesh& mesh, const std::vector<glm::mat4>& rest_to_posed) {
   if (mesh.node < 0) return glm::mat4(1.0f);
-  return rest_to_posed.at(static_cast<std::size_t>(mesh.node));
+  const glm::mat4& m = rest_to_posed.at(static_cast<std::size_t>(mesh.node));
+  if (std::isnan(m[3][3])) {  // an affine matrix's corner is 1 otherwise
+    throw InputError("mesh '" + mesh.name + "': the rest transform of node " +
+                     std::to_string(mesh.node) + " is singular, so it cannot be posed");
+  }
+  return m;
 }
 
 }  // namespace farm

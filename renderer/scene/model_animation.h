@@ -63,7 +63,8 @@ std::string sampler_problem(const AnimationSampler& sampler, AnimationPath path)
 // values; Step holds each key's value until the next key; Linear interpolates (rotations by
 // shortest-path slerp); CubicSpline is the Hermite spline of glTF 2.0 appendix C, its tangents
 // scaled by the key interval. Rotations come back unit length. Throws std::invalid_argument for a
-// sampler sampler_problem finds fault with.
+// sampler without keys or whose value count does not fit them (the faults that would read out of
+// bounds); other problems sampler_problem names give answers, just not meaningful ones.
 glm::vec3 sample_vec3(const AnimationSampler& sampler, double time_seconds);
 glm::quat sample_rotation(const AnimationSampler& sampler, double time_seconds);
 
@@ -90,12 +91,14 @@ bool invertible_for_posing(const glm::mat4& rest_world);
 // `animation` at `time_seconds` puts them: posed_world * inverse(rest_world). Exactly the identity
 // for a node the animation does not move (nullptr: every node). This is what the scene builder
 // puts between a mesh's positions and its object transform (object_transform * this), so that
-// the mesh's BVH is built once and only the top level changes per frame. Throws InputError where a
-// moved node's rest matrix is not invertible_for_posing (a loaded model never has one).
+// the mesh's BVH is built once and only the top level changes per frame. A moved node whose rest
+// matrix is not invertible_for_posing has no such matrix: its entry is all NaN (a loaded model's
+// meshes never have such a node; a mesh-less one may). Throws as node_world_matrices does.
 std::vector<glm::mat4> rest_to_posed_matrices(const Model& model, const ModelAnimation* animation,
                                               double time_seconds);
 // The same matrix for one mesh, from rest_to_posed_matrices' result: the identity for a mesh of no
-// node (Mesh::node == -1); std::out_of_range for a node the result has no matrix for.
+// node (Mesh::node == -1); std::out_of_range for a node the result has no matrix for, and
+// InputError for a node whose entry is NaN (a singular rest transform).
 glm::mat4 mesh_rest_to_posed(const Mesh& mesh, const std::vector<glm::mat4>& rest_to_posed);
 
 }  // namespace farm

@@ -95,7 +95,9 @@ void expect_vec3_near(const glm::vec3& actual, const glm::vec3& expected, float 
   EXPECT_NEAR(actual.z, expected.z, tol);
 }
 
-glm::vec3 apply(const glm::mat4& m, const glm::vec3& p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+glm::vec3 apply(const glm::mat4& m, const glm::vec3& p) {
+  return glm::vec3(m * glm::vec4(p, 1.0f));
+}
 
 const Mesh* mesh_named(const Model& m, const std::string& name) {
   for (const Mesh& mesh : m.meshes)
@@ -330,6 +332,25 @@ TEST(GltfAnimation, RestToPosedIsExactlyTheIdentityForNodesTheAnimationLeavesAlo
   EXPECT_EQ(mesh_rest_to_posed(unplaced, walk), glm::mat4(1.0f));
 }
 
+TEST(GltfAnimation, AMeshlessNodeHiddenByAZeroRestScaleMayBeAnimated) {
+  // A group scaled to nothing at rest and grown by an animation: no mesh is baked with its
+  // singular matrix, so the file loads; only a mesh that asked for its matrix would be an error.
+  TempDir dir;
+  json j = json::parse(read_file(kAnimated));
+  j["nodes"].push_back({{"name", "hidden"}, {"scale", {0, 0, 0}}});
+  j["scenes"][0]["nodes"].push_back(5);
+  j["animations"][1]["channels"].push_back(
+      {{"sampler", 0}, {"target", {{"node", 5}, {"path", "scale"}}}});
+  const Model m = load_model(dir.write("hidden.gltf", j.dump()));
+  const std::vector<glm::mat4> to_posed = rest_to_posed_matrices(m, &m.animations.at(1), 1.0);
+  for (const Mesh& mesh : m.meshes) EXPECT_NO_THROW(mesh_rest_to_posed(mesh, to_posed));
+  expect_matrix_near(node_world_matrices(m, &m.animations.at(1), 1.0).at(5), scale(2.0f));
+  Mesh under_hidden;
+  under_hidden.name = "under";
+  under_hidden.node = 5;
+  EXPECT_THROW(mesh_rest_to_posed(under_hidden, to_posed), InputError);
+}
+
 // ---- Models built by hand -----------------------------------------------------------------------
 
 TEST(GltfAnimation, WorldMatricesComposeParentsListedAfterTheirChildren) {
@@ -449,7 +470,8 @@ TEST(GltfAnimation, MalformedAnimationsAreInputErrorsNamingAnimationAndChannel) 
        "animation 0 'walk' channel 1 sampler output (accessor 4): unexpected element type"},
       {"translation_not_vec3", [](json& j) { j["accessors"][3]["type"] = "VEC4"; },
        "animation 0 'walk' channel 0 sampler output (accessor 3): unexpected element type"},
-      {"rotation_integer_not_normalized", [](json& j) { j["accessors"][4]["componentType"] = 5122; },
+      {"rotation_integer_not_normalized",
+       [](json& j) { j["accessors"][4]["componentType"] = 5122; },
        "animation 0 'walk' channel 1 sampler output: rotations must be float or normalized"},
       {"output_past_view", [](json& j) { j["accessors"][6]["count"] = 100; },
        "animation 2 'spline' channel 0 sampler output (accessor 6): 100 elements do not fit"},
