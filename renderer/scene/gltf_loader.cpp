@@ -1,6 +1,8 @@
-// glTF 2.0 (.gltf, .glb) through tinygltf, one loader in one file (over 500 lines: the bounds
-// checks below are most of it, and split apart they would be easier to leave out). Debian ships
-// tinygltf as a shared library, so this file only includes the header (no
+// glTF 2.0 (.gltf, .glb) through tinygltf, one loader in one file (over 700 lines: the bounds
+// checks below are most of it, and split apart they would be easier to leave out). Meshes are
+// baked with their node's rest world transform; the node hierarchy and its animations are kept
+// beside them (renderer/scene/model_animation.h) so that a frame can pose the baked meshes.
+// Debian ships tinygltf as a shared library, so this file only includes the header (no
 // TINYGLTF_IMPLEMENTATION; see renderer/CMakeLists.txt on link order).
 // tinygltf parses the JSON and the buffers but leaves it to us to check that accessors fit their
 // buffers, so every read below is bounds-checked: malformed input ends in an InputError, never in
@@ -20,6 +22,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/trigonometric.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -27,9 +30,14 @@
 
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/loaders.h"
+#include "renderer/scene/model_animation.h"
 
 namespace farm {
 namespace {
+
+// Animation keys in all channels of a file together: enough for minutes of dense motion capture on
+// dozens of nodes, and a bound on the work a small malicious file can ask of every frame.
+constexpr std::size_t kMaxAnimationKeys = 1'000'000;
 
 // ---- File access: every file tinygltf reads is confined ----------------------------------------
 
@@ -153,14 +161,21 @@ class GltfReader {
 
   AccessorView view(int index, int element_type, const std::string& what) const;
   std::vector<glm::vec3> read_vec3(int accessor, const std::string& what) const;
+  std::vector<float> read_times(int accessor, const std::string& what) const;
+  std::vector<glm::quat> read_rotations(int accessor, const std::string& what) const;
   std::vector<std::uint32_t> read_indices(int accessor, std::size_t vertex_count,
                                           const std::string& what) const;
   std::vector<glm::uvec3> assemble_triangles(int mode, const std::vector<std::uint32_t>& idx,
                                              const std::string& what) const;
 
-  glm::mat4 local_transform(const tinygltf::Node& node, int index) const;
+  ModelNode read_node(const tinygltf::Node& node, int index) const;
+  void read_nodes();
+  void read_animations();
+  AnimationChannel read_channel(const tinygltf::Animation& animation,
+                                const tinygltf::AnimationChannel& channel, const std::string& where,
+                                std::size_t& keys) const;
   std::vector<int> root_nodes() const;
-  void add_mesh(int mesh_index, const glm::mat4& node_to_root);
+  void add_mesh(int mesh_index, int node, const glm::mat4& node_to_root);
   void add_camera(int camera_index, const glm::mat4& node_to_root);
   void add_light(const tinygltf::Node& node, const glm::mat4& node_to_root);
   std::uint32_t default_material();
@@ -225,6 +240,59 @@ std::vector<glm::vec3> GltfReader::read_vec3(int accessor, const std::string& wh
     float xyz[3];
     std::memcpy(xyz, v.element(i), sizeof xyz);  // buffers need not be aligned for float
     out[i] = glm::vec3(xyz[0], xyz[1], xyz[2]);
+  }
+  return out;
+}
+
+std::vector<float> GltfReader::read_times(int accessor, const std::string& what) const {
+  const AccessorView v = view(accessor, TINYGLTF_TYPE_SCALAR, what);
+  if (v.count > 0 && v.component_type != TINYGLTF_COMPONENT_TYPE_FLOAT) {
+    fail(what + ": key times must be float scalars");
+  }
+  std::vector<float> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) std::memcpy(&out[i], v.element(i), sizeof(float));
+  return out;
+}
+
+// Rotation keys: float, or normalized integers scaled back to [-1, 1] as glTF 2.0 section 3.11
+// gives them (a signed value's most negative code is clamped to -1).
+std::vector<glm::quat> GltfReader::read_rotations(int accessor, const std::string& what) const {
+  const AccessorView v = view(accessor, TINYGLTF_TYPE_VEC4, what);
+  const tinygltf::Accessor& acc = gltf_.accessors[static_cast<std::size_t>(accessor)];
+  const bool is_float = v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT;
+  if (v.count > 0 && !is_float && !acc.normalized) {
+    fail(what + ": rotations must be float or normalized integer VEC4");
+  }
+  auto component = [&](const unsigned char* p, int c) -> float {
+    switch (v.component_type) {
+      case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+        float f;
+        std::memcpy(&f, p + 4 * c, sizeof f);
+        return f;
+      }
+      case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        const auto b = static_cast<signed char>(p[c]);
+        return std::max(static_cast<float>(b) / 127.0f, -1.0f);
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return static_cast<float>(p[c]) / 255.0f;
+      case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        std::int16_t s;
+        std::memcpy(&s, p + 2 * c, sizeof s);
+        return std::max(static_cast<float>(s) / 32767.0f, -1.0f);
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        std::uint16_t s;
+        std::memcpy(&s, p + 2 * c, sizeof s);
+        return static_cast<float>(s) / 65535.0f;
+      }
+      default: fail(what + ": rotations must be float, or normalized byte or short");
+    }
+  };
+  std::vector<glm::quat> out;
+  out.reserve(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) {
+    const unsigned char* p = v.element(i);  // x, y, z, w; GLM's constructor takes w first
+    out.emplace_back(component(p, 3), component(p, 0), component(p, 1), component(p, 2));
   }
   return out;
 }
@@ -298,7 +366,7 @@ std::uint32_t GltfReader::default_material() {
   return *default_material_;
 }
 
-void GltfReader::add_mesh(int mesh_index, const glm::mat4& node_to_root) {
+void GltfReader::add_mesh(int mesh_index, int node, const glm::mat4& node_to_root) {
   if (!valid_index(mesh_index, gltf_.meshes)) {
     fail("node refers to missing mesh " + std::to_string(mesh_index));
   }
@@ -320,6 +388,7 @@ void GltfReader::add_mesh(int mesh_index, const glm::mat4& node_to_root) {
     if (position == prim.attributes.end()) continue;  // the spec says to skip such primitives
 
     Mesh mesh;
+    mesh.node = node;
     mesh.name = in.name.empty() ? "mesh " + std::to_string(mesh_index) : in.name;
     if (in.primitives.size() > 1) mesh.name += "/" + std::to_string(p);
     mesh.positions = read_vec3(position->second, what + " POSITION");
@@ -420,7 +489,7 @@ void GltfReader::add_light(const tinygltf::Node& node, const glm::mat4& node_to_
   model_.lights.push_back(light);
 }
 
-glm::mat4 GltfReader::local_transform(const tinygltf::Node& node, int index) const {
+ModelNode GltfReader::read_node(const tinygltf::Node& node, int index) const {
   const std::string what = "node " + std::to_string(index);
   auto number = [&](const std::vector<double>& values, std::size_t i) {
     const float v = static_cast<float>(values[i]);
@@ -430,30 +499,141 @@ glm::mat4 GltfReader::local_transform(const tinygltf::Node& node, int index) con
   auto vec3 = [&](const std::vector<double>& v) {
     return glm::vec3(number(v, 0), number(v, 1), number(v, 2));
   };
+  ModelNode out;
+  out.name = node.name;
   if (!node.matrix.empty()) {
     if (node.matrix.size() != 16) fail(what + ": matrix must have 16 numbers");
     glm::mat4 m;
     // glTF matrices are column-major, like GLM's.
     for (int i = 0; i < 16; ++i) m[i / 4][i % 4] = number(node.matrix, static_cast<std::size_t>(i));
-    return m;
+    out.matrix = m;
+    return out;
   }
-  glm::mat4 m(1.0f);
   if (!node.translation.empty()) {
     if (node.translation.size() != 3) fail(what + ": translation must have 3 numbers");
-    m = glm::translate(m, vec3(node.translation));
+    out.translation = vec3(node.translation);
   }
   if (!node.rotation.empty()) {
     if (node.rotation.size() != 4) fail(what + ": rotation must have 4 numbers");
     const std::vector<double>& r = node.rotation;  // x, y, z, w; GLM's constructor takes w first
     const glm::quat q(number(r, 3), number(r, 0), number(r, 1), number(r, 2));
     if (!(glm::length(q) > 0.0f)) fail(what + ": rotation is not a unit quaternion");
-    m *= glm::mat4_cast(glm::normalize(q));
+    out.rotation = glm::normalize(q);
   }
   if (!node.scale.empty()) {
     if (node.scale.size() != 3) fail(what + ": scale must have 3 numbers");
-    m = glm::scale(m, vec3(node.scale));
+    out.scale = vec3(node.scale);
   }
-  return m;
+  return out;
+}
+
+// Every node of the file, not only those of the scene shown, so that animation channels index
+// them as the file does. glTF requires the nodes to form disjoint trees: each node has at most one
+// parent, and (checked by node_world_matrices) no node is its own ancestor.
+void GltfReader::read_nodes() {
+  model_.nodes.reserve(gltf_.nodes.size());
+  for (std::size_t i = 0; i < gltf_.nodes.size(); ++i) {
+    model_.nodes.push_back(read_node(gltf_.nodes[i], static_cast<int>(i)));
+  }
+  for (std::size_t i = 0; i < gltf_.nodes.size(); ++i) {
+    for (const int c : gltf_.nodes[i].children) {
+      if (!valid_index(c, gltf_.nodes)) {
+        fail("node " + std::to_string(i) + " refers to missing child node " + std::to_string(c));
+      }
+      ModelNode& child = model_.nodes[static_cast<std::size_t>(c)];
+      if (child.parent >= 0) {
+        fail("node " + std::to_string(c) +
+             " appears twice in the node hierarchy (a child of node " +
+             std::to_string(child.parent) + " and of node " + std::to_string(i) + ")");
+      }
+      child.parent = static_cast<int>(i);
+    }
+  }
+}
+
+AnimationChannel GltfReader::read_channel(const tinygltf::Animation& animation,
+                                          const tinygltf::AnimationChannel& in,
+                                          const std::string& where, std::size_t& keys) const {
+  AnimationChannel out;
+  if (in.target_path == "translation") out.path = AnimationPath::Translation;
+  else if (in.target_path == "rotation") out.path = AnimationPath::Rotation;
+  else if (in.target_path == "scale") out.path = AnimationPath::Scale;
+  else fail(where + ": unknown target path '" + in.target_path + "'");
+
+  if (!valid_index(in.target_node, gltf_.nodes)) {
+    fail(where + ": targets missing node " + std::to_string(in.target_node));
+  }
+  out.node = in.target_node;
+  const ModelNode& node = model_.nodes[static_cast<std::size_t>(in.target_node)];
+  if (node.matrix) {
+    fail(where + ": targets node " + std::to_string(in.target_node) +
+         (node.name.empty() ? "" : " '" + node.name + "'") +
+         ", which has a matrix (glTF allows animating only nodes given as translation, rotation "
+         "and scale)");
+  }
+
+  if (!valid_index(in.sampler, animation.samplers)) {
+    fail(where + ": no such sampler " + std::to_string(in.sampler));
+  }
+  const tinygltf::AnimationSampler& sampler =
+      animation.samplers[static_cast<std::size_t>(in.sampler)];
+  Interpolation& interpolation = out.sampler.interpolation;
+  if (sampler.interpolation == "LINEAR") interpolation = Interpolation::Linear;
+  else if (sampler.interpolation == "STEP") interpolation = Interpolation::Step;
+  else if (sampler.interpolation == "CUBICSPLINE") interpolation = Interpolation::CubicSpline;
+  else fail(where + ": unknown interpolation '" + sampler.interpolation + "'");
+
+  // The key count is known once the accessor is checked, before anything is read.
+  const AccessorView times = view(sampler.input, TINYGLTF_TYPE_SCALAR, where + " sampler input");
+  keys += times.count;
+  if (keys > kMaxAnimationKeys) {
+    fail(where + ": the animations have more than " + std::to_string(kMaxAnimationKeys) +
+         " keys in all");
+  }
+  out.sampler.times = read_times(sampler.input, where + " sampler input");
+  const std::string output = where + " sampler output";
+  if (out.path == AnimationPath::Rotation) {
+    out.sampler.quat_values = read_rotations(sampler.output, output);
+  } else {
+    out.sampler.vec3_values = read_vec3(sampler.output, output);
+  }
+  if (const std::string problem = sampler_problem(out.sampler, out.path); !problem.empty()) {
+    fail(where + ": " + problem);
+  }
+  // Keyed rotations are unit quaternions to the file's rounding; make them unit to ours. (A
+  // spline's tangents are no rotations, and its result is normalised when it is sampled.)
+  if (out.sampler.interpolation != Interpolation::CubicSpline) {
+    for (glm::quat& q : out.sampler.quat_values) q = glm::normalize(q);
+  }
+  return out;
+}
+
+void GltfReader::read_animations() {
+  std::size_t keys = 0;
+  for (std::size_t a = 0; a < gltf_.animations.size(); ++a) {
+    const tinygltf::Animation& in = gltf_.animations[a];
+    ModelAnimation animation;
+    animation.name = in.name;
+    const std::string name =
+        "animation " + std::to_string(a) + (in.name.empty() ? "" : " '" + in.name + "'");
+    std::set<std::pair<int, AnimationPath>> targets;
+    for (std::size_t c = 0; c < in.channels.size(); ++c) {
+      const tinygltf::AnimationChannel& channel = in.channels[c];
+      // Morph target weights: our meshes have none to blend. A channel without a target is
+      // skipped too (tinygltf itself drops one whose target has no node, which glTF leaves to
+      // extensions; the channel numbers below count only the channels tinygltf kept).
+      const bool no_target = channel.target_node == -1 && channel.target_path.empty();
+      if (channel.target_path == "weights" || no_target) continue;
+      const std::string where = name + " channel " + std::to_string(c);
+      AnimationChannel out = read_channel(in, channel, where, keys);
+      if (!targets.emplace(out.node, out.path).second) {
+        fail(where + ": node " + std::to_string(out.node) + "'s " + channel.target_path +
+             " is animated by an earlier channel too (glTF allows one per target)");
+      }
+      animation.channels.push_back(std::move(out));
+    }
+    model_.animations.push_back(std::move(animation));
+  }
 }
 
 std::vector<int> GltfReader::root_nodes() const {
@@ -486,27 +666,55 @@ Model GltfReader::read() {
     model_.materials.push_back(m);
   }
 
-  // Depth-first walk with an explicit stack; a node met twice means the hierarchy is no tree
-  // (glTF requires one), and following it could loop forever.
+  read_nodes();
+  read_animations();
+  std::vector<glm::mat4> rest_world;  // what every mesh is baked with
+  try {
+    rest_world = node_world_matrices(model_, nullptr, 0.0);
+  } catch (const InputError& e) {  // a cycle
+    fail(e.what());
+  }
+  std::vector<bool> animated(gltf_.nodes.size(), false);
+  for (const ModelAnimation& a : model_.animations)
+    for (const AnimationChannel& c : a.channels) animated[static_cast<std::size_t>(c.node)] = true;
+
+  // Depth-first walk of the scene shown, with an explicit stack, carrying whether an animation
+  // moves the node or an ancestor. read_nodes has made the hierarchy a forest, so a node met twice
+  // is a root listed twice or listed though it has a parent.
   std::vector<bool> visited(gltf_.nodes.size(), false);
-  std::vector<std::pair<int, glm::mat4>> stack;
+  std::vector<std::pair<int, bool>> stack;
   const std::vector<int> roots = root_nodes();
-  for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, glm::mat4(1.0f));
-  while (!stack.empty()) {
-    const auto [index, parent_to_root] = stack.back();
-    stack.pop_back();
-    if (!valid_index(index, gltf_.nodes)) fail("no such node " + std::to_string(index));
-    if (visited[static_cast<std::size_t>(index)]) {
-      fail("node " + std::to_string(index) + " appears twice in the node hierarchy");
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) {
+    if (!valid_index(*it, gltf_.nodes)) fail("no such node " + std::to_string(*it));
+    if (const int parent = model_.nodes[static_cast<std::size_t>(*it)].parent; parent >= 0) {
+      fail("node " + std::to_string(*it) +
+           " is listed as a root of the scene but is a child of node " + std::to_string(parent));
     }
-    visited[static_cast<std::size_t>(index)] = true;
-    const tinygltf::Node& node = gltf_.nodes[static_cast<std::size_t>(index)];
-    const glm::mat4 node_to_root = parent_to_root * local_transform(node, index);
-    if (node.mesh >= 0) add_mesh(node.mesh, node_to_root);
+    stack.emplace_back(*it, false);
+  }
+  while (!stack.empty()) {
+    const auto [index, parent_moves] = stack.back();
+    stack.pop_back();
+    const std::size_t i = static_cast<std::size_t>(index);
+    if (visited[i]) fail("node " + std::to_string(index) + " appears twice in the node hierarchy");
+    visited[i] = true;
+    const tinygltf::Node& node = gltf_.nodes[i];
+    const glm::mat4& node_to_root = rest_world[i];
+    const bool moves = parent_moves || animated[i];
+    if (node.mesh >= 0) {
+      // Posing undoes the rest transform the mesh is baked with (rest_to_posed_matrices).
+      if (moves && !invertible_for_posing(node_to_root)) {
+        fail("node " + std::to_string(index) +
+             (model_.nodes[i].name.empty() ? "" : " '" + model_.nodes[i].name + "'") +
+             " is animated, or under an animated node, but its rest transform is singular or "
+             "nearly so: its mesh baked with it could not be posed");
+      }
+      add_mesh(node.mesh, index, node_to_root);
+    }
     if (node.camera >= 0) add_camera(node.camera, node_to_root);
     add_light(node, node_to_root);
     for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) {
-      stack.emplace_back(*c, node_to_root);
+      stack.emplace_back(*c, moves);
     }
   }
 

@@ -16,6 +16,7 @@ struct Mesh {
   std::vector<glm::vec3> normals;        // one per position, unit length
   std::vector<glm::uvec3> triangles;     // indices into positions
   std::uint32_t material = 0;            // index into Model::materials
+  int node = -1;  // glTF: the Model::nodes entry whose rest world transform is baked in; else -1
 
   std::size_t triangle_count() const { return triangles.size(); }
   AABB bounds() const;

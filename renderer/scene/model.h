@@ -1,6 +1,7 @@
 #pragma once
 // Everything one model file contributes: meshes (model space), materials, and the cameras and
-// lights it declares, which a job uses only when it gives none of its own.
+// lights it declares, which a job uses only when it gives none of its own; from glTF also the node
+// hierarchy and the animations that move it (renderer/scene/model_animation.h).
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "renderer/scene/light.h"
 #include "renderer/scene/material.h"
 #include "renderer/scene/mesh.h"
+#include "renderer/scene/model_animation.h"
 
 namespace farm {
 
@@ -18,6 +20,8 @@ struct Model {
   std::vector<Material> materials;  // never empty after loading: a default is added if needed
   std::vector<Camera> cameras;
   std::vector<Light> lights;
+  std::vector<ModelNode> nodes;            // glTF only: every node of the file, in its order
+  std::vector<ModelAnimation> animations;  // glTF only
 
   std::size_t triangle_count() const;
   std::size_t vertex_count() const;

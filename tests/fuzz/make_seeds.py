@@ -103,7 +103,8 @@ def model_seeds():
   <scene><instance_visual_scene url="#s"/></scene>
 </COLLADA>
 """)
-    for f in ["tests/data/quad_scene.gltf", "tests/data/quad_scene.glb"]:
+    for f in ["tests/data/quad_scene.gltf", "tests/data/quad_scene.glb",
+              "tests/data/animated_nodes.gltf"]:
         copy("gltf_loader", ROOT / f, f.replace("/", "_"))
     ascii_ply = """ply
 format ascii 1.0
