@@ -577,10 +577,10 @@ AnimationChannel GltfReader::read_channel(const tinygltf::Animation& animation,
   }
   const tinygltf::AnimationSampler& sampler =
       animation.samplers[static_cast<std::size_t>(in.sampler)];
-  Interpolation& interpolation = out.sampler.interpolation;
-  if (sampler.interpolation == "LINEAR") interpolation = Interpolation::Linear;
-  else if (sampler.interpolation == "STEP") interpolation = Interpolation::Step;
-  else if (sampler.interpolation == "CUBICSPLINE") interpolation = Interpolation::CubicSpline;
+  SamplerInterpolation& interpolation = out.sampler.interpolation;
+  if (sampler.interpolation == "LINEAR") interpolation = SamplerInterpolation::Linear;
+  else if (sampler.interpolation == "STEP") interpolation = SamplerInterpolation::Step;
+  else if (sampler.interpolation == "CUBICSPLINE") interpolation = SamplerInterpolation::CubicSpline;
   else fail(where + ": unknown interpolation '" + sampler.interpolation + "'");
 
   // The key count is known once the accessor is checked, before anything is read.
@@ -602,7 +602,7 @@ AnimationChannel GltfReader::read_channel(const tinygltf::Animation& animation,
   }
   // Keyed rotations are unit quaternions to the file's rounding; make them unit to ours. (A
   // spline's tangents are no rotations, and its result is normalised when it is sampled.)
-  if (out.sampler.interpolation != Interpolation::CubicSpline) {
+  if (out.sampler.interpolation != SamplerInterpolation::CubicSpline) {
     for (glm::quat& q : out.sampler.quat_values) q = glm::normalize(q);
   }
   return out;

@@ -41,8 +41,8 @@ KeySpan locate(const std::vector<float>& times, double t) {
   return {k, true, (t - static_cast<double>(times[k])) / td, td};
 }
 
-std::size_t values_per_key(Interpolation interpolation) {
-  return interpolation == Interpolation::CubicSpline ? 3 : 1;
+std::size_t values_per_key(SamplerInterpolation interpolation) {
+  return interpolation == SamplerInterpolation::CubicSpline ? 3 : 1;
 }
 
 template <class T>
@@ -181,13 +181,13 @@ std::string sampler_problem(const AnimationSampler& sampler, AnimationPath path)
 glm::vec3 sample_vec3(const AnimationSampler& sampler, double time_seconds) {
   require_counts(sampler, sampler.vec3_values);
   const std::vector<glm::vec3>& v = sampler.vec3_values;
-  const bool cubic = sampler.interpolation == Interpolation::CubicSpline;
+  const bool cubic = sampler.interpolation == SamplerInterpolation::CubicSpline;
   auto value = [&](std::size_t k) { return cubic ? v[3 * k + 1] : v[k]; };
 
   const KeySpan span = locate(sampler.times, time_seconds);
   const std::size_t k = span.key;
-  if (!span.between || sampler.interpolation == Interpolation::Step) return value(k);
-  if (sampler.interpolation == Interpolation::Linear) {
+  if (!span.between || sampler.interpolation == SamplerInterpolation::Step) return value(k);
+  if (sampler.interpolation == SamplerInterpolation::Linear) {
     return glm::vec3(glm::mix(glm::dvec3(v[k]), glm::dvec3(v[k + 1]), span.s));
   }
   // CubicSpline: key k's out-tangent and key k+1's in-tangent.
@@ -199,15 +199,15 @@ glm::vec3 sample_vec3(const AnimationSampler& sampler, double time_seconds) {
 glm::quat sample_rotation(const AnimationSampler& sampler, double time_seconds) {
   require_counts(sampler, sampler.quat_values);
   const std::vector<glm::quat>& q = sampler.quat_values;
-  const bool cubic = sampler.interpolation == Interpolation::CubicSpline;
+  const bool cubic = sampler.interpolation == SamplerInterpolation::CubicSpline;
   auto value = [&](std::size_t k) { return cubic ? q[3 * k + 1] : q[k]; };
 
   const KeySpan span = locate(sampler.times, time_seconds);
   const std::size_t k = span.key;
-  if (!span.between || sampler.interpolation == Interpolation::Step) {
+  if (!span.between || sampler.interpolation == SamplerInterpolation::Step) {
     return glm::normalize(value(k));
   }
-  if (sampler.interpolation == Interpolation::Linear) {
+  if (sampler.interpolation == SamplerInterpolation::Linear) {
     return slerp_shortest(value(k), value(k + 1), span.s);
   }
   // CubicSpline: the spline of the four components, normalised back to a rotation.

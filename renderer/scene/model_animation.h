@@ -29,13 +29,13 @@ struct ModelNode {
 };
 
 enum class AnimationPath { Translation, Rotation, Scale };
-enum class Interpolation { Step, Linear, CubicSpline };
+enum class SamplerInterpolation { Step, Linear, CubicSpline };
 
 // Keyframes of one node property. `times` are seconds, strictly increasing, at least one. Values
 // are vec3 for translation and scale and unit quaternions for rotation; CubicSpline keeps three
 // per key (in-tangent, value, out-tangent, in that order), the others one.
 struct AnimationSampler {
-  Interpolation interpolation = Interpolation::Linear;
+  SamplerInterpolation interpolation = SamplerInterpolation::Linear;
   std::vector<float> times;
   std::vector<glm::vec3> vec3_values;  // translation, scale
   std::vector<glm::quat> quat_values;  // rotation

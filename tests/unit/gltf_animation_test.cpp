@@ -146,7 +146,7 @@ TEST(GltfAnimation, LoadsThreeNamedAnimationsWithTheirChannels) {
   ASSERT_EQ(walk.channels.size(), 2u);
   EXPECT_EQ(walk.channels[0].node, kArm);
   EXPECT_EQ(walk.channels[0].path, AnimationPath::Translation);
-  EXPECT_EQ(walk.channels[0].sampler.interpolation, Interpolation::Linear);
+  EXPECT_EQ(walk.channels[0].sampler.interpolation, SamplerInterpolation::Linear);
   EXPECT_EQ(walk.channels[0].sampler.times, (std::vector<float>{0.0f, 2.0f}));
   EXPECT_EQ(walk.channels[1].node, kHead);
   EXPECT_EQ(walk.channels[1].path, AnimationPath::Rotation);
@@ -156,11 +156,11 @@ TEST(GltfAnimation, LoadsThreeNamedAnimationsWithTheirChannels) {
   const ModelAnimation& hop = m.animations[1];
   ASSERT_EQ(hop.channels.size(), 1u);
   EXPECT_EQ(hop.channels[0].path, AnimationPath::Scale);
-  EXPECT_EQ(hop.channels[0].sampler.interpolation, Interpolation::Step);
+  EXPECT_EQ(hop.channels[0].sampler.interpolation, SamplerInterpolation::Step);
 
   const ModelAnimation& spline = m.animations[2];
   ASSERT_EQ(spline.channels.size(), 1u);
-  EXPECT_EQ(spline.channels[0].sampler.interpolation, Interpolation::CubicSpline);
+  EXPECT_EQ(spline.channels[0].sampler.interpolation, SamplerInterpolation::CubicSpline);
   EXPECT_EQ(spline.channels[0].sampler.vec3_values.size(), 6u);  // in, value, out per key
 }
 
@@ -243,7 +243,7 @@ TEST(GltfAnimation, LinearRotationTakesTheShorterArcWhenAKeyHasTheOppositeSign) 
   // -q is the same rotation as q. Towards the second key as written, halfway is 135 degrees about
   // -Y (the long way round); flipped onto the near side, it is 45 degrees about +Y.
   AnimationSampler s;
-  s.interpolation = Interpolation::Linear;
+  s.interpolation = SamplerInterpolation::Linear;
   s.times = {0.0f, 1.0f};
   s.quat_values = {glm::quat(1, 0, 0, 0), glm::quat(-kS45, 0, -kS45, 0)};
   const glm::quat q = sample_rotation(s, 0.5);
@@ -292,7 +292,7 @@ TEST(GltfAnimation, CubicSplineHoldsTheKeyValuesNotTheTangentsAtTheEnds) {
 TEST(GltfAnimation, CubicSplineRotationIsNormalised) {
   // Zero tangents halfway: the spline is the mean of the two keys, which is no unit quaternion.
   AnimationSampler s;
-  s.interpolation = Interpolation::CubicSpline;
+  s.interpolation = SamplerInterpolation::CubicSpline;
   s.times = {0.0f, 2.0f};
   const glm::quat zero(0, 0, 0, 0);
   s.quat_values = {zero, glm::quat(1, 0, 0, 0), zero, zero, glm::quat(kS45, 0, kS45, 0), zero};
@@ -381,7 +381,7 @@ TEST(GltfAnimation, CyclesAndMatrixTargetsAreInputErrors) {
   ModelAnimation a;
   a.name = "bad";
   a.channels.push_back({0, AnimationPath::Translation,
-                        {Interpolation::Linear, {0.0f}, {glm::vec3(1.0f)}, {}}});
+                        {SamplerInterpolation::Linear, {0.0f}, {glm::vec3(1.0f)}, {}}});
   try {
     node_world_matrices(matrix, &a, 0.0);
     ADD_FAILURE() << "no InputError";
