@@ -83,7 +83,7 @@ MaterialOverride parse_material(const JsonValue& v) {
 }
 
 JobObject parse_object(const JsonValue& v, const Context& ctx) {
-  const JsonObject obj = v.object({"file", "translate", "rotate", "scale", "material"});
+  const JsonObject obj = v.object({"file", "translate", "rotate", "scale", "material", "animation"});
   JobObject o;
   const JsonValue file = obj.require("file");
   o.file = resolve_model_file(file, ctx);
@@ -105,6 +105,21 @@ JobObject parse_object(const JsonValue& v, const Context& ctx) {
     }
   }
   if (auto x = obj.get("material")) o.material = parse_material(*x);
+  if (auto x = obj.get("animation")) {
+    // A name, an index, or false; the model, not loaded here, is checked when the scene is built.
+    if (x->raw().is_boolean()) {
+      if (x->boolean()) x->fail("expected an animation's name or index, or false (true is the default)");
+      o.animation.pick = ObjectAnimation::Pick::Off;
+    } else if (x->raw().is_string()) {
+      o.animation.pick = ObjectAnimation::Pick::Name;
+      o.animation.name = x->string();
+    } else if (x->raw().is_number()) {
+      o.animation.pick = ObjectAnimation::Pick::Index;
+      o.animation.index = static_cast<std::size_t>(x->integer(0, 1'000'000));
+    } else {
+      x->fail_expected("an animation's name or index, or false");
+    }
+  }
   return o;
 }
 
@@ -412,6 +427,7 @@ Job job_at_frame(const Job& job, int frame) {
   out.frame = frame;
   out.render.frame = frame;
   if (!job.frames) return out;
+  out.seconds = job.frames->seconds_at(frame);
   if (job.animation) out.scene = animated_scene(*job.animation, job.path.string(), frame);
   out.output.image = frame_file_name(job.output_patterns.image.string(), frame);
   out.output.preview = frame_file_name(job.output_patterns.preview.string(), frame);

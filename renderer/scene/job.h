@@ -18,11 +18,19 @@
 
 namespace farm {
 
+// Which of a glTF model's animations an object plays (jobs/README.md, "animation").
+struct ObjectAnimation {
+  enum class Pick { First, Off, Index, Name } pick = Pick::First;  // First: the model's first, if any
+  std::size_t index = 0;
+  std::string name;
+};
+
 struct JobObject {
   std::filesystem::path file;   // absolute, canonical, checked to lie inside the asset root
   std::string file_as_written;  // as it appears in the job, for messages
   ObjectTransform transform;
   MaterialOverride material;
+  ObjectAnimation animation;
 };
 
 struct JobScene {
@@ -55,6 +63,7 @@ struct Job {
   // through job_at_frame()). `output_patterns` keeps the names with their '#' runs.
   std::optional<FrameRange> frames;
   int frame = 0;
+  double seconds = 0.0;  // the frame's time, (frame - start) / fps: what glTF animations play at
   JobOutput output_patterns;
   std::shared_ptr<const JobAnimation> animation;  // null: nothing is keyframed
 };

@@ -26,4 +26,21 @@ std::shared_ptr<const Model> ModelLibrary::load(const std::filesystem::path& fil
   }
 }
 
+std::shared_ptr<const Model> ModelLibrary::node_part(const std::filesystem::path& file, int node) {
+  const std::shared_ptr<const Model> whole = load(file);
+  std::lock_guard lock(mutex_);
+  std::shared_ptr<const Model>& part = parts_[{file, node}];
+  if (!part) {
+    auto p = std::make_shared<Model>();
+    p->source = whole->source;
+    p->materials = whole->materials;
+    p->nodes = whole->nodes;
+    for (const Mesh& mesh : whole->meshes) {
+      if (mesh.node == node) p->meshes.push_back(mesh);
+    }
+    part = std::move(p);
+  }
+  return part;
+}
+
 }  // namespace farm

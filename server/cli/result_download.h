@@ -8,13 +8,19 @@
 
 namespace farm {
 
-// Where to write a result: given its kind and the name the scheduler suggests (may be empty).
-using ResultPath = std::function<std::filesystem::path(v1::ResultKind, const std::string& name)>;
+// Where to write a result: given its kind, the name the scheduler suggests (may be empty) and its
+// frame (a still's: 0).
+using ResultPath = std::function<std::filesystem::path(v1::ResultKind, const std::string& name, int frame)>;
 
 // Fetches the EXR and, when `want_preview`, the preview (none is fine: the job may not have
 // one), printing "wrote PATH" for each.
 // `frame`: that frame of a job with frames; none: the job's first.
 void download_results(SchedulerClient& client, const std::string& job_id, const ResultPath& where,
                       bool want_preview, std::optional<int> frame = std::nullopt);
+
+// Every result of `job` there is now: a still's once it succeeded (InputError before), each
+// merged frame of a job with frames, those still rendering counted and said. Returns how many
+// frames (a still: 1) were written; InputError when none could be.
+int download_job_results(SchedulerClient& client, const v1::Job& job, const ResultPath& where, bool want_preview);
 
 }  // namespace farm

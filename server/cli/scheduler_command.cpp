@@ -164,9 +164,9 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
   s->add_option("--max-priority", o->max_priority,
                 "Highest job priority a caller without the admin role may ask for")
       ->capture_default_str();
-  s->footer("Jobs run in priority order, then in submission order. A finished job's tiles are "
-            "merged into <data-dir>/results/<job>/ (EXR with the job's AOV layers + PNG "
-            "preview), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
+  s->footer("Jobs run in priority order, then in submission order. Each frame, once its tiles are "
+            "done, is merged into <data-dir>/results/<job>/<frame>/ (EXR with the job's AOV layers + "
+            "PNG preview; a still is frame 0), fetched with GetResult. SIGINT or SIGTERM stop it cleanly: tiles in "
             "flight go back to the queue.\n\nSecurity: it listens on loopback unless --listen says "
             "otherwise. With --tokens, calls need a token: 'submit' callers see and act on their "
             "own jobs, 'read' sees every job, 'admin' does everything, workers need 'worker' to "

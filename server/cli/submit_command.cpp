@@ -40,11 +40,12 @@ int run_submit(const SubmitOptions& o) {
   const v1::Job last = follow(client, job.job_id());
   if (last.state() != v1::JOB_STATE_SUCCEEDED) return exit_code_of(last);
   // Like `farm render`: the results land where the job's output section says.
-  download_results(client, job.job_id(),
-                   [&](v1::ResultKind kind, const std::string&) {
-                     return kind == v1::RESULT_KIND_EXR ? submission.job.output.image : submission.job.output.preview;
-                   },
-                   !submission.job.output.preview.empty());
+  download_job_results(client, last,
+                       [&](v1::ResultKind kind, const std::string&, int frame) {
+                         const JobOutput& out = job_at_frame(submission.job, submission.job.frames ? frame : 0).output;
+                         return kind == v1::RESULT_KIND_EXR ? out.image : out.preview;
+                       },
+                       !submission.job.output.preview.empty());
   return 0;
 }
 

@@ -204,7 +204,10 @@ TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
     // Back to what version 1 had: no part column, no owner.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
+    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
+                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
                             "ALTER TABLE tiles DROP COLUMN lost_attempts", "UPDATE schema_version SET version = 1"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -228,7 +231,10 @@ TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     // Back to what version 2 had: no owner column, no lost_attempts.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN owner", "ALTER TABLE tiles DROP COLUMN lost_attempts",
+    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
+                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE jobs DROP COLUMN owner", "ALTER TABLE tiles DROP COLUMN lost_attempts",
                             "UPDATE schema_version SET version = 2"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -258,7 +264,11 @@ TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) 
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN lost_attempts", "UPDATE schema_version SET version = 3"}) {
+    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
+                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN lost_attempts",
+                            "UPDATE schema_version SET version = 3"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
@@ -273,15 +283,99 @@ TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) 
     EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
     EXPECT_EQ(store.tiles("a")[0].lost_attempts, 1);
   }
-  // Upgraded once: it opens as version 4 from now on.
+  // Upgraded once: it opens as version 5 from now on.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* s = nullptr;
   ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(s, 0), 4);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 5);
   sqlite3_finalize(s);
   sqlite3_close(db);
+}
+
+// Version 5 renders frame ranges: every older job is a still, frame 0 alone, merged when the job
+// had succeeded.
+TEST(JobStoreTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZero) {
+  test::TempDir dir;
+  {
+    JobStore store(dir / "jobs.db");
+    store.add_job(make_job("done", 0, 1), 1);
+    store.add_job(make_job("running", 0, 2), 2);
+    ASSERT_TRUE(store.claim_next_batch("w", 3));
+    ASSERT_TRUE(store.batch_done("done", 0, 1, {}));
+    ASSERT_TRUE(store.frame_merged("done", 0));
+    ASSERT_EQ(store.finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
+                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "UPDATE schema_version SET version = 4"}) {
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    }
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "jobs.db");
+  const v1::Job done = *store.get_job("done");
+  EXPECT_EQ(done.frames_total(), 1u);
+  EXPECT_EQ(done.frames_done(), 1u);
+  EXPECT_EQ(done.frame_first(), 0);
+  EXPECT_TRUE(store.is_frame_merged("done", 0));
+  const v1::Job running = *store.get_job("running");
+  EXPECT_EQ(running.frames_done(), 0u);
+  EXPECT_FALSE(store.is_frame_merged("running", 0));
+  EXPECT_EQ(store.tiles("running")[0].frame, 0);
+  // It goes on as any job: its frame completes, is merged, and the job succeeds.
+  for (int i = 0; i < 2; ++i) {
+    auto b = store.claim_next_batch("w", 5);
+    ASSERT_TRUE(b);
+    ASSERT_TRUE(store.batch_done("running", b->first, 1, {}));
+  }
+  EXPECT_EQ(store.complete_frames("running"), std::vector<int>{0});
+  ASSERT_TRUE(store.frame_merged("running", 0));
+  EXPECT_TRUE(store.complete_frames("running").empty());
+  EXPECT_EQ(store.finish_job("running", v1::JOB_STATE_SUCCEEDED, "", "", 6).state(), v1::JOB_STATE_SUCCEEDED);
+}
+
+// A job of frames: tiles numbered frame after frame, batches never cross a frame, a frame is
+// complete when its tiles are, and a part taken back unmerges its frame.
+TEST(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  NewJob job = make_job("f", 0, 2);  // two tiles a frame, in one row
+  job.frames = {10, 12, 14};
+  job.frame_step = 2;
+  const v1::Job added = store.add_job(job, 1);
+  EXPECT_EQ(added.tiles_total(), 6u);
+  EXPECT_EQ(added.frames_total(), 3u);
+  EXPECT_EQ(added.frame_first(), 10);
+  EXPECT_EQ(added.frame_last(), 14);
+  EXPECT_EQ(added.frame_step(), 2);
+  const BatchSize many = [](const std::string&, int) { return 8; };
+  auto first = store.claim_next_batch("w", 2, many);
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->frame, 10);
+  EXPECT_EQ(first->count, 2u);  // the whole row of frame 10, not into frame 12
+  EXPECT_TRUE(store.complete_frames("f").empty());
+  ASSERT_TRUE(store.batch_done("f", first->first, first->count, {}));
+  EXPECT_EQ(store.complete_frames("f", 10), std::vector<int>{10});
+  EXPECT_TRUE(store.complete_frames("f", 12).empty());
+  EXPECT_EQ(store.frame_parts("f", 10), std::vector<std::uint32_t>{0});
+  ASSERT_TRUE(store.frame_merged("f", 10));
+  EXPECT_EQ(store.get_job("f")->frames_done(), 1u);
+  EXPECT_TRUE(store.complete_frames("f").empty());
+  auto second = store.claim_next_batch("w", 3, many);
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->frame, 12);
+  EXPECT_EQ(second->first, 2u);
+  EXPECT_FALSE(store.frame_merged("f", 12));  // its tiles are not done
+  // Taking frame 10's part back unmerges it: merged again once rendered again.
+  EXPECT_EQ(store.requeue_parts("f", {0}).size(), 1u);
+  EXPECT_EQ(store.get_job("f")->frames_done(), 0u);
+  EXPECT_FALSE(store.is_frame_merged("f", 10));
 }
 
 // Lost workers count against their own limit, never against max_attempts, and a tile that lost
@@ -385,6 +479,7 @@ TEST(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
   auto finished = store.claim_next_batch("liar", 3);
   ASSERT_TRUE(finished && finished->job_id == "done");
   ASSERT_TRUE(store.batch_done("done", 0, 1, stats, "liar"));
+  ASSERT_TRUE(store.frame_merged("done", 0));
   ASSERT_EQ(store.finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
   EXPECT_EQ(store.get_job("a")->stats().samples(), 20u);
 
@@ -430,6 +525,9 @@ TEST(JobStoreTest, BatchOperationsActOnlyOnTheirWorkersTilesAndSuccessNeedsEvery
   EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_RUNNING);
   auto last = store.claim_next_batch("w2", 6);
   ASSERT_TRUE(last && store.batch_done("a", last->first, 1, {}, "w2"));
+  // Every tile done, but the frame not merged: not yet.
+  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_RUNNING);
+  ASSERT_TRUE(store.frame_merged("a", 0));
   EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_SUCCEEDED);
 }
 
@@ -478,6 +576,7 @@ TEST(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysActi
   EXPECT_EQ(again->first, 0u);
   EXPECT_EQ(again->count, 2u);
   ASSERT_TRUE(store.batch_done("a", again->first, again->count, stats, "w"));
+  ASSERT_TRUE(store.frame_merged("a", 0));
   EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_SUCCEEDED);
   EXPECT_TRUE(store.requeue_parts("a", {0}).empty());
   EXPECT_EQ(store.get_job("a")->tiles_done(), 3u);
