@@ -17,6 +17,8 @@ namespace farm {
 namespace {
 
 constexpr int kSchemaVersion = 5;
+// claim_next_batch counts a job's queued tiles up to this many (BatchSize sees at most it).
+constexpr int kQueuedCountCap = 1024;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
@@ -450,26 +452,39 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
   TileBatch batch;
   std::int64_t seq = 0;
   {
-    Stmt pick(db_, prepared(fmt::format(
-                       "SELECT j.seq, j.id, t.idx, t.x0, t.y0, t.x1, t.y1, t.attempts, t.lost_attempts, t.frame FROM jobs j "
-                       "JOIN tiles t ON t.job_seq = j.seq WHERE j.state IN {} AND t.state = 0 "
-                       "ORDER BY j.priority DESC, j.seq ASC, t.idx ASC LIMIT 1",
-                       kActiveSql)));
-    if (!pick.step()) return std::nullopt;
-    seq = pick.i64(0);
-    batch.job_id = pick.text(1);
-    batch.first = static_cast<std::uint32_t>(pick.i64(2));
-    batch.rect = {pick.i32(3), pick.i32(4), pick.i32(5), pick.i32(6)};
-    batch.attempts = pick.i32(7);
-    batch.lost_attempts = pick.i32(8);
-    batch.frame = pick.i32(9);
+    // The active jobs in queue order, each asked for its first queued tile through tiles_by_state
+    // (one seek a job): a join sorted over every queued tile would cost each claim as much as the
+    // queue is long, and a job of many frames queues tens of thousands.
+    Stmt jobs(db_, prepared(fmt::format("SELECT seq, id FROM jobs WHERE state IN {} ORDER BY priority DESC, seq ASC",
+                                        kActiveSql)));
+    Stmt first(db_, prepared("SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame FROM tiles "
+                             "WHERE state = 0 AND job_seq = ? ORDER BY idx LIMIT 1"));
+    bool found = false;
+    while (!found && jobs.step()) {
+      first.reset();
+      first.bind(1, jobs.i64(0));
+      if (!first.step()) continue;
+      found = true;
+      seq = jobs.i64(0);
+      batch.job_id = jobs.text(1);
+      batch.first = static_cast<std::uint32_t>(first.i64(0));
+      batch.rect = {first.i32(1), first.i32(2), first.i32(3), first.i32(4)};
+      batch.attempts = first.i32(5);
+      batch.lost_attempts = first.i32(6);
+      batch.frame = first.i32(7);
+    }
+    if (!found) return std::nullopt;
   }
   // A tile that failed before, or lost its worker, goes alone, so it cannot take fresh
   // neighbours down with it (nor a worker's loss count them all).
   if (batch_size && batch.attempts == 0 && batch.lost_attempts == 0) {
     int queued = 0;
     {
-      Stmt count(db_, prepared("SELECT COUNT(*) FROM tiles WHERE state = 0 AND job_seq = ?"));
+      // Counted up to kQueuedCountCap only: past it no batch of up to 8 slots changes, and counting
+      // all of a long queue at every claim would cost as much as the queue is long.
+      Stmt count(db_, prepared(fmt::format("SELECT COUNT(*) FROM (SELECT 1 FROM tiles WHERE state = 0 AND "
+                                           "job_seq = ? LIMIT {})",
+                                           kQueuedCountCap)));
       count.bind(1, seq);
       if (count.step()) queued = count.i32(0);
     }
@@ -698,15 +713,30 @@ std::vector<TileBatch> JobStore::requeue_parts(const std::string& job_id, const 
 
 std::vector<int> JobStore::complete_frames(const std::string& job_id, std::optional<int> frame) const {
   std::lock_guard lock(mutex_);
-  // The tiles of a frame not merged yet, grouped by frame: complete when none is other than done.
-  Stmt s(db_, prepared(fmt::format(
-                  "SELECT t.frame FROM jobs j JOIN tiles t ON t.job_seq = j.seq WHERE j.id = ?1 AND j.state IN {} "
-                  "AND (?2 = 0 OR t.frame = ?3) "
-                  "AND NOT EXISTS (SELECT 1 FROM frames f WHERE f.job_seq = j.seq AND f.frame = t.frame) "
-                  "GROUP BY t.frame HAVING SUM(t.state != 2) = 0 ORDER BY t.frame",
-                  kActiveSql)));
-  s.bind(1, job_id).bind(2, frame ? 1 : 0).bind(3, frame.value_or(0));
   std::vector<int> out;
+  std::int64_t seq = 0;
+  {
+    Stmt s(db_, prepared(fmt::format("SELECT seq FROM jobs WHERE id = ? AND state IN {}", kActiveSql)));
+    s.bind(1, job_id);
+    if (!s.step()) return out;
+    seq = s.i64(0);
+  }
+  const char* not_merged = "NOT EXISTS (SELECT 1 FROM frames f WHERE f.job_seq = t.job_seq AND f.frame = t.frame)";
+  if (frame) {
+    // After each batch: one frame's tiles, counted through tiles_by_frame, unless it is merged.
+    Stmt merged(db_, prepared("SELECT 1 FROM frames WHERE job_seq = ? AND frame = ?"));
+    merged.bind(1, seq).bind(2, *frame);
+    if (merged.step()) return out;
+    Stmt s(db_, prepared("SELECT COUNT(*), SUM(state != 2) FROM tiles WHERE job_seq = ? AND frame = ?"));
+    s.bind(1, seq).bind(2, *frame);
+    if (s.step() && s.i64(0) > 0 && s.i64(1) == 0) out.push_back(*frame);
+    return out;
+  }
+  // After a restart: every frame of the job, complete when none of its tiles is other than done.
+  Stmt s(db_, prepared(fmt::format("SELECT t.frame FROM tiles t WHERE t.job_seq = ? AND {} GROUP BY t.frame "
+                                   "HAVING SUM(t.state != 2) = 0 ORDER BY t.frame",
+                                   not_merged)));
+  s.bind(1, seq);
   while (s.step()) out.push_back(s.i32(0));
   return out;
 }

@@ -86,7 +86,8 @@ struct TileBatch {
   int frame = 0;          // the frame its tiles belong to
 };
 
-// How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued.
+// How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued
+// (counted up to 1024: beyond, it shapes no batch of a farm of up to 8 slots).
 using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
 
 // What batch_failed did.
