@@ -33,12 +33,7 @@ double seconds_since(Clock::time_point t) { return std::chrono::duration<double>
 // Submit, follow to the end, fetch the EXR: what `farm submit --wait` does.
 double render_through(SchedulerClient& client, const JobSubmission& submission, const fs::path& out) {
   const Clock::time_point start = Clock::now();
-  client.upload_missing(submission);
-  const v1::Job job = client.submit(submission, 0);
-  const v1::Job last = client.watch(job.job_id(), {});
-  if (last.state() != v1::JOB_STATE_SUCCEEDED) {
-    throw std::runtime_error(fmt::format("job {} {}: {}", job.job_id(), to_string(last.state()), last.failure_reason()));
-  }
+  const v1::Job job = bench::submit_and_wait(client, submission).first;
   client.fetch(job.job_id(), v1::RESULT_KIND_EXR, [&](const std::string&) { return out; });
   return seconds_since(start);
 }

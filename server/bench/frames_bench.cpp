@@ -109,17 +109,6 @@ void bench_turntable(const FramesBenchOptions& o, const fs::path& dir) {
              median(ratio), median(ratio) <= 1.1 ? "within" : "over");
 }
 
-double render_through(SchedulerClient& client, const JobSubmission& submission) {
-  const Clock::time_point start = Clock::now();
-  client.upload_missing(submission);
-  const v1::Job job = client.submit(submission, 0);
-  const v1::Job last = client.watch(job.job_id(), {});
-  if (last.state() != v1::JOB_STATE_SUCCEEDED) {
-    throw std::runtime_error(fmt::format("job {} {}: {}", job.job_id(), to_string(last.state()), last.failure_reason()));
-  }
-  return ms_since(start);
-}
-
 void bench_path(const FramesBenchOptions& o, const fs::path& dir) {
   const JobSubmission submission = make_job_submission(o.path_job, {}, {});
   const Job& job = submission.job;
@@ -130,8 +119,8 @@ void bench_path(const FramesBenchOptions& o, const fs::path& dir) {
   SchedulerClient client_one(one.address()), client_two(two.address());
   std::vector<double> a, b, ratio;
   for (int i = 0; i < o.repeats; ++i) {
-    a.push_back(render_through(client_one, submission));
-    b.push_back(render_through(client_two, submission));
+    a.push_back(1e3 * bench::submit_and_wait(client_one, submission).second);
+    b.push_back(1e3 * bench::submit_and_wait(client_two, submission).second);
     ratio.push_back(a.back() / b.back());
   }
   fmt::print("{:<48} {:>10.1f} ms\n", "scheduler + 1 worker (all cores)", median(a));

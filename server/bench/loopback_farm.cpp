@@ -37,4 +37,15 @@ LoopbackFarm::LoopbackFarm(const std::filesystem::path& dir, int workers, int ti
   }
 }
 
+std::pair<v1::Job, double> submit_and_wait(SchedulerClient& client, const JobSubmission& submission) {
+  const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  client.upload_missing(submission);
+  const v1::Job job = client.submit(submission, 0);
+  const v1::Job last = client.watch(job.job_id(), {});
+  if (last.state() != v1::JOB_STATE_SUCCEEDED) {
+    throw std::runtime_error(fmt::format("job {} {}: {}", job.job_id(), to_string(last.state()), last.failure_reason()));
+  }
+  return {last, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+}
+
 }  // namespace farm::bench

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "server/client/job_submission.h"
+#include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
 
 namespace farm::bench {
@@ -23,5 +25,10 @@ class LoopbackFarm {
   std::vector<std::unique_ptr<ChildProcess>> workers_;
   std::string address_;
 };
+
+// What `farm submit --wait` does up to the download: uploads what the scheduler lacks, submits,
+// follows the job to its end. Returns the job (SUCCEEDED; std::runtime_error otherwise) and the
+// seconds it all took.
+std::pair<v1::Job, double> submit_and_wait(SchedulerClient& client, const JobSubmission& submission);
 
 }  // namespace farm::bench
