@@ -9,6 +9,8 @@
 #include <glm/vec3.hpp>
 #include <iterator>
 #include <limits>
+#include <map>
+#include <memory>
 #include <system_error>
 
 #include "renderer/scene/input_error.h"
@@ -32,7 +34,14 @@ struct Context {
   fs::path job_dir;     // absolute
   fs::path job_file;    // in job_dir with its symlinks resolved: what model paths are relative to
   fs::path asset_root;  // absolute, symlinks resolved
+  // Model paths resolved so far, by the text written: an animated job's scene is read once per
+  // frame, and its files (which no keyframe can change) are resolved once.
+  std::shared_ptr<std::map<std::string, fs::path>> resolved = std::make_shared<std::map<std::string, fs::path>>();
 };
+
+// An animated job's scene is read once per frame when it is loaded, so that no frame fails
+// halfway through a render: at most this many objects and lights over all its frames.
+constexpr std::size_t kMaxAnimatedSceneReads = 2'000'000;
 
 // A user's string inside a message: shortened so a hostile value cannot flood logs.
 std::string shown(const std::string& s) {
@@ -43,12 +52,14 @@ std::string shown(const std::string& s) {
 fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
   const std::string written = v.string();
   if (written.empty()) v.fail("expected a file path, got an empty string");
+  if (const auto it = ctx.resolved->find(written); it != ctx.resolved->end()) return it->second;
   // A person writes a job on their own machine: an absolute path is fine if it lies in the root
   // (a submission rewrites it relative to the root before it travels).
   const ConfinedFile file =
       confine_file(ctx.asset_root, ctx.job_file, written, ReferenceForm::relative_or_absolute);
   if (file.verdict == Confinement::missing) v.fail(fmt::format("no such file '{}'", shown(written)));
   if (!file.allowed()) v.fail(file.reason);
+  ctx.resolved->emplace(written, file.resolved);
   return file.resolved;
 }
 
@@ -408,6 +419,14 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
     auto animation = std::make_shared<JobAnimation>();
     animation->values = parse_animate(*x, doc);
     if (!animation->values.empty()) {
+      const std::size_t reads = (job.scene.objects.size() + (job.scene.lights ? job.scene.lights->size() : 0) + 1) *
+                                job.frames->frames().size();
+      if (reads > kMaxAnimatedSceneReads) {
+        x->fail(fmt::format("{} frames of a scene of {} objects and lights are too many to check: at most {} "
+                            "objects and lights over all frames",
+                            job.frames->frames().size(), reads / job.frames->frames().size() - 1,
+                            kMaxAnimatedSceneReads));
+      }
       animation->ctx = ctx;
       animation->document = std::move(doc);
       // Every frame is read once here, so that no value an animation reaches (a negative

@@ -218,6 +218,15 @@ TEST(JobFrames, BadAnimatePathsAndKeysNameTheirPlace) {
   expect(no_frames, "animate: keyframes need a frame range");
 }
 
+TEST(JobFrames, CheckingEveryFrameOfAnAnimationIsBounded) {
+  Json doc = animated("raster");
+  doc["frames"] = {{"start", 1}, {"end", 10000}};
+  for (int i = 0; i < 300; ++i) doc["scene"]["objects"].push_back({{"file", "assets/cornell_box.obj"}});
+  const std::string e = error_of(doc);
+  EXPECT_NE(e.find("animate: 10000 frames of a scene of 302 objects and lights are too many to check"), std::string::npos)
+      << e;
+}
+
 TEST(JobFrames, KeysTheJobDoesNotWriteCanBeAnimated) {
   Json doc = animated("raster");
   doc["scene"]["objects"][0].erase("rotate");  // animated, so added back at each frame
