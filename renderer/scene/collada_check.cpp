@@ -144,7 +144,14 @@ class ColladaCheck {
       if (count > values) {
         fail(node, "count " + std::to_string(count) + " but " + std::to_string(values) + " values");
       }
-      if (const std::string_view id = node.attribute("id").value(); !id.empty()) arrays_[std::string(id)] = count;
+      // Ids are unique in a COLLADA document (xs:ID). With two arrays of one id, an accessor could
+      // be checked against one and read by Assimp from the other (an empty one: a SEGV found by
+      // Fuzz.Run.collada_loader), so the second is refused.
+      if (const std::string_view id = node.attribute("id").value(); !id.empty()) {
+        if (!arrays_.emplace(std::string(id), count).second) {
+          fail(node, "a second array with id '" + std::string(id.substr(0, 64)) + "' (ids must be unique)");
+        }
+      }
     } else if (named(node, {"triangles", "polylist", "polygons", "lines", "linestrips", "trifans",
                             "tristrips"})) {
       const std::uint64_t count = count_attribute(node);
