@@ -17,6 +17,12 @@ std::vector<int> FrameRange::frames() const {
   return out;
 }
 
+bool FrameRange::contains(int frame) const {
+  const int first = only ? only->first : start;
+  const int last = only ? only->second : end;
+  return frame >= start && frame <= end && frame >= first && frame <= last && (frame - start) % step == 0;
+}
+
 namespace {
 
 std::optional<int> frame_number(std::string_view s) {

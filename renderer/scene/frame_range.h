@@ -25,6 +25,8 @@ struct FrameRange {
 
   // The frames rendered, ascending: start, start + step, ... <= end, inside `only` when given.
   std::vector<int> frames() const;
+  // Whether `frame` is one of frames(), without listing them.
+  bool contains(int frame) const;
   // Seconds from the range's start: (frame - start) / fps, what glTF animations play at.
   double seconds_at(int frame) const { return (frame - start) / fps; }
 };

@@ -30,6 +30,7 @@ void apply_overrides(Job& job, const RenderOverrides& o) {
   if (o.image) job.output.image = *o.image;
   if (o.preview) job.output.preview = *o.preview;
   if (!job.frames) {
+    job.output_patterns = job.output;  // a still's names are its patterns
     if (o.frames) {
       throw InputError(fmt::format("--frames {}-{}: the job renders one still; give it a range, such as "
                                    "\"frames\": {{\"start\": 1, \"end\": 48}}",

@@ -8,9 +8,9 @@
 
 #include "renderer/geometry/accel_validation.h"
 #include "renderer/prepared_scene.h"
+#include "renderer/scene/frame_range.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/common/free_memory.h"
-#include "renderer/scene/frame_range.h"
 #include "server/common/job_state.h"
 
 namespace farm {

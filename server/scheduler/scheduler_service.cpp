@@ -159,29 +159,31 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
     const Principal who = access_.access.require(*context, kJobReaders, "GetResult");
     const v1::Job job = visible_job(who, request->job_id(), kAllJobReaders, "fetch");
     const bool preview = request->kind() == v1::RESULT_KIND_PREVIEW;
-    std::optional<int> frame;
+    std::optional<std::filesystem::path> file;
     if (request->has_frame()) {
       // A frame can be fetched as soon as it is merged, while the job renders its others.
-      frame = request->frame();
-      const int f = *frame, first = job.frame_first(), step = std::max(1, job.frame_step());
+      const int f = request->frame(), first = job.frame_first(), step = std::max(1, job.frame_step());
       if (f < first || f > job.frame_last() || (f - first) % step != 0) {
         throw InputError(fmt::format("job {} renders no frame {} (its frames are {} to {} by {})", job.job_id(), f,
                                      first, job.frame_last(), step));
       }
-      if (job.state() == v1::JOB_STATE_FAILED || job.state() == v1::JOB_STATE_CANCELLED ||
-          !core_.result_file(job.job_id(), preview, frame)) {
+      if (job.state() != v1::JOB_STATE_FAILED && job.state() != v1::JOB_STATE_CANCELLED) {
+        file = core_.result_file(job.job_id(), preview, f);
+      }
+      if (!file) {
         return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
                             fmt::format("frame {} of job {} is not rendered yet (the job is {}, {} of {} frames done)",
                                         f, job.job_id(), v1::JobState_Name(job.state()), job.frames_done(),
                                         job.frames_total()));
       }
-    } else if (job.state() != v1::JOB_STATE_SUCCEEDED) {
-      return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                          fmt::format("job {} is {}, not done", job.job_id(),
-                                      v1::JobState_Name(job.state())));
+    } else {
+      if (job.state() != v1::JOB_STATE_SUCCEEDED) {
+        return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                            fmt::format("job {} is {}, not done", job.job_id(), v1::JobState_Name(job.state())));
+      }
+      file = core_.result_file(job.job_id(), preview);
+      if (!file) return grpc::Status(grpc::StatusCode::INTERNAL, "the job's result file is missing");
     }
-    const std::optional<std::filesystem::path> file = core_.result_file(job.job_id(), preview, frame);
-    if (!file) return grpc::Status(grpc::StatusCode::INTERNAL, "the job's result file is missing");
     const std::string sha = sha256_file_hex(*file);
     const std::uint64_t size = std::filesystem::file_size(*file);
     const bool complete = stream_file(*file, writer, context,

@@ -12,13 +12,13 @@ constexpr std::uint64_t kApproxFrameBytesPerTriangle = 64;
 constexpr auto kPollInterval = std::chrono::milliseconds(20);
 }  // namespace
 
-CachedScene::CachedScene(Job j, Scene s, std::shared_ptr<ModelLibrary> m, std::shared_ptr<ModelGeometry> geometry,
-                         bool shares_models)
+CachedScene::CachedScene(Job j, Scene s, std::shared_ptr<ModelLibrary> m, std::shared_ptr<ModelGeometry> geometry)
     : job(std::move(j)),
       models(m ? std::move(m) : std::make_shared<ModelLibrary>(job.asset_root)),
-      prepared(std::move(s), std::move(geometry)),
-      approx_bytes((shares_models ? kApproxFrameBytesPerTriangle : kApproxBytesPerTriangle) * prepared.triangle_count() +
-                   sizeof(CachedScene)) {}
+      prepared(std::move(s), geometry) {
+  approx_bytes = (geometry ? kApproxFrameBytesPerTriangle : kApproxBytesPerTriangle) * prepared.triangle_count() +
+                 sizeof(CachedScene);
+}
 
 SceneCache::Lookup SceneCache::get(const std::string& scene_hash, const Prepare& prepare,
                                    const Cancelled& cancelled) {

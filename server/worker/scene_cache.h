@@ -22,8 +22,9 @@ namespace farm {
 struct CachedScene {
   // `models` null: a library of its own (the scene's models were loaded elsewhere, and the
   // job's other frames load them once more, into it).
+  // `geometry` given: another frame's, whose models this frame shares (and is counted smaller).
   CachedScene(Job j, Scene s, std::shared_ptr<ModelLibrary> models = nullptr,
-              std::shared_ptr<ModelGeometry> geometry = nullptr, bool shares_models = false);
+              std::shared_ptr<ModelGeometry> geometry = nullptr);
 
   Job job;  // at its frame
   std::shared_ptr<ModelLibrary> models;

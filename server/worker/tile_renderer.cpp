@@ -208,10 +208,9 @@ SceneCache::Lookup TileRenderer::frame_of(const std::string& hash, const SceneCa
                                           const SceneCache::Cancelled& cancelled) {
   const Job& job = base.scene->job;
   if (frame == job.frame) return base;
-  const std::vector<int> frames = job_frames(job);
-  if (!std::binary_search(frames.begin(), frames.end(), frame)) {
+  if (!job.frames || !job.frames->contains(frame)) {
     throw InputError(job.frames ? fmt::format("frame {} is not one the job renders ({} to {} by {})", frame,
-                                              frames.front(), frames.back(), job.frames->step)
+                                              job.frames->start, job.frames->end, job.frames->step)
                                 : fmt::format("frame {} of a job without frames (a still is frame 0)", frame));
   }
   SceneCache::Lookup lookup = cache_.get(
@@ -220,7 +219,7 @@ SceneCache::Lookup TileRenderer::frame_of(const std::string& hash, const SceneCa
         Job at = job_at_frame(job, frame);
         Scene scene = build_scene(at, *base.scene->models);
         return std::make_shared<const CachedScene>(std::move(at), std::move(scene), base.scene->models,
-                                                   base.scene->prepared.shared_geometry(), true);
+                                                   base.scene->prepared.shared_geometry());
       },
       cancelled);
   lookup.hit = lookup.hit && base.hit;

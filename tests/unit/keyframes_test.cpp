@@ -1,6 +1,8 @@
 // Keyframe interpolation (renderer/scene/keyframes.h) against values worked out by hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <optional>
 #include <vector>
 
 #include "renderer/scene/frame_range.h"
@@ -92,6 +94,20 @@ TEST(FrameRange, FramesFollowTheStepAndThePick) {
   EXPECT_EQ(r.frames(), (std::vector<int>{4, 7}));
   r.fps = 2;
   EXPECT_DOUBLE_EQ(r.seconds_at(4), 1.5);
+}
+
+TEST(FrameRange, ContainsIsMembershipOfFrames) {
+  for (const auto& only : {std::optional<std::pair<int, int>>{}, std::optional{std::pair{3, 8}}}) {
+    FrameRange r;
+    r.start = 1;
+    r.end = 10;
+    r.step = 3;
+    r.only = only;
+    const std::vector<int> frames = r.frames();
+    for (int f = -2; f <= 14; ++f) {
+      EXPECT_EQ(r.contains(f), std::find(frames.begin(), frames.end(), f) != frames.end()) << f;
+    }
+  }
 }
 
 TEST(FrameRange, FrameNamesFillTheLastRunOfHashes) {

@@ -721,7 +721,6 @@ std::vector<int> JobStore::complete_frames(const std::string& job_id, std::optio
     if (!s.step()) return out;
     seq = s.i64(0);
   }
-  const char* not_merged = "NOT EXISTS (SELECT 1 FROM frames f WHERE f.job_seq = t.job_seq AND f.frame = t.frame)";
   if (frame) {
     // After each batch: one frame's tiles, counted through tiles_by_frame, unless it is merged.
     Stmt merged(db_, prepared("SELECT 1 FROM frames WHERE job_seq = ? AND frame = ?"));
@@ -733,9 +732,9 @@ std::vector<int> JobStore::complete_frames(const std::string& job_id, std::optio
     return out;
   }
   // After a restart: every frame of the job, complete when none of its tiles is other than done.
-  Stmt s(db_, prepared(fmt::format("SELECT t.frame FROM tiles t WHERE t.job_seq = ? AND {} GROUP BY t.frame "
-                                   "HAVING SUM(t.state != 2) = 0 ORDER BY t.frame",
-                                   not_merged)));
+  Stmt s(db_, prepared("SELECT t.frame FROM tiles t WHERE t.job_seq = ? AND NOT EXISTS (SELECT 1 FROM frames f "
+                       "WHERE f.job_seq = t.job_seq AND f.frame = t.frame) GROUP BY t.frame "
+                       "HAVING SUM(t.state != 2) = 0 ORDER BY t.frame"));
   s.bind(1, seq);
   while (s.step()) out.push_back(s.i32(0));
   return out;
