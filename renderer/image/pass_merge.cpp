@@ -33,6 +33,20 @@ void PassAccumulator::reset(const Rect& rect, const AovSet& aovs) {
   first_.reset(rect_, first_sample_aovs(aovs));
 }
 
+std::optional<std::pair<int, int>> PassAccumulator::first_not_at(const Rect& overlap, int count) const {
+  for (int y = overlap.y0; y < overlap.y1; ++y) {
+    for (int x = overlap.x0; x < overlap.x1; ++x) {
+      if (samples_[index(x, y)] != count) return std::pair{x, y};
+    }
+  }
+  return std::nullopt;
+}
+
+bool PassAccumulator::can_add(const Rect& rect, SampleRange samples) const {
+  const Rect overlap = rect_.intersect(rect);
+  return !samples.empty() && !overlap.empty() && !first_not_at(overlap, samples.begin);
+}
+
 void PassAccumulator::add(const TileBuffer& pass, SampleRange samples) {
   if (samples.empty() || samples.begin < 0) {
     throw std::invalid_argument(fmt::format("pass merge: samples [{}, {}) is no pass", samples.begin, samples.end));
@@ -45,16 +59,12 @@ void PassAccumulator::add(const TileBuffer& pass, SampleRange samples) {
     throw std::invalid_argument("pass merge: the pass buffer lacks AOVs the merged image carries");
   }
   // Every pixel first, so that a refused pass changes nothing.
-  for (int y = overlap.y0; y < overlap.y1; ++y) {
-    for (int x = overlap.x0; x < overlap.x1; ++x) {
-      const int have = samples_[index(x, y)];
-      if (have != samples.begin) {
-        throw std::invalid_argument(fmt::format(
-            "pass merge: pixel ({}, {}) holds samples [0, {}); samples [{}, {}) cannot follow them "
-            "(passes fold in order, each once)",
-            x, y, have, samples.begin, samples.end));
-      }
-    }
+  if (const std::optional<std::pair<int, int>> at = first_not_at(overlap, samples.begin)) {
+    const auto [x, y] = *at;
+    throw std::invalid_argument(fmt::format(
+        "pass merge: pixel ({}, {}) holds samples [0, {}); samples [{}, {}) cannot follow them "
+        "(passes fold in order, each once)",
+        x, y, samples_[index(x, y)], samples.begin, samples.end));
   }
 
   const double nb = static_cast<double>(samples.count());

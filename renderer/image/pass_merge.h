@@ -6,6 +6,8 @@
 // once; the progressive preview after pass k is the same fold stopped after pass k.
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "renderer/image/aov.h"
@@ -56,6 +58,10 @@ class PassAccumulator {
   // the same way: the caller keeps one of the copies, which are the same bits anyway.
   // Not safe to call concurrently on one accumulator.
   void add(const TileBuffer& pass, SampleRange samples);
+  // Whether a pass of `samples` over `rect` can be folded now: every pixel of its overlap with
+  // rect() holds exactly the samples before samples.begin (a part that came before the passes
+  // under it waits; see InMemoryAssembly).
+  bool can_add(const Rect& rect, SampleRange samples) const;
 
   // Samples folded so far at a pixel (absolute image coordinates inside rect()).
   int samples(int x, int y) const { return samples_[index(x, y)]; }
@@ -68,6 +74,8 @@ class PassAccumulator {
   const RenderStats& stats() const { return stats_; }
 
  private:
+  // The first pixel of `overlap` (inside rect()) that does not hold exactly `count` samples.
+  std::optional<std::pair<int, int>> first_not_at(const Rect& overlap, int count) const;
   std::size_t index(int x, int y) const {
     return static_cast<std::size_t>(y - rect_.y0) * static_cast<std::size_t>(rect_.width()) +
            static_cast<std::size_t>(x - rect_.x0);

@@ -232,7 +232,7 @@ constexpr AccelKind kAccels[] = {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind
                                  AccelKind::Embree};
 
 void parse_render(const JsonValue& v, RenderSettings& r) {
-  const JsonObject obj = v.object({"engine", "width", "height", "spp", "max_depth", "seed",
+  const JsonObject obj = v.object({"engine", "width", "height", "spp", "pass_spp", "max_depth", "seed",
                                    "tile_size", "threads", "accel", "shadows", "light_sampling"});
   constexpr int kIntMax = std::numeric_limits<int>::max();
   if (auto x = obj.get("engine")) {
@@ -244,6 +244,8 @@ void parse_render(const JsonValue& v, RenderSettings& r) {
   if (auto x = obj.get("width")) r.width = x->int32(1, kMaxImageSide);
   if (auto x = obj.get("height")) r.height = x->int32(1, kMaxImageSide);
   if (auto x = obj.get("spp")) r.spp = x->int32(1, kMaxSpp);
+  // 0 (the default) renders a frame's samples in one pass; raster and whitted ignore it.
+  if (auto x = obj.get("pass_spp")) r.pass_spp = x->int32(0, kMaxSpp);
   if (auto x = obj.get("max_depth")) r.max_depth = x->int32(-1, kIntMax);
   if (auto x = obj.get("seed")) r.seed = x->unsigned_integer();
   if (auto x = obj.get("tile_size")) r.tile_size = x->int32(1, kMaxTileSize);

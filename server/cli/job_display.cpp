@@ -54,7 +54,8 @@ void print_job(const v1::Job& job) {
   }
 }
 
-v1::Job follow(SchedulerClient& client, const std::string& job_id) {
+v1::Job follow(SchedulerClient& client, const std::string& job_id,
+               const std::function<void(const v1::JobEvent&)>& also) {
   const bool terminal = ProgressBar::stderr_is_terminal();
   ProgressBar bar(fmt::format("job {}", job_id), terminal);
   v1::JobState shown = v1::JOB_STATE_UNSPECIFIED;
@@ -71,6 +72,7 @@ v1::Job follow(SchedulerClient& client, const std::string& job_id) {
       fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, describe_tiles(f.tile_index(), f.tile_count()),
                  f.worker(), f.reason(), f.will_retry() ? " (will retry)" : "");
     }
+    if (also) also(event);
   });
   return last;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // How the client commands (`farm submit --wait`, `status`, `watch`, `cancel`) show a job on the
 // scheduler: its summary, a progress line, and following it to its end.
+#include <functional>
 #include <string>
 
 #include "proto/farm.pb.h"
@@ -21,7 +22,9 @@ void print_job(const v1::Job& job);
 
 // Follows a job to its end with a progress bar (on a terminal) or a line per state change, and
 // reports failed tiles on stderr. Returns the job as it ended.
-v1::Job follow(SchedulerClient& client, const std::string& job_id);
+// `also` (when given) sees every event too, after the progress bar.
+v1::Job follow(SchedulerClient& client, const std::string& job_id,
+               const std::function<void(const v1::JobEvent&)>& also = {});
 
 // 0 when the job succeeded; else says how it ended on stderr and returns 1.
 int exit_code_of(const v1::Job& job);

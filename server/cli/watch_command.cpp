@@ -1,6 +1,11 @@
 #include "server/cli/watch_command.h"
 
+#include <fmt/format.h>
+
+#include <cctype>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "server/cli/job_display.h"
@@ -9,14 +14,54 @@
 
 namespace farm {
 
+namespace {
+
+struct WatchOptions {
+  JobOnScheduler target;
+  std::filesystem::path preview;  // empty: none
+};
+
+// The preview to show after `event`: a frame of sample passes refines after each pass (its
+// progressive preview); a frame without passes is shown once merged.
+std::optional<std::pair<v1::ResultKind, int>> preview_after(const v1::JobEvent& event) {
+  if (event.has_pass_finished()) return std::pair{v1::RESULT_KIND_PROGRESSIVE, event.pass_finished().frame()};
+  if (event.has_frame_finished() && event.job().passes() <= 1) {
+    return std::pair{v1::RESULT_KIND_PREVIEW, event.frame_finished().frame()};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 void add_watch_command(CLI::App& app, CommandTable& commands) {
-  auto o = std::make_shared<JobOnScheduler>();
+  auto o = std::make_shared<WatchOptions>();
   CLI::App* watch = app.add_subcommand("watch", "Follow a job with a progress bar until it ends");
-  add_job_on_scheduler_options(*watch, *o);
+  add_job_on_scheduler_options(*watch, o->target);
+  watch->add_option("--preview", o->preview,
+                    "Keep this PNG up to date with the newest preview while the job renders: after each "
+                    "sample pass of a frame (render.pass_spp), and after each merged frame")
+      ->check([](const std::string& s) {
+        std::string ext = std::filesystem::path(s).extension().string();
+        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        return ext == ".png" ? std::string() : fmt::format("expected a .png file, got '{}'", s);
+      });
   watch->footer("Exit codes: 0 the job succeeded, 1 it failed or was cancelled.");
   commands.add(watch, [o] {
-    SchedulerClient client(resolve_scheduler_connection(o->scheduler));
-    const v1::Job last = follow(client, o->job_id);
+    SchedulerClient client(resolve_scheduler_connection(o->target.scheduler));
+    const auto refresh = [&](const v1::JobEvent& event) {
+      if (o->preview.empty()) return;
+      const auto wanted = preview_after(event);
+      if (!wanted) return;
+      try {
+        // Through a temporary file: a viewer never sees half a PNG.
+        client.fetch(o->target.job_id, wanted->first, [&](const std::string&) { return o->preview; },
+                     wanted->second);
+      } catch (const std::exception& e) {
+        // The job goes on; the next pass or frame tries again.
+        fmt::print(stderr, "farm watch: preview of frame {}: {}\n", wanted->second, e.what());
+      }
+    };
+    const v1::Job last = follow(client, o->target.job_id, refresh);
     print_job(last);
     return exit_code_of(last);
   });

@@ -156,8 +156,9 @@ std::string check_stats(const v1::TileStats& s, const RenderSettings& settings, 
     if (!std::isfinite(value) || value < 0.0) return fmt::format("stats: {} is {}", name, value);
   }
   if (s.threads() < 0) return fmt::format("stats: threads is {}", s.threads());
+  // Those of the call's sample pass (all spp without passes).
   const std::uint64_t samples =
-      settings.engine == EngineKind::Path ? pixels * static_cast<std::uint64_t>(std::max(1, settings.spp)) : 0;
+      settings.engine == EngineKind::Path ? pixels * static_cast<std::uint64_t>(samples_to_render(settings).count()) : 0;
   if (s.samples() != samples) {
     return fmt::format("stats: {} samples, the {} engine takes {} for {} pixels", s.samples(),
                        to_string(settings.engine), samples, pixels);

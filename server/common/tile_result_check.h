@@ -11,7 +11,8 @@
 //   albedo    finite, zero where nothing was hit
 //   bvh_cost  a whole number >= 0 from whitted; 0 from raster and path, which do not count
 //   variance  finite >= 0 from path; 0 from raster and whitted, whose pixels are no estimates
-//   stats     times finite and >= 0; path samples = pixels x spp, none from the other engines
+//   stats     times finite and >= 0; path samples = pixels x the pass's samples (spp without
+//             passes; settings.pass says which), none from the other engines
 //
 // The scheduler checks every reply that crossed the wire (server/scheduler/dispatcher.cpp); the
 // unit tests render real tiles with every engine and AOV to show that honest replies pass.

@@ -192,6 +192,7 @@ void Dispatcher::quarantine(const std::string& worker_id, const std::string& wor
   // finds its tiles no longer running, or is taken back here.
   for (const TileBatch& b : store_.quarantine_worker(worker_id)) {
     assembly_.discard(b.job_id, b.first);
+    finisher_.parts_taken_back(b.job_id);
     const std::string why =
         fmt::format("the result of worker {} is discarded and rendered again: the worker is quarantined ({})",
                     worker, reason);
@@ -275,6 +276,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
     auto call = std::make_shared<InFlight>();
     call->batch = TileBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
     call->batch.frame = c->batch.frame;
+    call->batch.pass = c->batch.pass;
     call->worker_id = w.id;
     call->check = c;
     in_flight_.insert(call);
@@ -325,6 +327,7 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
     request.set_job_id(batch.job_id);
     request.set_tile_index(batch.first);
     request.set_frame(batch.frame);
+    request.set_pass(batch.pass);
     // Each tile of the batch has its deadline.
     const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch.count;
     grpc::Status status = w.worker->render(request, result, deadline, *call.cancel);
@@ -381,7 +384,9 @@ void Dispatcher::handle_result(WorkerEntry& w, const InFlight& call, const grpc:
 
 std::optional<RenderSettings> Dispatcher::settings_of(const TileBatch& batch) {
   try {
-    return jobs_.get(batch.job_id)->job->render;
+    RenderSettings settings = jobs_.get(batch.job_id)->job->render;
+    settings.pass = batch.pass;  // what a reply for the batch renders (its samples)
+    return settings;
   } catch (const std::exception& e) {
     log_.error("job {} {}: {}", batch.job_id, describe(batch), e.what());
     return std::nullopt;
@@ -572,7 +577,7 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
   const v1::TileStats stats = result.response.stats();
   try {
     // The data first, then the mark: a done tile always has its data.
-    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(batch.frame), batch.first, result);
+    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(batch.frame), {batch.first, batch.pass}, result);
     if (!store_.batch_done(batch.job_id, batch.first, batch.count, stats, worker_id)) {
       // The job ended, or the tiles were taken back (the worker quarantined meanwhile).
       assembly_.discard(batch.job_id, batch.first);
@@ -588,6 +593,7 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       f.set_worker(worker);
       *f.mutable_stats() = stats;
       f.set_frame(batch.frame);
+      f.set_pass(batch.pass);
     });
     pause_.written();
     {

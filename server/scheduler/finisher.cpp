@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -38,18 +39,21 @@ std::string check_against_embree(const JobInfo& info) {
 void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> frame) {
   {
     std::lock_guard lock(mutex_);
-    const auto [it, added] = merging_.try_emplace(job_id, false);
+    const auto [it, added] = merging_.try_emplace(job_id);
     if (!added) {
       // Another thread merges the job's frames: it looks again once done, for this frame too.
-      it->second = true;
+      it->second.again = true;
+      if (frame) it->second.frames.insert(*frame);
       return;
     }
   }
   std::optional<int> which = frame;
+  std::set<int> refine;  // frames whose progressive previews may have a pass more
+  if (frame) refine.insert(*frame);
   for (;;) {
     bool refused = false;
     try {
-      merge_complete(job_id, which);
+      merge_complete(job_id, which, refine);
     } catch (const DiskFull& e) {
       // The job stays as it is, its tiles done, until there is room for its frame.
       log_.debug("job {}: merge refused: {}", job_id, e.what());
@@ -60,8 +64,9 @@ void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> 
     }
     std::lock_guard lock(mutex_);
     const auto it = merging_.find(job_id);
-    if (it->second && !refused) {
-      it->second = false;
+    if (it->second.again && !refused) {
+      refine = std::move(it->second.frames);
+      it->second = {};
       which.reset();  // frames completed meanwhile: every complete one
       continue;
     }
@@ -82,6 +87,7 @@ void Finisher::retry_refused() {
 
 void Finisher::release(const std::string& job_id) {
   assembly_.remove_job(job_id);
+  previews_.forget_job(job_id);
   const std::size_t still_running = jobs_.forget(job_id);
   // What the job's submission, tiles and merge freed is held by the allocator's arenas (the
   // scheduler grew from 28 to 760 MB over 50 tiny jobs, half of it free memory): it goes back when
@@ -89,10 +95,16 @@ void Finisher::release(const std::string& job_id) {
   if (still_running == 0 || ++released_ % kTrimEvery == 0) return_free_memory_to_system();
 }
 
-void Finisher::merge_complete(const std::string& job_id, std::optional<int> frame) {
+void Finisher::merge_complete(const std::string& job_id, std::optional<int> frame, const std::set<int>& refine) {
   const std::optional<v1::Job> job = store_.get_job(job_id);
   if (!job || is_final(job->state())) return;
-  for (int f : store_.complete_frames(job_id, frame)) {
+  const std::vector<int> complete = store_.complete_frames(job_id, frame);
+  if (job->passes() > 1) {
+    for (int f : refine) {
+      if (std::find(complete.begin(), complete.end(), f) == complete.end()) refine_preview(job_id, f);
+    }
+  }
+  for (int f : complete) {
     if (!merge_frame(job_id, f)) return;
   }
   const v1::Job now = *store_.get_job(job_id);
@@ -103,7 +115,7 @@ void Finisher::merge_complete(const std::string& job_id, std::optional<int> fram
 bool Finisher::merge_frame(const std::string& job_id, int frame) {
   try {
     const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
-    const std::vector<std::uint32_t> parts = store_.frame_parts(job_id, frame);
+    const std::vector<FramePart> parts = store_.frame_parts(job_id, frame, info->passes());
     TileBuffer film = assembly_.assemble(job_id, info->frame(frame), parts);
     write_merged(film, files_of(job_id, *info, frame), options_.exr_type);
     if (!store_.frame_merged(job_id, frame)) {
@@ -114,6 +126,9 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
     }
     if (info->merged) info->merged(frame, std::move(film));
     assembly_.frame_merged(job_id, frame);
+    previews_.frame_merged(job_id, *info, frame);
+    std::error_code ignored;
+    fs::remove(progressive_file(job_id, frame), ignored);  // its preview is the merged one now
     events_.publish(job_id, [&](v1::JobEvent& event) { event.mutable_frame_finished()->set_frame(frame); });
     log_.debug("job {}: frame {} merged from {} calls", job_id, frame, parts.size());
     return true;
@@ -158,6 +173,24 @@ void Finisher::fail(const std::string& job_id, const std::string& reason) {
   release(job_id);
 }
 
+void Finisher::refine_preview(const std::string& job_id, int frame) {
+  try {
+    const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
+    const fs::path file = progressive_file(job_id, frame);
+    fs::create_directories(file.parent_path());
+    previews_.update(job_id, *info, frame, file);
+  } catch (const DamagedParts& e) {
+    render_again(job_id, e);
+  } catch (const DiskFull&) {
+    throw;  // made again once there is room, with the merge
+  } catch (const std::exception& e) {
+    // A preview is no part of the result: the job goes on, and the next pass tries again.
+    log_.warn("job {}: progressive preview of frame {}: {}", job_id, frame, e.what());
+  }
+}
+
+void Finisher::parts_taken_back(const std::string& job_id) { previews_.parts_taken_back(job_id); }
+
 bool Finisher::make_room() {
   std::optional<v1::Job> youngest;
   int holding = 0;
@@ -181,6 +214,7 @@ bool Finisher::make_room() {
   // (DamagedParts), as after a crash.
   assembly_.free_parts(id, parts);
   const std::vector<TileBatch> taken = store_.requeue_parts(id, parts);
+  previews_.parts_taken_back(id);
   std::uint32_t tiles = 0;
   for (const TileBatch& b : taken) tiles += b.count;
   log_.warn("the disk is full: the {} done tiles of job {} (the youngest of {} running jobs holding tiles) are "
@@ -195,6 +229,7 @@ bool Finisher::render_again(const std::string& job_id, const DamagedParts& damag
   for (const DamagedParts::Part& p : damaged.parts()) parts.push_back(p.part);
   const std::vector<TileBatch> taken = store_.requeue_parts(job_id, parts);
   if (taken.empty()) return false;
+  previews_.parts_taken_back(job_id);
   for (const DamagedParts::Part& p : damaged.parts()) {
     log_.warn("job {}: {}; its tiles are rendered again, not merged", job_id, p.problem);
   }
@@ -230,6 +265,18 @@ MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info, i
 
 fs::path Finisher::results_dir(const std::string& job_id) const {
   return options_.data_dir / "results" / job_id;
+}
+
+fs::path Finisher::progressive_file(const std::string& job_id, int frame) const {
+  return results_dir(job_id) / "progress" / fmt::format("{}.png", frame);
+}
+
+std::optional<fs::path> Finisher::progressive_result(const std::string& job_id, int frame) const {
+  if (store_.is_frame_merged(job_id, frame)) return result_file(job_id, true, frame);
+  const fs::path file = progressive_file(job_id, frame);
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return std::nullopt;
+  return file;
 }
 
 std::optional<fs::path> Finisher::result_file(const std::string& job_id, bool preview, std::optional<int> frame) const {

@@ -29,6 +29,7 @@
 #include "server/scheduler/disk_full_pause.h"
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_events.h"
+#include "server/scheduler/progressive_previews.h"
 #include "server/scheduler/running_jobs.h"
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
@@ -40,10 +41,11 @@ class Finisher {
   Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly,
            RunningJobs& jobs, JobEvents& events, DiskFullPause& pause, spdlog::logger& log)
       : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), pause_(pause),
-        log_(log) {}
+        log_(log), previews_(store, assembly, events) {}
 
   // Merges `frame` of the job if its tiles are all done (no frame: every complete frame), and ends
-  // the job once all are merged. One caller merges a job at a time; another calling meanwhile
+  // the job once all are merged. A frame of sample passes not yet complete gets its progressive
+  // preview when a pass more is done (progressive_previews.h). One caller merges a job at a time; another calling meanwhile
   // returns at once, and the first looks again for complete frames before it returns.
   void finish_if_complete(const std::string& job_id, std::optional<int> frame = std::nullopt);
   // The job is final: what is kept of it in memory and its tiles go.
@@ -59,12 +61,21 @@ class Finisher {
   // the first frame of a SUCCEEDED job. nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
                                                    std::optional<int> frame = std::nullopt) const;
+  // The newest progressive preview (PNG) of the job's frame of sample passes, until it is merged;
+  // then its preview. nullopt before its first pass is done.
+  std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
+  // Done parts of the job were taken back (the dispatcher quarantined their worker).
+  void parts_taken_back(const std::string& job_id);
   // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.
   void on_requeued(std::function<void()> f) { on_requeued_ = std::move(f); }
 
  private:
-  // The complete frames merged (`frame` alone when given), then the job finished if all are.
-  void merge_complete(const std::string& job_id, std::optional<int> frame);
+  // The complete frames merged (`frame` alone when given), then the job finished if all are; the
+  // previews of the frames in `refine` that are not complete made.
+  void merge_complete(const std::string& job_id, std::optional<int> frame, const std::set<int>& refine);
+  // The frame's progressive preview, if a pass more is done. Damaged parts are rendered again; a
+  // full disk throws DiskFull; anything else is logged (a preview is no part of the result).
+  void refine_preview(const std::string& job_id, int frame);
   // False when the job cannot go on to its next frame now: failed, or tiles to render again.
   bool merge_frame(const std::string& job_id, int frame);
   void finish(const std::string& job_id, const v1::Job& before);
@@ -77,6 +88,8 @@ class Finisher {
   // results/<job id>/<frame>/<stem>.exr and .png.
   MergedFiles files_of(const std::string& job_id, const JobInfo& info, int frame) const;
   std::filesystem::path results_dir(const std::string& job_id) const;
+  // results/<job id>/progress/<frame>.png
+  std::filesystem::path progressive_file(const std::string& job_id, int frame) const;
 
   const SchedulerOptions& options_;
   JobStore& store_;
@@ -86,9 +99,14 @@ class Finisher {
   DiskFullPause& pause_;
   spdlog::logger& log_;
   std::mutex mutex_;
-  std::map<std::string, bool> merging_;  // job -> another frame completed meanwhile
+  struct Merging {
+    bool again = false;    // a batch was done meanwhile: look again
+    std::set<int> frames;  // the frames of those batches (their previews)
+  };
+  std::map<std::string, Merging> merging_;  // jobs being merged
   std::set<std::string> refused_;  // merges the disk refused, tried again by retry_refused()
   std::function<void()> on_requeued_;  // set once, before any merge
+  ProgressivePreviews previews_;
   static constexpr unsigned kTrimEvery = 16;
   std::atomic<unsigned> released_{0};  // jobs released, for trimming the heap now and then
 };

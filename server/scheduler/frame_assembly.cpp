@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <stdexcept>
 
 #include "server/common/tile_codec.h"
@@ -26,6 +27,14 @@ void check_fits(const TileBuffer& tile, const FrameLayout& frame, const std::str
   }
 }
 
+const SampleRange& samples_of(const FrameLayout& frame, const FramePart& part, const std::string& job_id) {
+  if (part.pass < 0 || static_cast<std::size_t>(part.pass) >= frame.passes.size()) {
+    throw std::runtime_error(fmt::format("result {} of job {} is of pass {}; frame {} has {}", part.part, job_id,
+                                         part.pass, frame.frame, frame.passes.size()));
+  }
+  return frame.passes[static_cast<std::size_t>(part.pass)];
+}
+
 std::string describe(const std::vector<DamagedParts::Part>& parts) {
   std::string s = fmt::format("{} damaged result{}:", parts.size(), parts.size() == 1 ? "" : "s");
   for (const DamagedParts::Part& p : parts) s += " " + p.problem + ";";
@@ -37,41 +46,70 @@ std::string describe(const std::vector<DamagedParts::Part>& parts) {
 
 DamagedParts::DamagedParts(std::vector<Part> parts) : std::runtime_error(describe(parts)), parts_(std::move(parts)) {}
 
-void TileFileAssembly::add(const std::string& job_id, const FrameLayout&, std::uint32_t part,
+void TileFileAssembly::add(const std::string& job_id, const FrameLayout&, const FramePart& part,
                            RenderedTiles& tiles) {
   // A worker in this process hands over pixels, not TileData: the file needs them encoded.
   if (tiles.pixels) {
     encode_tile(*tiles.pixels, *tiles.response.mutable_tile());
     tiles.pixels.reset();
   }
-  files_.write(job_id, part, tiles.response);
+  files_.write(job_id, part.part, tiles.response);
 }
 
 TileBuffer TileFileAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
-                                      const std::vector<std::uint32_t>& parts) {
+                                      const std::vector<FramePart>& parts) {
   TileBuffer film;
-  // The parts cover the image exactly (tiles of split_into_tiles, in batches), so the film need
-  // not be cleared first.
-  film.reset_for_overwrite(frame.image, frame.aovs);
-  std::vector<DamagedParts::Part> damaged;
-  for (std::uint32_t part : parts) {
-    RenderedTiles tiles;
-    try {
-      tiles.response = files_.read(job_id, part);
-    } catch (const DamagedTileResult& e) {
-      damaged.push_back({part, e.what()});  // the others are read too: all go back at once
-      continue;
-    }
-    const TileBuffer buffer = pixels_of(tiles);
-    check_fits(buffer, frame, job_id, part);
-    film.paste(buffer);
-    film.stats() += decode_stats(tiles.response.stats());
+  RenderStats stats;  // the parts' own, summed
+  if (frame.folded()) {
+    PassAccumulator merged(frame.image, frame.aovs);
+    read_parts(job_id, frame, parts, [&](const FramePart& part, const TileBuffer& buffer, const v1::TileStats& s) {
+      merged.add(buffer, samples_of(frame, part, job_id));
+      stats += decode_stats(s);
+    });
+    merged.resolve(film);
+  } else {
+    // The parts cover the image exactly (tiles of split_into_tiles, in batches), so the film need
+    // not be cleared first.
+    film.reset_for_overwrite(frame.image, frame.aovs);
+    read_parts(job_id, frame, parts, [&](const FramePart&, const TileBuffer& buffer, const v1::TileStats& s) {
+      film.paste(buffer);
+      stats += decode_stats(s);
+    });
   }
-  if (!damaged.empty()) throw DamagedParts(std::move(damaged));
+  film.stats() = stats;
   return film;
 }
 
-void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, std::uint32_t part,
+void TileFileAssembly::fold(const std::string& job_id, const FrameLayout& frame, const std::vector<FramePart>& parts,
+                            PassAccumulator& into) {
+  read_parts(job_id, frame, parts, [&](const FramePart& part, const TileBuffer& buffer, const v1::TileStats&) {
+    into.add(buffer, samples_of(frame, part, job_id));
+  });
+}
+
+void TileFileAssembly::read_parts(
+    const std::string& job_id, const FrameLayout& frame, const std::vector<FramePart>& parts,
+    const std::function<void(const FramePart&, const TileBuffer&, const v1::TileStats&)>& use) {
+  std::vector<DamagedParts::Part> damaged;
+  for (const FramePart& part : parts) {
+    RenderedTiles tiles;
+    try {
+      tiles.response = files_.read(job_id, part.part);
+    } catch (const DamagedTileResult& e) {
+      damaged.push_back({part.part, e.what()});  // the others are read too: all go back at once
+      continue;
+    }
+    // After a damaged part nothing more is used (a fold could not take the parts of later
+    // passes over it), but every part is read, so that all the damaged ones are named at once.
+    if (!damaged.empty()) continue;
+    const TileBuffer buffer = pixels_of(tiles);
+    check_fits(buffer, frame, job_id, part.part);
+    use(part, buffer, tiles.response.stats());
+  }
+  if (!damaged.empty()) throw DamagedParts(std::move(damaged));
+}
+
+void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, const FramePart& part,
                            RenderedTiles& tiles) {
   std::shared_ptr<Film> f;
   {
@@ -80,15 +118,44 @@ void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, 
     if (!slot) {
       slot = std::make_shared<Film>();
       // The batches cover the image exactly: no clearing needed.
-      slot->film.reset_for_overwrite(frame.image, frame.aovs);
+      if (frame.folded()) {
+        slot->fold.reset(frame.image, frame.aovs);
+      } else {
+        slot->film.reset_for_overwrite(frame.image, frame.aovs);
+      }
     }
     f = slot;
   }
-  const TileBuffer buffer = pixels_of(tiles);
-  check_fits(buffer, frame, job_id, part);
-  f->film.paste(buffer);  // batches are disjoint: concurrent pastes touch different pixels
+  TileBuffer buffer = pixels_of(tiles);
+  check_fits(buffer, frame, job_id, part.part);
+  if (!frame.folded()) {
+    f->film.paste(buffer);  // batches are disjoint: concurrent pastes touch different pixels
+    std::lock_guard lock(f->mutex);
+    f->parts.emplace_back(part.part, decode_stats(tiles.response.stats()));
+    return;
+  }
+  static_cast<void>(samples_of(frame, part, job_id));
   std::lock_guard lock(f->mutex);
-  f->parts.emplace_back(part, decode_stats(tiles.response.stats()));
+  f->waiting.push_back({part, std::move(buffer)});
+  fold_waiting(*f, frame);
+  f->parts.emplace_back(part.part, decode_stats(tiles.response.stats()));
+}
+
+void InMemoryAssembly::fold_waiting(Film& f, const FrameLayout& frame) {
+  // Passes fold in pass order: the lowest waiting pass first, so one fold can free the next.
+  std::sort(f.waiting.begin(), f.waiting.end(),
+            [](const Waiting& a, const Waiting& b) { return a.part.pass < b.part.pass; });
+  for (bool folded = true; folded;) {
+    folded = false;
+    for (auto it = f.waiting.begin(); it != f.waiting.end(); ++it) {
+      const SampleRange& samples = frame.passes[static_cast<std::size_t>(it->part.pass)];
+      if (!f.fold.can_add(it->pixels.rect(), samples)) continue;
+      f.fold.add(it->pixels, samples);
+      f.waiting.erase(it);
+      folded = true;
+      break;
+    }
+  }
 }
 
 void InMemoryAssembly::discard(const std::string& job_id, std::uint32_t part) {
@@ -105,13 +172,22 @@ void InMemoryAssembly::discard(const std::string& job_id, std::uint32_t part) {
     const auto it = std::find_if(f->parts.begin(), f->parts.end(), [&](const auto& p) { return p.first == part; });
     if (it != f->parts.end()) {
       f->parts.erase(it);
+      if (f->fold.rect().empty()) return;
+      // A frame of passes: a part still waiting goes with it; one folded cannot be taken out.
+      const auto waiting = std::find_if(f->waiting.begin(), f->waiting.end(),
+                                        [&](const Waiting& w) { return w.part.part == part; });
+      if (waiting != f->waiting.end()) {
+        f->waiting.erase(waiting);
+      } else {
+        f->lost_folded_part = true;
+      }
       return;
     }
   }
 }
 
 TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
-                                      const std::vector<std::uint32_t>& parts) {
+                                      const std::vector<FramePart>& parts) {
   std::shared_ptr<Film> f;
   {
     std::lock_guard lock(mutex_);
@@ -127,13 +203,21 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
     stats += part_stats;
   }
   std::sort(kept.begin(), kept.end());
-  std::vector<std::uint32_t> wanted = parts;
+  std::vector<std::uint32_t> wanted;
+  for (const FramePart& p : parts) wanted.push_back(p.part);
   std::sort(wanted.begin(), wanted.end());
-  // The store and the film must agree on what was rendered, as the files would.
-  if (kept != wanted || f->film.rect() != frame.image) {
-    throw std::runtime_error(fmt::format("job {}: {} batches kept in memory, the job store lists {}",
-                                         job_id, kept.size(), wanted.size()));
+  if (f->lost_folded_part) {
+    throw std::runtime_error(fmt::format("job {}: frame {} lost a sample pass's tiles after they were folded in "
+                                         "memory, and cannot be merged without them",
+                                         job_id, frame.frame));
   }
+  // The store and the film must agree on what was rendered, as the files would.
+  const Rect& rect = frame.folded() ? f->fold.rect() : f->film.rect();
+  if (kept != wanted || rect != frame.image || !f->waiting.empty()) {
+    throw std::runtime_error(fmt::format("job {}: {} batches kept in memory ({} not folded), the job store lists {}",
+                                         job_id, kept.size(), f->waiting.size(), wanted.size()));
+  }
+  if (frame.folded()) f->fold.resolve(f->film);
   f->film.stats() = stats;
   return std::move(f->film);
 }

@@ -8,6 +8,12 @@
 
 namespace farm {
 
+FrameLayout JobInfo::frame(int f) const {
+  FrameLayout layout{Rect{0, 0, job->render.width, job->render.height}, job->render.aovs, f, {}};
+  const int passes = pass_count(job->render);
+  for (int p = 0; p < passes; ++p) layout.passes.push_back(pass_samples(job->render, p));
+  return layout;
+}
 
 std::shared_ptr<const JobInfo> RunningJobs::get(const std::string& job_id) {
   {

@@ -35,8 +35,9 @@ struct JobInfo {
   MergedFiles files;
   std::function<void(int frame, TileBuffer&&)> merged;
 
-  // The frame `f` of the job's tiles: its image and AOVs (the same for every frame).
-  FrameLayout frame(int f) const { return {Rect{0, 0, job->render.width, job->render.height}, job->render.aovs, f}; }
+  // The frame `f` of the job's tiles: its image, AOVs and sample passes (the same for every frame).
+  FrameLayout frame(int f) const;
+  int passes() const { return pass_count(job->render); }
 };
 
 class RunningJobs {

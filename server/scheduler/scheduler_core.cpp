@@ -158,6 +158,7 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
   job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
   job.frames = job_frames(*info->job);
   if (info->job->frames) job.frame_step = info->job->frames->step;
+  job.passes = pass_count(r);
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
   v1::Job added;
@@ -195,6 +196,10 @@ v1::Job SchedulerCore::cancel(const std::string& job_id) {
 std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bool preview,
                                                    std::optional<int> frame) const {
   return finisher_.result_file(job_id, preview, frame);
+}
+
+std::optional<fs::path> SchedulerCore::progressive_result(const std::string& job_id, int frame) const {
+  return finisher_.progressive_result(job_id, frame);
 }
 
 // ---- Events --------------------------------------------------------------------------------------

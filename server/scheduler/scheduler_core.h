@@ -104,6 +104,8 @@ class SchedulerCore {
   // job); nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
                                                    std::optional<int> frame = std::nullopt) const;
+  // The newest progressive preview of a frame of sample passes (Finisher::progressive_result).
+  std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
 
   // Events of `job_id` from now on; pass the queue to unwatch() when done.
   std::shared_ptr<JobEventQueue> watch(const std::string& job_id);

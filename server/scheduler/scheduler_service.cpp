@@ -159,6 +159,10 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
     const Principal who = access_.access.require(*context, kJobReaders, "GetResult");
     const v1::Job job = visible_job(who, request->job_id(), kAllJobReaders, "fetch");
     const bool preview = request->kind() == v1::RESULT_KIND_PREVIEW;
+    const bool progressive = request->kind() == v1::RESULT_KIND_PROGRESSIVE;
+    if (progressive && !request->has_frame()) {
+      throw InputError("GetResult: a progressive preview is of a frame: give the frame");
+    }
     std::optional<std::filesystem::path> file;
     if (request->has_frame()) {
       // A frame can be fetched as soon as it is merged, while the job renders its others.
@@ -168,7 +172,7 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
                                      first, job.frame_last(), step));
       }
       if (job.state() != v1::JOB_STATE_FAILED && job.state() != v1::JOB_STATE_CANCELLED) {
-        file = core_.result_file(job.job_id(), preview, f);
+        file = progressive ? core_.progressive_result(job.job_id(), f) : core_.result_file(job.job_id(), preview, f);
       }
       if (!file) {
         return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,

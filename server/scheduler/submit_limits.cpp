@@ -79,16 +79,19 @@ void check_spec_limits(const v1::JobSpec& spec, const SubmitLimits& limits) {
 void check_job_limits(const Job& job, const v1::JobSpec& spec, const SubmitLimits& limits) {
   const std::string file = file_of(spec);
   const RenderSettings& r = job.render;
-  // Every frame is as many tiles and as much work again.
+  // Every frame is as many tiles and as much work again; every sample pass as many tiles again.
   const auto frames = static_cast<std::int64_t>(job_frames(job).size());
+  const auto passes = static_cast<std::int64_t>(pass_count(r));
   const std::string of_frames = frames > 1 ? fmt::format(" x {} frames", frames) : "";
-  if (const std::int64_t tiles = job_tiles(r) * frames; tiles > limits.max_tiles_per_job) {
-    const int fits = smallest_tile_size(r.width, r.height, limits.max_tiles_per_job / frames);
-    refuse(fmt::format("{}: render.tile_size: {}x{} at tile_size {}{} is {} tiles; the scheduler "
+  const std::string of_passes = passes > 1 ? fmt::format(" x {} sample passes", passes) : "";
+  if (const std::int64_t tiles = job_tiles(r) * frames * passes; tiles > limits.max_tiles_per_job) {
+    const int fits = smallest_tile_size(r.width, r.height, limits.max_tiles_per_job / (frames * passes));
+    refuse(fmt::format("{}: render.tile_size: {}x{} at tile_size {}{}{} is {} tiles; the scheduler "
                        "takes at most {} a job (--max-tiles-per-job){}",
-                       file, r.width, r.height, r.tile_size, of_frames, tiles, limits.max_tiles_per_job,
+                       file, r.width, r.height, r.tile_size, of_frames, of_passes, tiles, limits.max_tiles_per_job,
                        fits > 0 ? fmt::format(": use a tile_size of at least {}", fits)
-                                : frames > 1 ? ": render fewer frames a job" : ""));
+                       : passes > 1 ? ": use a larger render.pass_spp"
+                       : frames > 1 ? ": render fewer frames a job" : ""));
   }
   if (const double work = job_work(r) * static_cast<double>(frames); work > limits.max_work) {
     refuse(fmt::format("{}: render: {}x{} pixels x {} spp x path length {} (max_depth {}){} is {:.3g} "

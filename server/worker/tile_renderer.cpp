@@ -59,6 +59,7 @@ struct RectRender {
   explicit RectRender(CancelFlag::Clock::time_point deadline) : flag(deadline) {}
 
   std::shared_ptr<const CachedScene> scene;
+  RenderSettings settings;  // the scene's, at the call's sample pass
   std::vector<Rect> subs;
   TileBuffer out;
   // The call's: cancelled by the handler when its client goes away (or a sub-tile fails); the
@@ -98,7 +99,7 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
       TileBuffer tile;
       // A stopped sub-tile comes back without pixels and is never pasted: `out` is incomplete
       // then, and the call says CANCELLED or DEADLINE_EXCEEDED instead of sending it.
-      if (render_tile(r.scene->prepared, r.scene->job.render, sub, tile, r.flag) == StopReason::None) {
+      if (render_tile(r.scene->prepared, r.settings, sub, tile, r.flag) == StopReason::None) {
         r.out.paste(tile);  // sub-tiles are disjoint: no lock needed
         r.complete.fetch_add(1);
       }
@@ -334,8 +335,17 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
                           rect.height(), kMaxRectPixels)};
     }
 
+    const int passes = pass_count(settings);
+    if (request->pass() < 0 || request->pass() >= passes) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("pass {} is out of range: the job's frames are rendered in {} sample pass{} (0..{})",
+                          request->pass(), passes, passes == 1 ? "" : "es", passes - 1)};
+    }
+
     const Clock::time_point render_start = Clock::now();
     r->scene = lookup.scene;
+    r->settings = settings;
+    r->settings.pass = request->pass();
     // The engine's per-frame set-up (the rasterizer's transformed and binned triangles, the BVHs)
     // on all render threads, once per frame: the sub-tiles then find it built. It runs as pool
     // work so that this thread goes on polling the client's cancel, which the set-up sees

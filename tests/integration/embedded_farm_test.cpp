@@ -4,12 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "renderer/engine.h"
 #include "renderer/image/exr_io.h"
+#include "renderer/image/pass_merge.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
@@ -152,7 +154,7 @@ TEST(FrameAssemblyTest, FilesAndMemoryAssembleTheFrameRenderFrameGives) {
   InMemoryAssembly memory;
   for (FrameAssembly* assembly : std::initializer_list<FrameAssembly*>{&files, &memory}) {
     const std::string what = assembly == &files ? "files" : "memory";
-    std::vector<std::uint32_t> parts;
+    std::vector<FramePart> parts;
     for (std::uint32_t i = 0; i < tiles.size(); ++i) {
       TileBuffer tile;
       render_tile(scene, job.render, tiles[i], tile);
@@ -163,8 +165,8 @@ TEST(FrameAssemblyTest, FilesAndMemoryAssembleTheFrameRenderFrameGives) {
       } else {
         rendered.pixels = std::move(tile);
       }
-      assembly->add("job", frame, i, rendered);
-      parts.push_back(i);
+      assembly->add("job", frame, {i, 0}, rendered);
+      parts.push_back({i, 0});
     }
     const TileBuffer merged = assembly->assemble("job", frame, parts);
     expect_same_pixels(merged, local, what);
@@ -174,8 +176,68 @@ TEST(FrameAssemblyTest, FilesAndMemoryAssembleTheFrameRenderFrameGives) {
     expect_same_pixels(read_exr(written.exr), local, what + ", written");
     EXPECT_TRUE(std::filesystem::exists(written.preview)) << what;
 
-    parts.push_back(99);  // a part nobody kept
+    parts.push_back({99, 0});  // a part nobody kept
     EXPECT_THROW(assembly->assemble("job", frame, parts), std::runtime_error) << what;
+  }
+}
+
+// A frame of sample passes is the fold of its passes in sample order, whatever order its parts
+// arrive in: both assemblies, given pass 2's tiles first and pass 0's last (in other tile splits
+// than pass 1's), give render_frame's frame bit for bit, and a progressive fold of pass 0 alone
+// is the frame of its samples (a render of spp 3).
+TEST(FrameAssemblyTest, PassesArrivingInAnyOrderFoldToTheFrameRenderFrameGives) {
+  test::TempDir dir;
+  const v1::JobSpec spec = test::cornell_job_spec("path", 40, 30, 8);
+  const Job job = parse_job(spec.job_json(), test::kSource / "jobs" / spec.file_name());
+  const PreparedScene scene(build_scene(job));
+  RenderSettings settings = job.render;
+  settings.pass_spp = 3;  // passes [0, 3), [3, 6), [6, 8)
+  ASSERT_EQ(pass_count(settings), 3);
+  FrameLayout frame{Rect{0, 0, 40, 30}, settings.aovs, 0, {}};
+  for (int p = 0; p < 3; ++p) frame.passes.push_back(pass_samples(settings, p));
+  const TileBuffer local = render_frame(scene, settings);
+  RenderSettings first_pass = job.render;
+  first_pass.spp = 3;
+  const TileBuffer pass0 = render_frame(scene, first_pass);
+
+  struct Unit {
+    int pass;
+    Rect rect;
+  };
+  std::vector<Unit> units;
+  for (int p : {2, 1, 0}) {
+    for (const Rect& r : split_into_tiles(40, 30, p == 1 ? 16 : 13)) units.push_back({p, r});
+  }
+  TileFileAssembly files(dir / "tiles");
+  InMemoryAssembly memory;
+  for (FrameAssembly* assembly : std::initializer_list<FrameAssembly*>{&files, &memory}) {
+    const std::string what = assembly == &files ? "files" : "memory";
+    std::vector<FramePart> parts;
+    for (std::uint32_t i = 0; i < units.size(); ++i) {
+      RenderSettings s = settings;
+      s.pass = units[i].pass;
+      TileBuffer tile;
+      render_tile(scene, s, units[i].rect, tile);
+      RenderedTiles rendered;
+      encode_stats(tile.stats(), *rendered.response.mutable_stats());
+      encode_tile(tile, *rendered.response.mutable_tile());
+      assembly->add("job", frame, {i, units[i].pass}, rendered);
+      parts.push_back({i, units[i].pass});
+    }
+    // As the job store lists them: in pass order.
+    std::stable_sort(parts.begin(), parts.end(), [](const FramePart& a, const FramePart& b) { return a.pass < b.pass; });
+    if (assembly->reads_parts_back()) {
+      PassAccumulator progressive(frame.image, frame.aovs);
+      std::vector<FramePart> of_pass0;
+      for (const FramePart& p : parts) {
+        if (p.pass == 0) of_pass0.push_back(p);
+      }
+      assembly->fold("job", frame, of_pass0, progressive);
+      expect_same_pixels(progressive.resolve(), pass0, what + ", pass 0");
+    }
+    const TileBuffer merged = assembly->assemble("job", frame, parts);
+    expect_same_pixels(merged, local, what);
+    EXPECT_EQ(merged.stats().samples, local.stats().samples) << what;
   }
 }
 

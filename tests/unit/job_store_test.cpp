@@ -207,7 +207,8 @@ TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
     for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
+                            "ALTER TABLE jobs DROP COLUMN passes", "ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
                             "ALTER TABLE tiles DROP COLUMN lost_attempts", "UPDATE schema_version SET version = 1"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -234,7 +235,8 @@ TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE jobs DROP COLUMN owner", "ALTER TABLE tiles DROP COLUMN lost_attempts",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
+                            "ALTER TABLE jobs DROP COLUMN passes", "ALTER TABLE jobs DROP COLUMN owner", "ALTER TABLE tiles DROP COLUMN lost_attempts",
                             "UPDATE schema_version SET version = 2"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -267,7 +269,8 @@ TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) 
     for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN lost_attempts",
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
+                            "ALTER TABLE jobs DROP COLUMN passes", "ALTER TABLE tiles DROP COLUMN lost_attempts",
                             "UPDATE schema_version SET version = 3"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -283,13 +286,13 @@ TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) 
     EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
     EXPECT_EQ(store.tiles("a")[0].lost_attempts, 1);
   }
-  // Upgraded once: it opens as version 5 from now on.
+  // Upgraded once: it opens as version 6 from now on.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* s = nullptr;
   ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(s, 0), 5);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 6);
   sqlite3_finalize(s);
   sqlite3_close(db);
 }
@@ -313,7 +316,8 @@ TEST(JobStoreTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZero) {
     for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "UPDATE schema_version SET version = 4"}) {
+                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
+                            "ALTER TABLE jobs DROP COLUMN passes", "UPDATE schema_version SET version = 4"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
@@ -363,7 +367,7 @@ TEST(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
   ASSERT_TRUE(store.batch_done("f", first->first, first->count, {}));
   EXPECT_EQ(store.complete_frames("f", 10), std::vector<int>{10});
   EXPECT_TRUE(store.complete_frames("f", 12).empty());
-  EXPECT_EQ(store.frame_parts("f", 10), std::vector<std::uint32_t>{0});
+  EXPECT_EQ(store.frame_parts("f", 10, 1), (std::vector<FramePart>{{0, 0}}));
   ASSERT_TRUE(store.frame_merged("f", 10));
   EXPECT_EQ(store.get_job("f")->frames_done(), 1u);
   EXPECT_TRUE(store.complete_frames("f").empty());
@@ -376,6 +380,85 @@ TEST(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
   EXPECT_EQ(store.requeue_parts("f", {0}).size(), 1u);
   EXPECT_EQ(store.get_job("f")->frames_done(), 0u);
   EXPECT_FALSE(store.is_frame_merged("f", 10));
+}
+
+// A version 5 store (frames, no passes) is upgraded: its jobs are one pass each, and go on.
+TEST(JobStoreTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
+  test::TempDir dir;
+  {
+    JobStore store(dir / "jobs.db");
+    store.add_job(make_job("running", 0, 2), 1);
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
+                            "UPDATE schema_version SET version = 5"}) {
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    }
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "jobs.db");
+  EXPECT_EQ(store.get_job("running")->passes(), 1u);
+  EXPECT_EQ(store.tiles("running")[1].pass, 0);
+  for (int i = 0; i < 2; ++i) {
+    auto b = store.claim_next_batch("w", 2);
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->pass, 0);
+    ASSERT_TRUE(store.batch_done("running", b->first, 1, {}));
+  }
+  EXPECT_EQ(store.complete_passes("running", 0), 1);
+  EXPECT_EQ(store.complete_frames("running"), std::vector<int>{0});
+}
+
+// A job of sample passes: its units are numbered pass after pass within each frame, so the queue
+// hands a frame's passes out in order; a batch never crosses a pass; complete_passes counts the
+// passes done from the first on; a frame is complete when all its passes are.
+TEST(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
+  test::TempDir dir;
+  JobStore store(dir / "jobs.db");
+  NewJob job = make_job("p", 0, 2);  // two tiles a frame, in one row
+  job.frames = {1, 2};
+  job.passes = 3;
+  const v1::Job added = store.add_job(job, 1);
+  EXPECT_EQ(added.tiles_total(), 12u);
+  EXPECT_EQ(added.passes(), 3u);
+  const std::vector<TileRecord> tiles = store.tiles("p");
+  ASSERT_EQ(tiles.size(), 12u);
+  for (std::uint32_t i = 0; i < 12; ++i) {
+    EXPECT_EQ(tiles[i].frame, i < 6 ? 1 : 2) << i;
+    EXPECT_EQ(tiles[i].pass, static_cast<int>(i / 2 % 3)) << i;
+    EXPECT_EQ(tiles[i].rect, tiles[i % 2].rect) << i;  // every pass has the frame's grid
+  }
+  const BatchSize many = [](const std::string&, int) { return 8; };
+  std::vector<TileBatch> claimed;
+  for (int k = 0; k < 3; ++k) {
+    auto b = store.claim_next_batch("w", 2, many);
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->frame, 1);
+    EXPECT_EQ(b->pass, k);
+    EXPECT_EQ(b->count, 2u);  // the row of one pass, not into the next
+    claimed.push_back(*b);
+  }
+  EXPECT_EQ(store.complete_passes("p", 1), 0);
+  // Pass 1 done before pass 0: no pass is complete from the first on yet.
+  ASSERT_TRUE(store.batch_done("p", claimed[1].first, claimed[1].count, {}));
+  EXPECT_EQ(store.complete_passes("p", 1), 0);
+  ASSERT_TRUE(store.batch_done("p", claimed[0].first, claimed[0].count, {}));
+  EXPECT_EQ(store.complete_passes("p", 1), 2);
+  EXPECT_TRUE(store.complete_frames("p", 1).empty());
+  EXPECT_EQ(store.frame_parts("p", 1, 2), (std::vector<FramePart>{{0, 0}, {2, 1}}));
+  ASSERT_TRUE(store.batch_done("p", claimed[2].first, claimed[2].count, {}));
+  EXPECT_EQ(store.complete_passes("p", 1), 3);
+  EXPECT_EQ(store.complete_frames("p", 1), std::vector<int>{1});
+  EXPECT_EQ(store.frame_parts("p", 1, 3), (std::vector<FramePart>{{0, 0}, {2, 1}, {4, 2}}));
+  // Taking pass 0's part back: no pass is complete from the first on again.
+  EXPECT_EQ(store.requeue_parts("p", {0}).size(), 1u);
+  EXPECT_EQ(store.complete_passes("p", 1), 0);
+  auto again = store.claim_next_batch("w", 3, many);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->first, 0u);
+  EXPECT_EQ(again->pass, 0);
 }
 
 // Lost workers count against their own limit, never against max_attempts, and a tile that lost

@@ -16,7 +16,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 5;
+constexpr int kSchemaVersion = 6;
 // claim_next_batch counts a job's queued tiles up to this many (BatchSize sees at most it).
 constexpr int kQueuedCountCap = 1024;
 
@@ -48,7 +48,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   frame_last INTEGER NOT NULL DEFAULT 0,
   frame_step INTEGER NOT NULL DEFAULT 1,
   frames_total INTEGER NOT NULL DEFAULT 1,
-  frames_done INTEGER NOT NULL DEFAULT 0
+  frames_done INTEGER NOT NULL DEFAULT 0,
+  passes INTEGER NOT NULL DEFAULT 1
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -62,6 +63,7 @@ CREATE TABLE IF NOT EXISTS tiles (
   worker TEXT NOT NULL DEFAULT '',
   part INTEGER NOT NULL DEFAULT 0,
   frame INTEGER NOT NULL DEFAULT 0,
+  pass INTEGER NOT NULL DEFAULT 0,
   PRIMARY KEY (job_seq, idx)
 );
 CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
@@ -81,7 +83,7 @@ CREATE TABLE IF NOT EXISTS parts (
 constexpr const char* kJobColumns =
     "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
     "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
-    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done";
+    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done, passes";
 
 const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
@@ -138,6 +140,7 @@ class Stmt {
   }
   std::int64_t i64(int c) const { return sqlite3_column_int64(s_, c); }
   int i32(int c) const { return sqlite3_column_int(s_, c); }
+  bool is_null(int c) const { return sqlite3_column_type(s_, c) == SQLITE_NULL; }
   std::string text(int c) const {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s_, c));
     return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(s_, c))) : std::string();
@@ -208,6 +211,7 @@ v1::Job job_from_row(const Stmt& s) {
   job.set_frame_step(s.i32(22));
   job.set_frames_total(static_cast<std::uint32_t>(s.i64(23)));
   job.set_frames_done(static_cast<std::uint32_t>(s.i64(24)));
+  job.set_passes(static_cast<std::uint32_t>(s.i64(25)));
   return job;
 }
 
@@ -275,17 +279,22 @@ JobStore::JobStore(const std::filesystem::path& file) {
       // were counted as attempts, and stay so.
       exec("ALTER TABLE tiles ADD COLUMN lost_attempts INTEGER NOT NULL DEFAULT 0");
     }
-    // Version 5 renders frame ranges (the frames table kSchema made). Every older job is a
-    // still: frame 0 alone, merged when the job succeeded.
-    exec("ALTER TABLE tiles ADD COLUMN frame INTEGER NOT NULL DEFAULT 0");
-    for (const char* column : {"frame_first INTEGER NOT NULL DEFAULT 0", "frame_last INTEGER NOT NULL DEFAULT 0",
-                               "frame_step INTEGER NOT NULL DEFAULT 1", "frames_total INTEGER NOT NULL DEFAULT 1",
-                               "frames_done INTEGER NOT NULL DEFAULT 0"}) {
-      exec(fmt::format("ALTER TABLE jobs ADD COLUMN {}", column).c_str());
+    if (version <= 4) {
+      // Version 5 renders frame ranges (the frames table kSchema made). Every older job is a
+      // still: frame 0 alone, merged when the job succeeded.
+      exec("ALTER TABLE tiles ADD COLUMN frame INTEGER NOT NULL DEFAULT 0");
+      for (const char* column : {"frame_first INTEGER NOT NULL DEFAULT 0", "frame_last INTEGER NOT NULL DEFAULT 0",
+                                 "frame_step INTEGER NOT NULL DEFAULT 1", "frames_total INTEGER NOT NULL DEFAULT 1",
+                                 "frames_done INTEGER NOT NULL DEFAULT 0"}) {
+        exec(fmt::format("ALTER TABLE jobs ADD COLUMN {}", column).c_str());
+      }
+      exec(fmt::format("UPDATE jobs SET frames_done = 1 WHERE state = {}", static_cast<int>(v1::JOB_STATE_SUCCEEDED))
+               .c_str());
+      exec("INSERT INTO frames (job_seq, frame) SELECT seq, 0 FROM jobs WHERE frames_done = 1");
     }
-    exec(fmt::format("UPDATE jobs SET frames_done = 1 WHERE state = {}", static_cast<int>(v1::JOB_STATE_SUCCEEDED))
-             .c_str());
-    exec("INSERT INTO frames (job_seq, frame) SELECT seq, 0 FROM jobs WHERE frames_done = 1");
+    // Version 6 renders sample passes: every older job is one pass, pass 0.
+    exec("ALTER TABLE tiles ADD COLUMN pass INTEGER NOT NULL DEFAULT 0");
+    exec("ALTER TABLE jobs ADD COLUMN passes INTEGER NOT NULL DEFAULT 1");
     exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion).c_str());
     t.commit();
   } else if (version != kSchemaVersion) {
@@ -325,26 +334,32 @@ sqlite3_stmt* JobStore::prepared(const std::string& sql) const {
 
 v1::Job JobStore::add_job(const NewJob& j, std::int64_t now_ms) {
   if (j.frames.empty()) throw std::invalid_argument("job store: a job with no frames");
+  if (j.passes < 1) throw std::invalid_argument("job store: a job of no sample pass");
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   Stmt(db_, prepared("INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, "
-                     "state, submitted_ms, tiles_total, owner, frame_first, frame_last, frame_step, frames_total) "
-                     "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
+                     "state, submitted_ms, tiles_total, owner, frame_first, frame_last, frame_step, frames_total, passes) "
+                     "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)"))
       .bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
       .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
       .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
-      .bind(11, static_cast<std::int64_t>(j.tiles.size() * j.frames.size())).bind(12, j.owner)
+      .bind(11, static_cast<std::int64_t>(j.tiles.size() * j.frames.size() * static_cast<std::size_t>(j.passes)))
+      .bind(12, j.owner)
       .bind(13, j.frames.front()).bind(14, j.frames.back()).bind(15, j.frame_step)
-      .bind(16, static_cast<std::int64_t>(j.frames.size()))
+      .bind(16, static_cast<std::int64_t>(j.frames.size())).bind(17, j.passes)
       .run();
   const std::int64_t seq = sqlite3_last_insert_rowid(db_);
-  Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1, frame) VALUES (?, ?, ?, ?, ?, ?, ?)"));
+  Stmt tile(db_, prepared("INSERT INTO tiles (job_seq, idx, x0, y0, x1, y1, frame, pass) "
+                          "VALUES (?, ?, ?, ?, ?, ?, ?, ?)"));
   std::int64_t idx = 0;
   for (int frame : j.frames) {
-    for (const Rect& r : j.tiles) {
-      tile.reset();
-      tile.bind(1, seq).bind(2, idx++).bind(3, r.x0).bind(4, r.y0).bind(5, r.x1).bind(6, r.y1).bind(7, frame);
-      tile.run();
+    for (int pass = 0; pass < j.passes; ++pass) {
+      for (const Rect& r : j.tiles) {
+        tile.reset();
+        tile.bind(1, seq).bind(2, idx++).bind(3, r.x0).bind(4, r.y0).bind(5, r.x1).bind(6, r.y1).bind(7, frame)
+            .bind(8, pass);
+        tile.run();
+      }
     }
   }
   t.commit();
@@ -416,7 +431,7 @@ std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
 std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
   std::lock_guard lock(mutex_);
   Stmt s(db_, prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part, "
-                       "t.lost_attempts, t.frame "
+                       "t.lost_attempts, t.frame, t.pass "
                        "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx"));
   s.bind(1, id);
   std::vector<TileRecord> out;
@@ -432,6 +447,7 @@ std::vector<TileRecord> JobStore::tiles(const std::string& id) const {
     t.part = static_cast<std::uint32_t>(s.i64(9));
     t.lost_attempts = s.i32(10);
     t.frame = s.i32(11);
+    t.pass = s.i32(12);
     out.push_back(std::move(t));
   }
   return out;
@@ -457,7 +473,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     // queue is long, and a job of many frames queues tens of thousands.
     Stmt jobs(db_, prepared(fmt::format("SELECT seq, id FROM jobs WHERE state IN {} ORDER BY priority DESC, seq ASC",
                                         kActiveSql)));
-    Stmt first(db_, prepared("SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame FROM tiles "
+    Stmt first(db_, prepared("SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame, pass FROM tiles "
                              "WHERE state = 0 AND job_seq = ? ORDER BY idx LIMIT 1"));
     bool found = false;
     while (!found && jobs.step()) {
@@ -472,6 +488,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
       batch.attempts = first.i32(5);
       batch.lost_attempts = first.i32(6);
       batch.frame = first.i32(7);
+      batch.pass = first.i32(8);
     }
     if (!found) return std::nullopt;
   }
@@ -490,14 +507,14 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     }
     const int wanted = batch_size(batch.job_id, queued);
     if (wanted > 1) {
-      // The following tiles while they continue the same row of the frame's grid: the batch's
-      // union is then one rectangle of one frame, rendered in one call.
-      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts + lost_attempts, frame FROM tiles "
+      // The following tiles while they continue the same row of the frame's grid in the same pass:
+      // the batch's union is then one rectangle of one frame's pass, rendered in one call.
+      Stmt next(db_, prepared("SELECT idx, x0, y0, x1, y1, state, attempts + lost_attempts, frame, pass FROM tiles "
                               "WHERE job_seq = ? AND idx > ? AND idx < ? ORDER BY idx"));
       next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
       while (next.step()) {
         const Rect r{next.i32(1), next.i32(2), next.i32(3), next.i32(4)};
-        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 || next.i32(7) != batch.frame ||
+        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 || next.i32(7) != batch.frame || next.i32(8) != batch.pass ||
             r.y0 != batch.rect.y0 || r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
           break;
         }
@@ -740,14 +757,23 @@ std::vector<int> JobStore::complete_frames(const std::string& job_id, std::optio
   return out;
 }
 
-std::vector<std::uint32_t> JobStore::frame_parts(const std::string& job_id, int frame) const {
+std::vector<FramePart> JobStore::frame_parts(const std::string& job_id, int frame, int passes) const {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, prepared("SELECT DISTINCT t.part FROM tiles t JOIN jobs j ON t.job_seq = j.seq "
-                       "WHERE j.id = ? AND t.frame = ? AND t.state = 2 ORDER BY t.part"));
-  s.bind(1, job_id).bind(2, frame);
-  std::vector<std::uint32_t> out;
-  while (s.step()) out.push_back(static_cast<std::uint32_t>(s.i64(0)));
+  Stmt s(db_, prepared("SELECT DISTINCT t.part, t.pass FROM tiles t JOIN jobs j ON t.job_seq = j.seq "
+                       "WHERE j.id = ? AND t.frame = ? AND t.pass < ? AND t.state = 2 ORDER BY t.pass, t.part"));
+  s.bind(1, job_id).bind(2, frame).bind(3, passes);
+  std::vector<FramePart> out;
+  while (s.step()) out.push_back({static_cast<std::uint32_t>(s.i64(0)), s.i32(1)});
   return out;
+}
+
+int JobStore::complete_passes(const std::string& job_id, int frame) const {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, prepared("SELECT j.passes, (SELECT MIN(t.pass) FROM tiles t WHERE t.job_seq = j.seq AND t.frame = ? "
+                       "AND t.state != 2) FROM jobs j WHERE j.id = ?"));
+  s.bind(1, frame).bind(2, job_id);
+  if (!s.step()) return 0;
+  return s.is_null(1) ? s.i32(0) : s.i32(1);  // no tile of it undone: every pass
 }
 
 bool JobStore::frame_merged(const std::string& job_id, int frame) {

@@ -4,7 +4,7 @@
 // store; open() puts tiles that were running back in the queue (their results were lost with the
 // process) and keeps done tiles done (their data is on disk, written before they were marked).
 //
-// Schema (version 5; a version 1 to 4 store is upgraded in place):
+// Schema (version 6; a version 1 to 5 store is upgraded in place):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
@@ -13,17 +13,20 @@
 //        stats BLOB (farm.v1.TileStats, summed over done tiles), validation, render_seconds,
 //        owner (version 3: the submitter's token name, '' without tokens), frame_first,
 //        frame_last, frame_step, frames_total, frames_done (version 5: the frames it renders and
-//        how many are merged; a still is frame 0 alone))
+//        how many are merged; a still is frame 0 alone), passes (version 6: sample passes a
+//        frame is rendered in, 1 without))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart
-//         from attempts), frame (version 5: the frame it is a tile of); PRIMARY KEY (job_seq, idx))
+//         from attempts), frame (version 5: the frame it is a tile of), pass (version 6: the
+//         sample pass it renders); PRIMARY KEY (job_seq, idx))
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 //   frames(job_seq, frame; PRIMARY KEY (job_seq, frame))  -- version 5: the frames merged
-// A job's tiles are numbered frame after frame: idx = k * (tiles of a frame) + tile, k the
-// frame's place among the job's frames.
-// Tiles go out in batches: consecutive tiles of one row of one frame's grid, rendered by one call
-// as the rectangle they make up, so that per-call costs are paid once per batch, not per tile.
+// A job's tiles (its units) are numbered frame after frame and, within a frame, pass after pass:
+// idx = (k * passes + pass) * (tiles of a frame's grid) + tile, k the frame's place among the
+// job's frames, so that the queue hands out a frame's passes in order.
+// Tiles go out in batches: consecutive tiles of one row of one frame's grid in one pass, rendered
+// by one call as the rectangle they make up, so that per-call costs are paid once per batch.
 // The store is one connection behind a mutex, its statements prepared once. Any call may throw
 // DiskFull (server/common/disk_full.h) when SQLite finds no room (SQLITE_FULL): its transaction
 // is rolled back, so the store stays as it was and the call can be made again once there is space.
@@ -58,6 +61,7 @@ struct NewJob {
   std::string owner;  // who submitted it: the name of the caller's token (empty: no tokens)
   std::vector<int> frames{0};  // ascending, evenly `frame_step` apart; a still: frame 0
   int frame_step = 1;
+  int passes = 1;              // sample passes of each frame (pass_count of its settings)
   std::vector<Rect> tiles;     // one frame's grid: every frame has these tiles
 };
 
@@ -72,6 +76,14 @@ struct TileRecord {
   std::string worker;
   std::uint32_t part = 0;  // done tiles: the result file that holds them (TileResults)
   int frame = 0;
+  int pass = 0;
+};
+
+// A done batch of a frame: the part (TileResults) that holds it, and the sample pass it rendered.
+struct FramePart {
+  std::uint32_t part = 0;
+  int pass = 0;
+  bool operator==(const FramePart&) const = default;
 };
 
 // Tiles first .. first + count - 1 of a job, handed to a worker by claim_next_batch (now
@@ -84,6 +96,7 @@ struct TileBatch {
   int attempts = 0;       // failed attempts before this one (a batch of more than one: 0)
   int lost_attempts = 0;  // workers lost while rendering it before (a batch of more than one: 0)
   int frame = 0;          // the frame its tiles belong to
+  int pass = 0;           // the sample pass they render
 };
 
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued
@@ -167,8 +180,13 @@ class JobStore {
   // Frames. The job's frames whose tiles are all done and which are not merged yet: `frame`
   // alone when given (after one of its batches was done), else every such frame (a restart).
   std::vector<int> complete_frames(const std::string& job_id, std::optional<int> frame = std::nullopt) const;
-  // The parts (TileResults) that hold the frame's done tiles.
-  std::vector<std::uint32_t> frame_parts(const std::string& job_id, int frame) const;
+  // The parts (TileResults) that hold the frame's done tiles of passes 0 .. passes - 1, in pass
+  // order (then by part).
+  std::vector<FramePart> frame_parts(const std::string& job_id, int frame, int passes) const;
+  // How many of the frame's sample passes are done from the first on: p when every tile of
+  // passes 0 .. p - 1 is done and one of pass p is not (the job's passes when all are; 0 for an
+  // unknown job). A frame's progressive preview shows these.
+  int complete_passes(const std::string& job_id, int frame) const;
   // The frame is merged and its files written: counted in frames_done, if the job is active and
   // the frame's tiles are all still done (false otherwise: a quarantine took some back, and the
   // frame is merged again once they are rendered again). A part taken back later (quarantine,
