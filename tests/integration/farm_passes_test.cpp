@@ -1,6 +1,6 @@
 // Sample passes through the real binaries: a path job of two frames in eight passes each gives the
 // same bits with every unit on one worker, spread over two, and with one of two killed mid-job,
-// and those bits are `farm render`'s. Progressive previews are announced in pass order (every
+// and those bits are render_frame's in this process (and `farm render`'s). Progressive previews are announced in pass order (every
 // pass, in order, on one worker), can be fetched while the frame renders, and `farm watch
 // --preview` keeps a PNG up to date. Every wait is bounded.
 #include <fmt/format.h>
@@ -18,6 +18,10 @@
 #include <nlohmann/json.hpp>
 
 #include "renderer/image/exr_io.h"
+#include "renderer/prepared_scene.h"
+#include "renderer/render_frame.h"
+#include "renderer/scene/job.h"
+#include "renderer/scene/scene_builder.h"
 #include "server/common/read_whole_file.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -86,7 +90,8 @@ class FarmPassesTest : public test::FarmCliFixture {
     return worker;
   }
 
-  // `farm render --float` of the job: the frames every farm run must give, bit for bit.
+  // Each frame as render_frame gives it in this process (folding its passes, no worker involved):
+  // the bits every run must give. `farm render --float` of the job file must give them too.
   void render_reference() {
     const fs::path job_dir = dir_ / "job";
     fs::create_directories(job_dir / "assets");
@@ -94,11 +99,25 @@ class FarmPassesTest : public test::FarmCliFixture {
       fs::copy_file(file, job_dir / path, fs::copy_options::skip_existing);
     }
     std::ofstream(job_dir / "cornell.json") << cornell_in_passes();
+    const Job job = parse_job(cornell_in_passes(), job_dir / "cornell.json");
+    ASSERT_EQ(pass_count(job.render), kPasses);
+    for (int f = 1; f <= kFrames; ++f) {
+      const Job at = job_at_frame(job, f);
+      const PreparedScene scene(build_scene(at));
+      reference_[f] = render_frame(scene, at.render);
+    }
+    EXPECT_GT(test::differing_pixels(reference_[1], reference_[2]), 0) << "the light did not move";
     const test::CommandResult r = test::run_command(
         farm("render " + test::shell_quote((job_dir / "cornell.json").string()) + " --quiet --float --out " +
              test::shell_quote((dir_ / "local" / "f.####.exr").string()) + " --preview none"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (int f = 1; f <= kFrames; ++f) {
+      EXPECT_EQ(test::differing_pixels(read_exr(dir_ / "local" / fmt::format("f.{:04}.exr", f)), reference_[f]), 0)
+          << "farm render, frame " << f;
+    }
   }
+
+  std::map<int, TileBuffer> reference_;
 
   // One run on its own scheduler: submits the job (no worker is up yet, so the watch sees every
   // event), starts `workers`, kills the first once frame 1 has two passes done when asked, and
@@ -155,8 +174,7 @@ class FarmPassesTest : public test::FarmCliFixture {
       const grpc::Status status = test::fetch_result(*stub, job.job_id(), v1::RESULT_KIND_EXR, fetched, f);
       EXPECT_TRUE(status.ok()) << "frame " << f << ": " << status.error_message();
       if (!status.ok()) continue;
-      const TileBuffer local = read_exr(dir_ / "local" / fmt::format("f.{:04}.exr", f));
-      EXPECT_EQ(test::differing_pixels(read_exr(fetched), local), 0) << "frame " << f;
+      EXPECT_EQ(test::differing_pixels(read_exr(fetched), reference_[f]), 0) << "frame " << f;
     }
     if (cli_watch.valid()) {
       const test::CommandResult r = cli_watch.get();
