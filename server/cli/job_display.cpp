@@ -18,7 +18,9 @@ std::string frames_of(const v1::Job& job) {
 
 std::string progress_of(const v1::Job& job) {
   const std::string frames = frames_of(job);
-  return fmt::format("{}{}/{} tiles", frames.empty() ? "" : frames + ", ", job.tiles_done(), job.tiles_total());
+  // With sample passes, each tile of each pass is a unit of its own.
+  const std::string units = job.passes() > 1 ? "units" : "tiles";
+  return fmt::format("{}{}/{} {}", frames.empty() ? "" : frames + ", ", job.tiles_done(), job.tiles_total(), units);
 }
 
 std::string local_time(const google::protobuf::Timestamp& t) {
@@ -35,6 +37,9 @@ void print_job(const v1::Job& job) {
   fmt::print("job {} '{}': {}, {}\n", job.job_id(), job.name(), to_string(job.state()), progress_of(job));
   fmt::print("  {} engine, {}x{}, scene {}\n", job.engine(), job.width(), job.height(),
              job.scene_hash().substr(0, 16));
+  if (job.passes() > 1) {
+    fmt::print("  {} sample passes a frame: a unit is a tile of one pass\n", job.passes());
+  }
   if (!frames_of(job).empty()) {
     fmt::print("  frames {} to {} by {}: {} of {} merged\n", job.frame_first(), job.frame_last(), job.frame_step(),
                job.frames_done(), job.frames_total());

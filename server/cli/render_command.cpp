@@ -137,9 +137,11 @@ void run_render_command(const RenderCommandOptions& options) {
     fmt::print("rays: {} traced ({:.2f} Mrays/s)\n", stats.rays(),
                static_cast<double>(stats.rays()) / (render_ms * 1e3));
   }
-  fmt::print("time: job {:.1f} ms, load models+render+merge+write {:.1f} ms ({} tiles of {} px, {} threads), "
+  const std::string passes =
+      result.job.passes() > 1 ? fmt::format(" in {} sample passes", result.job.passes()) : std::string();
+  fmt::print("time: job {:.1f} ms, load models+render+merge+write {:.1f} ms ({} tiles of {} px{}, {} threads), "
              "{}total {:.1f} ms\n",
-             load_ms, render_ms, result.job.tiles_total(), r.tile_size, resolve_thread_count(r.threads),
+             load_ms, render_ms, result.job.tiles_total(), r.tile_size, passes, resolve_thread_count(r.threads),
              options.overrides.show_bvh ? fmt::format("BVH overlay {:.1f} ms, ", overlay_ms) : std::string(),
              ms_since(t_start));
   if (!result.job.validation().empty()) fmt::print("{}\n", result.job.validation());
