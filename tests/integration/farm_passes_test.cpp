@@ -22,6 +22,7 @@
 #include "renderer/render_frame.h"
 #include "renderer/scene/job.h"
 #include "renderer/scene/scene_builder.h"
+#include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -51,11 +52,6 @@ std::string cornell_in_passes() {
   job["animate"] = {{{"value", "scene.lights[0].position"},
                      {"keys", {{{"frame", 1}, {"value", {-0.5, 0.6, 0.5}}}, {{"frame", 2}, {"value", {0.5, 0.2, 0.5}}}}}}};
   return job.dump(2);
-}
-
-bool done(const v1::Job& job) {
-  return job.state() == v1::JOB_STATE_SUCCEEDED || job.state() == v1::JOB_STATE_FAILED ||
-         job.state() == v1::JOB_STATE_CANCELLED;
 }
 
 // The passes announced for each frame, in the order they came.
@@ -119,8 +115,8 @@ class FarmPassesTest : public test::FarmCliFixture {
 
   std::map<int, TileBuffer> reference_;
 
-  // One run on its own scheduler: submits the job (no worker is up yet, so the watch sees every
-  // event), starts `workers`, kills the first once frame 1 has two passes done when asked, and
+  // One run on its own scheduler: submits the job and watches it (no worker is up before the watch
+  // begins, so it sees every event), starts `workers`, kills the first once frame 1 has two passes done when asked, and
   // checks every frame against render_reference(). Returns the job's events.
   std::vector<v1::JobEvent> run_farm(const std::string& name, int workers, bool kill_one,
                                      const fs::path& watch_preview = {}) {
@@ -138,7 +134,12 @@ class FarmPassesTest : public test::FarmCliFixture {
     EXPECT_EQ(job.tiles_total(), kTilesPerPass * kPasses * kFrames);
 
     grpc::Status watch_status;
-    auto watch = std::async(std::launch::async, [&] { return test::watch_job(*stub, job.job_id(), 180s, &watch_status); });
+    std::promise<void> subscribed;
+    auto watch = std::async(std::launch::async, [&] {
+      return test::watch_job(*stub, job.job_id(), 180s, &watch_status, [&] { subscribed.set_value(); });
+    });
+    // No worker is up before the watch is subscribed: it sees every unit's event.
+    EXPECT_EQ(subscribed.get_future().wait_for(60s), std::future_status::ready) << "the watch did not begin";
     std::future<test::CommandResult> cli_watch;
     if (!watch_preview.empty()) {
       cli_watch = std::async(std::launch::async, [&] {
@@ -151,8 +152,8 @@ class FarmPassesTest : public test::FarmCliFixture {
 
     if (kill_one) {
       const auto two_passes = test::wait_for_job(
-          *stub, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 2 * kTilesPerPass || done(j); }, 120s);
-      EXPECT_TRUE(two_passes && !done(*two_passes)) << "the job ended before a worker could be killed";
+          *stub, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 2 * kTilesPerPass || is_final(j.state()); }, 120s);
+      EXPECT_TRUE(two_passes && !is_final(two_passes->state())) << "the job ended before a worker could be killed";
       // Frame 1's newest preview, while it renders (or, merged meanwhile, its preview).
       const fs::path progressive = dir_ / name / "progressive.png";
       const grpc::Status fetched = test::fetch_result(*stub, job.job_id(), v1::RESULT_KIND_PROGRESSIVE, progressive, 1);
@@ -195,7 +196,7 @@ TEST_F(FarmPassesTest, OneWorkerTwoWorkersAndAKilledWorkerGiveTheBitsOfFarmRende
   // One worker: the units go out in order, so each frame announces every pass, in order.
   const std::vector<v1::JobEvent> one = run_farm("one", 1, false);
   ASSERT_FALSE(one.empty());
-  ASSERT_EQ(one.front().job().tiles_done(), 0u) << "the watch began after the first units";
+  EXPECT_EQ(one.front().job().tiles_done(), 0u);
   const std::map<int, std::vector<int>> in_order = announced_passes(one);
   EXPECT_EQ(in_order, (std::map<int, std::vector<int>>{{1, every_pass}, {2, every_pass}}));
   // A frame's last pass is announced before the frame itself.

@@ -132,7 +132,8 @@ std::optional<v1::Job> wait_for_job(v1::Scheduler::Stub& stub, const std::string
 }
 
 std::vector<v1::JobEvent> watch_job(v1::Scheduler::Stub& stub, const std::string& id,
-                                    std::chrono::milliseconds timeout, grpc::Status* status) {
+                                    std::chrono::milliseconds timeout, grpc::Status* status,
+                                    const std::function<void()>& subscribed) {
   grpc::ClientContext context;
   set_deadline(context, timeout);
   v1::WatchJobRequest request;
@@ -140,7 +141,10 @@ std::vector<v1::JobEvent> watch_job(v1::Scheduler::Stub& stub, const std::string
   auto reader = stub.WatchJob(&context, request);
   std::vector<v1::JobEvent> events;
   v1::JobEvent event;
-  while (reader->Read(&event)) events.push_back(event);
+  while (reader->Read(&event)) {
+    events.push_back(event);
+    if (events.size() == 1 && subscribed) subscribed();
+  }
   grpc::Status s = reader->Finish();
   if (status) *status = s;
   return events;

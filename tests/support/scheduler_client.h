@@ -56,9 +56,11 @@ std::optional<v1::Job> wait_for_job(v1::Scheduler::Stub& stub, const std::string
                                     const std::function<bool(const v1::Job&)>& done,
                                     std::chrono::milliseconds timeout);
 
-// WatchJob to the end (bounded by `timeout`): every event, in order.
+// WatchJob to the end (bounded by `timeout`): every event, in order. `subscribed` (when given) is
+// called once the first event, the snapshot, has come: every later change reaches the watch.
 std::vector<v1::JobEvent> watch_job(v1::Scheduler::Stub& stub, const std::string& id,
-                                    std::chrono::milliseconds timeout, grpc::Status* status = nullptr);
+                                    std::chrono::milliseconds timeout, grpc::Status* status = nullptr,
+                                    const std::function<void()>& subscribed = {});
 
 // GetResult's bytes, written to `file`.
 grpc::Status fetch_result(v1::Scheduler::Stub& stub, const std::string& id, v1::ResultKind kind,
