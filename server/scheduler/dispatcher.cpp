@@ -284,9 +284,10 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
   }
   std::optional<TileBatch> batch;
   try {
-    batch = store_.claim_next_batch(w.id, unix_ms_now(), [this](const std::string& job_id, int queued) {
-      return batch_size(job_id, queued);
-    });
+    // batch_size's answer stops changing at 2 x slots x kMaxBatch queued tiles: counted up to that.
+    batch = store_.claim_next_batch(
+        w.id, unix_ms_now(), [this](const std::string& job_id, int queued) { return batch_size(job_id, queued); },
+        2 * std::max(1, workers_.slots_up()) * kMaxBatch);
   } catch (const DiskFull& e) {
     pause_.report(e);  // the store could not mark the claim: nothing was claimed
   } catch (const std::exception& e) {

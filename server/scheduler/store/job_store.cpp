@@ -17,8 +17,6 @@ namespace farm {
 namespace {
 
 constexpr int kSchemaVersion = 6;
-// claim_next_batch counts a job's queued tiles up to this many (BatchSize sees at most it).
-constexpr int kQueuedCountCap = 1024;
 
 constexpr const char* kSchema = R"sql(
 CREATE TABLE IF NOT EXISTS schema_version (version INTEGER NOT NULL);
@@ -462,7 +460,7 @@ std::vector<std::string> JobStore::active_jobs() const {
 }
 
 std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, std::int64_t now_ms,
-                                                    const BatchSize& batch_size) {
+                                                    const BatchSize& batch_size, int count_up_to) {
   std::lock_guard lock(mutex_);
   Transaction t(db_);
   TileBatch batch;
@@ -497,12 +495,10 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
   if (batch_size && batch.attempts == 0 && batch.lost_attempts == 0) {
     int queued = 0;
     {
-      // Counted up to kQueuedCountCap only: past it no batch of up to 8 slots changes, and counting
-      // all of a long queue at every claim would cost as much as the queue is long.
-      Stmt count(db_, prepared(fmt::format("SELECT COUNT(*) FROM (SELECT 1 FROM tiles WHERE state = 0 AND "
-                                           "job_seq = ? LIMIT {})",
-                                           kQueuedCountCap)));
-      count.bind(1, seq);
+      // Counted up to count_up_to only: counting all of a long queue at every claim would cost as
+      // much as the queue is long.
+      Stmt count(db_, prepared("SELECT COUNT(*) FROM (SELECT 1 FROM tiles WHERE state = 0 AND job_seq = ? LIMIT ?)"));
+      count.bind(1, seq).bind(2, std::max(1, count_up_to));
       if (count.step()) queued = count.i32(0);
     }
     const int wanted = batch_size(batch.job_id, queued);
@@ -739,13 +735,15 @@ std::vector<int> JobStore::complete_frames(const std::string& job_id, std::optio
     seq = s.i64(0);
   }
   if (frame) {
-    // After each batch: one frame's tiles, counted through tiles_by_frame, unless it is merged.
+    // After each batch: one frame, unless it is merged, by seeks in tiles_by_frame (a count of its
+    // tiles would read every one of them after every batch).
     Stmt merged(db_, prepared("SELECT 1 FROM frames WHERE job_seq = ? AND frame = ?"));
     merged.bind(1, seq).bind(2, *frame);
     if (merged.step()) return out;
-    Stmt s(db_, prepared("SELECT COUNT(*), SUM(state != 2) FROM tiles WHERE job_seq = ? AND frame = ?"));
+    Stmt s(db_, prepared("SELECT EXISTS (SELECT 1 FROM tiles WHERE job_seq = ?1 AND frame = ?2), "
+                         "EXISTS (SELECT 1 FROM tiles WHERE job_seq = ?1 AND frame = ?2 AND state IN (0, 1, 3))"));
     s.bind(1, seq).bind(2, *frame);
-    if (s.step() && s.i64(0) > 0 && s.i64(1) == 0) out.push_back(*frame);
+    if (s.step() && s.i64(0) == 1 && s.i64(1) == 0) out.push_back(*frame);
     return out;
   }
   // After a restart: every frame of the job, complete when none of its tiles is other than done.

@@ -100,7 +100,7 @@ struct TileBatch {
 };
 
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued
-// (counted up to 1024: beyond, it shapes no batch of a farm of up to 8 slots).
+// (counted only up to claim_next_batch's `count_up_to`).
 using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
 
 // What batch_failed did.
@@ -136,8 +136,10 @@ class JobStore {
   // same grid row, never one that failed before (a tile that failed goes alone). Without
   // `batch_size`, one tile. Marks them running on `worker` and the job RUNNING (started_at set
   // on the first claim).
+  // Queued tiles are counted for `batch_size` up to `count_up_to` (a count past what changes its
+  // answer costs every claim as much as the queue is long).
   std::optional<TileBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
-                                            const BatchSize& batch_size = {});
+                                            const BatchSize& batch_size = {}, int count_up_to = 1024);
 
   // The batch operations below act only on tiles running on `worker` (the id claim_next_batch was
   // given; empty: any), so that a late answer from a worker whose tiles were taken back never
