@@ -18,6 +18,7 @@
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
+#include "server/scheduler/job_merger.h"
 
 namespace farm {
 namespace {
@@ -69,18 +70,27 @@ double time_model_load(const fs::path& model) {
 }
 
 // The engine alone over every frame: each frame's scene built from models loaded once, a fresh
-// PreparedScene each (so the per-frame set-up is counted), rendered on one thread.
-double time_engine_frames(const Job& job, ThreadPool& pool) {
+// PreparedScene each (so the per-frame set-up is counted), rendered on one thread. Apart, what
+// writing each frame's files (half EXR and PNG, as `farm render` writes them) takes.
+struct EngineFrames {
+  double render_ms = 0.0;
+  double write_ms = 0.0;
+};
+
+EngineFrames time_engine_frames(const Job& job, ThreadPool& pool, const fs::path& dir) {
   ModelLibrary models(job.asset_root);
   build_scene(job, models);  // the load, not counted here: time_model_load measures it
-  double total = 0.0;
+  EngineFrames total;
   TileBuffer film;
   for (int frame : job_frames(job)) {
     const Job at = job_at_frame(job, frame);
     const PreparedScene prepared(build_scene(at, models));
     FrameTimings timings;
     render_frame(prepared, at.render, pool, film, {}, &timings);
-    total += timings.total_ms;
+    total.render_ms += timings.total_ms;
+    const Clock::time_point start = Clock::now();
+    write_merged(film, {dir / "engine.exr", dir / "engine.png"});
+    total.write_ms += ms_since(start);
   }
   return total;
 }
@@ -92,21 +102,28 @@ void bench_turntable(const FramesBenchOptions& o, const fs::path& dir) {
   fmt::print("\nturntable: the cow, {} frames at {}x{}, raster, 1 thread, median of {} rounds\n", o.frames,
              job.render.width, job.render.height, o.repeats);
   ThreadPool pool(1);
-  time_engine_frames(job, pool);  // warm-up
+  time_engine_frames(job, pool, dir);  // warm-up
   time_render_command(file);
-  std::vector<double> engine, load, command, ratio;
+  std::vector<double> engine, writes, load, command, ratio, beyond_writes;
   for (int i = 0; i < o.repeats; ++i) {
-    engine.push_back(time_engine_frames(job, pool));
+    const EngineFrames frames = time_engine_frames(job, pool, dir);
+    engine.push_back(frames.render_ms);
+    writes.push_back(frames.write_ms);
     load.push_back(time_model_load(job.scene.objects[0].file));
     command.push_back(time_render_command(file));
     ratio.push_back(command.back() / (engine.back() + load.back()));
+    beyond_writes.push_back(command.back() / (engine.back() + load.back() + writes.back()));
   }
-  const double e = median(engine), l = median(load), c = median(command);
+  const double e = median(engine), w = median(writes), l = median(load), c = median(command);
   fmt::print("{:<48} {:>10.1f} ms ({:.2f} ms a frame)\n", fmt::format("engine, {} frames", o.frames), e, e / o.frames);
+  fmt::print("{:<48} {:>10.1f} ms ({:.2f} ms a frame)\n", "writing them (half EXR + PNG), one after another", w,
+             w / o.frames);
   fmt::print("{:<48} {:>10.1f} ms\n", "one model load", l);
   fmt::print("{:<48} {:>10.1f} ms\n", "farm render of the whole job (start to exit)", c);
   fmt::print("whole job / (engine frames + one load): {:.3f} (paired by round, median); target <= 1.1: {}\n",
              median(ratio), median(ratio) <= 1.1 ? "within" : "over");
+  fmt::print("whole job / (engine frames + writing them + one load): {:.3f} (the farm's own cost beyond both)\n",
+             median(beyond_writes));
 }
 
 void bench_path(const FramesBenchOptions& o, const fs::path& dir) {

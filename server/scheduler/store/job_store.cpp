@@ -510,8 +510,9 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
       next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
       while (next.step()) {
         const Rect r{next.i32(1), next.i32(2), next.i32(3), next.i32(4)};
-        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 || next.i32(7) != batch.frame || next.i32(8) != batch.pass ||
-            r.y0 != batch.rect.y0 || r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
+        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 ||
+            next.i32(7) != batch.frame || next.i32(8) != batch.pass || r.y0 != batch.rect.y0 ||
+            r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
           break;
         }
         batch.rect.x1 = r.x1;
