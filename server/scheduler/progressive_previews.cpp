@@ -54,12 +54,14 @@ void ProgressivePreviews::frame_merged(const std::string& job_id, const JobInfo&
 void ProgressivePreviews::parts_taken_back(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   std::erase_if(folds_, [&](const auto& entry) { return entry.first.first == job_id; });
+  ++taken_back_[job_id];
 }
 
 void ProgressivePreviews::forget_job(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   std::erase_if(folds_, [&](const auto& entry) { return entry.first.first == job_id; });
   std::erase_if(announced_, [&](const auto& entry) { return entry.first.first == job_id; });
+  taken_back_.erase(job_id);
 }
 
 std::unique_ptr<ProgressivePreviews::Fold> ProgressivePreviews::take(const Key& key) {
@@ -70,11 +72,14 @@ std::unique_ptr<ProgressivePreviews::Fold> ProgressivePreviews::take(const Key& 
     folds_.erase(it);
     return fold;
   }
-  return std::make_unique<Fold>();
+  auto fold = std::make_unique<Fold>();
+  fold->taken_back = taken_back_[key.first];
+  return fold;
 }
 
 void ProgressivePreviews::put_back(const Key& key, std::unique_ptr<Fold> fold) {
   std::lock_guard lock(mutex_);
+  if (fold->taken_back != taken_back_[key.first]) return;  // it may hold parts taken back since
   folds_.emplace_front(key, std::move(fold));
   while (folds_.size() > kKeptFrames) folds_.pop_back();
 }

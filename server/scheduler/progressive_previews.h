@@ -11,6 +11,7 @@
 // for different jobs may run at once. Lock: mutex_ guards the maps only and is a leaf; folds and
 // writes run without it.
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <list>
 #include <map>
@@ -54,6 +55,9 @@ class ProgressivePreviews {
   struct Fold {
     PassAccumulator pixels;
     int passes = 0;  // folded: 0 .. passes - 1
+    // The job's taken_back_ count when the fold was begun: parts taken back while it was out of
+    // the cache (a quarantine runs on another thread) may be in it, and then it is not kept.
+    std::uint64_t taken_back = 0;
   };
   // The frame's fold, taken out of the cache (the caller puts it back); a fresh one if none.
   std::unique_ptr<Fold> take(const Key& key);
@@ -66,6 +70,7 @@ class ProgressivePreviews {
   std::mutex mutex_;
   std::list<std::pair<Key, std::unique_ptr<Fold>>> folds_;  // most recently used first
   std::map<Key, int> announced_;  // the newest pass announced of each frame in progress
+  std::map<std::string, std::uint64_t> taken_back_;  // parts_taken_back calls, by job
 };
 
 }  // namespace farm
