@@ -224,6 +224,26 @@ TEST_F(FarmVideoTest, SubmitWaitDownloadsTheVideoTheSchedulerMade) {
   EXPECT_EQ(with_frame.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << with_frame.error_message();
 }
 
+TEST_F(FarmVideoTest, AFailedEncodeFailsTheJobWithFfmpegsWordsAndKeepsTheFrames) {
+  const fs::path out = dir_ / "out";
+  const fs::path job_file = write_job(animated_cornell(64, 48, out, "cornell.mp4"));
+  // An "ffmpeg" that refuses, as one without an H.264 encoder would.
+  const fs::path fake = dir_.write("fake-ffmpeg", "#!/bin/sh\necho 'Unknown encoder libx264' >&2\nexit 1\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  const test::CommandResult r = test::run_command("FARM_FFMPEG=" + test::shell_quote(fake.string()) + " " +
+                                                  farm("render " + test::shell_quote(job_file.string()) + " --quiet"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("the render failed: making the video (output.video " + (out / "cornell.mp4").string() +
+                          "): ffmpeg failed (exit code 1): Unknown encoder libx264"),
+            std::string::npos)
+      << r.output;
+  EXPECT_TRUE(fs::exists(out / "cornell.0004.png"));
+  for (const fs::directory_entry& e : fs::directory_iterator(out)) {
+    EXPECT_FALSE(e.path().filename().string().starts_with(".")) << e.path();
+    EXPECT_NE(e.path().extension(), ".mp4") << e.path();
+  }
+}
+
 TEST_F(FarmVideoTest, WithoutFfmpegRenderExitsTwoBeforeAnyFrameAndSubmitIsRefused) {
   const fs::path out = dir_ / "out";
   const fs::path job_file = write_job(animated_cornell(64, 48, out, "cornell.mp4"));
