@@ -21,6 +21,9 @@ packages=(
   # the grading sandbox (server/review/sandbox.cpp): bwrap runs a student's program; setpriv,
   # which drops it to a user of its own, comes with util-linux (essential, always installed)
   bubblewrap
+  # a job's output.video (server/scheduler/video_encoder.cpp): ffmpeg, run as a program, encodes
+  # the frames' previews (H.264, VP9); ffprobe, in the same package, reads the videos in tests
+  ffmpeg
   # tests and benchmarks
   libgtest-dev libbenchmark-dev python3 python3-venv
   # fuzzing (tests/fuzz, the `fuzz` preset): clang, and libFuzzer with the sanitizer runtimes,

@@ -17,6 +17,7 @@
 #include "renderer/scene/job_animation.h"
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/json_reader.h"
+#include "renderer/scene/video_format.h"
 #include "renderer/util/confined_file.h"
 
 namespace farm {
@@ -301,8 +302,32 @@ void check_frame_pattern(const std::optional<JsonValue>& written, const fs::path
                       shown(file.string()), file.stem().string(), file.extension().string()));
 }
 
+// output.video: a file ffmpeg is asked to make from the frames' previews, once they are all done.
+void parse_video(const JsonValue& v, Job& job) {
+  job.output.video = v.string();
+  const fs::path& video = job.output.video;
+  if (video.empty()) v.fail("expected a file path, got an empty string");
+  if (!video_format_of(video)) {
+    v.fail(fmt::format("'{}': cannot make videos of type '{}' (expected {})", shown(video.string()),
+                       shown(video.extension().string()), video_extensions()));
+  }
+  if (!job.frames) {
+    v.fail("a video needs a frame range: give \"frames\": {\"start\": 1, \"end\": 48}");
+  }
+  if (job.output.preview.empty()) {
+    v.fail("a video is made from the frames' previews, and output.preview is \"\" (none): give the "
+           "previews a name, such as out/name.####.png");
+  }
+  for (const fs::path& other : {job.output.image, job.output.preview}) {
+    if (video.lexically_normal() == other.lexically_normal()) {
+      v.fail(fmt::format("'{}' is also the name of output.{}", shown(video.string()),
+                         other == job.output.image ? "image" : "preview"));
+    }
+  }
+}
+
 void parse_output(const JsonValue& v, Job& job) {
-  const JsonObject obj = v.object({"image", "preview", "aovs"});
+  const JsonObject obj = v.object({"image", "preview", "aovs", "video"});
   const auto image = obj.get("image");
   if (image) {
     job.output.image = image->string();
@@ -329,6 +354,7 @@ void parse_output(const JsonValue& v, Job& job) {
     check_frame_pattern(image, job.output.image, v);
     check_frame_pattern(preview, job.output.preview, v);
   }
+  if (auto x = obj.get("video")) parse_video(*x, job);
 }
 
 // The name becomes part of the default output paths, so it must be one plain path component.

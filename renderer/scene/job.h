@@ -44,6 +44,9 @@ struct JobScene {
 struct JobOutput {
   std::filesystem::path image;    // EXR; relative paths are relative to the working directory
   std::filesystem::path preview;  // PNG/JPEG; empty = none
+  // The frames' previews as one video, by ffmpeg (video_format.h); empty = none. Only with
+  // frames, and then the same for every frame (no '#' run).
+  std::filesystem::path video;
 };
 
 struct JobAnimation;  // the job's keyframe tracks and the document they animate (job.cpp)

@@ -24,10 +24,12 @@ int run_fetch(const FetchOptions& o) {
   const v1::Job job = client.get(o.target.job_id);
   download_job_results(client, job,
                        [&](v1::ResultKind kind, const std::string& name, int) {
-                         const std::string fallback = job.name() + (kind == v1::RESULT_KIND_EXR ? ".exr" : ".png");
+                         const std::string fallback = job.name() + (kind == v1::RESULT_KIND_EXR       ? ".exr"
+                                                                    : kind == v1::RESULT_KIND_VIDEO ? ".mp4"
+                                                                                                    : ".png");
                          return o.output_dir / (name.empty() ? fallback : name);
                        },
-                       true);
+                       true, VideoDownload::if_any);
   return 0;
 }
 
@@ -35,7 +37,9 @@ int run_fetch(const FetchOptions& o) {
 
 void add_fetch_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<FetchOptions>();
-  CLI::App* fetch = app.add_subcommand("fetch", "Download a job's EXR and preview (with frames: every frame merged so far)");
+  CLI::App* fetch = app.add_subcommand(
+      "fetch",
+      "Download a job's EXR and preview (with frames: every frame merged so far, and its video once it is done)");
   add_job_on_scheduler_options(*fetch, o->target);
   fetch->add_option("-o,--output", o->output_dir, "Folder to write into")->capture_default_str();
   commands.add(fetch, [o] { return run_fetch(*o); });

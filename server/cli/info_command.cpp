@@ -86,9 +86,10 @@ void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
   for (Aov a : kAllAovs) {
     if (r.aovs.has(a)) aovs += fmt::format("{}{}", aovs.empty() ? "" : " ", to_string(a));
   }
-  fmt::print("  output: image {} preview {} aovs {}\n", job.output.image.string(),
+  fmt::print("  output: image {} preview {} aovs {}{}\n", job.output.image.string(),
              job.output.preview.empty() ? std::string("(none)") : job.output.preview.string(),
-             aovs.empty() ? std::string("(none)") : aovs);
+             aovs.empty() ? std::string("(none)") : aovs,
+             job.output.video.empty() ? std::string() : " video " + job.output.video.string());
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
+#include "renderer/scene/video_format.h"
 #include "server/cli/job_display.h"
 #include "server/cli/job_file_options.h"
 #include "server/cli/log_level_option.h"
@@ -23,6 +24,7 @@
 #include "server/cli/validate_command.h"
 #include "server/client/job_submission.h"
 #include "server/embedded/embedded_farm.h"
+#include "server/scheduler/video_encoder.h"
 
 namespace farm {
 namespace {
@@ -74,6 +76,18 @@ void run_render_command(const RenderCommandOptions& options) {
   if (!job.output.preview.empty() && !preview_format_supported(job.output.preview)) {
     throw InputError(fmt::format("{}: output.preview: cannot write images of type '{}'",
                                  options.job_file.string(), job.output.preview.extension().string()));
+  }
+  if (!job.output.video.empty()) {
+    // Said before a frame renders, not after the last one.
+    if (const FfmpegLookup ffmpeg = find_ffmpeg(); !ffmpeg) {
+      throw InputError(fmt::format("{}: output.video: making the video {} needs ffmpeg, and {} (or render "
+                                   "without the video: --video none)",
+                                   options.job_file.string(), job.output.video.string(), ffmpeg.problem));
+    }
+    if (options.overrides.show_bvh) {
+      throw InputError("--show-bvh draws over the first frame's preview only, and the video is made from every "
+                       "frame's: give --video none with it");
+    }
   }
 
   // The same scheduler and worker code a farm runs, in this process: the job is submitted,
@@ -129,6 +143,10 @@ void run_render_command(const RenderCommandOptions& options) {
                    ? fmt::format(", BVH levels <= {} drawn over it", *options.overrides.show_bvh)
                    : std::string());
   }
+  if (!result.video.empty()) {
+    fmt::print("wrote {} ({}, {} frames at {} fps)\n", result.video.string(),
+               video_codec_name(*video_format_of(result.video)), frames.size(), job.frames->fps);
+  }
   if (stats.samples() > 0) {
     fmt::print("samples: {} traced, {} NaN/inf samples caught and dropped\n", stats.samples(),
                stats.invalid_samples());
@@ -162,6 +180,13 @@ void add_render_command(CLI::App& app, CommandTable& commands) {
         if (!preview.empty()) o->overrides.preview = preview == "none" ? "" : preview;
       },
       "Preview path, .png or .jpg (replaces output.preview; 'none' for no preview)");
+  render->add_option_function<std::string>(
+      "--video",
+      [o](const std::string& video) {
+        if (!video.empty()) o->overrides.video = video == "none" ? "" : video;
+      },
+      "Video path, .mp4 .mkv or .webm, made by ffmpeg from the previews (replaces output.video; 'none' for "
+      "no video)");
   render->add_flag("--float", o->overrides.full_float, "Write 32-bit float EXR instead of half");
   render->add_option("--show-bvh", o->overrides.show_bvh,
                      "Draw the BVH boxes of levels <= DEPTH over the preview (white: the tree over "

@@ -25,7 +25,25 @@ void download_results(SchedulerClient& client, const std::string& job_id, const 
   }
 }
 
-int download_job_results(SchedulerClient& client, const v1::Job& job, const ResultPath& where, bool want_preview) {
+namespace {
+
+// The job's video, once it has SUCCEEDED, as `video` asks.
+void download_video(SchedulerClient& client, const v1::Job& job, const ResultPath& where, VideoDownload video) {
+  if (video == VideoDownload::none || job.state() != v1::JOB_STATE_SUCCEEDED) return;
+  try {
+    const std::filesystem::path file = client.fetch(
+        job.job_id(), v1::RESULT_KIND_VIDEO, [&](const std::string& name) { return where(v1::RESULT_KIND_VIDEO, name, 0); });
+    fmt::print("wrote {}\n", file.string());
+  } catch (const InputError&) {
+    if (video == VideoDownload::required) throw;
+    // The job asked for no video.
+  }
+}
+
+}  // namespace
+
+int download_job_results(SchedulerClient& client, const v1::Job& job, const ResultPath& where, bool want_preview,
+                         VideoDownload video) {
   const std::string& id = job.job_id();
   if (frames_of(job).empty()) {
     if (job.state() != v1::JOB_STATE_SUCCEEDED) {
@@ -52,6 +70,7 @@ int download_job_results(SchedulerClient& client, const v1::Job& job, const Resu
                job.failure_reason().empty() ? "" : " (" + job.failure_reason() + ")");
   }
   if (fetched == 0) throw InputError(fmt::format("job {} is {}: no frame to fetch yet", id, to_string(job.state())));
+  download_video(client, job, where, video);
   return fetched;
 }
 

@@ -18,9 +18,14 @@ using ResultPath = std::function<std::filesystem::path(v1::ResultKind, const std
 void download_results(SchedulerClient& client, const std::string& job_id, const ResultPath& where,
                       bool want_preview, std::optional<int> frame = std::nullopt);
 
+// Whether download_job_results fetches the job's video (once the job has SUCCEEDED): not at all,
+// when the job has one (`farm fetch`, which has no job file to say), or always (an error if none).
+enum class VideoDownload { none, if_any, required };
+
 // Every result of `job` there is now: a still's once it succeeded (InputError before), each
 // merged frame of a job with frames, those still rendering counted and said. Returns how many
-// frames (a still: 1) were written; InputError when none could be.
-int download_job_results(SchedulerClient& client, const v1::Job& job, const ResultPath& where, bool want_preview);
+// frames (a still: 1) were written; InputError when none could be. Then the video, as `video` says.
+int download_job_results(SchedulerClient& client, const v1::Job& job, const ResultPath& where, bool want_preview,
+                         VideoDownload video = VideoDownload::none);
 
 }  // namespace farm

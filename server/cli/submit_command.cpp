@@ -42,10 +42,12 @@ int run_submit(const SubmitOptions& o) {
   // Like `farm render`: the results land where the job's output section says.
   download_job_results(client, last,
                        [&](v1::ResultKind kind, const std::string&, int frame) {
+                         if (kind == v1::RESULT_KIND_VIDEO) return submission.job.output.video;
                          const JobOutput& out = job_at_frame(submission.job, submission.job.frames ? frame : 0).output;
                          return kind == v1::RESULT_KIND_EXR ? out.image : out.preview;
                        },
-                       !submission.job.output.preview.empty());
+                       !submission.job.output.preview.empty(),
+                       submission.job.output.video.empty() ? VideoDownload::none : VideoDownload::required);
   return 0;
 }
 
@@ -57,8 +59,8 @@ void add_submit_command(CLI::App& app, CommandTable& commands) {
   add_job_file_options(*submit, o->job_file, o->load);
   add_scheduler_connection_options(*submit, o->scheduler);
   submit->add_flag("--wait", o->wait,
-                   "Follow the job to its end, then download the EXR and preview to the job's "
-                   "output paths (exit 1 if the job fails or is cancelled)");
+                   "Follow the job to its end, then download the EXR and preview (and the video) to the "
+                   "job's output paths (exit 1 if the job fails or is cancelled)");
   submit->add_option("--priority", o->priority, "Higher runs first; equal priorities in submission order")
       ->capture_default_str();
   add_render_override_options(*submit, o->overrides);

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 
 bool any_override(const RenderOverrides& o) {
   return o.engine || o.width || o.height || o.spp || o.threads || o.tile_size || o.max_depth || o.seed ||
-         !o.add_aovs.empty() || o.image || o.preview || o.frames;
+         !o.add_aovs.empty() || o.image || o.preview || o.video || o.frames;
 }
 
 // The job text with model paths relative to the root and the overrides written in.
@@ -56,6 +56,13 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
       doc["output"].erase("preview");
     } else {
       doc["output"]["preview"] = o.preview->generic_string();
+    }
+  }
+  if (o.video) {
+    if (o.video->empty()) {
+      if (doc.contains("output")) doc["output"].erase("video");
+    } else {
+      doc["output"]["video"] = o.video->generic_string();
     }
   }
   return doc.dump(2) + "\n";

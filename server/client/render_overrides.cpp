@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/video_format.h"
 
 namespace farm {
 
@@ -29,6 +30,22 @@ void apply_overrides(Job& job, const RenderOverrides& o) {
   }
   if (o.image) job.output.image = *o.image;
   if (o.preview) job.output.preview = *o.preview;
+  if (o.video) {
+    job.output.video = *o.video;
+    if (!o.video->empty() && !video_format_of(*o.video)) {
+      throw InputError(fmt::format("--video {}: cannot make videos of type '{}' (expected {}, or none)",
+                                   o.video->string(), o.video->extension().string(), video_extensions()));
+    }
+    if (!o.video->empty() && !job.frames) {
+      throw InputError(fmt::format("--video {}: the job renders one still; a video needs a frame range",
+                                   o.video->string()));
+    }
+  }
+  if (!job.output.video.empty() && job.output.preview.empty()) {
+    throw InputError(fmt::format("--preview none: the video {} is made from the frames' previews (give --video "
+                                 "none too, to render without it)",
+                                 job.output.video.string()));
+  }
   if (!job.frames) {
     job.output_patterns = job.output;  // a still's names are its patterns
     if (o.frames) {

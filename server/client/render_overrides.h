@@ -16,6 +16,7 @@ struct RenderOverrides {
   std::optional<std::uint64_t> seed;
   std::vector<std::string> add_aovs;  // AOV names the output gains (a regression z-test's variance)
   std::optional<std::filesystem::path> image, preview;  // preview "" = none
+  std::optional<std::filesystem::path> video;           // "" = none
   bool full_float = false;                              // 32-bit EXR instead of half
   std::optional<int> show_bvh;  // draw BVH boxes of levels <= this over the preview
   // Frames of the job's range to render ("10-20" or "5"): written as frames.only.
@@ -24,7 +25,8 @@ struct RenderOverrides {
 
 // Applies overrides to a loaded job; throws InputError naming the option for a bad value (a
 // --frames outside the job's range, or of a job without one; an --out without '#' for a job
-// with frames).
+// with frames; a --video of a still, of a type ffmpeg is not asked to make, or one whose previews
+// --preview none turns off).
 void apply_overrides(Job& job, const RenderOverrides& overrides);
 
 }  // namespace farm

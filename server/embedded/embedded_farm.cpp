@@ -81,6 +81,7 @@ EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Pr
   const JobOutput& output = job.frames ? job.output_patterns : job.output;
   v.exr = output.image;
   if (options.write_preview) v.preview = output.preview;
+  v.video = job.output.video;
   EmbeddedResult result;
   if (options.keep_frame) {
     // The job's first frame, and its scene.
@@ -94,6 +95,7 @@ EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Pr
   if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
     result.exr = job.output.image;
     if (options.write_preview) result.preview = job.output.preview;
+    result.video = job.output.video;
   }
   return result;
 }
@@ -106,6 +108,7 @@ EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec, const Progress& progre
   if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
     result.exr = core_->result_file(result.job.job_id(), false).value_or(fs::path());
     result.preview = core_->result_file(result.job.job_id(), true).value_or(fs::path());
+    result.video = core_->video_file(result.job.job_id()).value_or(fs::path());
   }
   return result;
 }

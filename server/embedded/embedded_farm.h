@@ -31,6 +31,7 @@ struct EmbeddedFarmOptions {
 struct EmbeddedResult {
   v1::Job job;                     // SUCCEEDED, FAILED (failure_reason) or CANCELLED
   std::filesystem::path exr, preview;  // empty unless SUCCEEDED (and preview unless written)
+  std::filesystem::path video;         // the job's output.video, once SUCCEEDED; empty: none
   // run_local with keep_frame: the merged frame, and the scene it was rendered from.
   std::optional<TileBuffer> frame;
   std::shared_ptr<const PreparedScene> scene;

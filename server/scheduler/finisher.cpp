@@ -11,8 +11,10 @@
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/frame_range.h"
 #include "renderer/scene/scene_builder.h"
+#include "renderer/scene/video_format.h"
 #include "server/common/free_memory.h"
 #include "server/common/job_state.h"
+#include "server/scheduler/video_encoder.h"
 
 namespace farm {
 
@@ -145,13 +147,32 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
 
 void Finisher::finish(const std::string& job_id, const v1::Job& before) {
   v1::Job after;
+  std::shared_ptr<const JobInfo> info;
+  std::string validation;
   try {
-    const std::string validation = check_against_embree(*jobs_.get(job_id));
-    after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
+    info = jobs_.get(job_id);
+    validation = check_against_embree(*info);
   } catch (const DiskFull&) {
     throw;
   } catch (const std::exception& e) {
     fail(job_id, fmt::format("checking against Embree: {}", e.what()));
+    return;
+  }
+  if (!info->job->output.video.empty()) {
+    // A video that cannot be made fails the job, with ffmpeg's words; its frames stay fetchable.
+    try {
+      make_video(job_id, *info);
+    } catch (const std::exception& e) {
+      fail(job_id, fmt::format("making the video (output.video {}): {}", info->job->output.video.string(), e.what()));
+      return;
+    }
+  }
+  try {
+    after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
+  } catch (const DiskFull&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(job_id, fmt::format("finishing the job: {}", e.what()));
     return;
   }
   if (!is_final(after.state())) {
@@ -261,6 +282,35 @@ MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info, i
   if (stem.empty() || stem.starts_with(".")) stem = "image";
   const fs::path dir = results_dir(job_id) / std::to_string(frame);
   return {dir / (stem + ".exr"), dir / (stem + ".png")};
+}
+
+fs::path Finisher::video_path(const std::string& job_id, const JobInfo& info) const {
+  if (!info.video.empty()) return info.video;
+  // Kept as results/<job id>/<the video's file name>, beside the frames' folders.
+  const fs::path& asked = info.job->output.video;
+  std::string name = asked.filename().string();
+  if (name.empty() || name.starts_with(".")) name = "video" + asked.extension().string();
+  return results_dir(job_id) / name;
+}
+
+void Finisher::make_video(const std::string& job_id, const JobInfo& info) const {
+  VideoRequest request;
+  for (int f : job_frames(*info.job)) request.frames.push_back(files_of(job_id, info, f).preview);
+  request.fps = info.job->frames ? info.job->frames->fps : 24.0;
+  request.output = video_path(job_id, info);
+  encode_video(request);
+  log_.info("job {}: video of {} frames written to {}", job_id, request.frames.size(), request.output.string());
+}
+
+std::optional<fs::path> Finisher::video_file(const std::string& job_id) const {
+  const std::optional<v1::Job> job = store_.get_job(job_id);
+  if (!job || job->state() != v1::JOB_STATE_SUCCEEDED) return std::nullopt;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(results_dir(job_id), ec)) {
+    if (e.path().filename().string().starts_with(".") || !e.is_regular_file(ec)) continue;
+    if (video_format_of(e.path())) return e.path();
+  }
+  return std::nullopt;
 }
 
 fs::path Finisher::results_dir(const std::string& job_id) const {

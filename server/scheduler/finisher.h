@@ -2,7 +2,8 @@
 // The end of each frame and of a job: once a frame's tiles are all done, the frame is assembled
 // (FrameAssembly), written (the EXR and the preview, job_merger.h), marked merged and announced
 // (FrameFinished), while the job's other frames render on. Once every frame is merged, the job is
-// checked against Embree when it asks for it and marked SUCCEEDED (FAILED when any of that throws). A part whose kept data is damaged
+// checked against Embree when it asks for it, its video made when it asks for one, and marked
+// SUCCEEDED (FAILED when any of that throws). A part whose kept data is damaged
 // (DamagedParts: its file missing, truncated or failing its checksum) fails nothing: its tiles are
 // queued again (JobStore::requeue_parts), the job stays running and is merged once they are done.
 // A final job's memory and kept tiles then go (release()), whichever way it ended. A merge the disk
@@ -66,6 +67,8 @@ class Finisher {
   std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
   // Done parts of the job were taken back (the dispatcher quarantined their worker).
   void parts_taken_back(const std::string& job_id);
+  // The video under results/ of a SUCCEEDED job that asked for one; nullopt otherwise.
+  std::optional<std::filesystem::path> video_file(const std::string& job_id) const;
   // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.
   void on_requeued(std::function<void()> f) { on_requeued_ = std::move(f); }
 
@@ -90,6 +93,10 @@ class Finisher {
   std::filesystem::path results_dir(const std::string& job_id) const;
   // results/<job id>/progress/<frame>.png
   std::filesystem::path progressive_file(const std::string& job_id, int frame) const;
+  // The job's output.video, once every frame is merged (video_encoder.h): where its submitter
+  // said, or results/<job id>/<its file name>. std::exception when ffmpeg cannot make it.
+  void make_video(const std::string& job_id, const JobInfo& info) const;
+  std::filesystem::path video_path(const std::string& job_id, const JobInfo& info) const;
 
   const SchedulerOptions& options_;
   JobStore& store_;

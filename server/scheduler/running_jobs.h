@@ -33,6 +33,8 @@ struct JobInfo {
   // Empty: results/<job id>/<stem>.exr and .png. A job with frames holds patterns here (a '#'
   // run for the frame number, as the job's output).
   MergedFiles files;
+  // The job's output.video: empty, results/<job id>/<its file name>; else where its submitter said.
+  std::filesystem::path video;
   std::function<void(int frame, TileBuffer&&)> merged;
 
   // The frame `f` of the job's tiles: its image, AOVs and sample passes (the same for every frame).

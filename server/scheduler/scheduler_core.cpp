@@ -13,6 +13,7 @@
 #include "server/common/scene_hash.h"
 #include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"
+#include "server/scheduler/video_encoder.h"
 
 namespace farm {
 
@@ -105,6 +106,14 @@ v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
   const std::string hash = scene_hash(spec);
   MaterializedScene m = materialize_scene(spec, hash, assets_, options_.data_dir);
   check_job_limits(m.job, spec, options_.limits);
+  if (!m.job.output.video.empty()) {
+    // Refused now rather than failed after every frame is rendered.
+    if (const FfmpegLookup ffmpeg = find_ffmpeg(); !ffmpeg) {
+      throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
+                         fmt::format("{}: output.video: this scheduler cannot make videos: {}",
+                                     spec.file_name().empty() ? m.job.name : spec.file_name(), ffmpeg.problem));
+    }
+  }
   auto info = std::make_shared<JobInfo>();
   try {
     // What `farm render` does before rendering: models load, the scene builds. A server does it in
@@ -138,6 +147,7 @@ v1::Job SchedulerCore::submit_validated(ValidatedJob job, int priority,
   info->job = std::move(job.job);
   info->scene = std::move(job.scene);
   info->files = {std::move(job.exr), std::move(job.preview)};
+  info->video = std::move(job.video);
   info->merged = std::move(job.merged);
   return queue_job(priority, watcher, std::move(info));
 }
@@ -200,6 +210,10 @@ std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bo
 
 std::optional<fs::path> SchedulerCore::progressive_result(const std::string& job_id, int frame) const {
   return finisher_.progressive_result(job_id, frame);
+}
+
+std::optional<fs::path> SchedulerCore::video_file(const std::string& job_id) const {
+  return finisher_.video_file(job_id);
 }
 
 // ---- Events --------------------------------------------------------------------------------------

@@ -61,6 +61,7 @@ struct ValidatedJob {
   std::shared_ptr<const PreparedScene> scene;   // reused by the merge's Embree check
   // Preview empty: none. A job with frames gives patterns (a '#' run for the frame number).
   std::filesystem::path exr, preview;
+  std::filesystem::path video;  // the job's output.video, when it asks for one
   // Given each merged frame after its files are written (`farm render --show-bvh` draws on it).
   std::function<void(int frame, TileBuffer&&)> merged;
 };
@@ -106,6 +107,9 @@ class SchedulerCore {
                                                    std::optional<int> frame = std::nullopt) const;
   // The newest progressive preview of a frame of sample passes (Finisher::progressive_result).
   std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
+  // The video of a SUCCEEDED job that asked for one (output.video), kept under results/; nullopt
+  // otherwise.
+  std::optional<std::filesystem::path> video_file(const std::string& job_id) const;
 
   // Events of `job_id` from now on; pass the queue to unwatch() when done.
   std::shared_ptr<JobEventQueue> watch(const std::string& job_id);

@@ -164,7 +164,22 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
       throw InputError("GetResult: a progressive preview is of a frame: give the frame");
     }
     std::optional<std::filesystem::path> file;
-    if (request->has_frame()) {
+    if (request->kind() == v1::RESULT_KIND_VIDEO) {
+      // The whole job's: made once every frame is done.
+      if (request->has_frame()) {
+        throw InputError(fmt::format("job {}: a video holds every frame; ask for it without a frame", job.job_id()));
+      }
+      if (job.state() != v1::JOB_STATE_SUCCEEDED) {
+        return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                            fmt::format("job {} is {}, not done: its video is made once every frame is",
+                                        job.job_id(), v1::JobState_Name(job.state())));
+      }
+      file = core_.video_file(job.job_id());
+      if (!file) {
+        return grpc::Status(grpc::StatusCode::NOT_FOUND,
+                            fmt::format("job {} has no video (its job file gives no output.video)", job.job_id()));
+      }
+    } else if (request->has_frame()) {
       // A frame can be fetched as soon as it is merged, while the job renders its others.
       const int f = request->frame(), first = job.frame_first(), step = std::max(1, job.frame_step());
       if (f < first || f > job.frame_last() || (f - first) % step != 0) {

@@ -1,0 +1,22 @@
+#include "renderer/scene/video_format.h"
+
+#include <algorithm>
+#include <cctype>
+#include <string>
+
+namespace farm {
+
+std::optional<VideoFormat> video_format_of(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".mp4") return VideoFormat::Mp4;
+  if (ext == ".mkv") return VideoFormat::Matroska;
+  if (ext == ".webm") return VideoFormat::WebM;
+  return std::nullopt;
+}
+
+std::string_view video_extensions() { return ".mp4, .mkv or .webm"; }
+
+std::string_view video_codec_name(VideoFormat format) { return format == VideoFormat::WebM ? "VP9" : "H.264"; }
+
+}  // namespace farm
