@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cctype>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -17,6 +16,7 @@
 #include "renderer/image/output_file.h"
 #include "renderer/image/png_writer.h"
 #include "renderer/image/rgb8_image.h"
+#include "renderer/util/file_extension.h"
 
 namespace farm {
 namespace {
@@ -25,9 +25,7 @@ enum class PreviewFormat { Png, Jpeg };
 
 // The extensions OpenImageIO, which wrote previews before, took for these two formats.
 std::optional<PreviewFormat> preview_format(const std::filesystem::path& file) {
-  std::string extension = file.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string extension = lowercase_extension(file);
   if (extension == ".png") return PreviewFormat::Png;
   constexpr std::array<std::string_view, 6> jpeg = {".jpg", ".jpeg", ".jpe", ".jif", ".jfif", ".jfi"};
   if (std::find(jpeg.begin(), jpeg.end(), extension) != jpeg.end()) return PreviewFormat::Jpeg;

@@ -1,7 +1,5 @@
 // load_model: checks that the file lies in the root and is a regular file, then hands it to the
 // loader for its extension. Every failure is an InputError that names the file.
-#include <algorithm>
-#include <cctype>
 #include <string>
 #include <system_error>
 
@@ -10,6 +8,7 @@
 #include "renderer/scene/loaders.h"
 #include "renderer/scene/model.h"
 #include "renderer/scene/ply_header.h"
+#include "renderer/util/file_extension.h"
 
 namespace farm {
 namespace {
@@ -17,13 +16,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kSupported = ".dae .obj .ply .gltf .glb";
-
-std::string lowercase_extension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
 
 fs::path resolved_folder(const fs::path& folder) {
   std::error_code ec;

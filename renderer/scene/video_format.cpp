@@ -1,14 +1,13 @@
 #include "renderer/scene/video_format.h"
 
-#include <algorithm>
-#include <cctype>
 #include <string>
+
+#include "renderer/util/file_extension.h"
 
 namespace farm {
 
 std::optional<VideoFormat> video_format_of(const std::filesystem::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  const std::string ext = lowercase_extension(file);
   if (ext == ".mp4") return VideoFormat::Mp4;
   if (ext == ".mkv") return VideoFormat::Matroska;
   if (ext == ".webm") return VideoFormat::WebM;

@@ -2,12 +2,12 @@
 
 #include <fmt/format.h>
 
-#include <cctype>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 
+#include "renderer/util/file_extension.h"
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
@@ -41,9 +41,7 @@ void add_watch_command(CLI::App& app, CommandTable& commands) {
                     "Keep this PNG up to date with the newest preview while the job renders: after each "
                     "sample pass of a frame (render.pass_spp), and after each merged frame")
       ->check([](const std::string& s) {
-        std::string ext = std::filesystem::path(s).extension().string();
-        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-        return ext == ".png" ? std::string() : fmt::format("expected a .png file, got '{}'", s);
+        return lowercase_extension(s) == ".png" ? std::string() : fmt::format("expected a .png file, got '{}'", s);
       });
   watch->footer("Exit codes: 0 the job succeeded, 1 it failed or was cancelled.");
   commands.add(watch, [o] {

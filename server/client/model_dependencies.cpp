@@ -11,18 +11,13 @@
 #include <string>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/util/file_extension.h"
 #include "server/client/collada_images.h"
 
 namespace farm {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string lower_extension(const fs::path& file) {
-  std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext;
-}
 
 std::string trim(std::string s) {
   const auto first = s.find_first_not_of(" \t\r\n");
@@ -156,7 +151,7 @@ ModelDependencyScanner::Files ModelDependencyScanner::scan_model(const fs::path&
   const ConfinedFile self = confine_file(root_, model, model.string(), ReferenceForm::relative_or_absolute);
   if (self.verdict == Confinement::missing) throw InputError(model.string() + ": cannot read the model file");
   if (!self.allowed()) throw InputError(model.string() + ": " + self.reason);
-  const std::string ext = lower_extension(model);
+  const std::string ext = lowercase_extension(model);
   if (ext == ".obj") return scan_obj(model, read(self, "model file"));
   std::vector<std::string> uris;
   if (ext == ".gltf") {
