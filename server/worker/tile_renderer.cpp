@@ -335,17 +335,13 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
                           rect.height(), kMaxRectPixels)};
     }
 
-    const int passes = pass_count(settings);
-    if (request->pass() < 0 || request->pass() >= passes) {
-      return {grpc::StatusCode::INVALID_ARGUMENT,
-              fmt::format("pass {} is out of range: the job's frames are rendered in {} sample pass{} (0..{})",
-                          request->pass(), passes, passes == 1 ? "" : "es", passes - 1)};
-    }
+    r->settings = settings;
+    r->settings.pass = request->pass();
+    // A pass outside the frame's (negative too) is InputError (INVALID_ARGUMENT), naming the passes.
+    static_cast<void>(pass_samples(settings, request->pass()));
 
     const Clock::time_point render_start = Clock::now();
     r->scene = lookup.scene;
-    r->settings = settings;
-    r->settings.pass = request->pass();
     // The engine's per-frame set-up (the rasterizer's transformed and binned triangles, the BVHs)
     // on all render threads, once per frame: the sub-tiles then find it built. It runs as pool
     // work so that this thread goes on polling the client's cancel, which the set-up sees
