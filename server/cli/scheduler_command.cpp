@@ -90,8 +90,13 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   sigwait(&signals, &signal_number);
   fmt::print("scheduler: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
   std::fflush(stdout);
+  // Dispatch stops first: calls to workers cancelled, their tiles queued again in the store (no
+  // attempt counted). Once the server shuts down it refuses the heartbeats and asset fetches
+  // those calls depend on, and its grace period outlasts a worker's heartbeat limit: a worker
+  // would be dropped, or fail its tiles, and every call in flight be counted lost. The clients'
+  // calls (the store's, the events') still get their grace.
+  core.stop();
   const bool drained = shut_down_within(*server, kShutdownGrace, kShutdownUnwind);
-  core.stop();  // calls to workers cancelled, their tiles queued again in the store
   if (!drained) {
     // Safe to leave mid-call. The job store is SQLite in WAL mode, which a process that dies in
     // the middle of a transaction leaves as it was before it (the next open rolls the unfinished

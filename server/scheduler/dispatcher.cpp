@@ -361,6 +361,10 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
 
 void Dispatcher::handle_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
                                RenderedTiles& result) {
+  // An answer is a sign of life as good as a heartbeat, and sooner: a worker that was stopped
+  // (SIGSTOP, a machine that froze) and has just answered is not dropped a moment later for a
+  // heartbeat still on its way, taking the batch it was handed next with it.
+  if (status.ok()) workers_.heartbeat(w.id);
   CancelReason reason;
   std::string reason_text;
   {

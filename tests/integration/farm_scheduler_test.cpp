@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -27,6 +28,7 @@
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/run_command.h"
+#include "tests/support/running_tiles.h"
 #include "tests/support/scheduler_client.h"
 #include "tests/support/temp_dir.h"
 
@@ -520,6 +522,49 @@ TEST_F(FarmSchedulerTest, SigtermWhileAWorkerRendersHugeTilesQueuesThemAgainAndF
   ASSERT_TRUE(resumed);
   EXPECT_FALSE(done(*resumed)) << v1::JobState_Name(resumed->state());
   EXPECT_EQ(resumed->tiles_done(), 0u);
+}
+
+// SIGTERM while a client watches a job: once the server shuts down it refuses the registered
+// worker's heartbeats and asset fetches, and its grace period (1.4 s, held by the WatchJob
+// stream) outlasts the worker's heartbeat limit (3 x 0.2 s). Neither may cost the job anything:
+// the tiles in flight go back to the queue with no lost rendering counted, and the worker is not
+// dropped. (The chaos soak once saw every worker dropped at its SIGTERM, their tiles counted
+// lost; a worker still fetching the job's files failed its tiles.)
+TEST_F(FarmSchedulerTest, SigtermWhileAClientWatchesDropsNoWorkerForTheRefusedHeartbeats) {
+  auto scheduler = start_scheduler({"--heartbeat-interval", "0.2"});
+  ASSERT_TRUE(stub_);
+  auto worker = start_worker("w1", 1, scheduler->address());
+  const v1::Job huge = submit_ok(cornell("path", 32, 32, kMaxSpp, 16));
+  const test::RunningTiles running(dir_ / "data" / "jobs.db");
+  const auto until = std::chrono::steady_clock::now() + 30s;
+  while (running.on_worker(worker->address()).empty() && std::chrono::steady_clock::now() < until) {
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_FALSE(running.on_worker(worker->address()).empty()) << "no tile reached the worker";
+
+  std::promise<void> subscribed;
+  std::thread watcher([&] {
+    test::watch_job(*stub_, huge.job_id(), 60s, nullptr, [&] { subscribed.set_value(); });
+  });
+  struct Join {
+    std::thread& t;
+    ~Join() { t.join(); }
+  } join{watcher};
+  ASSERT_EQ(subscribed.get_future().wait_for(30s), std::future_status::ready);
+  scheduler->process().send_signal(SIGTERM);
+  const std::optional<int> code = scheduler->process().wait_exit(15s);
+  ASSERT_TRUE(code.has_value()) << "scheduler still running after SIGTERM\n" << scheduler->process().output();
+  EXPECT_EQ(*code, 0) << scheduler->process().output();
+  EXPECT_EQ(scheduler->process().output().find("removed: no heartbeat"), std::string::npos)
+      << scheduler->process().output();
+
+  auto restarted = start_scheduler({});  // no workers: the job stays as the store kept it
+  ASSERT_TRUE(stub_);
+  const auto resumed = test::get_job(*stub_, huge.job_id());
+  ASSERT_TRUE(resumed);
+  EXPECT_EQ(resumed->tile_failures(), 0u) << "tiles counted lost at the scheduler's own shutdown:\n" << scheduler->process().output();
+  EXPECT_EQ(resumed->tiles_done(), 0u);
+  EXPECT_FALSE(done(*resumed)) << v1::JobState_Name(resumed->state());
 }
 
 // A model whose loading takes minutes in little memory: Assimp triangulates each polygon by ear
