@@ -111,7 +111,7 @@ void Finisher::merge_complete(const std::string& job_id, std::optional<int> fram
   }
   const v1::Job now = *store_.get_job(job_id);
   if (is_final(now.state()) || now.frames_done() < now.frames_total() || now.tiles_done() < now.tiles_total()) return;
-  finish(job_id, now);
+  finish(job_id);
 }
 
 bool Finisher::merge_frame(const std::string& job_id, int frame) {
@@ -145,7 +145,42 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
   }
 }
 
-void Finisher::finish(const std::string& job_id, const v1::Job& before) {
+void Finisher::finish(const std::string& job_id) {
+  std::shared_ptr<const JobInfo> info;
+  try {
+    info = jobs_.get(job_id);
+  } catch (const DiskFull&) {
+    throw;
+  } catch (const std::exception& e) {
+    fail(job_id, fmt::format("finishing the job: {}", e.what()));
+    return;
+  }
+  if (info->job->embree_rays > 0 || !info->job->output.video.empty()) {
+    endings_.add(job_id);  // or it is queued already
+    return;
+  }
+  end_job(job_id);
+}
+
+void Finisher::end_in_background(const std::string& job_id) {
+  try {
+    end_job(job_id);
+  } catch (const DiskFull& e) {
+    // As a merge the disk refused: the job stays running, ended once there is room.
+    log_.debug("job {}: end refused: {}", job_id, e.what());
+    pause_.report(e);
+    std::lock_guard lock(mutex_);
+    refused_.insert(job_id);
+  } catch (const VideoStopped&) {
+    log_.info("job {}: its video is made by the next scheduler (this one is stopping)", job_id);
+  } catch (const std::exception& e) {
+    log_.error("job {}: ending: {}", job_id, e.what());
+  }
+}
+
+void Finisher::end_job(const std::string& job_id) {
+  const std::optional<v1::Job> before = store_.get_job(job_id);
+  if (!before || is_final(before->state())) return;  // cancelled while it waited
   v1::Job after;
   std::shared_ptr<const JobInfo> info;
   std::string validation;
@@ -162,6 +197,8 @@ void Finisher::finish(const std::string& job_id, const v1::Job& before) {
     // A video that cannot be made fails the job, with ffmpeg's words; its frames stay fetchable.
     try {
       make_video(job_id, *info);
+    } catch (const VideoStopped&) {
+      throw;  // the job stays as it is: the next scheduler makes its video
     } catch (const std::exception& e) {
       fail(job_id, fmt::format("making the video (output.video {}): {}", info->job->output.video.string(), e.what()));
       return;
@@ -182,7 +219,7 @@ void Finisher::finish(const std::string& job_id, const v1::Job& before) {
   }
   log_.info("job {} done: {} tiles, {} frame{} merged", job_id, after.tiles_total(), after.frames_total(),
             after.frames_total() == 1 ? "" : "s");
-  events_.publish_state(after, before.state());
+  events_.publish_state(after, before->state());
   release(job_id);
 }
 
@@ -298,6 +335,7 @@ void Finisher::make_video(const std::string& job_id, const JobInfo& info) const 
   for (int f : job_frames(*info.job)) request.frames.push_back(files_of(job_id, info, f).preview);
   request.fps = info.job->frames ? info.job->frames->fps : 24.0;
   request.output = video_path(job_id, info);
+  request.stop_requested = [this] { return endings_.stop_requested(); };
   encode_video(request);
   log_.info("job {}: video of {} frames written to {}", job_id, request.frames.size(), request.output.string());
 }

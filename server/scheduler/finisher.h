@@ -11,6 +11,8 @@
 // is told (disk_full_pause.h), the job stays running with its tiles done, and it is merged again
 // when dispatch resumes (retry_refused()). While the disk stays full, make_room() frees the tiles of
 // the youngest job holding some, so that the farm's own tiles never hold the disk for good.
+// A job whose end takes long (its Embree check, its video) ends on a thread of its own
+// (job_endings.h), so that the slot that merged its last frame goes back to rendering.
 //
 // Lock: Finisher::mutex_ guards merging_ (a job being merged, and whether to look again) and
 // refused_ only, and is a leaf: the merge itself runs
@@ -29,6 +31,7 @@
 
 #include "server/scheduler/disk_full_pause.h"
 #include "server/scheduler/frame_assembly.h"
+#include "server/scheduler/job_endings.h"
 #include "server/scheduler/job_events.h"
 #include "server/scheduler/progressive_previews.h"
 #include "server/scheduler/running_jobs.h"
@@ -69,6 +72,9 @@ class Finisher {
   void parts_taken_back(const std::string& job_id);
   // The video under results/ of a SUCCEEDED job that asked for one; nullopt otherwise.
   std::optional<std::filesystem::path> video_file(const std::string& job_id) const;
+  // Ends the thread of the jobs' long ends: one ending now gives up (its video stops), and they
+  // stay RUNNING with their frames merged, for the next scheduler to end. Idempotent.
+  void stop() { endings_.stop(); }
   // Called (without locks) when a merge queued tiles again: the dispatcher's slots are woken.
   void on_requeued(std::function<void()> f) { on_requeued_ = std::move(f); }
 
@@ -81,7 +87,14 @@ class Finisher {
   void refine_preview(const std::string& job_id, int frame);
   // False when the job cannot go on to its next frame now: failed, or tiles to render again.
   bool merge_frame(const std::string& job_id, int frame);
-  void finish(const std::string& job_id, const v1::Job& before);
+  // Every frame is merged: the job ends here, or on the endings' thread when that takes long.
+  void finish(const std::string& job_id);
+  // The job's Embree check, video and final mark, then its release; DiskFull and VideoStopped
+  // are thrown, every other problem fails the job.
+  void end_job(const std::string& job_id);
+  // end_job on the endings' thread: a full disk reported and the job merged again once there is
+  // room, a stop leaves the job as it is.
+  void end_in_background(const std::string& job_id);
   void fail(const std::string& job_id, const std::string& reason);
   // Queues the damaged parts' tiles again; false when the job had none done any more (final).
   bool render_again(const std::string& job_id, const DamagedParts& damaged);
@@ -116,6 +129,8 @@ class Finisher {
   ProgressivePreviews previews_;
   static constexpr unsigned kTrimEvery = 16;
   std::atomic<unsigned> released_{0};  // jobs released, for trimming the heap now and then
+  // Declared last: its thread calls into the fields above, and is joined before they go.
+  JobEndings endings_{[this](const std::string& job_id) { end_in_background(job_id); }};
 };
 
 }  // namespace farm

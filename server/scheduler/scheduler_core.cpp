@@ -88,6 +88,7 @@ void SchedulerCore::stop() {
   workers_.stop();
   pause_.stop();
   dispatcher_.stop();
+  finisher_.stop();  // after the slots: none hands it a job to end any more
 }
 
 // ---- Jobs ----------------------------------------------------------------------------------------

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cctype>
 #include <cerrno>
@@ -163,14 +164,28 @@ void encode_video(const VideoRequest& request) {
   };
   std::optional<int> code;
   std::string said;
+  bool stopped = false;
   {
     ChildProcess child(argv);
-    code = child.wait_exit(request.timeout);
+    const auto deadline = std::chrono::steady_clock::now() + request.timeout;
+    constexpr auto kLook = std::chrono::milliseconds(100);  // how often stop_requested is asked
+    while (!code && std::chrono::steady_clock::now() < deadline) {
+      if (request.stop_requested && request.stop_requested()) {
+        stopped = true;
+        break;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      code = child.wait_exit(std::clamp(left, std::chrono::milliseconds(0), std::chrono::milliseconds(kLook)));
+    }
     if (!code) {
       child.send_signal(SIGKILL);
       child.wait_exit(std::chrono::seconds(10));
     }
     said = child.output_to_end(std::chrono::seconds(2));
+  }
+  if (stopped) {
+    remove_temp();
+    throw VideoStopped();
   }
   if (!code) {
     remove_temp();

@@ -6,6 +6,8 @@
 // refuses the job before rendering rather than failing it at the end.
 #include <chrono>
 #include <filesystem>
+#include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,12 +29,21 @@ struct VideoRequest {
   // ffmpeg is killed past this: a video is a few seconds of ffmpeg for frames the farm took far
   // longer to render, so this only keeps a wedged ffmpeg from holding the job for ever.
   std::chrono::milliseconds timeout = std::chrono::minutes(10);
+  // Asked every tenth of a second while ffmpeg runs: true kills it (the scheduler is stopping)
+  // and encode_video throws VideoStopped. None: never.
+  std::function<bool()> stop_requested;
+};
+
+// ffmpeg was killed because request.stop_requested said so; nothing was written.
+struct VideoStopped : std::runtime_error {
+  VideoStopped() : std::runtime_error("the video was not made: the scheduler is stopping") {}
 };
 
 // Encodes the frames into request.output, written under a temporary name beside it and renamed,
 // so that the file is either the whole video or absent. Frames of odd width or height get one
 // black column or row: H.264 in yuv420p needs even sizes. std::runtime_error carrying ffmpeg's
-// own message when there is no ffmpeg, when it fails, or when it runs past the timeout.
+// own message when there is no ffmpeg, when it fails, or when it runs past the timeout;
+// VideoStopped when stopped.
 void encode_video(const VideoRequest& request);
 
 }  // namespace farm

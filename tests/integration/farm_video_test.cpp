@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <stdlib.h>
 
 #include <cmath>
@@ -13,8 +14,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <thread>
 
 #include "renderer/image/png_reader.h"
+#include "server/common/job_state.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
@@ -242,6 +245,67 @@ TEST_F(FarmVideoTest, AFailedEncodeFailsTheJobWithFfmpegsWordsAndKeepsTheFrames)
     EXPECT_FALSE(e.path().filename().string().starts_with(".")) << e.path();
     EXPECT_NE(e.path().extension(), ".mp4") << e.path();
   }
+}
+
+// The video is made on a thread of its own: with one worker of one slot, a job submitted while
+// another's video is being made renders and succeeds meanwhile (the "ffmpeg" here waits for the
+// test's word before it runs the real one). SIGTERM during an encode stops it at once and fails
+// nothing; the restarted scheduler makes the video and the job succeeds.
+TEST_F(FarmVideoTest, AVideoBeingMadeHoldsNoSlotAndAStoppedOneIsMadeByTheNextScheduler) {
+  const fs::path go = dir_ / "go";
+  const fs::path started = dir_ / "started";
+  // Waits at most a minute for `go`, then runs ffmpeg; says it started by touching `started`.
+  const fs::path held = dir_.write(
+      "held-ffmpeg", "#!/bin/sh\ntouch " + test::shell_quote(started.string()) + "\ni=0\nwhile [ ! -e " +
+                         test::shell_quote(go.string()) +
+                         " ] && [ $i -lt 1200 ]; do sleep 0.05; i=$((i+1)); done\nexec ffmpeg \"$@\"\n");
+  fs::permissions(held, fs::perms::owner_all);
+  const ScopedEnv held_ffmpeg("FARM_FFMPEG", held.string());
+  test::LocalFarm local = test::start_local_farm(dir_.path(), 1, {"--tiles-per-worker", "1"});
+  ASSERT_TRUE(local.problem.empty()) << local.problem;
+  auto stub = test::scheduler_stub(local.address());
+  ASSERT_TRUE(test::upload_assets(*stub, test::cornell_assets()).ok());
+  const auto submit = [&](const Json& job) {
+    v1::Job submitted;
+    const grpc::Status status =
+        test::submit(*stub, test::make_job_spec(job.dump(), test::cornell_assets(), "cornell.json"), submitted);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return submitted.job_id();
+  };
+  Json with_video = animated_cornell(64, 48, dir_ / "unused", "cornell.mp4");
+  with_video["output"] = {{"video", "cornell.mp4"}};  // kept by the scheduler, under results/
+  const std::string video_job = submit(with_video);
+  const auto wait_for_file = [](const fs::path& file) {
+    for (int i = 0; i < 6000 && !fs::exists(file); ++i) std::this_thread::sleep_for(10ms);
+    return fs::exists(file);
+  };
+  ASSERT_TRUE(wait_for_file(started)) << local.scheduler->process().output();
+
+  Json still = Json::parse(test::cornell_job_json("raster", 32, 32, 1));
+  const std::string other = submit(still);
+  const auto other_done = test::wait_for_job(*stub, other, [](const v1::Job& j) { return is_final(j.state()); }, 60s);
+  ASSERT_TRUE(other_done) << "the job behind the video never ended";
+  EXPECT_EQ(other_done->state(), v1::JOB_STATE_SUCCEEDED) << other_done->failure_reason();
+  EXPECT_FALSE(fs::exists(go));
+  const auto encoding = test::get_job(*stub, video_job);
+  ASSERT_TRUE(encoding);
+  EXPECT_EQ(encoding->state(), v1::JOB_STATE_RUNNING) << "the video job ended before its video was made";
+
+  // SIGTERM while "ffmpeg" waits: the scheduler stops within its bound, the job not failed.
+  local.scheduler->process().send_signal(SIGTERM);
+  const std::optional<int> code = local.scheduler->process().wait_exit(15s);
+  ASSERT_TRUE(code.has_value()) << "the scheduler waited for the encode: " << local.scheduler->process().output();
+  EXPECT_EQ(*code, 0) << local.scheduler->process().output();
+  std::ofstream(go.string()) << "go\n";
+  test::SchedulerProcess restarted(dir_ / "data", {});
+  ASSERT_FALSE(restarted.address().empty()) << restarted.process().output();
+  auto stub2 = test::scheduler_stub(restarted.address());
+  const auto ended = test::wait_for_job(*stub2, video_job, [](const v1::Job& j) { return is_final(j.state()); }, 60s);
+  ASSERT_TRUE(ended) << restarted.process().output();
+  EXPECT_EQ(ended->state(), v1::JOB_STATE_SUCCEEDED) << ended->failure_reason();
+  const grpc::Status fetched = test::fetch_result(*stub2, video_job, v1::RESULT_KIND_VIDEO, dir_ / "v.mp4");
+  ASSERT_TRUE(fetched.ok()) << fetched.error_message();
+  EXPECT_EQ(probe(dir_ / "v.mp4").frames, kFrames);
 }
 
 TEST_F(FarmVideoTest, WithoutFfmpegRenderExitsTwoBeforeAnyFrameAndSubmitIsRefused) {

@@ -29,9 +29,9 @@ SchedulerProcess::SchedulerProcess(const std::filesystem::path& data_dir,
       }()),
       address_(wait_for_listening(process_, "scheduler", kStartTimeout)) {}
 
-LocalFarm start_local_farm(const std::filesystem::path& dir, int workers) {
+LocalFarm start_local_farm(const std::filesystem::path& dir, int workers, const std::vector<std::string>& scheduler_args) {
   LocalFarm farm;
-  farm.scheduler = std::make_unique<SchedulerProcess>(dir / "data", std::vector<std::string>{});
+  farm.scheduler = std::make_unique<SchedulerProcess>(dir / "data", scheduler_args);
   if (farm.scheduler->address().empty()) {
     farm.problem = "the scheduler did not start: ";
     farm.problem += farm.scheduler->process().output();

@@ -30,14 +30,16 @@ class SchedulerProcess {
 };
 
 // A scheduler (data under dir/data) and `workers` one-thread workers registered with it (caches
-// under dir/w1, dir/w2, ...), as a user starts a small farm. `problem` says what did not start.
+// under dir/w1, dir/w2, ...), as a user starts a small farm; `scheduler_args` are added to the
+// scheduler's command line. `problem` says what did not start.
 struct LocalFarm {
   std::unique_ptr<SchedulerProcess> scheduler;
   std::vector<std::unique_ptr<WorkerProcess>> workers;
   std::string problem;  // empty when all are up and registered
   const std::string& address() const { return scheduler->address(); }
 };
-LocalFarm start_local_farm(const std::filesystem::path& dir, int workers);
+LocalFarm start_local_farm(const std::filesystem::path& dir, int workers,
+                           const std::vector<std::string>& scheduler_args = {});
 
 std::unique_ptr<v1::Scheduler::Stub> scheduler_stub(const std::string& address);
 // A stub calling as `identity` (its token, its TLS files).
