@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "renderer/image/float_to_half.h"
 #include "renderer/image/output_file.h"
 #include "renderer/util/thread_pool.h"
 
@@ -80,8 +81,8 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
   header.zipCompressionLevel() = 1;  // 2% larger than the default level, at about half the time
   Imf::FrameBuffer frame;
   // Float channels are written straight from the buffer. OpenEXR's OutputFile does not convert
-  // float to half, so half channels get a plane each, converted here by Imath::half.
-  std::vector<std::vector<Imath::half>> half_planes;
+  // float to half, so half channels get a plane each, converted here (float_to_half.h).
+  std::vector<std::vector<std::uint16_t>> half_planes;  // a half's bits each (float_to_half.h)
   const std::size_t width = static_cast<std::size_t>(r.width());
   // Slices are non-const in OpenEXR's API; a file being written only reads through them.
   for (const ChannelSlice& slice : channel_slices(const_cast<TileBuffer&>(image))) {
@@ -91,14 +92,11 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
       frame.insert(slice.name, float_slice(slice, r));
       continue;
     }
-    std::vector<Imath::half>& plane = half_planes.emplace_back(width * static_cast<std::size_t>(height));
-    const char* from = reinterpret_cast<const char*>(slice.first);
-    for (std::size_t i = 0; i < plane.size(); ++i, from += slice.stride) {
-      plane[i] = Imath::half(*reinterpret_cast<const float*>(from));
-    }
+    std::vector<std::uint16_t>& plane = half_planes.emplace_back(width * static_cast<std::size_t>(height));
+    floats_to_halves(reinterpret_cast<const char*>(slice.first), slice.stride, plane.size(), plane.data());
     const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(r.y0) * r.width() + r.x0;
     frame.insert(slice.name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(plane.data() - origin),
-                                        sizeof(Imath::half), sizeof(Imath::half) * width));
+                                        sizeof(std::uint16_t), sizeof(std::uint16_t) * width));
   }
 
   // A frame's line blocks are compressed on OpenEXR's pool, one thread a core: compression is most

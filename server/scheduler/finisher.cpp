@@ -43,19 +43,26 @@ void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> 
     std::lock_guard lock(mutex_);
     const auto [it, added] = merging_.try_emplace(job_id);
     if (!added) {
-      // Another thread merges the job's frames: it looks again once done, for this frame too.
+      // Another thread merges the job's frames: it looks again once done, at this frame too.
       it->second.again = true;
-      if (frame) it->second.frames.insert(*frame);
+      if (frame) {
+        it->second.frames.insert(*frame);
+      } else {
+        it->second.every_frame = true;
+      }
       return;
     }
   }
-  std::optional<int> which = frame;
-  std::set<int> refine;  // frames whose progressive previews may have a pass more
-  if (frame) refine.insert(*frame);
+  // The frames to look at. Only those of the batches done can have completed: looking at every
+  // frame after each merge read all of a long job's tiles again and again (an eighth of a
+  // 48-frame turntable's time).
+  std::set<int> frames;
+  if (frame) frames.insert(*frame);
+  bool every_frame = !frame;
   for (;;) {
     bool refused = false;
     try {
-      merge_complete(job_id, which, refine);
+      merge_complete(job_id, frames, every_frame);
     } catch (const DiskFull& e) {
       // The job stays as it is, its tiles done, until there is room for its frame.
       log_.debug("job {}: merge refused: {}", job_id, e.what());
@@ -67,9 +74,9 @@ void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> 
     std::lock_guard lock(mutex_);
     const auto it = merging_.find(job_id);
     if (it->second.again && !refused) {
-      refine = std::move(it->second.frames);
+      frames = std::move(it->second.frames);
+      every_frame = it->second.every_frame;
       it->second = {};
-      which.reset();  // frames completed meanwhile: every complete one
       continue;
     }
     merging_.erase(it);
@@ -97,12 +104,19 @@ void Finisher::release(const std::string& job_id) {
   if (still_running == 0 || ++released_ % kTrimEvery == 0) return_free_memory_to_system();
 }
 
-void Finisher::merge_complete(const std::string& job_id, std::optional<int> frame, const std::set<int>& refine) {
+void Finisher::merge_complete(const std::string& job_id, const std::set<int>& frames, bool every_frame) {
   const std::optional<v1::Job> job = store_.get_job(job_id);
   if (!job || is_final(job->state())) return;
-  const std::vector<int> complete = store_.complete_frames(job_id, frame);
+  std::vector<int> complete;
+  if (every_frame) {
+    complete = store_.complete_frames(job_id, std::nullopt);
+  } else {
+    for (int f : frames) {
+      for (int c : store_.complete_frames(job_id, f)) complete.push_back(c);
+    }
+  }
   if (job->passes() > 1) {
-    for (int f : refine) {
+    for (int f : frames) {
       if (std::find(complete.begin(), complete.end(), f) == complete.end()) refine_preview(job_id, f);
     }
   }

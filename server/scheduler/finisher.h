@@ -79,9 +79,9 @@ class Finisher {
   void on_requeued(std::function<void()> f) { on_requeued_ = std::move(f); }
 
  private:
-  // The complete frames merged (`frame` alone when given), then the job finished if all are; the
-  // previews of the frames in `refine` that are not complete made.
-  void merge_complete(const std::string& job_id, std::optional<int> frame, const std::set<int>& refine);
+  // The complete ones of `frames` (of every frame when `every_frame`) merged, then the job
+  // finished if all are; the previews of those of `frames` that are not complete made.
+  void merge_complete(const std::string& job_id, const std::set<int>& frames, bool every_frame);
   // The frame's progressive preview, if a pass more is done. Damaged parts are rendered again; a
   // full disk throws DiskFull; anything else is logged (a preview is no part of the result).
   void refine_preview(const std::string& job_id, int frame);
@@ -120,8 +120,9 @@ class Finisher {
   spdlog::logger& log_;
   std::mutex mutex_;
   struct Merging {
-    bool again = false;    // a batch was done meanwhile: look again
-    std::set<int> frames;  // the frames of those batches (their previews)
+    bool again = false;        // a batch was done meanwhile: look again
+    std::set<int> frames;      // the frames of those batches: only they can have completed
+    bool every_frame = false;  // a caller without a frame (a restart, a retry): look at all
   };
   std::map<std::string, Merging> merging_;  // jobs being merged
   std::set<std::string> refused_;  // merges the disk refused, tried again by retry_refused()

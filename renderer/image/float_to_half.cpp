@@ -1,0 +1,57 @@
+#include "renderer/image/float_to_half.h"
+
+#include <Imath/half.h>
+
+#include <cstring>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define FARM_HAVE_F16C_PATH 1
+#endif
+
+namespace farm {
+
+namespace {
+
+float float_at(const char* p) {
+  float f;
+  std::memcpy(&f, p, sizeof f);  // the channel's stride need not keep floats aligned
+  return f;
+}
+
+void convert_in_software(const char* first, std::size_t stride, std::size_t count, std::uint16_t* out) {
+  for (std::size_t i = 0; i < count; ++i, first += stride) out[i] = Imath::half(float_at(first)).bits();
+}
+
+#ifdef FARM_HAVE_F16C_PATH
+__attribute__((target("avx,f16c"))) void convert_with_f16c(const char* first, std::size_t stride, std::size_t count,
+                                                              std::uint16_t* out) {
+  std::size_t i = 0;
+  alignas(32) float eight[8];
+  for (; i + 8 <= count; i += 8) {
+    for (int k = 0; k < 8; ++k, first += stride) eight[k] = float_at(first);
+    const __m128i halves = _mm256_cvtps_ph(_mm256_load_ps(eight), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), halves);
+  }
+  convert_in_software(first, stride, count - i, out + i);
+}
+
+bool cpu_has_f16c() {
+  static const bool has = __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c");
+  return has;
+}
+#endif
+
+}  // namespace
+
+void floats_to_halves(const char* first, std::size_t stride, std::size_t count, std::uint16_t* out) {
+#ifdef FARM_HAVE_F16C_PATH
+  if (cpu_has_f16c()) {
+    convert_with_f16c(first, stride, count, out);
+    return;
+  }
+#endif
+  convert_in_software(first, stride, count, out);
+}
+
+}  // namespace farm
