@@ -24,6 +24,9 @@ packages=(
   # a job's output.video (server/scheduler/video_encoder.cpp): ffmpeg, run as a program, encodes
   # the frames' previews (H.264, VP9); ffprobe, in the same package, reads the videos in tests
   ffmpeg
+  # the PostgreSQL job store (issue #18): libpq to talk to it, and the server, which the tests
+  # start in a temporary folder of their own (tests/support/postgres_server.h)
+  libpq-dev postgresql
   # tests and benchmarks
   libgtest-dev libbenchmark-dev python3 python3-venv
   # fuzzing (tests/fuzz, the `fuzz` preset): clang, and libFuzzer with the sanitizer runtimes,

@@ -5,7 +5,9 @@
 //              one model load, measured in this process. Per-frame reloading or full BVH rebuilds
 //              would show as a ratio well above 1.
 //   path       a 16-frame path-traced animation (jobs/moving_light.json) through a scheduler and
-//              one worker, and through the scheduler and two workers, over loopback.
+//              one worker, and through the scheduler and two workers over loopback: sharing the
+//              machine's cores (half each, as many threads in all as the one worker has), and
+//              each with every core.
 #include <filesystem>
 #include <string>
 
