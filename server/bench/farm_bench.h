@@ -2,8 +2,10 @@
 // `farm bench farm`: what the farm's machinery costs. The Cornell box path traced at 512x512
 // through (a) `farm render` (the embedded farm), (b) a `farm scheduler` and one `farm worker`
 // over loopback, (c) the scheduler and two workers; then many tiny jobs submitted back to back to
-// (b) for jobs/s and submit latency, checking that none is lost.
+// (b) for jobs/s and submit latency, checking that none is lost: on SQLite, and beside it on the
+// PostgreSQL store given (`--store`).
 #include <filesystem>
+#include <string>
 
 namespace farm {
 
@@ -16,6 +18,7 @@ struct FarmBenchOptions {
   int tiles_per_worker = 2;  // the scheduler's --tiles-per-worker
   int batch_ms = 200;        // the scheduler's --batch-ms, for all three set-ups
   int two_worker_threads = 0;  // --threads of each worker in (c); 0 = all cores each
+  std::string store;           // a postgresql:// URL: the tiny jobs on it too; empty: SQLite only
 };
 
 void run_farm_bench(const FarmBenchOptions& options);

@@ -14,11 +14,13 @@ constexpr auto kStartTimeout = std::chrono::seconds(30);
 }  // namespace
 
 LoopbackFarm::LoopbackFarm(const std::filesystem::path& dir, int workers, int tiles_per_worker, int batch_ms,
-                           int worker_threads) {
+                           int worker_threads, const std::string& store) {
   const std::string farm = self_binary();
-  scheduler_ = std::make_unique<ChildProcess>(std::vector<std::string>{
-      farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir", (dir / "scheduler").string(), "--tiles-per-worker",
-      std::to_string(tiles_per_worker), "--batch-ms", std::to_string(batch_ms)});
+  std::vector<std::string> args{farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir", (dir / "scheduler").string(),
+                                "--tiles-per-worker", std::to_string(tiles_per_worker), "--batch-ms",
+                                std::to_string(batch_ms)};
+  if (!store.empty()) args.insert(args.end(), {"--store", store});
+  scheduler_ = std::make_unique<ChildProcess>(args);
   address_ = wait_for_listening(*scheduler_, "scheduler", kStartTimeout);
   if (address_.empty()) throw std::runtime_error("the scheduler did not start: " + scheduler_->output());
   for (int i = 0; i < workers; ++i) {

@@ -14,6 +14,7 @@
 #include "server/bench/regress_bench.h"
 #include "server/bench/render_bench.h"
 #include "server/bench/rt_bench.h"
+#include "server/scheduler/store/postgres_connection.h"
 
 namespace farm {
 namespace {
@@ -137,6 +138,12 @@ void add_farm_bench(CLI::App& bench, CommandTable& commands) {
   farm->add_option("--tiny-jobs", o->tiny_jobs, "Tiny jobs to submit")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  farm->add_option("--store", o->store,
+                   "A PostgreSQL job store, postgresql://USER@HOST:PORT/DATABASE: the tiny jobs run on it "
+                   "too, beside SQLite (its jobs stay in it)")
+      ->check([](const std::string& url) {
+        return is_postgres_url(url) ? std::string() : "give a postgresql:// URL";
+      });
   add_runner(commands, farm, o, run_farm_bench);
 }
 

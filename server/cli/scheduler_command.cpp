@@ -16,6 +16,7 @@
 #include "server/common/server_shutdown.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
+#include "server/scheduler/store/postgres_connection.h"
 
 namespace farm {
 
@@ -49,8 +50,14 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   // mask: making credentials starts gRPC's threads, which must inherit it).
   ServerSecurity security = make_server_security(o.security, o.listen, "farm scheduler");
 
+  if (!o.store.empty() && !is_postgres_url(o.store)) {
+    throw InputError(fmt::format("--store '{}': give a postgresql://USER@HOST:PORT/DATABASE URL (without "
+                                 "--store the job store is SQLite, jobs.db in --data-dir)",
+                                 o.store));
+  }
   SchedulerOptions options;
   options.data_dir = o.data_dir;
+  options.store = o.store;
   options.tile_deadline = ms(o.tile_deadline_s);
   options.max_attempts = o.max_attempts;
   options.max_lost_worker_attempts = o.max_lost_worker_attempts;
@@ -80,8 +87,8 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
 
   print_security_warnings(security);
   fmt::print("scheduler listening on {}:{}\n", host_of(o.listen), port);
-  fmt::print("  data dir {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
-             o.data_dir.string(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
+  fmt::print("  data dir {}, job store {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
+             o.data_dir.string(), core.store().describe(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
   fmt::print("  {}, {}\n", security.access.requires_tokens() ? "tokens required" : "no tokens",
              o.security.tls.has_certificate() ? (o.security.tls.ca.empty() ? "TLS" : "mTLS") : "plain text");
   std::fflush(stdout);
@@ -100,8 +107,9 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   if (!drained) {
     // Safe to leave mid-call. The job store is SQLite in WAL mode, which a process that dies in
     // the middle of a transaction leaves as it was before it (the next open rolls the unfinished
-    // transaction back): an abandoned SubmitJob has queued its job entirely or not at all, and
-    // its client was never told OK. Every file (assets, laid-out scenes, tiles, results) is written
+    // transaction back), or PostgreSQL, which rolls back the transaction of a connection that
+    // closed: an abandoned SubmitJob has queued its job entirely or not at all, and its client
+    // was never told OK. Every file (assets, laid-out scenes, tiles, results) is written
     // under a temporary name and renamed into place, so none is left half-written.
     fmt::print("scheduler: calls still running after the grace period, exiting without them\n");
     exit_abandoning_calls(0);
@@ -122,6 +130,11 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "Folder for the job store (jobs.db, SQLite WAL), uploaded assets, finished tiles "
                 "and results; a restarted scheduler resumes the jobs it finds there")
       ->required();
+  s->add_option("--store", o->store,
+                "The job store: a PostgreSQL database, postgresql://USER@HOST:PORT/DATABASE (a libpq "
+                "URL; a password is better kept in ~/.pgpass or PGPASSWORD than in the URL). Without "
+                "it: SQLite, jobs.db in --data-dir. The schema is made, or upgraded, at start")
+      ->envname("FARM_STORE");
   s->add_option("--worker", o->workers,
                 "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
                 "register themselves (farm worker --scheduler)");

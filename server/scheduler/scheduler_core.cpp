@@ -39,7 +39,9 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
     : options_(std::move(options)),
       assets_((fs::create_directories(options_.data_dir), options_.data_dir / "assets")),
       asset_quota_(assets_.dir(), options_.limits.max_asset_store_bytes),
-      store_(options_.in_memory ? fs::path(":memory:") : options_.data_dir / "jobs.db"),
+      store_(connect_store(options_.in_memory    ? std::string(":memory:")
+                           : options_.store.empty() ? (options_.data_dir / "jobs.db").string()
+                                                    : options_.store)),
       log_(make_logger("scheduler", options_.log_level)),
       assembly_(make_assembly(options_)),
       scene_checker_(options_.scene_check_program.empty()

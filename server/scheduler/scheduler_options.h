@@ -17,6 +17,8 @@ namespace farm {
 
 struct SchedulerOptions {
   std::filesystem::path data_dir;  // jobs.db, assets/, scenes/, tiles/, results/
+  // The job store: empty for SQLite in data_dir/jobs.db, or a postgresql:// URL (store/job_store.h).
+  std::string store;
   std::chrono::milliseconds tile_deadline = std::chrono::minutes(10);
   int max_attempts = 3;            // failed attempts of one tile before its job fails
   // Workers a tile may lose while rendering it (their process died: the call ended UNAVAILABLE;

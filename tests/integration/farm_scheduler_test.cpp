@@ -30,6 +30,7 @@
 #include "tests/support/run_command.h"
 #include "tests/support/running_tiles.h"
 #include "tests/support/scheduler_client.h"
+#include "tests/support/store_locations.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {
@@ -102,8 +103,12 @@ class FarmSchedulerTest : public ::testing::Test {
   }
 
   std::unique_ptr<test::SchedulerProcess> start_scheduler(std::vector<std::string> args) {
+    if (!store_.empty()) args.insert(args.end(), {"--store", store_});
     auto scheduler = std::make_unique<test::SchedulerProcess>(dir_ / "data", args);
     EXPECT_FALSE(scheduler->address().empty()) << scheduler->process().output();
+    if (!store_.empty()) {
+      EXPECT_TRUE(scheduler->process().wait_for_line("job store postgresql://", 10s)) << scheduler->process().output();
+    }
     if (!scheduler->address().empty()) stub_ = test::scheduler_stub(scheduler->address());
     return scheduler;
   }
@@ -151,11 +156,36 @@ class FarmSchedulerTest : public ::testing::Test {
     return status.ok() ? read_exr(file) : TileBuffer();
   }
 
+  // Every engine's job submitted, watched and fetched, bit-identical to `farm render`.
+  void expect_every_engine_identical_to_farm_render();
+  // The scheduler killed -9 mid-job and started again on the same store: the job resumes, no
+  // finished tile is rendered again, the image is bit-identical.
+  void expect_restart_resumes_without_rendering_again();
+
   test::TempDir dir_;
   std::unique_ptr<v1::Scheduler::Stub> stub_;
+  std::string store_;  // --store for every scheduler the test starts; empty: SQLite in the data dir
+};
+
+// The same on a PostgreSQL store (issue #18): `--store postgresql://...`, a database of its own.
+class FarmSchedulerOnPostgresTest : public FarmSchedulerTest {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(where_.problem().empty()) << where_.problem();
+    store_ = where_.location();
+  }
+  test::StoreLocation where_{SqlDialect::PostgreSQL};
 };
 
 TEST_F(FarmSchedulerTest, SubmitWatchFetchIsBitIdenticalToFarmRenderForEveryEngine) {
+  expect_every_engine_identical_to_farm_render();
+}
+
+TEST_F(FarmSchedulerOnPostgresTest, SubmitWatchFetchIsBitIdenticalToFarmRenderForEveryEngine) {
+  expect_every_engine_identical_to_farm_render();
+}
+
+void FarmSchedulerTest::expect_every_engine_identical_to_farm_render() {
   auto worker = start_worker("w1", 2);
   auto scheduler = start_scheduler({"--worker", worker->address()});
   ASSERT_TRUE(stub_);
@@ -331,6 +361,30 @@ TEST_F(FarmSchedulerTest, AStaticWorkerWithAnEmptyCacheGetsTheJobsFilesInline) {
 }
 
 TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTilesAgain) {
+  expect_restart_resumes_without_rendering_again();
+}
+
+TEST_F(FarmSchedulerOnPostgresTest, RestartedSchedulerResumesWithoutRenderingFinishedTilesAgain) {
+  expect_restart_resumes_without_rendering_again();
+}
+
+// --store takes only a PostgreSQL URL (exit 2 naming the flag); a server that is not there stops
+// the scheduler at start with its address and no password (exit 1), before it listens.
+TEST_F(FarmSchedulerTest, ABadOrUnreachableStoreIsAnErrorNamingIt) {
+  const std::string data = test::shell_quote((dir_ / "data").string());
+  const test::CommandResult bad = test::run_command(test::farm_command("scheduler --data-dir " + data + " --store jobs.db"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--store 'jobs.db'"), std::string::npos) << bad.output;
+  const test::CommandResult away = test::run_command(test::farm_command(
+      "scheduler --listen 127.0.0.1:0 --data-dir " + data + " --store postgresql://farm:secret@127.0.0.1:1/farm"));
+  EXPECT_EQ(away.exit_code, 1) << away.output;
+  EXPECT_NE(away.output.find("cannot reach job store postgresql://...@127.0.0.1:1/farm"), std::string::npos)
+      << away.output;
+  EXPECT_EQ(away.output.find("secret"), std::string::npos) << away.output;
+  EXPECT_EQ(away.output.find("listening"), std::string::npos) << away.output;
+}
+
+void FarmSchedulerTest::expect_restart_resumes_without_rendering_again() {
   auto worker = start_worker("w1");
   auto scheduler = start_scheduler({"--worker", worker->address(), "--float"});
   ASSERT_TRUE(stub_);

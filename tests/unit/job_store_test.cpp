@@ -5,10 +5,20 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include "tests/support/store_locations.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
+
+// Each test of the fixture runs on a fresh SQLite file and on a fresh PostgreSQL database.
+class JobStoreTest : public ::testing::TestWithParam<SqlDialect> {
+ protected:
+  void SetUp() override { ASSERT_TRUE(where_.problem().empty()) << where_.problem(); }
+  std::unique_ptr<SqlConnection> connect() const { return connect_store(where_.location()); }
+
+  test::StoreLocation where_{GetParam()};
+};
 
 NewJob make_job(const std::string& id, int priority, int tiles) {
   NewJob j;
@@ -24,10 +34,9 @@ NewJob make_job(const std::string& id, int priority, int tiles) {
   return j;
 }
 
-TEST(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
-  test::TempDir dir;
+TEST_P(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
   {
-    JobStore store(dir / "jobs.db");
+    JobStore store(connect());
     const v1::Job job = store.add_job(make_job("a", 0, 3), 1000);
     EXPECT_EQ(job.state(), v1::JOB_STATE_QUEUED);
     EXPECT_EQ(job.tiles_total(), 3u);
@@ -40,7 +49,7 @@ TEST(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
     EXPECT_FALSE(store.batch_done("a", t0->first, 1, stats));  // not running any more
     EXPECT_EQ(store.get_job("a")->state(), v1::JOB_STATE_RUNNING);
   }  // t1 was running when the "scheduler" went away
-  JobStore store(dir / "jobs.db");
+  JobStore store(connect());
   const v1::Job job = *store.get_job("a");
   EXPECT_EQ(job.tiles_done(), 1u);
   EXPECT_EQ(job.tiles_rendered(), 1u);
@@ -57,9 +66,8 @@ TEST(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
   EXPECT_EQ(store.get_spec("a")->job_json(), "{}");
 }
 
-TEST(JobStoreTest, TilesGoOutByPriorityThenSubmissionThenIndex) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, TilesGoOutByPriorityThenSubmissionThenIndex) {
+  JobStore store(connect());
   store.add_job(make_job("first", 0, 2), 1);
   store.add_job(make_job("second", 0, 1), 2);
   store.add_job(make_job("urgent", 5, 2), 3);
@@ -71,9 +79,8 @@ TEST(JobStoreTest, TilesGoOutByPriorityThenSubmissionThenIndex) {
                                              "second:0"}));
 }
 
-TEST(JobStoreTest, FailedAttemptsRequeueUntilTheLimitThenFailTheJobWithTheReason) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, FailedAttemptsRequeueUntilTheLimitThenFailTheJobWithTheReason) {
+  JobStore store(connect());
   store.add_job(make_job("a", 0, 2), 1);
   for (int attempt = 1; attempt <= 2; ++attempt) {
     auto claim = store.claim_next_batch("w", 2);
@@ -96,9 +103,8 @@ TEST(JobStoreTest, FailedAttemptsRequeueUntilTheLimitThenFailTheJobWithTheReason
   EXPECT_EQ(store.cancel_job("a", 6).state(), v1::JOB_STATE_FAILED);
 }
 
-TEST(JobStoreTest, CancelledJobHandsOutNoTilesAndIgnoresLateResults) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, CancelledJobHandsOutNoTilesAndIgnoresLateResults) {
+  JobStore store(connect());
   store.add_job(make_job("a", 0, 3), 1);
   auto claim = store.claim_next_batch("w", 2);
   ASSERT_TRUE(claim);
@@ -119,9 +125,8 @@ NewJob grid_job(const std::string& id) {
   return j;
 }
 
-TEST(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlone) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlone) {
+  JobStore store(connect());
   store.add_job(grid_job("a"), 1);
   int asked_queued = -1;
   const BatchSize three = [&](const std::string& job_id, int queued) {
@@ -175,9 +180,8 @@ TEST(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlone
   EXPECT_EQ(parts, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 4, 4, 4}));
 }
 
-TEST(JobStoreTest, ARequeuedBatchIsQueuedAgainWithoutAnAttempt) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, ARequeuedBatchIsQueuedAgainWithoutAnAttempt) {
+  JobStore store(connect());
   store.add_job(grid_job("a"), 1);
   const BatchSize two = [](const std::string&, int) { return 2; };
   auto b = store.claim_next_batch("w", 2, two);
@@ -191,7 +195,7 @@ TEST(JobStoreTest, ARequeuedBatchIsQueuedAgainWithoutAnAttempt) {
 }
 
 // A data dir written by the scheduler before batches (schema 1, one file per tile) opens as is.
-TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
+TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
@@ -222,7 +226,7 @@ TEST(JobStoreTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFiles) {
   EXPECT_EQ(tiles[0].state, TileState::Queued);  // was running
 }
 
-TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
+TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
@@ -255,7 +259,7 @@ TEST(JobStoreTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
 
 // A store of the scheduler before lost workers were counted apart (schema 3): its tiles keep their
 // failed attempts, and count lost workers from zero.
-TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) {
+TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
@@ -299,7 +303,7 @@ TEST(JobStoreTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkersFromZero) 
 
 // Version 5 renders frame ranges: every older job is a still, frame 0 alone, merged when the job
 // had succeeded.
-TEST(JobStoreTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZero) {
+TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZero) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
@@ -346,9 +350,8 @@ TEST(JobStoreTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZero) {
 
 // A job of frames: tiles numbered frame after frame, batches never cross a frame, a frame is
 // complete when its tiles are, and a part taken back unmerges its frame.
-TEST(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
+  JobStore store(connect());
   NewJob job = make_job("f", 0, 2);  // two tiles a frame, in one row
   job.frames = {10, 12, 14};
   job.frame_step = 2;
@@ -383,7 +386,7 @@ TEST(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
 }
 
 // A version 5 store (frames, no passes) is upgraded: its jobs are one pass each, and go on.
-TEST(JobStoreTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
+TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
@@ -414,9 +417,8 @@ TEST(JobStoreTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
 // A job of sample passes: its units are numbered pass after pass within each frame, so the queue
 // hands a frame's passes out in order; a batch never crosses a pass; complete_passes counts the
 // passes done from the first on; a frame is complete when all its passes are.
-TEST(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
+  JobStore store(connect());
   NewJob job = make_job("p", 0, 2);  // two tiles a frame, in one row
   job.frames = {1, 2};
   job.passes = 3;
@@ -463,9 +465,8 @@ TEST(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
 
 // Lost workers count against their own limit, never against max_attempts, and a tile that lost
 // one goes out alone, as a failed one does.
-TEST(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLimit) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLimit) {
+  JobStore store(connect());
   store.add_job(make_job("a", 0, 3), 1);
   const BatchSize three = [](const std::string&, int) { return 3; };
   const auto batch = store.claim_next_batch("w", 2, three);
@@ -515,9 +516,8 @@ TEST(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLimit
   EXPECT_EQ(store.tiles("a")[0].state, TileState::Failed);
 }
 
-TEST(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {
+  JobStore store(connect());
   for (int i = 0; i < 5; ++i) store.add_job(make_job(std::to_string(i), 0, 1), i);
   store.cancel_job("3", 10);
   auto [page1, next1] = store.list_jobs({}, 2, 0);
@@ -543,9 +543,8 @@ namespace {
 // A quarantined worker's results for running jobs are not kept: its done tiles go back to the
 // queue with their stats taken out, and so do the tiles it has running. Finished jobs and other
 // workers' tiles are left alone.
-TEST(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
+  JobStore store(connect());
   store.add_job(make_job("a", 0, 4), 1);
   store.add_job(make_job("done", -1, 1), 1);
   v1::TileStats stats;
@@ -591,9 +590,8 @@ TEST(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
 
 // A late answer from a worker whose tiles were taken back does not touch the worker that has
 // them now; the job succeeds only while every tile is done.
-TEST(JobStoreTest, BatchOperationsActOnlyOnTheirWorkersTilesAndSuccessNeedsEveryTileDone) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, BatchOperationsActOnlyOnTheirWorkersTilesAndSuccessNeedsEveryTileDone) {
+  JobStore store(connect());
   store.add_job(make_job("a", 0, 2), 1);
   auto first = store.claim_next_batch("w1", 2);
   ASSERT_TRUE(first);
@@ -623,9 +621,8 @@ namespace {
 // A batch whose result file turned out damaged at the merge goes back to the queue in one step:
 // its tiles queued without an attempt, its stats out of the job's, the job still running; a final
 // job is left alone.
-TEST(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysActive) {
-  test::TempDir dir;
-  JobStore store(dir / "jobs.db");
+TEST_P(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysActive) {
+  JobStore store(connect());
   store.add_job(make_job("a", 0, 3), 1);
   v1::TileStats stats;
   stats.set_samples(10);
@@ -664,6 +661,56 @@ TEST(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysActi
   EXPECT_TRUE(store.requeue_parts("a", {0}).empty());
   EXPECT_EQ(store.get_job("a")->tiles_done(), 3u);
 }
+
+// Tiles go in 128 rows a statement: a job of 140 (a full statement and a short one) keeps every
+// tile, in unit order, with its frame, pass and rectangle.
+TEST_P(JobStoreTest, AJobOfManyUnitsKeepsEveryTileInUnitOrder) {
+  JobStore store(connect());
+  NewJob j = make_job("many", 0, 10);
+  j.frames = {3, 5, 7, 9, 11, 13, 15};
+  j.frame_step = 2;
+  j.passes = 2;
+  const v1::Job job = store.add_job(j, 1);
+  EXPECT_EQ(job.tiles_total(), 140u);
+  EXPECT_EQ(job.frames_total(), 7u);
+  const std::vector<TileRecord> tiles = store.tiles("many");
+  ASSERT_EQ(tiles.size(), 140u);
+  for (std::uint32_t i = 0; i < tiles.size(); ++i) {
+    EXPECT_EQ(tiles[i].index, i);
+    EXPECT_EQ(tiles[i].frame, j.frames[i / 20]) << i;
+    EXPECT_EQ(tiles[i].pass, static_cast<int>(i / 10 % 2)) << i;
+    EXPECT_EQ(tiles[i].rect, j.tiles[i % 10]) << i;
+    EXPECT_EQ(tiles[i].state, TileState::Queued);
+  }
+}
+
+// Names, reasons and blobs go through either store as they are: quotes, question marks (the
+// placeholders' character) and bytes that are not text.
+TEST_P(JobStoreTest, TextAndBlobsRoundTripWhateverTheyHold) {
+  JobStore store(connect());
+  NewJob j = make_job("q?'1", 0, 1);
+  j.name = "it's a \"job\" ? $1 ?2 -- not a comment";
+  j.owner = "ünïcødé";
+  std::string bytes;
+  for (int b = 0; b < 256; ++b) bytes += static_cast<char>(b);
+  j.spec.set_job_json(bytes.substr(32, 90));  // printable
+  j.spec.add_assets()->set_sha256(std::string(64, 'f'));
+  store.add_job(j, 1);
+  const v1::Job job = *store.get_job("q?'1");
+  EXPECT_EQ(job.name(), j.name);
+  EXPECT_EQ(job.owner(), j.owner);
+  EXPECT_EQ(store.get_spec("q?'1")->SerializeAsString(), j.spec.SerializeAsString());
+  auto b = store.claim_next_batch("w'?", 2);
+  ASSERT_TRUE(b);
+  v1::TileStats stats;
+  stats.set_samples(1ull << 40);  // past 32 bits
+  ASSERT_TRUE(store.batch_done("q?'1", b->first, 1, stats, "w'?"));
+  EXPECT_EQ(store.get_job("q?'1")->stats().samples(), 1ull << 40);
+  EXPECT_EQ(store.tiles("q?'1")[0].worker, "w'?");
+}
+
+INSTANTIATE_TEST_SUITE_P(BothStores, JobStoreTest, ::testing::ValuesIn(test::kBothStores),
+                         [](const auto& p) { return test::store_name(p.param); });
 
 }  // namespace
 }  // namespace farm

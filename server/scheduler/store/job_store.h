@@ -1,10 +1,13 @@
 #pragma once
-// The scheduler's durable state: jobs and their tiles in SQLite (WAL) under the data dir. Every
-// state change is one transaction, so a scheduler killed at any point reopens to a consistent
-// store; open() puts tiles that were running back in the queue (their results were lost with the
-// process) and keeps done tiles done (their data is on disk, written before they were marked).
+// The scheduler's durable state: jobs and their tiles, in SQLite (WAL) under the data dir by
+// default or in a PostgreSQL database (`--store postgresql://...`), both through SqlConnection.
+// Every state change is one transaction, so a scheduler killed at any point reopens to a
+// consistent store; opening puts tiles that were running back in the queue (their results were
+// lost with the process) and keeps done tiles done (their data is on disk, written before they
+// were marked).
 //
-// Schema (version 6; a version 1 to 5 store is upgraded in place):
+// Schema (version 6; a SQLite store of version 1 to 5 is upgraded in place; the PostgreSQL store
+// began at 6, in PostgreSQL's types):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
@@ -28,12 +31,13 @@
 // Tiles go out in batches: consecutive tiles of one row of one frame's grid in one pass, rendered
 // by one call as the rectangle they make up, so that per-call costs are paid once per batch.
 // The store is one connection behind a mutex, its statements prepared once. Any call may throw
-// DiskFull (server/common/disk_full.h) when SQLite finds no room (SQLITE_FULL): its transaction
-// is rolled back, so the store stays as it was and the call can be made again once there is space.
+// DiskFull (server/common/disk_full.h) when SQLite finds no room (SQLITE_FULL), or
+// StoreUnavailable (store/postgres_connection.h) when the PostgreSQL server cannot be reached: its
+// transaction is rolled back, so the store stays as it was and the call can be made again later.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
-#include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -42,9 +46,7 @@
 #include "proto/farm.pb.h"
 #include "renderer/image/tile_buffer.h"
 #include "server/common/job_state.h"
-
-struct sqlite3;
-struct sqlite3_stmt;
+#include "server/scheduler/store/sql_connection.h"
 
 namespace farm {
 
@@ -109,16 +111,26 @@ struct TileFailure {
   v1::Job job;
 };
 
+// The connection for a store location: PostgreSQL for a postgresql:// (or postgres://) URL, else
+// the SQLite file `location`. StoreUnavailable when the server cannot be reached.
+std::unique_ptr<SqlConnection> connect_store(const std::string& location);
+
 class JobStore {
  public:
-  // Opens (creating) <file>, WAL mode; requeues running tiles. std::runtime_error on SQLite errors.
-  explicit JobStore(const std::filesystem::path& file);
+  // Opens (creating) the SQLite store <file>, WAL mode; requeues running tiles.
+  // std::runtime_error on SQLite errors.
+  explicit JobStore(const std::filesystem::path& sqlite_file);
+  // The store on `db`, its schema made or upgraded; requeues running tiles.
+  explicit JobStore(std::unique_ptr<SqlConnection> db);
   ~JobStore();
   JobStore(const JobStore&) = delete;
   JobStore& operator=(const JobStore&) = delete;
 
   // Inserts the job (QUEUED) and its queued tiles. Returns it as v1::Job.
   v1::Job add_job(const NewJob& job, std::int64_t now_ms);
+
+  // Where it is, for messages: the file, or the URL without a password.
+  std::string describe() const;
 
   std::optional<v1::Job> get_job(const std::string& id) const;
   std::optional<v1::JobSpec> get_spec(const std::string& id) const;
@@ -209,9 +221,8 @@ class JobStore {
   // batch_failed and batch_lost: the same bookkeeping on their own count and limit.
   TileFailure count_attempt(AttemptKind kind, const std::string& job_id, std::uint32_t first, std::uint32_t count,
                             const std::string& reason, int max, std::int64_t now_ms, const std::string& worker);
-  void exec(const char* sql) const;
-  sqlite3_stmt* prepare(const std::string& sql, unsigned flags) const;  // the caller finalizes it
-  sqlite3_stmt* prepared(const std::string& sql) const;  // cached; under mutex_
+  void open_sqlite();    // the schema made, or upgraded from versions 1 to 5
+  void open_postgres();  // the schema made, under a lock that other schedulers wait on
   v1::Job load_job_locked(const std::string& id) const;
   std::optional<v1::Job> find_job_locked(const std::string& id) const;
   // The job's seq when the batch's tiles are all running on an active job.
@@ -222,8 +233,7 @@ class JobStore {
   void take_back_part_locked(std::int64_t seq, std::uint32_t part, std::uint32_t count);
 
   mutable std::mutex mutex_;
-  sqlite3* db_ = nullptr;
-  mutable std::map<std::string, sqlite3_stmt*> statements_;
+  std::unique_ptr<SqlConnection> db_;
 };
 
 }  // namespace farm

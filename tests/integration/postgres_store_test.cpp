@@ -1,0 +1,110 @@
+// The job store on PostgreSQL beyond what every store does (job_store_test.cpp runs those on
+// both): SQLite's placeholders numbered as PostgreSQL's, a server that goes away under the store
+// and comes back, and schedulers that open one new database at the same moment.
+#include <gtest/gtest.h>
+#include <libpq-fe.h>
+
+#include <thread>
+
+#include "server/scheduler/store/job_store.h"
+#include "server/scheduler/store/postgres_connection.h"
+#include "tests/support/postgres_server.h"
+#include "tests/support/store_locations.h"
+
+namespace farm {
+namespace {
+
+NewJob one_row_job(const std::string& id, int tiles) {
+  NewJob j;
+  j.id = id;
+  j.name = id;
+  j.spec.set_job_json("{}");
+  j.scene_hash = std::string(64, 'a');
+  j.engine = "raster";
+  j.width = 16 * tiles;
+  j.height = 16;
+  for (int i = 0; i < tiles; ++i) j.tiles.push_back({16 * i, 0, 16 * i + 16, 16});
+  return j;
+}
+
+TEST(PostgresStoreTest, PlaceholdersAreNumberedAsSqliteNumbersThemAndQuotedTextIsLeftAlone) {
+  EXPECT_EQ(postgres_placeholders("a = ? AND b = ?"), "a = $1 AND b = $2");
+  EXPECT_EQ(postgres_placeholders("a = ?1 AND b = ?2 AND c = ?1"), "a = $1 AND b = $2 AND c = $1");
+  // A bare ? after ?3 is 4, SQLite's rule.
+  EXPECT_EQ(postgres_placeholders("a = ?3 AND b = ?"), "a = $3 AND b = $4");
+  EXPECT_EQ(postgres_placeholders("a = '?' AND b = 'it''s ?' AND c = ?"), "a = '?' AND b = 'it''s ?' AND c = $1");
+  EXPECT_EQ(postgres_placeholders("SELECT 1"), "SELECT 1");
+}
+
+TEST(PostgresStoreTest, AnUnreachableServerIsStoreUnavailableNamingItWithoutThePassword) {
+  // A port nothing listens on: connection refused at once.
+  try {
+    connect_store("postgresql://farm:secret@127.0.0.1:1/farm");
+    FAIL() << "connected to nothing";
+  } catch (const StoreUnavailable& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("127.0.0.1:1/farm"), std::string::npos) << what;
+    EXPECT_EQ(what.find("secret"), std::string::npos) << what;
+  }
+}
+
+// The server stops under an open store: each call meanwhile is StoreUnavailable and changes
+// nothing; once the server is back, the same store object carries on (it connects again and
+// prepares its statements again) and finds everything committed before.
+TEST(PostgresStoreTest, AServerThatGoesAwayIsStoreUnavailableAndTheStoreCarriesOnWhenItReturns) {
+  test::StoreLocation where(SqlDialect::PostgreSQL);
+  ASSERT_TRUE(where.problem().empty()) << where.problem();
+  JobStore store(connect_store(where.location()));
+  store.add_job(one_row_job("a", 3), 1);
+  auto first = store.claim_next_batch("w", 2);
+  ASSERT_TRUE(first);
+
+  ASSERT_TRUE(where.server()->stop()) << where.server()->problem();
+  EXPECT_THROW(store.batch_done("a", first->first, 1, {}, "w"), StoreUnavailable);
+  EXPECT_THROW(store.claim_next_batch("w", 3), StoreUnavailable);
+  EXPECT_THROW(store.add_job(one_row_job("b", 2), 3), StoreUnavailable);
+  ASSERT_TRUE(where.server()->start()) << where.server()->problem();
+
+  const v1::Job a = *store.get_job("a");
+  EXPECT_EQ(a.state(), v1::JOB_STATE_RUNNING);
+  EXPECT_EQ(a.tiles_done(), 0u);
+  EXPECT_FALSE(store.get_job("b"));  // its transaction never committed
+  EXPECT_TRUE(store.batch_done("a", first->first, 1, {}, "w"));  // still running on w
+  auto second = store.claim_next_batch("w", 4);
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->first, 1u);
+  EXPECT_EQ(store.get_job("a")->tiles_done(), 1u);
+}
+
+// Schedulers of one farm start together: the schema is made once, under a lock, and every one of
+// them opens the store.
+TEST(PostgresStoreTest, SchedulersOpeningOneNewDatabaseAtOnceMakeTheSchemaOnce) {
+  test::StoreLocation where(SqlDialect::PostgreSQL);
+  ASSERT_TRUE(where.problem().empty()) << where.problem();
+  constexpr int kSchedulers = 4;
+  std::vector<std::string> errors(kSchedulers);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < kSchedulers; ++i) {
+    threads.emplace_back([&, i] {
+      try {
+        JobStore store(connect_store(where.location()));
+        store.add_job(one_row_job("job" + std::to_string(i), 1), 1);
+      } catch (const std::exception& e) {
+        errors[static_cast<std::size_t>(i)] = e.what();
+      }
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  for (const std::string& e : errors) EXPECT_EQ(e, "");
+  JobStore store(connect_store(where.location()));
+  EXPECT_EQ(store.list_jobs({}, 10, 0).first.size(), static_cast<std::size_t>(kSchedulers));
+  PGconn* c = PQconnectdb(where.location().c_str());
+  PGresult* r = PQexec(c, "SELECT COUNT(*) FROM schema_version");
+  ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQerrorMessage(c);
+  EXPECT_STREQ(PQgetvalue(r, 0, 0), "1");
+  PQclear(r);
+  PQfinish(c);
+}
+
+}  // namespace
+}  // namespace farm

@@ -1,0 +1,38 @@
+#pragma once
+// A fresh, empty job store for one test, of either kind the scheduler takes (`--store`): a SQLite
+// file in a temporary folder, or a database of its own on a real PostgreSQL server
+// (postgres_server.h) that the test process starts once, at the first test that asks, and stops
+// at exit. Store tests are written once and run on both (INSTANTIATE_TEST_SUITE_P over
+// kBothStores).
+#include <memory>
+#include <string>
+
+#include "server/scheduler/store/sql_connection.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm::test {
+
+class PostgresServer;
+
+inline constexpr SqlDialect kBothStores[] = {SqlDialect::SQLite, SqlDialect::PostgreSQL};
+
+// "SQLite" or "PostgreSQL", for test names.
+std::string store_name(SqlDialect dialect);
+
+class StoreLocation {
+ public:
+  explicit StoreLocation(SqlDialect dialect);
+  // Why the store could not be made (the PostgreSQL server did not start); empty when it was.
+  const std::string& problem() const { return problem_; }
+  // What connect_store and `farm scheduler --store` take: a file, or a postgresql:// URL.
+  const std::string& location() const { return location_; }
+  // The server under a PostgreSQL store (stop and start it to take the store away); null for SQLite.
+  PostgresServer* server() const { return server_; }
+
+ private:
+  TempDir dir_;
+  std::string location_, problem_;
+  PostgresServer* server_ = nullptr;
+};
+
+}  // namespace farm::test
