@@ -8,6 +8,10 @@
 
 #include "tests/support/postgres_server.h"
 
+namespace farm {
+void PrintTo(SqlDialect dialect, std::ostream* os) { *os << test::store_name(dialect); }
+}  // namespace farm
+
 namespace farm::test {
 
 namespace {

@@ -5,10 +5,16 @@
 // at exit. Store tests are written once and run on both (INSTANTIATE_TEST_SUITE_P over
 // kBothStores).
 #include <memory>
+#include <ostream>
 #include <string>
 
 #include "server/scheduler/store/sql_connection.h"
 #include "tests/support/temp_dir.h"
+
+namespace farm {
+// Readable in failure messages (gtest finds PrintTo by argument-dependent lookup).
+void PrintTo(SqlDialect dialect, std::ostream* os);
+}  // namespace farm
 
 namespace farm::test {
 

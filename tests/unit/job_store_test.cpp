@@ -709,6 +709,27 @@ TEST_P(JobStoreTest, TextAndBlobsRoundTripWhateverTheyHold) {
   EXPECT_EQ(store.tiles("q?'1")[0].worker, "w'?");
 }
 
+// A worker's error message is whatever bytes it sent: a NUL, bytes that are not UTF-8. It is
+// recorded (PostgreSQL, whose text holds neither, keeps U+FFFD in their place) and the batch's
+// attempt counted: no message can keep a batch running for ever.
+TEST_P(JobStoreTest, AnErrorMessageOfAnyBytesIsRecordedAndItsAttemptCounted) {
+  JobStore store(connect());
+  store.add_job(make_job("a", 0, 1), 1);
+  auto b = store.claim_next_batch("w", 2);
+  ASSERT_TRUE(b);
+  const std::string reason("bad \0 bytes \xff\xc0\x80 end", 19);
+  const TileFailure failure = store.batch_failed("a", b->first, 1, reason, 3, 3, "w");
+  EXPECT_TRUE(failure.will_retry);
+  const TileRecord tile = store.tiles("a")[0];
+  EXPECT_EQ(tile.state, TileState::Queued);
+  EXPECT_EQ(tile.attempts, 1);
+  if (GetParam() == SqlDialect::SQLite) {
+    EXPECT_EQ(tile.last_error, reason);
+  } else {
+    EXPECT_EQ(tile.last_error, "bad \xEF\xBF\xBD bytes \xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD end");
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(BothStores, JobStoreTest, ::testing::ValuesIn(test::kBothStores),
                          [](const auto& p) { return test::store_name(p.param); });
 

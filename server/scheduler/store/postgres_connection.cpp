@@ -42,6 +42,38 @@ struct ResultDeleter {
 };
 using Result = std::unique_ptr<PGresult, ResultDeleter>;
 
+// `text` as a PostgreSQL text value can hold it: a NUL byte (which would end the value there) and
+// bytes that are not UTF-8 (which the server refuses, failing the whole statement) become U+FFFD.
+// The store's text is ours or checked UTF-8 already; a worker's error message is not, and must
+// not stop its batch from being recorded.
+std::string storable_text(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char c = p[i];
+    std::size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xe ? 3 : (c >> 3) == 0x1e ? 4 : 0;
+    bool valid = c != 0 && length != 0 && i + length <= n;
+    for (std::size_t k = 1; valid && k < length; ++k) valid = (p[i + k] & 0xc0) == 0x80;
+    if (valid && length > 1) {
+      // Overlong forms, surrogates and code points past U+10FFFF are not UTF-8 either.
+      std::uint32_t code = c & (0xff >> (length + 1));
+      for (std::size_t k = 1; k < length; ++k) code = code << 6 | (p[i + k] & 0x3f);
+      constexpr std::uint32_t kSmallest[] = {0, 0, 0x80, 0x800, 0x10000};
+      valid = code >= kSmallest[length] && code <= 0x10ffff && (code < 0xd800 || code > 0xdfff);
+    }
+    if (valid) {
+      out.append(text, i, length);
+      i += length;
+    } else {
+      out += "\xEF\xBF\xBD";
+      ++i;
+    }
+  }
+  return out;
+}
+
 void check(pg_conn* conn, const Result& result, const std::string& where, const std::string& sql) {
   const ExecStatusType status = result ? PQresultStatus(result.get()) : PGRES_FATAL_ERROR;
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) throw_postgres_error(conn, result.get(), where, sql);
@@ -54,7 +86,7 @@ class PostgresStatement : public SqlStatement {
       : db_(db), sql_(postgres_placeholders(sql)), name_(std::move(name)) {}
 
   void bind_int(int i, std::int64_t v) override { set(i, std::to_string(v), kInt8Oid, false); }
-  void bind_text(int i, const std::string& v) override { set(i, v, kTextOid, false); }
+  void bind_text(int i, const std::string& v) override { set(i, storable_text(v), kTextOid, false); }
   void bind_blob(int i, const std::string& v) override { set(i, v, kByteaOid, true); }
 
   bool step() override {
