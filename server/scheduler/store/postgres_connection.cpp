@@ -233,9 +233,13 @@ std::string postgres_placeholders(const std::string& sql) {
 }
 
 PostgresConnection::PostgresConnection(const std::string& url) : url_(url) {
-  // Ours come before dbname, so the URL's own connect_timeout or application_name win.
-  const char* keywords[] = {"connect_timeout", "application_name", "dbname", nullptr};
-  const char* values[] = {"10", "farm", url.c_str(), nullptr};
+  // Ours come before dbname, so that the URL's own settings win: a bounded connect, and a link
+  // that stops answering noticed within about 10 s (TCP keepalives and user timeout) instead of a
+  // statement waiting for ever under the store's lock. client_encoding comes after: the store
+  // always sends UTF-8.
+  const char* keywords[] = {"connect_timeout", "application_name", "keepalives_idle", "keepalives_interval",
+                            "keepalives_count", "tcp_user_timeout", "dbname", "client_encoding", nullptr};
+  const char* values[] = {"10", "farm", "5", "2", "3", "10000", url.c_str(), "UTF8", nullptr};
   conn_ = PQconnectdbParams(keywords, values, 1);
   if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
     const std::string message = conn_ ? server_message(conn_, nullptr) : "out of memory";
