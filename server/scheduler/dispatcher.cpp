@@ -83,6 +83,7 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       workers_(parts.workers),
       finisher_(parts.finisher),
       pause_(parts.pause),
+      outage_(parts.outage),
       log_(parts.log),
       chooser_(options.verify_fraction, random_key()) {}
 
@@ -224,7 +225,10 @@ void Dispatcher::slot_main(const std::shared_ptr<WorkerEntry>& w) {
 
 void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
   while (workers_.await_up(*w)) {
-    const std::shared_ptr<InFlight> call = claim(*w);
+    bool store_answered = false;
+    const std::shared_ptr<InFlight> call = claim(*w, store_answered);
+    // Outside claim's lock: the end of an outage looks at every active job (StoreOutage::on_back).
+    if (store_answered) outage_.answered();
     if (!call) {
       {
         std::lock_guard lock(mutex_);
@@ -247,6 +251,16 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
       } else {
         requeue_when_stored(call->batch, w->id);
       }
+    } catch (const StoreUnavailable& e) {
+      // The store's server went away on the way (a mark, a failed attempt): nobody's fault. The
+      // batch goes back in the queue once it answers (tiles it marked done meanwhile stay done).
+      outage_.report(e);
+      if (call->check) {
+        std::lock_guard lock(mutex_);
+        call->check->queued = true;
+      } else {
+        requeue_when_stored(call->batch, w->id);
+      }
     } catch (const std::exception& e) {
       // Nothing may end a slot's thread (that would be std::terminate); the batch's tiles stay
       // as the store has them, queued again by the next scheduler to open it.
@@ -257,7 +271,7 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
   }
 }
 
-std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
+std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bool& store_answered) {
   std::unique_lock lock(mutex_);
   // Checked under this lock, with the claim: a worker removed, quarantined (or marked down) after
   // this point finds the call in flight and cancels it.
@@ -288,8 +302,11 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w) {
     batch = store_.claim_next_batch(
         w.id, unix_ms_now(), [this](const std::string& job_id, int queued) { return batch_size(job_id, queued); },
         2 * std::max(1, workers_.slots_up()) * kMaxBatch);
+    store_answered = true;
   } catch (const DiskFull& e) {
     pause_.report(e);  // the store could not mark the claim: nothing was claimed
+  } catch (const StoreUnavailable& e) {
+    outage_.report(e);  // nothing was claimed; the slot asks again after its wait
   } catch (const std::exception& e) {
     log_.error("claiming tiles: {}", e.what());
   }
@@ -583,7 +600,12 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
   try {
     // The data first, then the mark: a done tile always has its data.
     assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(batch.frame), {batch.first, batch.pass}, result);
-    if (!store_.batch_done(batch.job_id, batch.first, batch.count, stats, worker_id)) {
+    // Kept on disk, the result waits for a store that went away rather than being rendered again.
+    const std::optional<bool> marked = outage_.when_answered(
+        [&] { return store_.batch_done(batch.job_id, batch.first, batch.count, stats, worker_id); },
+        [this](std::chrono::milliseconds wait) { return wait_unless_stopping(wait); });
+    if (!marked) return;  // stopping: its tiles stay running, queued again by the next scheduler
+    if (!*marked) {
       // The job ended, or the tiles were taken back (the worker quarantined meanwhile).
       assembly_.discard(batch.job_id, batch.first);
       work_.notify_all();
@@ -612,6 +634,9 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
     log_.debug("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
     pause_.report(e);
     requeue_when_stored(batch, worker_id);
+  } catch (const StoreUnavailable& e) {
+    outage_.report(e);  // after its mark (an event, the merge): looked at again when the store answers
+    requeue_when_stored(batch, worker_id);
   } catch (const std::exception& e) {
     log_.error("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
     store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
@@ -619,14 +644,25 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
   }
 }
 
+bool Dispatcher::wait_unless_stopping(std::chrono::milliseconds wait) {
+  std::unique_lock lock(mutex_);
+  work_.wait_for(lock, wait, [this] { return stopping_; });
+  return stopping_;
+}
+
 void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& worker_id) {
   while (true) {
     try {
       store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
+      outage_.answered();
       work_.notify_all();
       return;
     } catch (const DiskFull& e) {
       pause_.report(e);  // the store itself is full
+    } catch (const StoreUnavailable& e) {
+      outage_.report(e);
+      if (wait_unless_stopping(StoreOutage::kRetry)) return;
+      continue;
     }
     std::unique_lock lock(mutex_);
     // Until the pause's prober finds room again (its resume wakes this), or the scheduler stops.

@@ -68,6 +68,7 @@
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/spot_checks.h"
 #include "server/scheduler/store/job_store.h"
+#include "server/scheduler/store_outage.h"
 #include "server/scheduler/tile_worker.h"
 #include "server/scheduler/worker_registry.h"
 
@@ -83,6 +84,7 @@ struct DispatcherParts {
   WorkerRegistry& workers;
   Finisher& finisher;
   DiskFullPause& pause;
+  StoreOutage& outage;
   spdlog::logger& log;
 };
 
@@ -117,14 +119,16 @@ class Dispatcher {
   enum class CancelReason { None, JobCancelled, WorkerLeft, Quarantined, Stopping };
   struct InFlight;
   struct SpotCheck;
+  // Waits `wait` (less when woken); true when the scheduler is stopping.
+  bool wait_unless_stopping(std::chrono::milliseconds wait);
 
   // A slot's thread: slot_loop, then its handle goes to exited_ to be joined.
   void slot_main(const std::shared_ptr<WorkerEntry>& w);
   void slot_loop(const std::shared_ptr<WorkerEntry>& w);
   void join_exited();
   // The next batch for `w` (or a batch to check), in flight from now on; null when there was
-  // none (after a wait).
-  std::shared_ptr<InFlight> claim(const WorkerEntry& w);
+  // none (after a wait). `store_answered`: the store answered (it may have had nothing to give).
+  std::shared_ptr<InFlight> claim(const WorkerEntry& w, bool& store_answered);
   int batch_size(const std::string& job_id, int queued_tiles) const;  // called back by claim
   grpc::Status render(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   void handle_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
@@ -145,8 +149,9 @@ class Dispatcher {
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
   // The batch (running on worker_id) back in the queue with no attempt counted, once the store
-  // takes it: while the store itself is full, tried again each time dispatch resumes (or dropped
-  // at stop(), when a restarted store queues running tiles itself).
+  // takes it: while the store itself is full, tried again each time dispatch resumes, while its
+  // server is away every second (or dropped at stop(), when a restarted store queues running
+  // tiles itself).
   void requeue_when_stored(const TileBatch& batch, const std::string& worker_id);
   // The worker said its disk is full: its batch queued again (no attempt counted) and the worker
   // left alone for its backoff.
@@ -180,6 +185,7 @@ class Dispatcher {
   WorkerRegistry& workers_;
   Finisher& finisher_;
   DiskFullPause& pause_;
+  StoreOutage& outage_;
   spdlog::logger& log_;
   SpotCheckChooser chooser_;
   mutable std::mutex mutex_;

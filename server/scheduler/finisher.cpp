@@ -63,6 +63,9 @@ void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> 
     bool refused = false;
     try {
       merge_complete(job_id, frames, every_frame);
+      outage_.answered();
+    } catch (const StoreUnavailable& e) {
+      outage_.report(e);  // looked at again when the store answers (StoreOutage::on_back)
     } catch (const DiskFull& e) {
       // The job stays as it is, its tiles done, until there is room for its frame.
       log_.debug("job {}: merge refused: {}", job_id, e.what());
@@ -153,6 +156,8 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
     return false;
   } catch (const DiskFull&) {
     throw;  // not the job's fault: merged again once there is room (finish_if_complete)
+  } catch (const StoreUnavailable&) {
+    throw;  // nor this: merged again once the store answers
   } catch (const std::exception& e) {
     fail(job_id, fmt::format("merging the tiles of frame {}: {}", frame, e.what()));
     return false;
@@ -164,6 +169,8 @@ void Finisher::finish(const std::string& job_id) {
   try {
     info = jobs_.get(job_id);
   } catch (const DiskFull&) {
+    throw;
+  } catch (const StoreUnavailable&) {
     throw;
   } catch (const std::exception& e) {
     fail(job_id, fmt::format("finishing the job: {}", e.what()));
@@ -187,6 +194,8 @@ void Finisher::end_in_background(const std::string& job_id) {
     refused_.insert(job_id);
   } catch (const VideoStopped&) {
     log_.info("job {}: its video is made by the next scheduler (this one is stopping)", job_id);
+  } catch (const StoreUnavailable& e) {
+    outage_.report(e);  // ended when the store answers again (StoreOutage::on_back)
   } catch (const std::exception& e) {
     log_.error("job {}: ending: {}", job_id, e.what());
   }
@@ -202,6 +211,8 @@ void Finisher::end_job(const std::string& job_id) {
     info = jobs_.get(job_id);
     validation = check_against_embree(*info);
   } catch (const DiskFull&) {
+    throw;
+  } catch (const StoreUnavailable&) {
     throw;
   } catch (const std::exception& e) {
     fail(job_id, fmt::format("checking against Embree: {}", e.what()));
@@ -221,6 +232,8 @@ void Finisher::end_job(const std::string& job_id) {
   try {
     after = store_.finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
   } catch (const DiskFull&) {
+    throw;
+  } catch (const StoreUnavailable&) {
     throw;
   } catch (const std::exception& e) {
     fail(job_id, fmt::format("finishing the job: {}", e.what()));
@@ -255,6 +268,8 @@ void Finisher::refine_preview(const std::string& job_id, int frame) {
     render_again(job_id, e);
   } catch (const DiskFull&) {
     throw;  // made again once there is room, with the merge
+  } catch (const StoreUnavailable&) {
+    throw;
   } catch (const std::exception& e) {
     // A preview is no part of the result: the job goes on, and the next pass tries again.
     log_.warn("job {}: progressive preview of frame {}: {}", job_id, frame, e.what());

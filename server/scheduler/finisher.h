@@ -9,7 +9,9 @@
 // A final job's memory and kept tiles then go (release()), whichever way it ended. A merge the disk
 // refuses (DiskFull: the frame's files or the store's final mark) fails nothing either: the pause
 // is told (disk_full_pause.h), the job stays running with its tiles done, and it is merged again
-// when dispatch resumes (retry_refused()). While the disk stays full, make_room() frees the tiles of
+// when dispatch resumes (retry_refused()). A store whose server is away (StoreUnavailable) fails
+// nothing either: the job stays as it is, and is looked at again when the store answers
+// (store_outage.h). While the disk stays full, make_room() frees the tiles of
 // the youngest job holding some, so that the farm's own tiles never hold the disk for good.
 // A job whose end takes long (its Embree check, its video) ends on a thread of its own
 // (job_endings.h), so that the slot that merged its last frame goes back to rendering.
@@ -37,15 +39,16 @@
 #include "server/scheduler/running_jobs.h"
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
+#include "server/scheduler/store_outage.h"
 
 namespace farm {
 
 class Finisher {
  public:
   Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly,
-           RunningJobs& jobs, JobEvents& events, DiskFullPause& pause, spdlog::logger& log)
+           RunningJobs& jobs, JobEvents& events, DiskFullPause& pause, StoreOutage& outage, spdlog::logger& log)
       : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), pause_(pause),
-        log_(log), previews_(store, assembly, events) {}
+        outage_(outage), log_(log), previews_(store, assembly, events) {}
 
   // Merges `frame` of the job if its tiles are all done (no frame: every complete frame), and ends
   // the job once all are merged. A frame of sample passes not yet complete gets its progressive
@@ -117,6 +120,7 @@ class Finisher {
   RunningJobs& jobs_;
   JobEvents& events_;
   DiskFullPause& pause_;
+  StoreOutage& outage_;
   spdlog::logger& log_;
   std::mutex mutex_;
   struct Merging {

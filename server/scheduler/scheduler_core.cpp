@@ -55,7 +55,8 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
       jobs_(store_, assets_, options_.data_dir),
       events_(store_),
       pause_(*log_, options_.disk_full_backoff, options_.disk_full_backoff_max),
-      finisher_(options_, store_, *assembly_, jobs_, events_, pause_, *log_),
+      outage_(*log_),
+      finisher_(options_, store_, *assembly_, jobs_, events_, pause_, outage_, *log_),
       workers_(
           options_, *log_, [this](const std::string& id, const std::string& reason) { remove_worker(id, reason); },
           [this](const std::shared_ptr<WorkerEntry>& w) { dispatcher_.start_slots(w); }),
@@ -67,6 +68,7 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                              .workers = workers_,
                              .finisher = finisher_,
                              .pause = pause_,
+                             .outage = outage_,
                              .log = *log_}) {
   // Room on the disk again: the slots claim, and the merges the disk refused are done.
   // Room on the disk again: the merges the disk refused first (they free their tiles), then
@@ -78,11 +80,20 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
   pause_.on_still_full([this] { return finisher_.make_room(); });
   // A merge that found damaged tile results queued their tiles again: the slots take them now.
   finisher_.on_requeued([this] { dispatcher_.work_queued(); });
+  // The store's server back after an outage: the merges and ends it interrupted, then the slots.
+  outage_.on_back([this] {
+    finish_active_jobs();
+    dispatcher_.work_queued();
+  });
   // Jobs interrupted between their last tile and their merge.
-  for (const std::string& id : store_.active_jobs()) finisher_.finish_if_complete(id);
+  finish_active_jobs();
 }
 
 SchedulerCore::~SchedulerCore() { stop(); }
+
+void SchedulerCore::finish_active_jobs() {
+  for (const std::string& id : store_.active_jobs()) finisher_.finish_if_complete(id);
+}
 
 void SchedulerCore::stop() {
   // The registry first: slots waiting for a worker to come up return, and no worker is dropped

@@ -13,6 +13,8 @@
 //   Finisher        merging, writing and checking a finished job's frame (finisher.h)
 //   DiskFullPause   dispatch paused while the disk refuses writes, resumed when it has room
 //                   (disk_full_pause.h)
+//   StoreOutage     the store's server away: nothing claimed or failed, results kept until it
+//                   answers, interrupted merges looked at again then (store_outage.h)
 //
 // Locks: each part has its own mutex, and its header says what it guards. A part holds its lock
 // while it calls another only along these arrows (A -> B: B is taken while A is held):
@@ -20,8 +22,8 @@
 //   Dispatcher -> {WorkerRegistry, TileCancel}                claiming, cancelling calls in flight
 //   JobEvents -> {JobStore, JobEventQueue}                    publishing an event in store order
 //   Dispatcher -> DiskFullPause                               claiming (is dispatch paused?)
-// The others (Finisher, RunningJobs, WorkerRegistry, JobStore, DiskFullPause, the queues) are leaves: nothing is
-// taken under them. The arrows make no cycle, so no two threads can deadlock on them.
+// The others (Finisher, RunningJobs, WorkerRegistry, JobStore, DiskFullPause, StoreOutage, the queues) are
+// leaves: nothing is taken under them (StoreOutage's on_back runs with no lock held). The arrows make no cycle, so no two threads can deadlock on them.
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -44,6 +46,7 @@
 #include "server/scheduler/scene_check.h"
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
+#include "server/scheduler/store_outage.h"
 #include "server/scheduler/asset_grants.h"
 #include "server/scheduler/asset_quota.h"
 #include "server/scheduler/tile_worker.h"
@@ -128,6 +131,9 @@ class SchedulerCore {
   std::size_t jobs_in_memory() const { return jobs_.count(); }
 
  private:
+  // Merges the complete frames of every active job and ends those with all merged: the ones a
+  // stop (at start) or an outage of the store (when it answers again) interrupted.
+  void finish_active_jobs();
   // Adds a validated job to the store and the dispatch.
   v1::Job queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
                     std::shared_ptr<JobInfo> info, const std::string& owner = {});
@@ -144,6 +150,7 @@ class SchedulerCore {
   RunningJobs jobs_;
   JobEvents events_;
   DiskFullPause pause_;
+  StoreOutage outage_;
   Finisher finisher_;
   WorkerRegistry workers_;
   Dispatcher dispatcher_;

@@ -30,6 +30,7 @@
 #include "tests/support/run_command.h"
 #include "tests/support/running_tiles.h"
 #include "tests/support/scheduler_client.h"
+#include "tests/support/postgres_server.h"
 #include "tests/support/store_locations.h"
 #include "tests/support/temp_dir.h"
 
@@ -366,6 +367,38 @@ TEST_F(FarmSchedulerTest, RestartedSchedulerResumesWithoutRenderingFinishedTiles
 
 TEST_F(FarmSchedulerOnPostgresTest, RestartedSchedulerResumesWithoutRenderingFinishedTilesAgain) {
   expect_restart_resumes_without_rendering_again();
+}
+
+// The store's server stops mid-job and comes back a few seconds later: the scheduler says so both
+// times, keeps its registered worker, counts no failure, renders no tile twice (a result that
+// came back meanwhile waits on disk for its mark) and finishes the job bit-identical.
+TEST_F(FarmSchedulerOnPostgresTest, AStoreThatGoesAwayMidJobAndComesBackLosesNothing) {
+  auto scheduler = start_scheduler({"--float", "--heartbeat-interval", "0.2"});
+  ASSERT_TRUE(stub_);
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  auto worker = start_worker("w1", 1, scheduler->address());
+  const v1::JobSpec spec = cornell("path", 64, 48, 512, 8);
+  const v1::Job job = submit_ok(spec);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 6 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  ASSERT_FALSE(done(*before)) << "the job finished before the store went away";
+
+  ASSERT_TRUE(where_.server()->stop()) << where_.server()->problem();
+  EXPECT_TRUE(scheduler->process().wait_for_line("no tile is claimed or marked until it answers", 30s))
+      << scheduler->process().output();
+  // Away for longer than a silent worker is kept (3 heartbeats of 0.2 s): it must still be there.
+  std::this_thread::sleep_for(3s);
+  ASSERT_TRUE(where_.server()->start()) << where_.server()->problem();
+  EXPECT_TRUE(scheduler->process().wait_for_line("job store answers again", 30s)) << scheduler->process().output();
+
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason() << scheduler->process().output();
+  EXPECT_EQ(final_job->tile_failures(), 0u);
+  EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(scheduler->process().output().find("removed"), std::string::npos) << scheduler->process().output();
 }
 
 // --store takes only a PostgreSQL URL (exit 2 naming the flag); a server that is not there stops
