@@ -5,6 +5,10 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <map>
+#include <mutex>
+#include <thread>
+
 #include "tests/support/store_locations.h"
 #include "tests/support/temp_dir.h"
 
@@ -727,6 +731,57 @@ TEST_P(JobStoreTest, AnErrorMessageOfAnyBytesIsRecordedAndItsAttemptCounted) {
     EXPECT_EQ(tile.last_error, reason);
   } else {
     EXPECT_EQ(tile.last_error, "bad \xEF\xBF\xBD bytes \xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD end");
+  }
+}
+
+// Several schedulers on one store: four claimers on two connections take batches from three jobs
+// at once and mark them done. No tile goes to two of them, none is left, and every job's counts
+// and stats add up (no update of one claimer lost under another's).
+TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) {
+  constexpr int kJobs = 3, kTiles = 40;
+  {
+    JobStore store(connect());
+    for (int j = 0; j < kJobs; ++j) store.add_job(make_job("j" + std::to_string(j), 0, kTiles), 1);
+  }
+  JobStore a(connect()), b(connect());
+  std::mutex mutex;
+  std::map<std::pair<std::string, std::uint32_t>, int> claimed;  // (job, tile) -> claims
+  std::vector<std::string> errors;
+  const auto claimer = [&](JobStore& store, const std::string& worker) {
+    try {
+      while (const std::optional<TileBatch> batch =
+                 store.claim_next_batch(worker, 2, [](const std::string&, int) { return 3; })) {
+        {
+          std::lock_guard lock(mutex);
+          for (std::uint32_t i = 0; i < batch->count; ++i) ++claimed[{batch->job_id, batch->first + i}];
+        }
+        v1::TileStats stats;
+        stats.set_samples(batch->count);
+        if (!store.batch_done(batch->job_id, batch->first, batch->count, stats, worker)) {
+          throw std::runtime_error(worker + ": a batch it claimed was not running on it");
+        }
+      }
+    } catch (const std::exception& e) {
+      std::lock_guard lock(mutex);
+      errors.push_back(e.what());
+    }
+  };
+  std::vector<std::thread> threads;
+  threads.emplace_back(claimer, std::ref(a), "a1");
+  threads.emplace_back(claimer, std::ref(a), "a2");
+  threads.emplace_back(claimer, std::ref(b), "b1");
+  threads.emplace_back(claimer, std::ref(b), "b2");
+  for (std::thread& t : threads) t.join();
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  EXPECT_EQ(claimed.size(), static_cast<std::size_t>(kJobs * kTiles));
+  int shared = 0;
+  for (const auto& [tile, claims] : claimed) shared += claims > 1 ? 1 : 0;
+  EXPECT_EQ(shared, 0);
+  for (int j = 0; j < kJobs; ++j) {
+    const v1::Job job = *a.get_job("j" + std::to_string(j));
+    EXPECT_EQ(job.tiles_done(), static_cast<std::uint32_t>(kTiles));
+    EXPECT_EQ(job.tiles_rendered(), static_cast<std::uint32_t>(kTiles));
+    EXPECT_EQ(job.stats().samples(), static_cast<std::uint64_t>(kTiles));
   }
 }
 

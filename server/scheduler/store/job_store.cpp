@@ -433,6 +433,14 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
       first.reset();
       first.bind(1, jobs.i64(0));
       if (!first.step()) continue;
+      // Another scheduler may be claiming from the same job: once this one holds the job, its
+      // first queued tile is read again (PostgreSQL's next statement sees what the other committed).
+      if (db_->dialect() == SqlDialect::PostgreSQL) {
+        if (!lock_job_locked(jobs.i64(0))) continue;
+        first.reset();
+        first.bind(1, jobs.i64(0));
+        if (!first.step()) continue;
+      }
       found = true;
       seq = jobs.i64(0);
       batch.job_id = jobs.text(1);
@@ -484,6 +492,20 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
   return batch;
 }
 
+bool JobStore::lock_job_locked(std::int64_t seq) {
+  if (db_->dialect() != SqlDialect::PostgreSQL) return true;  // BEGIN IMMEDIATE holds the whole store
+  Query s(db_->prepared("SELECT seq FROM jobs WHERE seq = ? FOR UPDATE"));
+  s.bind(1, seq);
+  return s.step();
+}
+
+bool JobStore::lock_job_locked(const std::string& job_id) {
+  if (db_->dialect() != SqlDialect::PostgreSQL) return true;
+  Query s(db_->prepared("SELECT seq FROM jobs WHERE id = ? FOR UPDATE"));
+  s.bind(1, job_id);
+  return s.step();
+}
+
 std::optional<std::int64_t> JobStore::running_batch_locked(const std::string& job_id, std::uint32_t first,
                                                            std::uint32_t count, const std::string& worker) const {
   Query find(db_->prepared(fmt::format(
@@ -500,6 +522,7 @@ bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::u
                           const v1::TileStats& stats, const std::string& worker) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
+  lock_job_locked(job_id);
   const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count, worker);
   if (!seq) return false;
   v1::TileStats sum;
@@ -538,6 +561,7 @@ TileFailure JobStore::count_attempt(AttemptKind kind, const std::string& job_id,
                                     const std::string& worker) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
+  lock_job_locked(job_id);
   TileFailure result;
   const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count, worker);
   if (!seq) {
@@ -589,6 +613,16 @@ void JobStore::batch_requeue(const std::string& job_id, std::uint32_t first, std
 std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
+  if (db_->dialect() == SqlDialect::PostgreSQL) {
+    // Every job it touches, in one order (seq) so that two such transactions never deadlock.
+    std::vector<std::int64_t> jobs;
+    {
+      Query s(db_->prepared("SELECT DISTINCT job_seq FROM tiles WHERE worker = ? AND state IN (1, 2) ORDER BY job_seq"));
+      s.bind(1, worker);
+      while (s.step()) jobs.push_back(s.i64(0));
+    }
+    for (std::int64_t seq : jobs) lock_job_locked(seq);
+  }
   // The done batches first (a batch is the tiles of one part), with what they added to the job.
   std::vector<TileBatch> discarded;
   std::vector<std::int64_t> seqs;
@@ -652,6 +686,7 @@ void JobStore::take_back_part_locked(std::int64_t seq, std::uint32_t part, std::
 std::vector<TileBatch> JobStore::requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
+  lock_job_locked(job_id);
   std::vector<TileBatch> taken;
   std::int64_t seq = 0;
   {
@@ -734,6 +769,7 @@ int JobStore::complete_passes(const std::string& job_id, int frame) const {
 bool JobStore::frame_merged(const std::string& job_id, int frame) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
+  lock_job_locked(job_id);
   std::int64_t seq = 0;
   {
     Query s(db_->prepared(fmt::format(

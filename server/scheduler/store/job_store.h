@@ -225,6 +225,13 @@ class JobStore {
   void open_postgres();  // the schema made, under a lock that other schedulers wait on
   v1::Job load_job_locked(const std::string& id) const;
   std::optional<v1::Job> find_job_locked(const std::string& id) const;
+  // Several schedulers on one PostgreSQL store: the job's row locked for the rest of the
+  // transaction, so that what the transaction reads of the job and its tiles (the first queued
+  // tile, the stats it adds to) no other scheduler changes before it commits. Every transaction
+  // that reads before it writes a job takes it first (SQLite's BEGIN IMMEDIATE already holds the
+  // whole store). False when there is no such job.
+  bool lock_job_locked(std::int64_t seq);
+  bool lock_job_locked(const std::string& job_id);
   // The job's seq when the batch's tiles are all running on an active job.
   std::optional<std::int64_t> running_batch_locked(const std::string& job_id, std::uint32_t first,
                                                    std::uint32_t count, const std::string& worker) const;
