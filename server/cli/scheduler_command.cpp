@@ -58,6 +58,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   SchedulerOptions options;
   options.data_dir = o.data_dir;
   options.store = o.store;
+  options.lease = ms(o.lease_s);
   options.tile_deadline = ms(o.tile_deadline_s);
   options.max_attempts = o.max_attempts;
   options.max_lost_worker_attempts = o.max_lost_worker_attempts;
@@ -89,6 +90,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   fmt::print("scheduler listening on {}:{}\n", host_of(o.listen), port);
   fmt::print("  data dir {}, job store {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
              o.data_dir.string(), core.store().describe(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
+  if (core.store().is_shared()) fmt::print("  scheduler {}, lease {} s\n", core.scheduler_id(), o.lease_s);
   fmt::print("  {}, {}\n", security.access.requires_tokens() ? "tokens required" : "no tokens",
              o.security.tls.has_certificate() ? (o.security.tls.ca.empty() ? "TLS" : "mTLS") : "plain text");
   std::fflush(stdout);
@@ -135,6 +137,13 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "URL; a password is better kept in ~/.pgpass or PGPASSWORD than in the URL). Without "
                 "it: SQLite, jobs.db in --data-dir. The schema is made, or upgraded, at start")
       ->envname("FARM_STORE");
+  s->add_option("--lease", o->lease_s,
+                "With --store: seconds this scheduler's hold on the units it hands out lasts unless "
+                "renewed (every third of it). Several schedulers may share one store and --data-dir "
+                "(a shared folder): the units of one that dies are rendered by the others, or by "
+                "its successor, once its lease runs out")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
   s->add_option("--worker", o->workers,
                 "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
                 "register themselves (farm worker --scheduler)");

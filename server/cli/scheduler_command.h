@@ -16,6 +16,7 @@ struct SchedulerCommandOptions {
   std::string listen = kDefaultSchedulerListen;  // host:port; port 0 = any free port
   std::filesystem::path data_dir;     // jobs.db, assets/, tiles/, results/
   std::string store;                  // a postgresql:// URL; empty: SQLite, data_dir/jobs.db
+  double lease_s = 10;                // SchedulerOptions::lease
   std::vector<std::string> workers;   // static `farm worker` addresses
   double tile_deadline_s = 600;
   int max_attempts = 3;

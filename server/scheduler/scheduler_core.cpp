@@ -1,7 +1,9 @@
 #include "server/scheduler/scheduler_core.h"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <mutex>
 #include <random>
 
@@ -85,8 +87,22 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
     finish_active_jobs();
     dispatcher_.work_queued();
   });
+  // On a store several schedulers share, this one's units are marked with its id and held under a
+  // lease; the units of one that died come back when its lease runs out.
+  store_.set_scheduler(scheduler_id_);
+  if (store_.is_shared()) {
+    lease_ = std::make_unique<SchedulerLease>(store_, outage_, *log_, options_.lease,
+                                              [this] { dispatcher_.work_queued(); });
+  }
   // Jobs interrupted between their last tile and their merge.
   finish_active_jobs();
+}
+
+std::string make_scheduler_id() {
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "unknown");
+  std::random_device random;
+  return fmt::format("{}:{}:{:08x}", host, getpid(), random());
 }
 
 SchedulerCore::~SchedulerCore() { stop(); }
@@ -102,6 +118,7 @@ void SchedulerCore::stop() {
   pause_.stop();
   dispatcher_.stop();
   finisher_.stop();  // after the slots: none hands it a job to end any more
+  if (lease_) lease_->stop();  // after the dispatcher queued its running units again
 }
 
 // ---- Jobs ----------------------------------------------------------------------------------------

@@ -46,6 +46,7 @@
 #include "server/scheduler/scene_check.h"
 #include "server/scheduler/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
+#include "server/scheduler/scheduler_lease.h"
 #include "server/scheduler/store_outage.h"
 #include "server/scheduler/asset_grants.h"
 #include "server/scheduler/asset_quota.h"
@@ -69,6 +70,10 @@ struct ValidatedJob {
   std::function<void(int frame, TileBuffer&&)> merged;
 };
 
+// A new scheduler id, "HOST:PID:RANDOM": unique among the schedulers of one store, and says which
+// machine and process in the store and the logs.
+std::string make_scheduler_id();
+
 class SchedulerCore {
  public:
   // Opens (or creates) the data dir and resumes its jobs: tiles that were running are queued
@@ -88,6 +93,7 @@ class SchedulerCore {
   // The assets workers may fetch now (given to RemoteTileWorkers this core renders on).
   AssetGrants& grants() { return grants_; }
   const JobStore& store() const { return store_; }
+  const std::string& scheduler_id() const { return scheduler_id_; }
   const SchedulerOptions& options() const { return options_; }
 
   // Validates like `farm render` (asset refs, parse_job, loading the models) and queues the job.
@@ -154,6 +160,9 @@ class SchedulerCore {
   Finisher finisher_;
   WorkerRegistry workers_;
   Dispatcher dispatcher_;
+  // This process among the schedulers of one store: host, process id and a random part.
+  std::string scheduler_id_ = make_scheduler_id();
+  std::unique_ptr<SchedulerLease> lease_;  // on a shared store (PostgreSQL) only
 };
 
 }  // namespace farm

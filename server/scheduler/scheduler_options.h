@@ -19,6 +19,10 @@ struct SchedulerOptions {
   std::filesystem::path data_dir;  // jobs.db, assets/, scenes/, tiles/, results/
   // The job store: empty for SQLite in data_dir/jobs.db, or a postgresql:// URL (store/job_store.h).
   std::string store;
+  // On a store several schedulers share: how long this one's hold on the units it hands out
+  // lasts unless renewed (scheduler_lease.h), so how long the units of a scheduler killed mid-job
+  // wait before the others (or its successor) render them.
+  std::chrono::milliseconds lease = std::chrono::seconds(10);
   std::chrono::milliseconds tile_deadline = std::chrono::minutes(10);
   int max_attempts = 3;            // failed attempts of one tile before its job fails
   // Workers a tile may lose while rendering it (their process died: the call ended UNAVAILABLE;

@@ -104,7 +104,9 @@ class FarmSchedulerTest : public ::testing::Test {
   }
 
   std::unique_ptr<test::SchedulerProcess> start_scheduler(std::vector<std::string> args) {
-    if (!store_.empty()) args.insert(args.end(), {"--store", store_});
+    // A restarted scheduler on a shared store renders its predecessor's units once its lease ran
+    // out: short here, so that tests wait seconds, not the default ten.
+    if (!store_.empty()) args.insert(args.end(), {"--store", store_, "--lease", "2"});
     auto scheduler = std::make_unique<test::SchedulerProcess>(dir_ / "data", args);
     EXPECT_FALSE(scheduler->address().empty()) << scheduler->process().output();
     if (!store_.empty()) {
@@ -399,6 +401,36 @@ TEST_F(FarmSchedulerOnPostgresTest, AStoreThatGoesAwayMidJobAndComesBackLosesNot
   EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());
   EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
   EXPECT_EQ(scheduler->process().output().find("removed"), std::string::npos) << scheduler->process().output();
+}
+
+// Two schedulers on one PostgreSQL store and one (shared) data dir, both sending units to the same
+// two workers. The one the job was submitted to is killed -9 mid-job: the other carries it on,
+// renders the dead one's running units once its lease ran out (2 s here), renders no finished unit
+// again, and ends it bit-identical; the job and its image are served by the survivor.
+TEST_F(FarmSchedulerOnPostgresTest, KillingOneOfTwoSchedulersMidJobLeavesTheOtherToFinishIt) {
+  auto w1 = start_worker("w1");
+  auto w2 = start_worker("w2");
+  const std::vector<std::string> workers{"--worker", w1->address(), "--worker", w2->address(), "--float"};
+  auto a = start_scheduler(workers);
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("path", 64, 48, 512, 8);
+  const v1::Job job = submit_ok(spec);
+  auto b = start_scheduler(workers);  // stub_ talks to b from here on
+  ASSERT_TRUE(stub_);
+  const auto before = test::wait_for_job(
+      *stub_, job.job_id(), [](const v1::Job& j) { return j.tiles_done() >= 6 || done(j); }, 60s);
+  ASSERT_TRUE(before);
+  ASSERT_FALSE(done(*before)) << "the job finished before the kill";
+  a->process().send_signal(SIGKILL);
+  ASSERT_TRUE(a->process().wait_exit(10s));
+  EXPECT_TRUE(b->process().wait_for_line("its lease ran out", 30s)) << b->process().output();
+
+  const auto final_job = test::wait_for_job(*stub_, job.job_id(), done, 90s);
+  ASSERT_TRUE(final_job);
+  ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason() << b->process().output();
+  EXPECT_EQ(final_job->tile_failures(), 0u);
+  EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());  // none rendered twice
+  EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
 }
 
 // --store takes only a PostgreSQL URL (exit 2 naming the flag); a server that is not there stops

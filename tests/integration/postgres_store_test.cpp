@@ -106,5 +106,39 @@ TEST(PostgresStoreTest, SchedulersOpeningOneNewDatabaseAtOnceMakeTheSchemaOnce) 
   PQfinish(c);
 }
 
+// The first upgrade written for both stores, on PostgreSQL: a version 6 database (no scheduler
+// leases) is upgraded in place, its jobs kept and its running tiles queued again.
+TEST(PostgresStoreTest, AVersion6StoreIsUpgradedInPlace) {
+  test::StoreLocation where(SqlDialect::PostgreSQL);
+  ASSERT_TRUE(where.problem().empty()) << where.problem();
+  {
+    JobStore store(connect_store(where.location()));
+    store.add_job(one_row_job("a", 3), 1);
+    ASSERT_TRUE(store.claim_next_batch("w", 2));
+    ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
+    ASSERT_TRUE(store.claim_next_batch("w", 3));  // running when the version went back
+  }
+  PGconn* c = PQconnectdb(where.location().c_str());
+  for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
+                          "UPDATE schema_version SET version = 6"}) {
+    PGresult* r = PQexec(c, sql);
+    EXPECT_EQ(PQresultStatus(r), PGRES_COMMAND_OK) << sql << ": " << PQerrorMessage(c);
+    PQclear(r);
+  }
+  JobStore store(connect_store(where.location()));
+  PGresult* r = PQexec(c, "SELECT version FROM schema_version");
+  ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQerrorMessage(c);
+  EXPECT_STREQ(PQgetvalue(r, 0, 0), "7");
+  PQclear(r);
+  PQfinish(c);
+  const std::vector<TileRecord> tiles = store.tiles("a");
+  ASSERT_EQ(tiles.size(), 3u);
+  EXPECT_EQ(tiles[0].state, TileState::Done);
+  EXPECT_EQ(tiles[1].state, TileState::Queued);
+  store.set_scheduler("s");
+  store.hold_lease(100);
+  EXPECT_EQ(store.claim_next_batch("w", 4)->first, 1u);
+}
+
 }  // namespace
 }  // namespace farm

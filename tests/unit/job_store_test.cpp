@@ -212,7 +212,7 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
     // Back to what version 1 had: no part column, no owner.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -240,7 +240,7 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     // Back to what version 2 had: no owner column, no lost_attempts.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -274,7 +274,7 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -294,13 +294,13 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
     EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
     EXPECT_EQ(store.tiles("a")[0].lost_attempts, 1);
   }
-  // Upgraded once: it opens as version 6 from now on.
+  // Upgraded once: it opens as version 7 from now on.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* s = nullptr;
   ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(s, 0), 6);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 7);
   sqlite3_finalize(s);
   sqlite3_close(db);
 }
@@ -321,7 +321,7 @@ TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZ
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -399,7 +399,7 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
                             "UPDATE schema_version SET version = 5"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -421,6 +421,33 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
 // A job of sample passes: its units are numbered pass after pass within each frame, so the queue
 // hands a frame's passes out in order; a batch never crosses a pass; complete_passes counts the
 // passes done from the first on; a frame is complete when all its passes are.
+// Version 7 adds the schedulers' leases: a tile running in a version 6 store names no scheduler,
+// and is queued again at open.
+TEST(SqliteStoreUpgradeTest, AVersion6StoreIsUpgradedAndItsRunningTilesAreQueuedAgain) {
+  test::TempDir dir;
+  {
+    JobStore store(dir / "jobs.db");
+    store.add_job(make_job("a", 0, 2), 1);
+    ASSERT_TRUE(store.claim_next_batch("w", 2));
+  }
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
+    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
+                            "UPDATE tiles SET state = 1 WHERE idx = 0", "UPDATE schema_version SET version = 6"}) {
+      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    }
+    sqlite3_close(db);
+  }
+  JobStore store(dir / "jobs.db");
+  EXPECT_EQ(store.tiles("a")[0].state, TileState::Queued);
+  store.set_scheduler("s");
+  store.hold_lease(10);
+  const auto b = store.claim_next_batch("w", 3);
+  ASSERT_TRUE(b);
+  EXPECT_TRUE(store.batch_done("a", b->first, 1, {}, "w"));
+}
+
 TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
   JobStore store(connect());
   NewJob job = make_job("p", 0, 2);  // two tiles a frame, in one row
@@ -783,6 +810,42 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
     EXPECT_EQ(job.tiles_rendered(), static_cast<std::uint32_t>(kTiles));
     EXPECT_EQ(job.stats().samples(), static_cast<std::uint64_t>(kTiles));
   }
+}
+
+// Two schedulers on one store, each handing out tiles to a worker both call "w1". When the first
+// one's lease runs out, the second queues its running tiles again (no attempt counted) and the
+// first one's late answer is refused; the second's own tiles are never touched, nor is a lease
+// still running.
+TEST_P(JobStoreTest, AnExpiredSchedulersTilesComeBackWithoutAnAttemptAndItsLateAnswerIsRefused) {
+  JobStore a(connect()), b(connect());
+  a.set_scheduler("a");
+  b.set_scheduler("b");
+  a.add_job(make_job("j", 0, 4), 1);
+  a.hold_lease(1000);
+  b.hold_lease(5000);
+  const auto a1 = a.claim_next_batch("w1", 10);
+  const auto a2 = a.claim_next_batch("w1", 10);
+  const auto b1 = b.claim_next_batch("w1", 10);
+  ASSERT_TRUE(a1 && a2 && b1);
+  EXPECT_FALSE(b.batch_done("j", a1->first, 1, {}, "w1"));  // not b's to mark
+  EXPECT_TRUE(b.reap_expired(999).empty());                 // a's lease still runs
+  const std::vector<ReapedScheduler> reaped = b.reap_expired(1001);
+  ASSERT_EQ(reaped.size(), 1u);
+  EXPECT_EQ(reaped[0].id, "a");
+  EXPECT_EQ(reaped[0].tiles_queued_again, 2);
+  EXPECT_TRUE(a.reap_expired(1001).empty());  // gone with the first reaping
+  std::vector<TileRecord> tiles = b.tiles("j");
+  EXPECT_EQ(tiles[a1->first].state, TileState::Queued);
+  EXPECT_EQ(tiles[a2->first].state, TileState::Queued);
+  EXPECT_EQ(tiles[a1->first].attempts + tiles[a1->first].lost_attempts, 0);
+  EXPECT_EQ(tiles[b1->first].state, TileState::Running);
+  EXPECT_FALSE(a.batch_done("j", a1->first, 1, {}, "w1"));  // the late answer
+  EXPECT_TRUE(b.batch_done("j", b1->first, 1, {}, "w1"));
+  // b renders the rest; a scheduler never reaps itself, whatever its lease says.
+  EXPECT_TRUE(b.reap_expired(999999).empty());
+  while (const auto next = b.claim_next_batch("w1", 20)) ASSERT_TRUE(b.batch_done("j", next->first, 1, {}, "w1"));
+  EXPECT_EQ(b.get_job("j")->tiles_done(), 4u);
+  EXPECT_EQ(b.get_job("j")->tiles_rendered(), 4u);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothStores, JobStoreTest, ::testing::ValuesIn(test::kBothStores),

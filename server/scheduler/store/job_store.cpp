@@ -17,7 +17,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 6;
+constexpr int kSchemaVersion = 7;
 
 // The tables, written once for both stores: {integer}, {blob} and {key} are each dialect's types
 // (PostgreSQL's integers all bigint, as the store binds them), {empty_blob} its empty blob.
@@ -65,6 +65,7 @@ CREATE TABLE IF NOT EXISTS tiles (
   part {integer} NOT NULL DEFAULT 0,
   frame {integer} NOT NULL DEFAULT 0,
   pass {integer} NOT NULL DEFAULT 0,
+  scheduler TEXT NOT NULL DEFAULT '',
   PRIMARY KEY (job_seq, idx)
 );
 CREATE INDEX IF NOT EXISTS tiles_by_state ON tiles (state, job_seq, idx);
@@ -72,6 +73,10 @@ CREATE TABLE IF NOT EXISTS frames (
   job_seq {integer} NOT NULL REFERENCES jobs (seq),
   frame {integer} NOT NULL,
   PRIMARY KEY (job_seq, frame)
+);
+CREATE TABLE IF NOT EXISTS schedulers (
+  id TEXT PRIMARY KEY,
+  lease_until_ms {integer} NOT NULL
 );
 CREATE TABLE IF NOT EXISTS parts (
   job_seq {integer} NOT NULL REFERENCES jobs (seq),
@@ -178,8 +183,13 @@ JobStore::JobStore(std::unique_ptr<SqlConnection> db) : db_(std::move(db)) {
   } else {
     open_sqlite();
   }
-  // Tiles in flight when the last scheduler stopped: their results died with it.
-  db_->exec("UPDATE tiles SET state = 0, worker = '' WHERE state = 1");
+  // Tiles in flight when the last scheduler stopped: their results died with it. A SQLite store
+  // has one scheduler, so every running tile was its; on PostgreSQL only those of no scheduler
+  // (an older version's), the others coming back when their scheduler's lease runs out
+  // (reap_expired).
+  db_->exec(db_->dialect() == SqlDialect::SQLite
+                ? "UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE state = 1"
+                : "UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND scheduler = ''");
 }
 
 std::unique_ptr<SqlConnection> connect_store(const std::string& location) {
@@ -227,10 +237,12 @@ void JobStore::open_sqlite() {
                             static_cast<int>(v1::JOB_STATE_SUCCEEDED)));
       db_->exec("INSERT INTO frames (job_seq, frame) SELECT seq, 0 FROM jobs WHERE frames_done = 1");
     }
-    // Version 6 renders sample passes: every older job is one pass, pass 0.
-    db_->exec("ALTER TABLE tiles ADD COLUMN pass INTEGER NOT NULL DEFAULT 0");
-    db_->exec("ALTER TABLE jobs ADD COLUMN passes INTEGER NOT NULL DEFAULT 1");
-    db_->exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion));
+    if (version <= 5) {
+      // Version 6 renders sample passes: every older job is one pass, pass 0.
+      db_->exec("ALTER TABLE tiles ADD COLUMN pass INTEGER NOT NULL DEFAULT 0");
+      db_->exec("ALTER TABLE jobs ADD COLUMN passes INTEGER NOT NULL DEFAULT 1");
+    }
+    upgrade_from_6(version);
     t.commit();
   } else if (version != kSchemaVersion) {
     throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}", db_->describe(),
@@ -251,14 +263,26 @@ void JobStore::open_postgres() {
     Query s(db_->prepared("SELECT version FROM schema_version"));
     if (s.step()) version = s.i32(0);
   }
-  // The PostgreSQL store began at version 6: upgrades from here on are written for both.
+  // The PostgreSQL store began at version 6: upgrades from there on are written for both.
   if (version == 0) {
     Query(db_->prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
+  } else if (version >= 6 && version < kSchemaVersion) {
+    upgrade_from_6(version);
   } else if (version != kSchemaVersion) {
     throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}", db_->describe(),
                                          version, kSchemaVersion));
   }
   t.commit();
+}
+
+void JobStore::upgrade_from_6(int version) {
+  if (version <= 6) {
+    // Version 7: several schedulers on one store. A running tile names the scheduler that handed
+    // it out, and each scheduler holds a lease (the schedulers table the schema made). Tiles
+    // running in an older store name none: queued again at open.
+    db_->exec("ALTER TABLE tiles ADD COLUMN scheduler TEXT NOT NULL DEFAULT ''");
+  }
+  db_->exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion));
 }
 
 JobStore::~JobStore() = default;
@@ -483,8 +507,8 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
       }
     }
   }
-  Query(db_->prepared("UPDATE tiles SET state = 1, worker = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
-      .bind(1, worker).bind(2, seq).bind(3, batch.first).bind(4, batch.first + batch.count).run();
+  Query(db_->prepared("UPDATE tiles SET state = 1, worker = ?, scheduler = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
+      .bind(1, worker).bind(2, scheduler_).bind(3, seq).bind(4, batch.first).bind(5, batch.first + batch.count).run();
   Query(db_->prepared("UPDATE jobs SET state = ?, started_ms = CASE WHEN started_ms = 0 THEN ? ELSE "
                      "started_ms END WHERE seq = ?"))
       .bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, now_ms).bind(3, seq).run();
@@ -511,9 +535,10 @@ std::optional<std::int64_t> JobStore::running_batch_locked(const std::string& jo
   Query find(db_->prepared(fmt::format(
                      "SELECT j.seq, COUNT(*) FROM jobs j JOIN tiles t ON t.job_seq = j.seq WHERE j.id = ? "
                      "AND j.state IN {} AND t.idx >= ? AND t.idx < ? AND t.state = 1 "
-                     "AND (? = '' OR t.worker = ?) GROUP BY j.seq",
+                     "AND (? = '' OR t.worker = ?) AND t.scheduler = ? GROUP BY j.seq",
                      kActiveSql)));
-  find.bind(1, job_id).bind(2, first).bind(3, static_cast<std::int64_t>(first) + count).bind(4, worker).bind(5, worker);
+  find.bind(1, job_id).bind(2, first).bind(3, static_cast<std::int64_t>(first) + count).bind(4, worker).bind(5, worker)
+      .bind(6, scheduler_);
   if (!find.step() || find.i64(1) != count) return std::nullopt;
   return find.i64(0);
 }
@@ -577,7 +602,7 @@ TileFailure JobStore::count_attempt(AttemptKind kind, const std::string& job_id,
     if (s.step()) attempts = s.i32(0) + 1;
   }
   result.will_retry = attempts < max;
-  Query(db_->prepared(fmt::format("UPDATE tiles SET state = ?, {0} = {0} + 1, last_error = ?, worker = '' "
+  Query(db_->prepared(fmt::format("UPDATE tiles SET state = ?, {0} = {0} + 1, last_error = ?, worker = '', scheduler = '' "
                                  "WHERE job_seq = ? AND idx >= ? AND idx < ?",
                                  column)))
       .bind(1, static_cast<int>(result.will_retry ? TileState::Queued : TileState::Failed))
@@ -604,10 +629,58 @@ TileFailure JobStore::count_attempt(AttemptKind kind, const std::string& job_id,
 void JobStore::batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                              const std::string& worker) {
   std::lock_guard lock(mutex_);
-  Query(db_->prepared("UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND idx >= ? AND idx < ? "
-                     "AND job_seq = (SELECT seq FROM jobs WHERE id = ?) AND (? = '' OR worker = ?)"))
+  Query(db_->prepared("UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE state = 1 AND idx >= ? "
+                     "AND idx < ? AND job_seq = (SELECT seq FROM jobs WHERE id = ?) AND (? = '' OR worker = ?) "
+                     "AND scheduler = ?"))
       .bind(1, first).bind(2, static_cast<std::int64_t>(first) + count).bind(3, job_id).bind(4, worker)
-      .bind(5, worker).run();
+      .bind(5, worker).bind(6, scheduler_).run();
+}
+
+void JobStore::set_scheduler(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  scheduler_ = id;
+}
+
+void JobStore::hold_lease(std::int64_t until_ms) {
+  std::lock_guard lock(mutex_);
+  Query(db_->prepared("INSERT INTO schedulers (id, lease_until_ms) VALUES (?, ?) "
+                      "ON CONFLICT (id) DO UPDATE SET lease_until_ms = excluded.lease_until_ms"))
+      .bind(1, scheduler_).bind(2, until_ms).run();
+}
+
+void JobStore::drop_lease() {
+  std::lock_guard lock(mutex_);
+  Query(db_->prepared("DELETE FROM schedulers WHERE id = ?")).bind(1, scheduler_).run();
+}
+
+std::vector<ReapedScheduler> JobStore::reap_expired(std::int64_t now_ms) {
+  std::lock_guard lock(mutex_);
+  SqlTransaction t(*db_);
+  std::vector<ReapedScheduler> reaped;
+  {
+    // Locked, so that two schedulers reaping at once take each lease once.
+    const std::string lock_rows = db_->dialect() == SqlDialect::PostgreSQL ? " FOR UPDATE SKIP LOCKED" : "";
+    Query s(db_->prepared("SELECT id FROM schedulers WHERE lease_until_ms < ? AND id <> ? ORDER BY id" + lock_rows));
+    s.bind(1, now_ms).bind(2, scheduler_);
+    while (s.step()) reaped.push_back({s.text(0), 0});
+  }
+  for (ReapedScheduler& r : reaped) {
+    // Its running tiles' jobs, locked in seq order as every transaction that touches several does.
+    std::vector<std::int64_t> jobs;
+    {
+      Query s(db_->prepared("SELECT DISTINCT job_seq FROM tiles WHERE state = 1 AND scheduler = ? ORDER BY job_seq"));
+      s.bind(1, r.id);
+      while (s.step()) jobs.push_back(s.i64(0));
+    }
+    for (std::int64_t seq : jobs) lock_job_locked(seq);
+    // Not the tiles' fault: no attempt counted.
+    Query requeue(db_->prepared("UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE state = 1 AND scheduler = ?"));
+    requeue.bind(1, r.id).run();
+    r.tiles_queued_again = requeue.changes();
+    Query(db_->prepared("DELETE FROM schedulers WHERE id = ?")).bind(1, r.id).run();
+  }
+  t.commit();
+  return reaped;
 }
 
 std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
@@ -651,10 +724,10 @@ std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
     take_back_part_locked(seq, b.first, b.count);
   }
   // Its calls in flight and its results waiting for a spot check: nothing of them is kept.
-  Query(db_->prepared(fmt::format("UPDATE tiles SET state = 0, worker = '' WHERE worker = ? AND state = 1 "
-                                 "AND job_seq IN (SELECT seq FROM jobs WHERE state IN {})",
+  Query(db_->prepared(fmt::format("UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE worker = ? "
+                                 "AND state = 1 AND scheduler = ? AND job_seq IN (SELECT seq FROM jobs WHERE state IN {})",
                                  kActiveSql)))
-      .bind(1, worker).run();
+      .bind(1, worker).bind(2, scheduler_).run();
   t.commit();
   return discarded;
 }

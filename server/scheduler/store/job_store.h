@@ -6,8 +6,8 @@
 // lost with the process) and keeps done tiles done (their data is on disk, written before they
 // were marked).
 //
-// Schema (version 6; a SQLite store of version 1 to 5 is upgraded in place; the PostgreSQL store
-// began at 6, in PostgreSQL's types):
+// Schema (version 7; a SQLite store of version 1 to 6 is upgraded in place, a PostgreSQL store,
+// which began at 6 in PostgreSQL's types, from 6):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
 //        id TEXT UNIQUE, name, spec BLOB (farm.v1.JobSpec), scene_hash, engine, width, height,
@@ -22,7 +22,9 @@
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart
 //         from attempts), frame (version 5: the frame it is a tile of), pass (version 6: the
-//         sample pass it renders); PRIMARY KEY (job_seq, idx))
+//         sample pass it renders), scheduler (version 7: running tiles: the scheduler that
+//         handed it out); PRIMARY KEY (job_seq, idx))
+//   schedulers(id TEXT PRIMARY KEY, lease_until_ms)  -- version 7: the schedulers' leases
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 //   frames(job_seq, frame; PRIMARY KEY (job_seq, frame))  -- version 5: the frames merged
 // A job's tiles (its units) are numbered frame after frame and, within a frame, pass after pass:
@@ -105,6 +107,12 @@ struct TileBatch {
 // (counted only up to claim_next_batch's `count_up_to`).
 using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
 
+// A scheduler whose lease ran out, and how many of the tiles it had handed out came back.
+struct ReapedScheduler {
+  std::string id;
+  std::int64_t tiles_queued_again = 0;
+};
+
 // What batch_failed did.
 struct TileFailure {
   bool will_retry = false;  // false: the job is now FAILED with the reason
@@ -131,6 +139,8 @@ class JobStore {
 
   // Where it is, for messages: the file, or the URL without a password.
   std::string describe() const;
+  // Whether several schedulers may share it (PostgreSQL): they then hold leases (set_scheduler).
+  bool is_shared() const { return db_->dialect() == SqlDialect::PostgreSQL; }
 
   std::optional<v1::Job> get_job(const std::string& id) const;
   std::optional<v1::JobSpec> get_spec(const std::string& id) const;
@@ -177,6 +187,20 @@ class JobStore {
   TileFailure batch_lost(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                          const std::string& reason, int max_lost_attempts, std::int64_t now_ms,
                          const std::string& worker = {});
+  // Several schedulers on one store (PostgreSQL). Each marks the tiles it hands out with its id
+  // (set_scheduler, once, before any claim; "" until then) and the batch operations below act only
+  // on tiles this store's scheduler handed out. A scheduler holds a lease in the store, renewed
+  // (hold_lease) well before it runs out; when one runs out (the scheduler was killed, or lost the
+  // store or its machine), any other's reap_expired queues its running tiles again with no
+  // attempt counted, and a late answer to the dead one finds them running no more.
+  void set_scheduler(const std::string& id);
+  void hold_lease(std::int64_t until_ms);
+  // The lease given up (a scheduler that stops): its running tiles are queued again by itself.
+  void drop_lease();
+  // Every other scheduler whose lease ran out before `now_ms`: its running tiles queued again and
+  // its lease gone. One transaction.
+  std::vector<ReapedScheduler> reap_expired(std::int64_t now_ms);
+
   // Puts a running batch back in the queue without counting an attempt (a shutdown, not a failure).
   void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                      const std::string& worker = {});
@@ -239,8 +263,11 @@ class JobStore {
   // tiles_done lowered. The caller queues its tiles again.
   void take_back_part_locked(std::int64_t seq, std::uint32_t part, std::uint32_t count);
 
+  void upgrade_from_6(int version);  // the upgrades written for both stores
+
   mutable std::mutex mutex_;
   std::unique_ptr<SqlConnection> db_;
+  std::string scheduler_;  // set_scheduler
 };
 
 }  // namespace farm
