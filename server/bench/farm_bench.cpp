@@ -82,12 +82,18 @@ void compare_setups(const FarmBenchOptions& o, const fs::path& dir, const JobSub
              100.0 * (median(b_over_a) - 1.0), median(b_over_c));
 }
 
-// Tiny jobs: one 16x16 tile each, submitted back to back to a scheduler on `store` with one
-// worker, then followed to the end: jobs/s and units/s (a tiny job is one unit), submit latency,
-// and none lost.
-void run_tiny_jobs(const FarmBenchOptions& o, const fs::path& dir, const std::string& label, const std::string& store) {
-  bench::LoopbackFarm farm(dir, 1, o.tiles_per_worker, o.batch_ms, 0, store);
-  SchedulerClient client(farm.address());
+// Tiny jobs: one 16x16 tile each, submitted back to back to `schedulers` schedulers on `store`
+// (taking turns; one data dir), each with one registered worker, then followed to the end:
+// jobs/s and units/s (a tiny job is one unit), submit latency, and none lost.
+void run_tiny_jobs(const FarmBenchOptions& o, const fs::path& dir, const std::string& label, const std::string& store,
+                   int schedulers) {
+  std::vector<std::unique_ptr<bench::LoopbackFarm>> farms;
+  std::vector<std::unique_ptr<SchedulerClient>> clients;
+  for (int i = 0; i < schedulers; ++i) {
+    farms.push_back(std::make_unique<bench::LoopbackFarm>(dir / fmt::format("scheduler{}", i), 1, o.tiles_per_worker,
+                                                          o.batch_ms, 0, store, dir / "data"));
+    clients.push_back(std::make_unique<SchedulerClient>(farms.back()->address()));
+  }
   RenderOverrides tiny;
   tiny.engine = "raster";
   tiny.width = 16;
@@ -95,30 +101,31 @@ void run_tiny_jobs(const FarmBenchOptions& o, const fs::path& dir, const std::st
   tiny.spp = 1;
   tiny.preview = fs::path();
   const JobSubmission small = make_job_submission(o.job, {}, tiny);
-  client.upload_missing(small);
-  std::vector<std::string> ids;
+  clients.front()->upload_missing(small);
+  std::vector<std::pair<SchedulerClient*, std::string>> ids;
   std::vector<double> latency_ms;
   const Clock::time_point start = Clock::now();
   for (int i = 0; i < o.tiny_jobs; ++i) {
+    SchedulerClient& client = *clients[static_cast<std::size_t>(i % schedulers)];
     const Clock::time_point t = Clock::now();
     client.upload_missing(small);  // as `farm submit` does: one HasAssets, nothing to upload
-    ids.push_back(client.submit(small, 0).job_id());
+    ids.emplace_back(&client, client.submit(small, 0).job_id());
     latency_ms.push_back(1e3 * seconds_since(t));
   }
   const double submitted_s = seconds_since(start);
   int succeeded = 0;
   std::uint64_t units = 0;
-  for (const std::string& id : ids) {
-    const v1::Job job = client.watch(id, {});
+  for (const auto& [client, id] : ids) {
+    const v1::Job job = client->watch(id, {});
     succeeded += job.state() == v1::JOB_STATE_SUCCEEDED ? 1 : 0;
     units += job.tiles_done();
   }
   const double total_s = seconds_since(start);
   std::sort(latency_ms.begin(), latency_ms.end());
-  fmt::print("{} tiny jobs (16x16 raster) on {}: submitted in {:.3f} s, all finished after {:.3f} s: {:.0f} jobs/s, "
-             "{:.0f} units/s; {} succeeded, {} lost or failed\n",
-             o.tiny_jobs, label, submitted_s, total_s, o.tiny_jobs / total_s, static_cast<double>(units) / total_s,
-             succeeded, o.tiny_jobs - succeeded);
+  fmt::print("{} tiny jobs (16x16 raster) on {}, {} scheduler{} with a worker each: submitted in {:.3f} s, all "
+             "finished after {:.3f} s: {:.0f} jobs/s, {:.0f} units/s; {} succeeded, {} lost or failed\n",
+             o.tiny_jobs, label, schedulers, schedulers == 1 ? "" : "s", submitted_s, total_s, o.tiny_jobs / total_s,
+             static_cast<double>(units) / total_s, succeeded, o.tiny_jobs - succeeded);
   fmt::print("  submit latency: median {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms\n", latency_ms[latency_ms.size() / 2],
              latency_ms[std::min(latency_ms.size() - 1, latency_ms.size() * 99 / 100)], latency_ms.back());
   if (succeeded != o.tiny_jobs) {
@@ -148,8 +155,11 @@ void run_farm_bench(const FarmBenchOptions& o) {
   // tiny jobs' database commits.
   ::sync();
 
-  run_tiny_jobs(o, dir / "tiny-sqlite", "SQLite", {});
-  if (!o.store.empty()) run_tiny_jobs(o, dir / "tiny-postgresql", "PostgreSQL", o.store);
+  run_tiny_jobs(o, dir / "tiny-sqlite", "SQLite", {}, 1);
+  if (!o.store.empty()) {
+    run_tiny_jobs(o, dir / "tiny-postgresql-1", "PostgreSQL", o.store, 1);
+    run_tiny_jobs(o, dir / "tiny-postgresql-2", "PostgreSQL", o.store, 2);
+  }
 }
 
 }  // namespace farm

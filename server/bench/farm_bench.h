@@ -3,7 +3,7 @@
 // through (a) `farm render` (the embedded farm), (b) a `farm scheduler` and one `farm worker`
 // over loopback, (c) the scheduler and two workers; then many tiny jobs submitted back to back to
 // (b) for jobs/s and submit latency, checking that none is lost: on SQLite, and beside it on the
-// PostgreSQL store given (`--store`).
+// PostgreSQL store given (`--store`) with one scheduler and with two.
 #include <filesystem>
 #include <string>
 

@@ -14,9 +14,10 @@ constexpr auto kStartTimeout = std::chrono::seconds(30);
 }  // namespace
 
 LoopbackFarm::LoopbackFarm(const std::filesystem::path& dir, int workers, int tiles_per_worker, int batch_ms,
-                           int worker_threads, const std::string& store) {
+                           int worker_threads, const std::string& store, const std::filesystem::path& data_dir) {
   const std::string farm = self_binary();
-  std::vector<std::string> args{farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir", (dir / "scheduler").string(),
+  std::vector<std::string> args{farm, "scheduler", "--listen", "127.0.0.1:0", "--data-dir",
+                                (data_dir.empty() ? dir / "scheduler" : data_dir).string(),
                                 "--tiles-per-worker", std::to_string(tiles_per_worker), "--batch-ms",
                                 std::to_string(batch_ms)};
   if (!store.empty()) args.insert(args.end(), {"--store", store});

@@ -14,12 +14,13 @@ namespace farm::bench {
 
 class LoopbackFarm {
  public:
-  // Starts `farm scheduler` under dir/scheduler (its job store `store`, a postgresql:// URL, or
-  // empty for SQLite there) and `workers` registered workers with `worker_threads` threads each
-  // (0: all cores); returns once every worker has registered. Throws std::runtime_error with the
-  // process's output when one does not start.
+  // Starts `farm scheduler` with its data dir `data_dir` (empty: dir/scheduler) and its job store
+  // `store` (a postgresql:// URL, or empty for SQLite in the data dir), and `workers` registered
+  // workers with `worker_threads` threads each (0: all cores) under dir; returns once every
+  // worker has registered. Two farms given one store and one data dir are two schedulers of one
+  // farm. Throws std::runtime_error with the process's output when one does not start.
   LoopbackFarm(const std::filesystem::path& dir, int workers, int tiles_per_worker, int batch_ms, int worker_threads,
-               const std::string& store = {});
+               const std::string& store = {}, const std::filesystem::path& data_dir = {});
   const std::string& address() const { return address_; }
 
  private:

@@ -124,10 +124,13 @@ void Finisher::merge_complete(const std::string& job_id, const std::set<int>& fr
     }
   }
   for (int f : complete) {
+    // Another scheduler of the store may have found it complete too: one of them merges it.
+    if (!store_.claim_frame_merge(job_id, f)) continue;
     if (!merge_frame(job_id, f)) return;
   }
   const v1::Job now = *store_.get_job(job_id);
   if (is_final(now.state()) || now.frames_done() < now.frames_total() || now.tiles_done() < now.tiles_total()) return;
+  if (!store_.claim_job_end(job_id)) return;  // another scheduler ends it
   finish(job_id);
 }
 

@@ -14,7 +14,9 @@
 // (store_outage.h). While the disk stays full, make_room() frees the tiles of
 // the youngest job holding some, so that the farm's own tiles never hold the disk for good.
 // A job whose end takes long (its Embree check, its video) ends on a thread of its own
-// (job_endings.h), so that the slot that merged its last frame goes back to rendering.
+// (job_endings.h), so that the slot that merged its last frame goes back to rendering. Several
+// schedulers of one store may find a frame complete, or a job's frames all merged, at once: the
+// one that claims it in the store (JobStore::claim_frame_merge, claim_job_end) merges or ends it.
 //
 // Lock: Finisher::mutex_ guards merging_ (a job being merged, and whether to look again) and
 // refused_ only, and is a leaf: the merge itself runs

@@ -91,8 +91,12 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
   // lease; the units of one that died come back when its lease runs out.
   store_.set_scheduler(scheduler_id_);
   if (store_.is_shared()) {
-    lease_ = std::make_unique<SchedulerLease>(store_, outage_, *log_, options_.lease,
-                                              [this] { dispatcher_.work_queued(); });
+    // A scheduler reaped: its units are queued again for the slots, and the merges and ends it
+    // had claimed are free for this one.
+    lease_ = std::make_unique<SchedulerLease>(store_, outage_, *log_, options_.lease, [this] {
+      dispatcher_.work_queued();
+      finish_active_jobs();
+    });
   }
   // Jobs interrupted between their last tile and their merge.
   finish_active_jobs();

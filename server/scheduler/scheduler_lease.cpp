@@ -47,13 +47,11 @@ void SchedulerLease::renew_and_reap() {
     store_.hold_lease(now + length_.count());
     const std::vector<ReapedScheduler> reaped = store_.reap_expired(now);
     outage_.answered();
-    std::int64_t units = 0;
     for (const ReapedScheduler& r : reaped) {
       log_.warn("scheduler {}: its lease ran out; its {} running unit{} queued again", r.id, r.tiles_queued_again,
                 r.tiles_queued_again == 1 ? "" : "s");
-      units += r.tiles_queued_again;
     }
-    if (units > 0 && on_reaped_) on_reaped_();
+    if (!reaped.empty() && on_reaped_) on_reaped_();
   } catch (const StoreUnavailable& e) {
     outage_.report(e);
   } catch (const std::exception& e) {

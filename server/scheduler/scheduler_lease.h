@@ -24,7 +24,8 @@ namespace farm {
 class SchedulerLease {
  public:
   // Holds the lease of `store`'s scheduler (set_scheduler) for `length` from now on, and starts
-  // renewing it; `on_reaped` runs after another scheduler's units came back.
+  // renewing it; `on_reaped` runs after another scheduler was reaped (its units queued again, its
+  // claims free).
   SchedulerLease(JobStore& store, StoreOutage& outage, spdlog::logger& log, std::chrono::milliseconds length,
                  std::function<void()> on_reaped);
   ~SchedulerLease();  // stop()

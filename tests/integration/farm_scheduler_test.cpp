@@ -1,6 +1,7 @@
 // Starts the real `farm scheduler` and `farm worker` binaries on loopback and drives them through
 // the generated farm.v1.Scheduler stub: results bit-identical to `farm render`, workers and the
 // scheduler killed mid-job, cancellation, bad jobs. Every wait is bounded; nothing sleeps blind.
+#include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -431,6 +432,58 @@ TEST_F(FarmSchedulerOnPostgresTest, KillingOneOfTwoSchedulersMidJobLeavesTheOthe
   EXPECT_EQ(final_job->tile_failures(), 0u);
   EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());  // none rendered twice
   EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
+}
+
+// Two schedulers on one PostgreSQL store and data dir, both sending units to the same two workers,
+// take 50 jobs at once, half through each: none is lost, no unit is rendered twice (each frame
+// merged and each job ended by one of them), and every image is bit-identical to the job rendered
+// here, whichever scheduler it is fetched from.
+TEST_F(FarmSchedulerOnPostgresTest, TwoSchedulersTakeFiftyJobsAtOnceAndRenderEachOnce) {
+  auto w1 = start_worker("w1");
+  auto w2 = start_worker("w2");
+  const std::vector<std::string> workers{"--worker", w1->address(), "--worker", w2->address(), "--float"};
+  auto a = start_scheduler(workers);
+  ASSERT_TRUE(stub_);
+  std::unique_ptr<v1::Scheduler::Stub> to_a = std::move(stub_);
+  auto b = start_scheduler(workers);
+  ASSERT_TRUE(stub_);
+  std::unique_ptr<v1::Scheduler::Stub> to_b = std::move(stub_);
+  ASSERT_TRUE(test::upload_assets(*to_a, test::cornell_assets()).ok());
+  const std::vector<v1::JobSpec> specs{cornell("raster", 48, 32, 1, 16), cornell("whitted", 48, 32, 1, 16),
+                                       cornell("path", 48, 32, 4, 16)};
+  constexpr int kJobs = 50;
+  std::vector<std::string> ids(kJobs);
+  const auto submit_half = [&](v1::Scheduler::Stub& stub, int parity) {
+    for (int i = parity; i < kJobs; i += 2) {
+      v1::Job job;
+      const grpc::Status status = test::submit(stub, specs[static_cast<std::size_t>(i) % specs.size()], job);
+      EXPECT_TRUE(status.ok()) << status.error_message();
+      ids[static_cast<std::size_t>(i)] = job.job_id();
+    }
+  };
+  std::thread through_a(submit_half, std::ref(*to_a), 0);
+  std::thread through_b(submit_half, std::ref(*to_b), 1);
+  through_a.join();
+  through_b.join();
+
+  std::vector<TileBuffer> expected;
+  for (const v1::JobSpec& spec : specs) expected.push_back(render_locally(spec));
+  for (int i = 0; i < kJobs; ++i) {
+    v1::Scheduler::Stub& stub = i % 3 == 0 ? *to_a : *to_b;  // not always where it was submitted
+    const auto final_job = test::wait_for_job(stub, ids[static_cast<std::size_t>(i)], done, 120s);
+    ASSERT_TRUE(final_job) << "job " << i;
+    ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << i << ": " << final_job->failure_reason();
+    EXPECT_EQ(final_job->tile_failures(), 0u) << i;
+    EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total()) << i;
+    const fs::path file = dir_ / fmt::format("job{}.exr", i);
+    ASSERT_TRUE(test::fetch_result(stub, final_job->job_id(), v1::RESULT_KIND_EXR, file).ok()) << i;
+    EXPECT_EQ(differing_pixels(read_exr(file), expected[static_cast<std::size_t>(i) % specs.size()]), 0) << i;
+  }
+  // Each job ended once: by one scheduler or the other, never both.
+  const std::string logs = a->process().output() + b->process().output();
+  std::size_t ended = 0;
+  for (std::size_t at = logs.find(" done: "); at != std::string::npos; at = logs.find(" done: ", at + 1)) ++ended;
+  EXPECT_EQ(ended, static_cast<std::size_t>(kJobs)) << logs;
 }
 
 // --store takes only a PostgreSQL URL (exit 2 naming the flag); a server that is not there stops

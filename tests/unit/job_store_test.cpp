@@ -848,6 +848,39 @@ TEST_P(JobStoreTest, AnExpiredSchedulersTilesComeBackWithoutAnAttemptAndItsLateA
   EXPECT_EQ(b.get_job("j")->tiles_rendered(), 4u);
 }
 
+// Two schedulers find the same frame complete, or the same job's frames all merged: one claims
+// the merge (or the end), the other leaves it. A claim is its holder's again and again, is freed
+// when a part of its frame is taken back, and dies with its holder's lease.
+TEST_P(JobStoreTest, OneSchedulerClaimsEachMergeAndEndAndAClaimDiesWithItsLease) {
+  JobStore a(connect()), b(connect());
+  a.set_scheduler("a");
+  b.set_scheduler("b");
+  a.hold_lease(1000);
+  b.hold_lease(5000);
+  a.add_job(make_job("j", 0, 2), 1);
+  EXPECT_TRUE(a.claim_frame_merge("j", 0));
+  EXPECT_FALSE(b.claim_frame_merge("j", 0));
+  EXPECT_TRUE(a.claim_frame_merge("j", 0));  // still a's
+  EXPECT_TRUE(b.claim_frame_merge("j", 1));  // another frame, another claim
+  EXPECT_TRUE(b.claim_job_end("j"));
+  EXPECT_FALSE(a.claim_job_end("j"));
+  EXPECT_FALSE(a.claim_frame_merge("nothing", 0));  // no such job: nobody's
+
+  // Frame 0's units done by a, then its part taken back: the merge is anybody's again.
+  const auto t0 = a.claim_next_batch("w", 2), t1 = a.claim_next_batch("w", 2);
+  ASSERT_TRUE(t0 && t1);
+  ASSERT_TRUE(a.batch_done("j", t0->first, 1, {}, "w"));
+  ASSERT_TRUE(a.batch_done("j", t1->first, 1, {}, "w"));
+  ASSERT_EQ(a.requeue_parts("j", {t0->first}).size(), 1u);
+  EXPECT_TRUE(b.claim_frame_merge("j", 0));
+
+  // a's lease runs out: what it held goes with it.
+  EXPECT_TRUE(a.claim_frame_merge("j", 2));
+  EXPECT_FALSE(b.claim_frame_merge("j", 2));
+  ASSERT_EQ(b.reap_expired(2000).size(), 1u);
+  EXPECT_TRUE(b.claim_frame_merge("j", 2));
+}
+
 INSTANTIATE_TEST_SUITE_P(BothStores, JobStoreTest, ::testing::ValuesIn(test::kBothStores),
                          [](const auto& p) { return test::store_name(p.param); });
 

@@ -78,6 +78,12 @@ CREATE TABLE IF NOT EXISTS schedulers (
   id TEXT PRIMARY KEY,
   lease_until_ms {integer} NOT NULL
 );
+CREATE TABLE IF NOT EXISTS claims (
+  job_seq {integer} NOT NULL REFERENCES jobs (seq),
+  what TEXT NOT NULL,
+  scheduler TEXT NOT NULL,
+  PRIMARY KEY (job_seq, what)
+);
 CREATE TABLE IF NOT EXISTS parts (
   job_seq {integer} NOT NULL REFERENCES jobs (seq),
   part {integer} NOT NULL,
@@ -190,6 +196,8 @@ JobStore::JobStore(std::unique_ptr<SqlConnection> db) : db_(std::move(db)) {
   db_->exec(db_->dialect() == SqlDialect::SQLite
                 ? "UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE state = 1"
                 : "UPDATE tiles SET state = 0, worker = '' WHERE state = 1 AND scheduler = ''");
+  // Likewise the merges and ends the last scheduler had claimed (on PostgreSQL: reaped with its lease).
+  if (db_->dialect() == SqlDialect::SQLite) db_->exec("DELETE FROM claims");
 }
 
 std::unique_ptr<SqlConnection> connect_store(const std::string& location) {
@@ -677,10 +685,35 @@ std::vector<ReapedScheduler> JobStore::reap_expired(std::int64_t now_ms) {
     Query requeue(db_->prepared("UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE state = 1 AND scheduler = ?"));
     requeue.bind(1, r.id).run();
     r.tiles_queued_again = requeue.changes();
+    Query(db_->prepared("DELETE FROM claims WHERE scheduler = ?")).bind(1, r.id).run();
     Query(db_->prepared("DELETE FROM schedulers WHERE id = ?")).bind(1, r.id).run();
   }
   t.commit();
   return reaped;
+}
+
+bool JobStore::claim_locked(const std::string& job_id, const std::string& what) {
+  SqlTransaction t(*db_);
+  lock_job_locked(job_id);
+  Query(db_->prepared("INSERT INTO claims (job_seq, what, scheduler) SELECT seq, ?, ? FROM jobs WHERE id = ? "
+                      "ON CONFLICT (job_seq, what) DO NOTHING"))
+      .bind(1, what).bind(2, scheduler_).bind(3, job_id).run();
+  Query s(db_->prepared("SELECT c.scheduler FROM claims c JOIN jobs j ON c.job_seq = j.seq WHERE j.id = ? AND c.what = ?"));
+  s.bind(1, job_id).bind(2, what);
+  const bool mine = s.step() && s.text(0) == scheduler_;
+  s.reset();
+  t.commit();
+  return mine;
+}
+
+bool JobStore::claim_frame_merge(const std::string& job_id, int frame) {
+  std::lock_guard lock(mutex_);
+  return claim_locked(job_id, fmt::format("frame {}", frame));
+}
+
+bool JobStore::claim_job_end(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  return claim_locked(job_id, "end");
 }
 
 std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
@@ -746,9 +779,13 @@ void JobStore::take_back_part_locked(std::int64_t seq, std::uint32_t part, std::
   }
   subtract_stats(sum, stats);
   Query(db_->prepared("DELETE FROM parts WHERE job_seq = ? AND part = ?")).bind(1, seq).bind(2, part).run();
-  // Its frame, if merged, is merged again once the part is rendered again.
+  // Its frame, if merged, is merged again once the part is rendered again, by whichever
+  // scheduler claims it then.
   Query(db_->prepared("DELETE FROM frames WHERE job_seq = ?1 AND frame = (SELECT frame FROM tiles WHERE job_seq = ?1 "
                      "AND idx = ?2)"))
+      .bind(1, seq).bind(2, part).run();
+  Query(db_->prepared("DELETE FROM claims WHERE job_seq = ?1 AND what = 'frame ' || (SELECT frame FROM tiles "
+                      "WHERE job_seq = ?1 AND idx = ?2)"))
       .bind(1, seq).bind(2, part).run();
   Query(db_->prepared("UPDATE jobs SET frames_done = (SELECT COUNT(*) FROM frames WHERE job_seq = ?1) WHERE seq = ?1"))
       .bind(1, seq).run();

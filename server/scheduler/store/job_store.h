@@ -25,6 +25,8 @@
 //         sample pass it renders), scheduler (version 7: running tiles: the scheduler that
 //         handed it out); PRIMARY KEY (job_seq, idx))
 //   schedulers(id TEXT PRIMARY KEY, lease_until_ms)  -- version 7: the schedulers' leases
+//   claims(job_seq, what ('frame N', 'end'), scheduler; PRIMARY KEY (job_seq, what))  -- version 7:
+//         who merges a frame, who ends a job
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 //   frames(job_seq, frame; PRIMARY KEY (job_seq, frame))  -- version 5: the frames merged
 // A job's tiles (its units) are numbered frame after frame and, within a frame, pass after pass:
@@ -197,9 +199,15 @@ class JobStore {
   void hold_lease(std::int64_t until_ms);
   // The lease given up (a scheduler that stops): its running tiles are queued again by itself.
   void drop_lease();
-  // Every other scheduler whose lease ran out before `now_ms`: its running tiles queued again and
-  // its lease gone. One transaction.
+  // Every other scheduler whose lease ran out before `now_ms`: its running tiles queued again, its
+  // claims (below) and its lease gone. One transaction.
   std::vector<ReapedScheduler> reap_expired(std::int64_t now_ms);
+  // Work on a job that one scheduler must do alone, though several may find it to do: merging a
+  // frame whose units are all done, ending a job whose frames are all merged. True when it is this
+  // store's scheduler's (claimed now, or before); false when another holds it. A claim lasts
+  // while its scheduler's lease does; a frame's, until a part of it is taken back.
+  bool claim_frame_merge(const std::string& job_id, int frame);
+  bool claim_job_end(const std::string& job_id);
 
   // Puts a running batch back in the queue without counting an attempt (a shutdown, not a failure).
   void batch_requeue(const std::string& job_id, std::uint32_t first, std::uint32_t count,
@@ -264,6 +272,7 @@ class JobStore {
   void take_back_part_locked(std::int64_t seq, std::uint32_t part, std::uint32_t count);
 
   void upgrade_from_6(int version);  // the upgrades written for both stores
+  bool claim_locked(const std::string& job_id, const std::string& what);
 
   mutable std::mutex mutex_;
   std::unique_ptr<SqlConnection> db_;
