@@ -106,6 +106,11 @@ std::string schema(SqlDialect dialect) {
 // upgrade, which adds the column to an older SQLite store.
 constexpr const char* kTilesByFrame = "CREATE INDEX IF NOT EXISTS tiles_by_frame ON tiles (job_seq, frame, state)";
 
+// The commit of a claim, a unit marked done, a merge claimed or recorded: what the farm does again
+// when a crash of the database server loses it (the unit is rendered again, the frame merged again),
+// so its commit does not wait for the server's disk. A job's submission, and its end, do.
+constexpr SqlTransaction::Commit kRedoable = SqlTransaction::Commit::Unflushed;
+
 // pg_advisory_xact_lock's key for making the schema: any number no other user of the database
 // locks ("farm" in ASCII).
 constexpr std::int64_t kSchemaLockKey = 0x6661726d;
@@ -449,7 +454,7 @@ std::vector<std::string> JobStore::active_jobs() const {
 std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                                     const BatchSize& batch_size, int count_up_to) {
   std::lock_guard lock(mutex_);
-  SqlTransaction t(*db_);
+  SqlTransaction t(*db_, kRedoable);
   TileBatch batch;
   std::int64_t seq = 0;
   {
@@ -554,7 +559,7 @@ std::optional<std::int64_t> JobStore::running_batch_locked(const std::string& jo
 bool JobStore::batch_done(const std::string& job_id, std::uint32_t first, std::uint32_t count,
                           const v1::TileStats& stats, const std::string& worker) {
   std::lock_guard lock(mutex_);
-  SqlTransaction t(*db_);
+  SqlTransaction t(*db_, kRedoable);
   lock_job_locked(job_id);
   const std::optional<std::int64_t> seq = running_batch_locked(job_id, first, count, worker);
   if (!seq) return false;
@@ -693,7 +698,7 @@ std::vector<ReapedScheduler> JobStore::reap_expired(std::int64_t now_ms) {
 }
 
 bool JobStore::claim_locked(const std::string& job_id, const std::string& what) {
-  SqlTransaction t(*db_);
+  SqlTransaction t(*db_, kRedoable);
   lock_job_locked(job_id);
   Query(db_->prepared("INSERT INTO claims (job_seq, what, scheduler) SELECT seq, ?, ? FROM jobs WHERE id = ? "
                       "ON CONFLICT (job_seq, what) DO NOTHING"))
@@ -878,7 +883,7 @@ int JobStore::complete_passes(const std::string& job_id, int frame) const {
 
 bool JobStore::frame_merged(const std::string& job_id, int frame) {
   std::lock_guard lock(mutex_);
-  SqlTransaction t(*db_);
+  SqlTransaction t(*db_, kRedoable);
   lock_job_locked(job_id);
   std::int64_t seq = 0;
   {

@@ -288,8 +288,8 @@ std::unique_ptr<SqlStatement> PostgresConnection::prepare_once(const std::string
   return std::make_unique<PostgresStatement>(*this, sql, std::string());
 }
 
-void PostgresConnection::begin() {
-  exec("BEGIN");
+void PostgresConnection::begin(bool flushed) {
+  exec(flushed ? "BEGIN" : "BEGIN; SET LOCAL synchronous_commit TO OFF");
   in_transaction_ = true;
 }
 

@@ -49,7 +49,7 @@ class PostgresConnection : public SqlConnection {
   void exec(const std::string& sql) override;
   SqlStatement& prepared(const std::string& sql) override;
   std::unique_ptr<SqlStatement> prepare_once(const std::string& sql) override;
-  void begin() override;
+  void begin(bool flushed) override;
   void commit() override;
   void rollback() noexcept override;
 

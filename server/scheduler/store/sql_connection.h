@@ -46,8 +46,11 @@ class SqlConnection {
   // A statement for one use (text that varies with a filter).
   virtual std::unique_ptr<SqlStatement> prepare_once(const std::string& sql) = 0;
   // A transaction that takes the store's write lock at once (SQLite's BEGIN IMMEDIATE), so that
-  // two writers never deadlock half-way.
-  virtual void begin() = 0;
+  // two writers never deadlock half-way. `flushed`: its commit waits until the server has it on
+  // disk; false for what a crash of the database server may lose, the farm repairing it by
+  // rendering again (PostgreSQL's synchronous_commit off for it; SQLite in WAL mode with
+  // synchronous=NORMAL never waits for the disk at commit anyway).
+  virtual void begin(bool flushed = true) = 0;
   virtual void commit() = 0;
   virtual void rollback() noexcept = 0;
 };
@@ -86,7 +89,10 @@ class Query {
 // begin() ... commit(), rolled back when the scope is left by an exception.
 class SqlTransaction {
  public:
-  explicit SqlTransaction(SqlConnection& db) : db_(db) { db_.begin(); }
+  enum class Commit { Flushed, Unflushed };  // SqlConnection::begin's `flushed`
+  explicit SqlTransaction(SqlConnection& db, Commit commit = Commit::Flushed) : db_(db) {
+    db_.begin(commit == Commit::Flushed);
+  }
   ~SqlTransaction() {
     if (!done_) db_.rollback();
   }

@@ -109,7 +109,7 @@ std::unique_ptr<SqlStatement> SqliteConnection::prepare_once(const std::string& 
   return std::make_unique<SqliteStatement>(db_, sql, 0);
 }
 
-void SqliteConnection::begin() {
+void SqliteConnection::begin(bool /*flushed: WAL + NORMAL never waits*/) {
   if (sqlite3_exec(db_, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr) != SQLITE_OK) {
     throw_sqlite_error(db_, "BEGIN IMMEDIATE");
   }
