@@ -178,7 +178,19 @@ class FarmSchedulerOnPostgresTest : public FarmSchedulerTest {
     ASSERT_TRUE(where_.problem().empty()) << where_.problem();
     store_ = where_.location();
   }
+  // Two static workers (their caches hold the Cornell box) for every scheduler of the farm: the
+  // arguments that give them to one, float EXRs included.
+  std::vector<std::string> start_shared_workers() {
+    std::vector<std::string> args;
+    for (const char* name : {"w1", "w2"}) {
+      shared_workers_.push_back(start_worker(name));
+      args.insert(args.end(), {"--worker", shared_workers_.back()->address()});
+    }
+    args.push_back("--float");
+    return args;
+  }
   test::StoreLocation where_{SqlDialect::PostgreSQL};
+  std::vector<std::unique_ptr<test::WorkerProcess>> shared_workers_;
 };
 
 TEST_F(FarmSchedulerTest, SubmitWatchFetchIsBitIdenticalToFarmRenderForEveryEngine) {
@@ -409,9 +421,7 @@ TEST_F(FarmSchedulerOnPostgresTest, AStoreThatGoesAwayMidJobAndComesBackLosesNot
 // renders the dead one's running units once its lease ran out (2 s here), renders no finished unit
 // again, and ends it bit-identical; the job and its image are served by the survivor.
 TEST_F(FarmSchedulerOnPostgresTest, KillingOneOfTwoSchedulersMidJobLeavesTheOtherToFinishIt) {
-  auto w1 = start_worker("w1");
-  auto w2 = start_worker("w2");
-  const std::vector<std::string> workers{"--worker", w1->address(), "--worker", w2->address(), "--float"};
+  const std::vector<std::string> workers = start_shared_workers();
   auto a = start_scheduler(workers);
   ASSERT_TRUE(stub_);
   const v1::JobSpec spec = cornell("path", 64, 48, 512, 8);
@@ -439,9 +449,7 @@ TEST_F(FarmSchedulerOnPostgresTest, KillingOneOfTwoSchedulersMidJobLeavesTheOthe
 // merged and each job ended by one of them), and every image is bit-identical to the job rendered
 // here, whichever scheduler it is fetched from.
 TEST_F(FarmSchedulerOnPostgresTest, TwoSchedulersTakeFiftyJobsAtOnceAndRenderEachOnce) {
-  auto w1 = start_worker("w1");
-  auto w2 = start_worker("w2");
-  const std::vector<std::string> workers{"--worker", w1->address(), "--worker", w2->address(), "--float"};
+  const std::vector<std::string> workers = start_shared_workers();
   auto a = start_scheduler(workers);
   ASSERT_TRUE(stub_);
   std::unique_ptr<v1::Scheduler::Stub> to_a = std::move(stub_);

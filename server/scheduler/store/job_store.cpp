@@ -210,16 +210,24 @@ std::unique_ptr<SqlConnection> connect_store(const std::string& location) {
   return std::make_unique<SqliteConnection>(location);
 }
 
+int JobStore::stored_version() {
+  Query s(db_->prepared("SELECT version FROM schema_version"));
+  if (s.step()) return s.i32(0);
+  // A new store: made at this version by the schema just run.
+  s.reset();
+  Query(db_->prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
+  return kSchemaVersion;
+}
+
+void JobStore::refuse_version(int version) const {
+  throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}", db_->describe(), version,
+                                       kSchemaVersion));
+}
+
 void JobStore::open_sqlite() {
   db_->exec(schema(SqlDialect::SQLite));
-  int version = 0;
-  {
-    Query s(db_->prepared("SELECT version FROM schema_version"));
-    if (s.step()) version = s.i32(0);
-  }
-  if (version == 0) {
-    Query(db_->prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
-  } else if (version >= 1 && version < kSchemaVersion) {
+  const int version = stored_version();
+  if (version >= 1 && version < kSchemaVersion) {
     SqlTransaction t(*db_);
     if (version == 1) {
       // Version 1 kept one file per tile: each done tile is its own part.
@@ -258,8 +266,7 @@ void JobStore::open_sqlite() {
     upgrade_from_6(version);
     t.commit();
   } else if (version != kSchemaVersion) {
-    throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}", db_->describe(),
-                                         version, kSchemaVersion));
+    refuse_version(version);
   }
   db_->exec(kTilesByFrame);
 }
@@ -271,19 +278,12 @@ void JobStore::open_postgres() {
   db_->exec(fmt::format("SELECT pg_advisory_xact_lock({})", kSchemaLockKey));
   db_->exec(schema(SqlDialect::PostgreSQL));
   db_->exec(kTilesByFrame);
-  int version = 0;
-  {
-    Query s(db_->prepared("SELECT version FROM schema_version"));
-    if (s.step()) version = s.i32(0);
-  }
   // The PostgreSQL store began at version 6: upgrades from there on are written for both.
-  if (version == 0) {
-    Query(db_->prepared("INSERT INTO schema_version (version) VALUES (?)")).bind(1, kSchemaVersion).run();
-  } else if (version >= 6 && version < kSchemaVersion) {
+  const int version = stored_version();
+  if (version >= 6 && version < kSchemaVersion) {
     upgrade_from_6(version);
   } else if (version != kSchemaVersion) {
-    throw std::runtime_error(fmt::format("job store {}: schema version {}, this farm reads {}", db_->describe(),
-                                         version, kSchemaVersion));
+    refuse_version(version);
   }
   t.commit();
 }

@@ -271,7 +271,9 @@ class JobStore {
   // tiles_done lowered. The caller queues its tiles again.
   void take_back_part_locked(std::int64_t seq, std::uint32_t part, std::uint32_t count);
 
-  void upgrade_from_6(int version);  // the upgrades written for both stores
+  int stored_version();                       // the schema's; a new store's recorded as this one's
+  [[noreturn]] void refuse_version(int version) const;  // a version this farm cannot read
+  void upgrade_from_6(int version);           // the upgrades written for both stores
   bool claim_locked(const std::string& job_id, const std::string& what);
 
   mutable std::mutex mutex_;
