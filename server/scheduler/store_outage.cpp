@@ -23,7 +23,16 @@ void StoreOutage::answered() {
     failed_calls_ = 0;
     log_backoff_ = RetryBackoff(kRetry, kRetry);  // the next outage is logged at once
   }
-  if (on_back_) on_back_();
+  if (!on_back_) return;
+  // Nothing it meets may reach the caller, which asked the store something else: a store away
+  // again is an outage again, anything else is logged.
+  try {
+    on_back_();
+  } catch (const StoreUnavailable& e) {
+    report(e);
+  } catch (const std::exception& e) {
+    log_.error("looking at the active jobs after the store came back: {}", e.what());
+  }
 }
 
 bool StoreOutage::away() const {

@@ -30,7 +30,8 @@ class StoreOutage {
   void on_back(std::function<void()> f) { on_back_ = std::move(f); }
   // A store call failed for want of its server.
   void report(const StoreUnavailable& e);
-  // A store call answered: ends an outage (logged, and on_back run) if there was one.
+  // A store call answered: ends an outage (logged, and on_back run) if there was one. Never
+  // throws: what on_back meets is reported (an outage again) or logged.
   void answered();
   bool away() const;
 
