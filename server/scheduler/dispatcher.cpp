@@ -238,29 +238,29 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
       continue;  // no work yet, or the worker went down: await_up says which
     }
     RenderedTiles result;
-    try {
-      const grpc::Status status = render(*w, *call, result);
-      handle_result(*w, *call, status, result);
-    } catch (const DiskFull& e) {
-      // The scheduler's own disk refused something on the way (the job's scene laid out again, a
-      // mark in the store): not the job's fault nor the worker's. The batch waits for room.
-      pause_.report(e);
-      if (call->check) {
-        std::lock_guard lock(mutex_);
-        call->check->queued = true;  // another worker checks it once dispatch resumes
-      } else {
-        requeue_when_stored(call->batch, w->id);
-      }
-    } catch (const StoreUnavailable& e) {
-      // The store's server went away on the way (a mark, a failed attempt): nobody's fault. The
-      // batch goes back in the queue once it answers (tiles it marked done meanwhile stay done).
-      outage_.report(e);
+    // Not the job's fault nor the worker's: the call goes back, a check to the checks' queue
+    // (another worker checks it once dispatch resumes), a batch to the store's queue once the
+    // store takes it (tiles it marked done meanwhile stay done).
+    const auto put_back = [&] {
       if (call->check) {
         std::lock_guard lock(mutex_);
         call->check->queued = true;
       } else {
         requeue_when_stored(call->batch, w->id);
       }
+    };
+    try {
+      const grpc::Status status = render(*w, *call, result);
+      handle_result(*w, *call, status, result);
+    } catch (const DiskFull& e) {
+      // The scheduler's own disk refused something on the way (the job's scene laid out again, a
+      // mark in the store): the batch waits for room.
+      pause_.report(e);
+      put_back();
+    } catch (const StoreUnavailable& e) {
+      // The store's server went away on the way (a mark, a failed attempt).
+      outage_.report(e);
+      put_back();
     } catch (const std::exception& e) {
       // Nothing may end a slot's thread (that would be std::terminate); the batch's tiles stay
       // as the store has them, queued again by the next scheduler to open it.
@@ -653,16 +653,17 @@ bool Dispatcher::wait_unless_stopping(std::chrono::milliseconds wait) {
 void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& worker_id) {
   while (true) {
     try {
-      store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
-      outage_.answered();
-      work_.notify_all();
-      return;
+      // A store whose server is away is asked again every second (StoreOutage::when_answered).
+      const std::optional<bool> requeued = outage_.when_answered(
+          [&] {
+            store_.batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
+            return true;
+          },
+          [this](std::chrono::milliseconds wait) { return wait_unless_stopping(wait); });
+      if (requeued) work_.notify_all();
+      return;  // queued again, or stopping
     } catch (const DiskFull& e) {
       pause_.report(e);  // the store itself is full
-    } catch (const StoreUnavailable& e) {
-      outage_.report(e);
-      if (wait_unless_stopping(StoreOutage::kRetry)) return;
-      continue;
     }
     std::unique_lock lock(mutex_);
     // Until the pause's prober finds room again (its resume wakes this), or the scheduler stops.

@@ -35,9 +35,4 @@ void StoreOutage::answered() {
   }
 }
 
-bool StoreOutage::away() const {
-  std::lock_guard lock(mutex_);
-  return away_since_.has_value();
-}
-
 }  // namespace farm

@@ -33,7 +33,6 @@ class StoreOutage {
   // A store call answered: ends an outage (logged, and on_back run) if there was one. Never
   // throws: what on_back meets is reported (an outage again) or logged.
   void answered();
-  bool away() const;
 
   // `call()` until the store answers: while it is away, again every second, until `stopping()`
   // says to give up (nullopt then). Other exceptions pass through.
@@ -57,7 +56,7 @@ class StoreOutage {
  private:
   using Clock = std::chrono::steady_clock;
   spdlog::logger& log_;
-  mutable std::mutex mutex_;
+  std::mutex mutex_;
   std::optional<Clock::time_point> away_since_;
   int failed_calls_ = 0;  // since the last line logged
   RetryBackoff log_backoff_;

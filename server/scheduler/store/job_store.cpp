@@ -536,6 +536,17 @@ bool JobStore::lock_job_locked(std::int64_t seq) {
   return s.step();
 }
 
+void JobStore::lock_jobs_of_tiles_locked(const std::string& tiles_where, const std::string& value) {
+  if (db_->dialect() != SqlDialect::PostgreSQL) return;
+  std::vector<std::int64_t> jobs;
+  {
+    Query s(db_->prepared(fmt::format("SELECT DISTINCT job_seq FROM tiles WHERE {} ORDER BY job_seq", tiles_where)));
+    s.bind(1, value);
+    while (s.step()) jobs.push_back(s.i64(0));
+  }
+  for (std::int64_t seq : jobs) lock_job_locked(seq);
+}
+
 bool JobStore::lock_job_locked(const std::string& job_id) {
   if (db_->dialect() != SqlDialect::PostgreSQL) return true;
   Query s(db_->prepared("SELECT seq FROM jobs WHERE id = ? FOR UPDATE"));
@@ -678,14 +689,7 @@ std::vector<ReapedScheduler> JobStore::reap_expired(std::int64_t now_ms) {
     while (s.step()) reaped.push_back({s.text(0), 0});
   }
   for (ReapedScheduler& r : reaped) {
-    // Its running tiles' jobs, locked in seq order as every transaction that touches several does.
-    std::vector<std::int64_t> jobs;
-    {
-      Query s(db_->prepared("SELECT DISTINCT job_seq FROM tiles WHERE state = 1 AND scheduler = ? ORDER BY job_seq"));
-      s.bind(1, r.id);
-      while (s.step()) jobs.push_back(s.i64(0));
-    }
-    for (std::int64_t seq : jobs) lock_job_locked(seq);
+    lock_jobs_of_tiles_locked("state = 1 AND scheduler = ?", r.id);  // its running tiles' jobs
     // Not the tiles' fault: no attempt counted.
     Query requeue(db_->prepared("UPDATE tiles SET state = 0, worker = '', scheduler = '' WHERE state = 1 AND scheduler = ?"));
     requeue.bind(1, r.id).run();
@@ -724,16 +728,7 @@ bool JobStore::claim_job_end(const std::string& job_id) {
 std::vector<TileBatch> JobStore::quarantine_worker(const std::string& worker) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
-  if (db_->dialect() == SqlDialect::PostgreSQL) {
-    // Every job it touches, in one order (seq) so that two such transactions never deadlock.
-    std::vector<std::int64_t> jobs;
-    {
-      Query s(db_->prepared("SELECT DISTINCT job_seq FROM tiles WHERE worker = ? AND state IN (1, 2) ORDER BY job_seq"));
-      s.bind(1, worker);
-      while (s.step()) jobs.push_back(s.i64(0));
-    }
-    for (std::int64_t seq : jobs) lock_job_locked(seq);
-  }
+  lock_jobs_of_tiles_locked("worker = ? AND state IN (1, 2)", worker);  // every job it touches
   // The done batches first (a batch is the tiles of one part), with what they added to the job.
   std::vector<TileBatch> discarded;
   std::vector<std::int64_t> seqs;

@@ -264,6 +264,9 @@ class JobStore {
   // whole store). False when there is no such job.
   bool lock_job_locked(std::int64_t seq);
   bool lock_job_locked(const std::string& job_id);
+  // The jobs of the tiles `tiles_where` (one `?`, bound to `value`) picks, locked in seq order, as
+  // every transaction that touches several jobs takes them, so that no two deadlock.
+  void lock_jobs_of_tiles_locked(const std::string& tiles_where, const std::string& value);
   // The job's seq when the batch's tiles are all running on an active job.
   std::optional<std::int64_t> running_batch_locked(const std::string& job_id, std::uint32_t first,
                                                    std::uint32_t count, const std::string& worker) const;
