@@ -154,10 +154,18 @@ v1::Job Dispatcher::cancel_job(const std::string& job_id) {
   // Under the dispatcher's lock, so no slot claims a tile of this job and starts it unseen.
   std::lock_guard lock(mutex_);
   v1::Job after = store_.cancel_job(job_id, unix_ms_now());
-  cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; },
-                      CancelReason::JobCancelled);
-  drop_checks_locked(job_id);
+  stop_job_locked(job_id);
   return after;
+}
+
+void Dispatcher::job_ended_elsewhere(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  stop_job_locked(job_id);
+}
+
+void Dispatcher::stop_job_locked(const std::string& job_id) {
+  cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; }, CancelReason::JobCancelled);
+  drop_checks_locked(job_id);
 }
 
 void Dispatcher::worker_left(const std::string& worker_id, const std::string& reason) {
@@ -780,9 +788,7 @@ void Dispatcher::after_failure(const std::string& worker, const TileBatch& batch
     {
       // Its other tiles in flight, and its batches waiting for a check, are of no use now.
       std::lock_guard lock(mutex_);
-      cancel_calls_locked([&](const InFlight& other) { return other.batch.job_id == batch.job_id; },
-                          CancelReason::JobCancelled);
-      drop_checks_locked(batch.job_id);
+      stop_job_locked(batch.job_id);
     }
     events_.publish_state(failure.job, before);
     finisher_.release(batch.job_id);

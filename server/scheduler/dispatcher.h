@@ -102,6 +102,9 @@ class Dispatcher {
   // Cancels the job in the store and its calls in flight; their tiles stay as they are. Returns
   // the job as the store has it now.
   v1::Job cancel_job(const std::string& job_id);
+  // The job ended on another scheduler of the store (cancelled or failed there): its calls in
+  // flight here are cancelled, their tiles left as the store has them.
+  void job_ended_elsewhere(const std::string& job_id);
   // Cancels the worker's calls in flight: their tiles are retried on others (a lost-worker attempt
   // counted, not a failed one).
   void worker_left(const std::string& worker_id, const std::string& reason);
@@ -174,6 +177,8 @@ class Dispatcher {
   template <typename Which>
   void cancel_calls_locked(Which&& which, CancelReason reason, const std::string& text = {});
   void drop_checks_locked(const std::string& job_id);
+  // A final job's calls in flight cancelled and its batches waiting for a check dropped.
+  void stop_job_locked(const std::string& job_id);
   bool holds_check_locked(const std::shared_ptr<SpotCheck>& check) const;
 
   const SchedulerOptions& options_;

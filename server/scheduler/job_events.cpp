@@ -53,7 +53,31 @@ void JobEvents::publish_state(const v1::Job& job, v1::JobState from) {
   push_locked(event);
 }
 
+void JobEvents::relay_to(std::function<void(const v1::JobEvent&)> forward) {
+  std::lock_guard lock(mutex_);
+  forward_ = std::move(forward);
+}
+
+void JobEvents::publish_relayed(v1::JobEvent event) {
+  std::lock_guard lock(mutex_);
+  const std::string& id = event.job().job_id();
+  if (watchers_.count(id) == 0) return;  // nobody here watches it: the store is not read
+  const std::optional<v1::Job> job = store_.get_job(id);
+  if (!job) return;
+  if (event.has_state_changed()) {
+    if (event.state_changed().from() == job->state()) return;
+    event.mutable_state_changed()->set_to(job->state());
+  }
+  *event.mutable_job() = *job;
+  push_to_watchers_locked(event);
+}
+
 void JobEvents::push_locked(const v1::JobEvent& event) {
+  push_to_watchers_locked(event);
+  if (forward_) forward_(event);
+}
+
+void JobEvents::push_to_watchers_locked(const v1::JobEvent& event) {
   auto [begin, end] = watchers_.equal_range(event.job().job_id());
   for (auto it = begin; it != end; ++it) it->second->push(event);
 }

@@ -5,7 +5,7 @@
 //
 // Locks: JobEvents::mutex_ guards the subscriptions and is held while an event is made and pushed
 // to every subscriber of its job; under it the job store's lock (to read the job) and each
-// queue's lock are taken, both leaves. No other lock of the scheduler is held when an event is
+// queue's lock are taken, both leaves, and the relay's queue (forward_, a leaf). No other lock of the scheduler is held when an event is
 // published, so it takes part in no cycle.
 #include <chrono>
 #include <condition_variable>
@@ -47,12 +47,23 @@ class JobEvents {
   // `job` went from `from` to its state now.
   void publish_state(const v1::Job& job, v1::JobState from);
 
+  // Every event published from now on is given to `forward` too (under mutex_, so in order; it
+  // must not block): the schedulers sharing a store relay them to each other (event_relay.h).
+  // An empty function stops it.
+  void relay_to(std::function<void(const v1::JobEvent&)> forward);
+  // An event another scheduler published: passed to this one's watchers of its job, if any,
+  // carrying the job as the store has it now (a state change: to its state now; none when that is
+  // where it came from). Not forwarded again.
+  void publish_relayed(v1::JobEvent event);
+
  private:
-  void push_locked(const v1::JobEvent& event);  // under mutex_
+  void push_locked(const v1::JobEvent& event);  // under mutex_: the watchers, then forward_
+  void push_to_watchers_locked(const v1::JobEvent& event);
 
   const JobStore& store_;
   std::mutex mutex_;
   std::multimap<std::string, std::shared_ptr<JobEventQueue>> watchers_;
+  std::function<void(const v1::JobEvent&)> forward_;
 };
 
 }  // namespace farm

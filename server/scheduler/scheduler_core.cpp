@@ -97,6 +97,16 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
       dispatcher_.work_queued();
       finish_active_jobs();
     });
+    // A job another scheduler ended: its units in flight here stop, and its memory here goes.
+    relay_ = std::make_unique<EventRelay>(options_.store, events_, *log_, [this](const v1::JobEvent& event) {
+      if (!event.has_state_changed() || !is_final(event.state_changed().to())) return;
+      if (event.state_changed().to() != v1::JOB_STATE_SUCCEEDED) {
+        log_->info("job {} {} on another scheduler: its units in flight here stopped", event.job().job_id(),
+                   v1::JobState_Name(event.state_changed().to()));
+      }
+      dispatcher_.job_ended_elsewhere(event.job().job_id());
+      finisher_.release(event.job().job_id());
+    });
   }
   // Jobs interrupted between their last tile and their merge.
   finish_active_jobs();
@@ -118,6 +128,7 @@ void SchedulerCore::finish_active_jobs() {
 void SchedulerCore::stop() {
   // The registry first: slots waiting for a worker to come up return, and no worker is dropped
   // while the dispatcher cancels and joins.
+  if (relay_) relay_->stop();  // first: its thread calls the dispatcher and the finisher
   workers_.stop();
   pause_.stop();
   dispatcher_.stop();

@@ -15,12 +15,15 @@
 //                   (disk_full_pause.h)
 //   StoreOutage     the store's server away: nothing claimed or failed, results kept until it
 //                   answers, interrupted merges looked at again then (store_outage.h)
+//   SchedulerLease  on a store several schedulers share: this one's lease, the dead ones' units
+//                   queued again (scheduler_lease.h)
+//   EventRelay      likewise: the jobs' events to and from the other schedulers (event_relay.h)
 //
 // Locks: each part has its own mutex, and its header says what it guards. A part holds its lock
 // while it calls another only along these arrows (A -> B: B is taken while A is held):
 //   Dispatcher -> JobStore -> {WorkerRegistry, RunningJobs}   claiming a batch (batch sizing)
 //   Dispatcher -> {WorkerRegistry, TileCancel}                claiming, cancelling calls in flight
-//   JobEvents -> {JobStore, JobEventQueue}                    publishing an event in store order
+//   JobEvents -> {JobStore, JobEventQueue, EventRelay}        publishing an event in store order
 //   Dispatcher -> DiskFullPause                               claiming (is dispatch paused?)
 // The others (Finisher, RunningJobs, WorkerRegistry, JobStore, DiskFullPause, StoreOutage, the queues) are
 // leaves: nothing is taken under them (StoreOutage's on_back runs with no lock held). The arrows make no cycle, so no two threads can deadlock on them.
@@ -39,6 +42,7 @@
 #include "server/common/asset_store.h"
 #include "server/scheduler/disk_full_pause.h"
 #include "server/scheduler/dispatcher.h"
+#include "server/scheduler/event_relay.h"
 #include "server/scheduler/finisher.h"
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_events.h"
@@ -163,6 +167,7 @@ class SchedulerCore {
   // This process among the schedulers of one store: host, process id and a random part.
   std::string scheduler_id_ = make_scheduler_id();
   std::unique_ptr<SchedulerLease> lease_;  // on a shared store (PostgreSQL) only
+  std::unique_ptr<EventRelay> relay_;      // likewise: WatchJob's events to and from the others
 };
 
 }  // namespace farm

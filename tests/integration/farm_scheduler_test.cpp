@@ -494,6 +494,76 @@ TEST_F(FarmSchedulerOnPostgresTest, TwoSchedulersTakeFiftyJobsAtOnceAndRenderEac
   EXPECT_EQ(ended, static_cast<std::size_t>(kJobs)) << logs;
 }
 
+// A job watched on a scheduler that renders none of it (it has no workers): the other one's units,
+// frame and end reach the watch through the store (LISTEN/NOTIFY), every unit done after the
+// snapshot announced once, and the job is served by either.
+TEST_F(FarmSchedulerOnPostgresTest, AWatchOnOneSchedulerSeesTheWorkOfTheOther) {
+  const std::vector<std::string> workers = start_shared_workers();
+  auto renders = start_scheduler(workers);
+  ASSERT_TRUE(stub_);
+  auto watched = start_scheduler({});  // stub_ talks to it from here on
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("path", 64, 48, 256, 8);
+  const v1::Job job = submit_ok(spec);
+  grpc::Status status;
+  const std::vector<v1::JobEvent> events = test::watch_job(*stub_, job.job_id(), 120s, &status);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_FALSE(events.empty());
+  ASSERT_TRUE(events.front().has_snapshot());
+  const v1::Job& snapshot = events.front().job();
+  ASSERT_FALSE(done(snapshot)) << "the job ended before the watch began";
+  std::uint32_t announced = 0;
+  bool frame_finished = false;
+  for (const v1::JobEvent& e : events) {
+    if (e.has_tile_finished()) {
+      announced += e.tile_finished().tile_count();
+      EXPECT_FALSE(e.tile_finished().worker().empty());
+    }
+    frame_finished |= e.has_frame_finished();
+    EXPECT_FALSE(e.has_tile_failed()) << e.tile_failed().reason();
+  }
+  EXPECT_EQ(announced, snapshot.tiles_total() - snapshot.tiles_done());
+  EXPECT_TRUE(frame_finished);
+  ASSERT_TRUE(events.back().has_state_changed());
+  EXPECT_EQ(events.back().state_changed().to(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(events.back().job().tiles_done(), events.back().job().tiles_total());
+  EXPECT_EQ(differing_pixels(fetch_exr(job.job_id()), render_locally(spec)), 0);
+  EXPECT_EQ(watched->process().output().find(" done: "), std::string::npos) << "ended by the watched one";
+}
+
+// A job cancelled on one scheduler while the other renders it: the other's calls in flight stop
+// (told through the store), the job stays cancelled with its units as they were, and the workers
+// go straight on to the next job.
+TEST_F(FarmSchedulerOnPostgresTest, ACancelOnOneSchedulerStopsTheUnitsOfTheOther) {
+  const std::vector<std::string> workers = start_shared_workers();
+  auto renders = start_scheduler(workers);
+  ASSERT_TRUE(stub_);
+  const v1::Job big = submit_ok(cornell("path", 256, 256, 256, 64));  // many seconds of work
+  ASSERT_TRUE(test::wait_for_job(*stub_, big.job_id(),
+                                 [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
+  auto cancels = start_scheduler({});  // stub_ talks to it from here on
+  ASSERT_TRUE(stub_);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + 10s);
+  v1::CancelJobRequest request;
+  request.set_job_id(big.job_id());
+  v1::CancelJobResponse response;
+  const grpc::Status call = stub_->CancelJob(&context, request, &response);
+  ASSERT_TRUE(call.ok()) << call.error_message();
+  EXPECT_EQ(response.job().state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_TRUE(renders->process().wait_for_line("JOB_STATE_CANCELLED on another scheduler: its units in flight here stopped", 30s))
+      << renders->process().output();
+
+  const v1::Job small = submit_ok(cornell("raster", 32, 32, 1, 16));
+  const auto small_done = test::wait_for_job(*stub_, small.job_id(), done, 60s);
+  ASSERT_TRUE(small_done);
+  EXPECT_EQ(small_done->state(), v1::JOB_STATE_SUCCEEDED) << small_done->failure_reason();
+  const auto cancelled = test::get_job(*stub_, big.job_id());
+  ASSERT_TRUE(cancelled);
+  EXPECT_EQ(cancelled->state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_EQ(cancelled->tiles_done(), response.job().tiles_done());
+}
+
 // --store takes only a PostgreSQL URL (exit 2 naming the flag); a server that is not there stops
 // the scheduler at start with its address and no password (exit 1), before it listens.
 TEST_F(FarmSchedulerTest, ABadOrUnreachableStoreIsAnErrorNamingIt) {

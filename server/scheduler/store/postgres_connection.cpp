@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <libpq-fe.h>
+#include <poll.h>
 
 #include <algorithm>
 #include <cctype>
@@ -302,6 +303,54 @@ void PostgresConnection::rollback() noexcept {
   in_transaction_ = false;
   if (PQstatus(conn_) != CONNECTION_OK) return;  // the transaction went with the connection
   PQclear(PQexec(conn_, "ROLLBACK"));
+}
+
+void PostgresConnection::notify(const std::string& channel, const std::vector<std::string>& payloads) {
+  if (payloads.empty()) return;
+  // One round trip for the lot: the payloads joined by newlines (which none holds) and split
+  // again by the server. Notifications of one transaction arrive in the order sent.
+  std::string joined;
+  for (const std::string& p : payloads) {
+    if (p.empty() || p.find('\n') != std::string::npos) throw std::invalid_argument("notify: empty payload or one with a newline");
+    if (!joined.empty()) joined += '\n';
+    joined += p;
+  }
+  Query(prepared("SELECT pg_notify(?1, payload) FROM unnest(string_to_array(?2, E'\\n')) AS payload"))
+      .bind(1, channel)
+      .bind(2, joined)
+      .run();
+}
+
+void PostgresConnection::listen(const std::string& channel) {
+  pg_conn* conn = live();
+  char* name = PQescapeIdentifier(conn, channel.data(), channel.size());
+  if (!name) throw std::runtime_error(fmt::format("job store {}: cannot quote channel '{}'", described_, channel));
+  const std::string sql = fmt::format("LISTEN {}", name);
+  PQfreemem(name);
+  exec(sql);
+}
+
+std::vector<std::string> PostgresConnection::notifications(std::chrono::milliseconds wait) {
+  pg_conn* conn = live();
+  std::vector<std::string> out;
+  const auto drain = [&] {
+    while (PGnotify* n = PQnotifies(conn)) {
+      out.emplace_back(n->extra);
+      PQfreemem(n);
+    }
+  };
+  drain();  // those a statement's reply brought along
+  if (!out.empty()) return out;
+  pollfd fd{.fd = PQsocket(conn), .events = POLLIN, .revents = 0};
+  if (fd.fd < 0) throw StoreUnavailable(fmt::format("job store {}: connection lost", described_));
+  if (::poll(&fd, 1, static_cast<int>(wait.count())) <= 0) return out;
+  // A broken link (the server gone, keepalives unanswered) shows as readable and fails here;
+  // PQstatus then says so, and live() makes the connection again.
+  if (!PQconsumeInput(conn) || PQstatus(conn) != CONNECTION_OK) {
+    throw StoreUnavailable(fmt::format("job store {}: connection lost: {}", described_, server_message(conn, nullptr)));
+  }
+  drain();
+  return out;
 }
 
 }  // namespace farm

@@ -9,10 +9,12 @@
 // A connection that broke (the server restarted, the network dropped) is made again before the
 // next statement, its prepared statements with it; the statement that found it broken throws
 // StoreUnavailable, so that the caller retries later instead of failing a job.
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "server/common/service_error.h"
 #include "server/scheduler/store/sql_connection.h"
@@ -56,6 +58,15 @@ class PostgresConnection : public SqlConnection {
   // The live connection, made again if it broke; StoreUnavailable when that fails. For the
   // statements of this file.
   pg_conn* live();
+  // LISTEN/NOTIFY, for the schedulers of one store to tell each other what happened. `notify`
+  // sends each of `payloads` on `channel` in one statement; `listen` subscribes this connection
+  // to `channel`, which a connection made again must do again (see generation()).
+  void notify(const std::string& channel, const std::vector<std::string>& payloads);
+  void listen(const std::string& channel);
+  // The payloads of the notifications that arrived, waiting up to `wait` for the first one; none
+  // when it passed. StoreUnavailable when the connection is lost (made again at the next call).
+  std::vector<std::string> notifications(std::chrono::milliseconds wait);
+
   // Increases each time the connection is made again: a statement prepared on the server in an
   // earlier generation is prepared again.
   std::uint64_t generation() const { return generation_; }
