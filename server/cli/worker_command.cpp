@@ -1,6 +1,7 @@
 #include "server/cli/worker_command.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <grpcpp/grpcpp.h>
 #include <signal.h>
 
@@ -11,9 +12,11 @@
 #include <condition_variable>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "proto/farm.grpc.pb.h"
 
@@ -45,14 +48,15 @@ std::string host_of(const std::string& address) {
   return colon == std::string::npos ? address : address.substr(0, colon);
 }
 
-// With --scheduler, the worker registers itself (Scheduler.RegisterWorker) and heartbeats until
-// stopped; registers again when the scheduler forgot it (restarted), retries while it is away.
-// A scheduler without RegisterWorker (UNIMPLEMENTED) is left alone: assets are all it serves.
+// With --scheduler, the worker registers itself with each scheduler (Scheduler.RegisterWorker)
+// and heartbeats until stopped; registers again when the scheduler forgot it (restarted), retries
+// while it is away. A scheduler without RegisterWorker (UNIMPLEMENTED) is left alone: assets are
+// all it serves. `registered` is told the scheduler's id at each registration.
 class Registration {
  public:
-  Registration(const std::string& scheduler, const ClientIdentity& identity, std::string address,
-               int threads)
-      : address_(std::move(address)), threads_(threads),
+  Registration(const std::string& scheduler, const ClientIdentity& identity, std::string address, int threads,
+               std::function<void(const std::string& scheduler_id)> registered)
+      : scheduler_(scheduler), address_(std::move(address)), threads_(threads), registered_(std::move(registered)),
         stub_(v1::Scheduler::NewStub(open_channel(scheduler, identity))),
         thread_([this] { loop(); }) {}
   ~Registration() {
@@ -109,14 +113,16 @@ class Registration {
           // Retried, since the operator may fix the tokens file; said again only when it changes.
           if (status.error_message() != refusal) {
             refusal = status.error_message();
-            fmt::print(stderr, "worker: the scheduler refused the registration: {}\n", refusal);
+            fmt::print(stderr, "worker: the scheduler {} refused the registration: {}\n", scheduler_, refusal);
             std::fflush(stderr);
           }
         }
         if (status.ok()) {
           id = response.worker_id();
           interval = std::chrono::milliseconds(std::max(50u, response.heartbeat_interval_ms()));
-          fmt::print("worker: registered with the scheduler as {}\n", id);
+          if (!response.scheduler_id().empty()) registered_(response.scheduler_id());
+          fmt::print("worker: registered with the scheduler {}{} as {}\n", scheduler_,
+                     response.scheduler_id().empty() ? "" : " (" + response.scheduler_id() + ")", id);
           std::fflush(stdout);
         }
       } else {
@@ -130,8 +136,9 @@ class Registration {
     }
   }
 
-  std::string address_;
+  std::string scheduler_, address_;
   int threads_;
+  std::function<void(const std::string&)> registered_;
   std::unique_ptr<v1::Scheduler::Stub> stub_;
   std::mutex mutex_;
   std::condition_variable wake_;
@@ -188,20 +195,20 @@ int run_worker_command(const WorkerCommandOptions& command) {
   fmt::print("worker listening on {}:{}\n", host_of(options.listen), port);
   fmt::print("  {} render threads, cache {} (at most {} scenes, ~{} MiB){}\n", service.threads(),
              options.cache_dir.string(), options.max_scenes, options.cache_memory_mb,
-             options.scheduler.empty() ? "" : ", assets from scheduler " + options.scheduler);
+             options.schedulers.empty() ? "" : ", serving scheduler " + fmt::format("{}", fmt::join(options.schedulers, ", ")));
   std::fflush(stdout);
-  std::unique_ptr<Registration> registration;
-  if (!options.scheduler.empty()) {
-    registration = std::make_unique<Registration>(options.scheduler, security.outgoing,
-                                                  advertised_address(options.listen, port),
-                                                  service.threads());
+  std::vector<std::unique_ptr<Registration>> registrations;
+  for (const std::string& scheduler : options.schedulers) {
+    registrations.push_back(std::make_unique<Registration>(
+        scheduler, security.outgoing, advertised_address(options.listen, port), service.threads(),
+        [&service, scheduler](const std::string& id) { service.scheduler_registered(id, scheduler); }));
   }
 
   int signal_number = 0;
   sigwait(&signals, &signal_number);
   fmt::print("worker: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
   std::fflush(stdout);
-  registration.reset();
+  registrations.clear();
   if (!shut_down_within(*server, kShutdownGrace, kShutdownUnwind)) {
     // Safe to leave mid-call: the worker's files (blobs, laid-out scenes) are written under a
     // temporary name and renamed into place, and the scheduler sends an abandoned tile again.
@@ -225,10 +232,14 @@ void add_worker_command(CLI::App& app, CommandTable& commands) {
   worker->add_option("--threads", o->threads, "Render threads shared by all calls (0 = all cores)")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
-  worker->add_option("--scheduler", o->scheduler,
-                     "Scheduler HOST:PORT to fetch assets this worker lacks from (by SHA-256); "
-                     "without it, a job whose assets are not in the cache fails with "
-                     "FAILED_PRECONDITION");
+  worker->add_option("--scheduler", o->schedulers,
+                     "Scheduler HOST:PORT to register with and fetch the assets this worker lacks "
+                     "from (by SHA-256); several, comma-separated or repeated, for a farm of "
+                     "several schedulers on one store: the worker serves them all, fetching a "
+                     "call's assets from the scheduler that sent it. Without it, the worker "
+                     "registers nowhere (give it to `farm scheduler --worker`) and a job whose "
+                     "assets are not in the cache fails with FAILED_PRECONDITION")
+      ->delimiter(',');
   worker->add_option("--cache-dir", o->cache_dir,
                      "Folder for fetched assets (blobs/<sha256>) and laid-out scenes "
                      "(scenes/<scene hash>/) (default: <temp>/farm-worker-cache)");

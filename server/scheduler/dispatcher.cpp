@@ -354,6 +354,7 @@ grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTi
     request.set_tile_index(batch.first);
     request.set_frame(batch.frame);
     request.set_pass(batch.pass);
+    request.set_scheduler_id(store_.scheduler());  // a worker of several schedulers fetches assets here
     // Each tile of the batch has its deadline.
     const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch.count;
     grpc::Status status = w.worker->render(request, result, deadline, *call.cancel);

@@ -355,6 +355,7 @@ grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext* context,
       registered_[request->address()] = Registered{id, who.name};
     }
     response->set_worker_id(id);
+    response->set_scheduler_id(core_.scheduler_id());
     response->set_heartbeat_interval_ms(
         static_cast<std::uint32_t>(core_.options().heartbeat_interval.count()));
     return grpc::Status::OK;

@@ -166,13 +166,18 @@ TileRenderer::TileRenderer(const TileRendererOptions& options)
     : log_(make_logger("worker", options.log_level)),
       cache_dir_(options.cache_dir),
       store_(options.blobs_dir),
-      fetcher_(options.scheduler.empty() ? nullptr
-                                         : std::make_unique<AssetFetcher>(options.scheduler, options.scheduler_identity)),
+      fetcher_(options.schedulers.empty()
+                   ? nullptr
+                   : std::make_unique<AssetFetcher>(options.schedulers, options.scheduler_identity)),
       cache_({options.max_scenes, options.cache_memory_mb << 20}),
       pool_(options.threads) {}
 
-std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec,
-                                                          const std::string& hash) {
+void TileRenderer::scheduler_registered(const std::string& scheduler_id, const std::string& address) {
+  if (fetcher_) fetcher_->learn(scheduler_id, address);
+}
+
+std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec, const std::string& hash,
+                                                          const std::string& scheduler_id) {
   const Clock::time_point start = Clock::now();
   validate_asset_refs(spec);
   const std::vector<v1::AssetRef> missing = missing_assets(spec, store_);
@@ -182,7 +187,11 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
                          fmt::format("{} on this worker, which has no --scheduler to fetch from",
                                      MissingAssetsError(missing).what()));
     }
-    for (const v1::AssetRef& ref : missing) fetcher_->fetch(ref, store_);
+  }
+  std::string fetched_from;
+  for (const v1::AssetRef& ref : missing) {
+    const std::string from = fetcher_->fetch(ref, store_, scheduler_id);
+    if (fetched_from.find(from) == std::string::npos) fetched_from += (fetched_from.empty() ? "" : ", ") + from;
   }
   MaterializedScene m = materialize_scene(spec, hash, store_, cache_dir_);
   auto models = std::make_shared<ModelLibrary>(m.job.asset_root);
@@ -192,7 +201,7 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
   log_->info("scene {} of job '{}' prepared in {:.0f} ms: {} triangles{}", hash.substr(0, 12),
              prepared->job.name, ms_since(start), prepared->prepared.triangle_count(),
              missing.empty() ? std::string()
-                             : fmt::format(", {} files fetched from {}", missing.size(), fetcher_->address()));
+                             : fmt::format(", {} files fetched from {}", missing.size(), fetched_from));
   return prepared;
 }
 
@@ -291,7 +300,7 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
         throw ServiceError(grpc::StatusCode::NOT_FOUND,
                            fmt::format("scene {} is not prepared on this worker: send its job", hash));
       }
-      return prepare(spec, hash);
+      return prepare(spec, hash, request->scheduler_id());
     };
 
     // Files sent along by a scheduler we cannot fetch from: verified (their size against the

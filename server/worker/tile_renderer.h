@@ -22,13 +22,17 @@
 
 #include <grpcpp/support/status.h>
 
+#include <string>
+#include <vector>
+
 namespace farm {
 
 struct TileRendererOptions {
   std::filesystem::path blobs_dir;    // content-addressed assets (AssetStore)
   std::filesystem::path cache_dir;    // scenes/<scene hash>/ are laid out here
-  std::string scheduler;              // host:port to fetch missing assets from; empty = none
-  ClientIdentity scheduler_identity;  // the worker's token and TLS for `scheduler`
+  // host:port of the schedulers to fetch missing assets from (asset_fetcher.h); none: none.
+  std::vector<std::string> schedulers;
+  ClientIdentity scheduler_identity;  // the worker's token and TLS for the schedulers
   int threads = 0;                    // render threads; 0 = all hardware threads
   std::size_t max_scenes = 8;
   std::uint64_t cache_memory_mb = 4096;
@@ -64,6 +68,10 @@ class TileRenderer {
   std::shared_ptr<const CachedScene> adopt(const std::string& scene_hash, Job job, Scene scene,
                                            std::shared_ptr<ModelLibrary> models);
 
+  // The scheduler at `address` (one of options.schedulers) registered this worker as
+  // `scheduler_id`: the assets of its calls are fetched there first.
+  void scheduler_registered(const std::string& scheduler_id, const std::string& address);
+
   int threads() const { return pool_.size(); }
   const SceneCache& scene_cache() const { return cache_; }
   const AssetStore& asset_store() const { return store_; }
@@ -71,7 +79,9 @@ class TileRenderer {
   std::uint64_t tiles_rendered() const { return tiles_rendered_.load(); }
 
  private:
-  std::shared_ptr<const CachedScene> prepare(const v1::JobSpec& spec, const std::string& hash);
+  // `scheduler_id`: the calling scheduler's, where missing assets are fetched first.
+  std::shared_ptr<const CachedScene> prepare(const v1::JobSpec& spec, const std::string& hash,
+                                             const std::string& scheduler_id);
   // Frame `frame` of the job `base` was prepared for (base itself when that is its frame), its
   // models and BVHs shared with base. InputError for a frame the job does not render.
   SceneCache::Lookup frame_of(const std::string& hash, const SceneCache::Lookup& base, int frame,

@@ -10,7 +10,7 @@ TileRendererOptions renderer_options(const WorkerOptions& o) {
   TileRendererOptions r;
   r.blobs_dir = o.cache_dir / "blobs";
   r.cache_dir = o.cache_dir;
-  r.scheduler = o.scheduler;
+  r.schedulers = o.schedulers;
   r.scheduler_identity = o.scheduler_identity;
   r.threads = o.threads;
   r.max_scenes = o.max_scenes;

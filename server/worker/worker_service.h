@@ -21,13 +21,14 @@ namespace farm {
 struct WorkerOptions {
   std::string listen;                  // host:port; port 0 = any free port
   int threads = 0;                     // render threads; 0 = all hardware threads
-  std::string scheduler;               // host:port to fetch missing assets from; empty = none
+  // host:port of each scheduler it serves: registered with, assets fetched from; none: none.
+  std::vector<std::string> schedulers;
   std::filesystem::path cache_dir;     // blobs/ and scenes/ live here
   std::size_t max_scenes = 8;          // prepared scenes kept in memory
   std::uint64_t cache_memory_mb = 4096;  // approximate memory budget of the prepared scenes
   // Who may call RenderTile (roles scheduler or admin); default: anyone (loopback).
   AccessControl access;
-  ClientIdentity scheduler_identity;     // token and TLS for the calls to `scheduler`
+  ClientIdentity scheduler_identity;     // token and TLS for the calls to the schedulers
 };
 
 class WorkerService final : public v1::Worker::Service {
@@ -38,6 +39,10 @@ class WorkerService final : public v1::Worker::Service {
                           v1::RenderTileResponse* response) override;
 
   int threads() const { return renderer_.threads(); }
+  // See TileRenderer::scheduler_registered.
+  void scheduler_registered(const std::string& scheduler_id, const std::string& address) {
+    renderer_.scheduler_registered(scheduler_id, address);
+  }
   const SceneCache& scene_cache() const { return renderer_.scene_cache(); }
   TileRenderer& renderer() { return renderer_; }
 

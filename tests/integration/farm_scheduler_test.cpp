@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <thread>
+#include <tuple>
 
 #include "renderer/image/exr_io.h"
 #include "renderer/prepared_scene.h"
@@ -501,7 +502,7 @@ TEST_F(FarmSchedulerOnPostgresTest, AWatchOnOneSchedulerSeesTheWorkOfTheOther) {
   const std::vector<std::string> workers = start_shared_workers();
   auto renders = start_scheduler(workers);
   ASSERT_TRUE(stub_);
-  auto watched = start_scheduler({});  // stub_ talks to it from here on
+  auto watched = start_scheduler({"--float"});  // stub_ talks to it from here on
   ASSERT_TRUE(stub_);
   const v1::JobSpec spec = cornell("path", 64, 48, 256, 8);
   const v1::Job job = submit_ok(spec);
@@ -562,6 +563,45 @@ TEST_F(FarmSchedulerOnPostgresTest, ACancelOnOneSchedulerStopsTheUnitsOfTheOther
   ASSERT_TRUE(cancelled);
   EXPECT_EQ(cancelled->state(), v1::JOB_STATE_CANCELLED);
   EXPECT_EQ(cancelled->tiles_done(), response.job().tiles_done());
+}
+
+// One worker given both schedulers of a farm (`farm worker --scheduler A,B`): it registers with
+// each, learns who each is, fetches a call's files from the scheduler that sent it, renders the
+// jobs of both bit-identical, and goes on serving the survivor when the other is killed.
+TEST_F(FarmSchedulerOnPostgresTest, AWorkerOfTwoSchedulersServesBothAndOutlivesEither) {
+  auto a = start_scheduler({"--float"});
+  ASSERT_TRUE(stub_);
+  std::unique_ptr<v1::Scheduler::Stub> to_a = std::move(stub_);
+  auto b = start_scheduler({"--float"});
+  ASSERT_TRUE(stub_);
+  auto worker = start_worker("w", 2, a->address() + "," + b->address());
+  for (const auto* s : {a.get(), b.get()}) {
+    EXPECT_TRUE(worker->process().wait_for_line("registered with the scheduler " + s->address() + " (", 20s))
+        << worker->process().output();
+  }
+  const v1::JobSpec raster = cornell("raster", 48, 32, 1, 16), path = cornell("path", 48, 32, 4, 16);
+  ASSERT_TRUE(test::upload_assets(*to_a, test::cornell_assets()).ok());
+  v1::Job on_a, on_b;
+  ASSERT_TRUE(test::submit(*to_a, raster, on_a).ok());
+  ASSERT_TRUE(test::submit(*stub_, path, on_b).ok());
+  for (const auto& [stub, job, spec] : {std::tuple{to_a.get(), on_a, raster}, std::tuple{stub_.get(), on_b, path}}) {
+    const auto final_job = test::wait_for_job(*stub, job.job_id(), done, 60s);
+    ASSERT_TRUE(final_job);
+    ASSERT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason() << worker->process().output();
+    const fs::path file = dir_ / (job.job_id() + ".exr");
+    ASSERT_TRUE(test::fetch_result(*stub, job.job_id(), v1::RESULT_KIND_EXR, file).ok());
+    EXPECT_EQ(differing_pixels(read_exr(file), render_locally(spec)), 0);
+  }
+  // The files came from a scheduler of the two, once.
+  const std::string output = worker->process().output();
+  EXPECT_NE(output.find("files fetched from 127.0.0.1:"), std::string::npos) << output;
+
+  a->process().send_signal(SIGKILL);
+  ASSERT_TRUE(a->process().wait_exit(10s));
+  const v1::Job later = submit_ok(cornell("whitted", 48, 32, 1, 16));
+  const auto final_job = test::wait_for_job(*stub_, later.job_id(), done, 60s);
+  ASSERT_TRUE(final_job);
+  EXPECT_EQ(final_job->state(), v1::JOB_STATE_SUCCEEDED) << final_job->failure_reason() << worker->process().output();
 }
 
 // --store takes only a PostgreSQL URL (exit 2 naming the flag); a server that is not there stops

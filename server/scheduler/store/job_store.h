@@ -196,6 +196,7 @@ class JobStore {
   // store or its machine), any other's reap_expired queues its running tiles again with no
   // attempt counted, and a late answer to the dead one finds them running no more.
   void set_scheduler(const std::string& id);
+  const std::string& scheduler() const { return scheduler_; }  // set once, before any thread asks
   void hold_lease(std::int64_t until_ms);
   // The lease given up (a scheduler that stops): its running tiles are queued again by itself.
   void drop_lease();
