@@ -27,6 +27,9 @@ packages=(
   # the PostgreSQL job store (issue #18): libpq to talk to it, and the server, which the tests
   # start in a temporary folder of their own (tests/support/postgres_server.h)
   libpq-dev postgresql
+  # the multi-host test (tests/integration/multi_host_farm_test.cpp): `ip` makes its hosts as
+  # network namespaces on a bridge
+  iproute2
   # tests and benchmarks
   libgtest-dev libbenchmark-dev python3 python3-venv
   # fuzzing (tests/fuzz, the `fuzz` preset): clang, and libFuzzer with the sanitizer runtimes,

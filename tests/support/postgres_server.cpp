@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <fstream>
 #include <optional>
 #include <system_error>
 #include <vector>
@@ -66,7 +67,8 @@ std::optional<int> run(const std::vector<std::string>& argv, std::chrono::second
 
 }  // namespace
 
-PostgresServer::PostgresServer(std::chrono::seconds timeout) : timeout_(timeout) {
+PostgresServer::PostgresServer(std::chrono::seconds timeout, PostgresPlacement placement)
+    : timeout_(timeout), placement_(std::move(placement)) {
   bin_ = server_programs();
   if (bin_.empty()) {
     problem_ = "no PostgreSQL server programs under /usr/lib/postgresql/<version>/bin (Debian's postgresql "
@@ -105,6 +107,15 @@ PostgresServer::PostgresServer(std::chrono::seconds timeout) : timeout_(timeout)
     problem_ = "initdb failed: " + said;
     return;
   }
+  if (placement_.address != "127.0.0.1") {
+    // Clients on the other hosts of its network (a NetworkLab's) are trusted too.
+    std::ofstream hba(data_ / "pg_hba.conf", std::ios::app);
+    hba << "host all all samenet trust\n";
+    if (!hba.flush()) {
+      problem_ = "cannot add the network to pg_hba.conf";
+      return;
+    }
+  }
   port_ = free_port();
   if (port_ == 0) {
     problem_ = "no free port on 127.0.0.1";
@@ -124,13 +135,17 @@ PostgresServer::~PostgresServer() {
 }
 
 std::vector<std::string> PostgresServer::as_owner(std::vector<std::string> argv) const {
-  if (!as_postgres_user_) return argv;
-  std::vector<std::string> wrapped{"/usr/bin/setpriv", "--reuid=postgres", "--regid=postgres", "--init-groups", "--"};
+  std::vector<std::string> wrapped = placement_.prefix;
+  if (as_postgres_user_) {
+    wrapped.insert(wrapped.end(), {"/usr/bin/setpriv", "--reuid=postgres", "--regid=postgres", "--init-groups", "--"});
+  }
   wrapped.insert(wrapped.end(), argv.begin(), argv.end());
   return wrapped;
 }
 
-std::string PostgresServer::url() const { return fmt::format("postgresql://farm@127.0.0.1:{}/farm", port_); }
+std::string PostgresServer::url() const {
+  return fmt::format("postgresql://farm@{}:{}/farm", placement_.address, port_);
+}
 
 std::string PostgresServer::log() const { return server_ ? server_->output() : std::string(); }
 
@@ -138,7 +153,7 @@ bool PostgresServer::start() {
   if (server_) return true;
   server_ = std::make_unique<ChildProcess>(as_owner(
       {(bin_ / "postgres").string(), "-D", data_.string(), "-k", socket_dir_.string(), "-p", std::to_string(port_),
-       "-c", "listen_addresses=127.0.0.1", "-c", "fsync=off", "-c", "max_connections=200"}));
+       "-c", "listen_addresses=" + placement_.address, "-c", "fsync=off", "-c", "max_connections=200"}));
   if (!server_->wait_for_line("database system is ready to accept connections", timeout_)) {
     problem_ = "the PostgreSQL server did not come up: " + server_->output();
     server_.reset();

@@ -20,16 +20,23 @@ class ChildProcess;
 
 namespace farm::test {
 
+// Where the server runs: this host's loopback by default; or a host of a NetworkLab (its
+// programs run under `prefix`, `ip netns exec NS`, and it listens on that host's `address`).
+struct PostgresPlacement {
+  std::vector<std::string> prefix;
+  std::string address = "127.0.0.1";
+};
+
 class PostgresServer {
  public:
   // Starts it; `problem()` says why when it did not come up within `timeout`.
-  explicit PostgresServer(std::chrono::seconds timeout = std::chrono::seconds(60));
+  explicit PostgresServer(std::chrono::seconds timeout = std::chrono::seconds(60), PostgresPlacement placement = {});
   ~PostgresServer();
   PostgresServer(const PostgresServer&) = delete;
   PostgresServer& operator=(const PostgresServer&) = delete;
 
   const std::string& problem() const { return problem_; }
-  // postgresql://farm@127.0.0.1:PORT/farm, what `--store` takes.
+  // postgresql://farm@ADDRESS:PORT/farm, what `--store` takes.
   std::string url() const;
   int port() const { return port_; }
   const std::filesystem::path& data_dir() const { return data_; }
@@ -46,6 +53,7 @@ class PostgresServer {
   std::vector<std::string> as_owner(std::vector<std::string> argv) const;
 
   std::chrono::seconds timeout_;
+  PostgresPlacement placement_;
   std::filesystem::path root_, data_, socket_dir_;
   std::filesystem::path bin_;  // /usr/lib/postgresql/<version>/bin
   int port_ = 0;
