@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -18,6 +19,8 @@
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
 #include "server/embedded/embedded_farm.h"
+#include "server/scheduler/store/postgres_connection.h"
+#include "server/scheduler/tile_results.h"
 
 namespace farm {
 namespace {
@@ -133,6 +136,65 @@ void run_tiny_jobs(const FarmBenchOptions& o, const fs::path& dir, const std::st
   }
 }
 
+// Where the schedulers of one farm keep the units' results (issue #18, item 2): files in the data
+// dir they share (TileResults, as the scheduler writes and reads them) against bytea rows in the
+// PostgreSQL store. Each way writes `count` results of a 32x32 path-traced tile with its AOVs,
+// then reads them all back; neither waits for its disk (the store marks units done with
+// unflushed commits, the files are not fsynced).
+void compare_result_storage(const std::string& store, const fs::path& dir, int count) {
+  constexpr int kEdge = 32;
+  constexpr int kPixels = kEdge * kEdge;
+  std::mt19937 random(7);
+  const auto noise = [&](int floats) {
+    std::string bytes(static_cast<std::size_t>(floats) * 4, '\0');
+    for (char& c : bytes) c = static_cast<char>(random());  // pixels do not compress
+    return bytes;
+  };
+  v1::RenderTileResponse result;
+  v1::TileData& tile = *result.mutable_tile();
+  tile.set_width(kEdge);
+  tile.set_height(kEdge);
+  tile.set_rgba(noise(4 * kPixels));
+  tile.set_depth(noise(kPixels));
+  tile.set_normal(noise(3 * kPixels));
+  tile.set_albedo(noise(3 * kPixels));
+  tile.set_variance(noise(3 * kPixels));
+  const std::string bytes = result.SerializeAsString();
+  const double mib = static_cast<double>(bytes.size()) * count / (1 << 20);
+
+  const TileResults files(dir / "tiles");
+  Clock::time_point t = Clock::now();
+  for (int i = 0; i < count; ++i) files.write("bench", static_cast<std::uint32_t>(i), result);
+  const double file_write_s = seconds_since(t);
+  t = Clock::now();
+  for (int i = 0; i < count; ++i) {
+    if (files.read("bench", static_cast<std::uint32_t>(i)).tile().rgba().size() != tile.rgba().size()) {
+      throw std::runtime_error("a result file read back differs");
+    }
+  }
+  const double file_read_s = seconds_since(t);
+
+  PostgresConnection db(store);
+  db.exec("SET synchronous_commit TO OFF");
+  db.exec("CREATE TEMPORARY TABLE bench_results (part bigint PRIMARY KEY, data bytea NOT NULL)");
+  t = Clock::now();
+  for (int i = 0; i < count; ++i) {
+    Query(db.prepared("INSERT INTO bench_results (part, data) VALUES (?, ?)")).bind(1, i).bind_blob(2, bytes).run();
+  }
+  const double db_write_s = seconds_since(t);
+  t = Clock::now();
+  for (int i = 0; i < count; ++i) {
+    Query q(db.prepared("SELECT data FROM bench_results WHERE part = ?"));
+    q.bind(1, i);
+    if (!q.step() || q.blob(0) != bytes) throw std::runtime_error("a result row read back differs");
+  }
+  const double db_read_s = seconds_since(t);
+  fmt::print("unit results ({} of {:.0f} KiB, a 32x32 tile with its AOVs): shared data dir write {:.0f} MiB/s, read "
+             "{:.0f} MiB/s; PostgreSQL bytea write {:.0f} MiB/s, read {:.0f} MiB/s (files {:.1f}x and {:.1f}x)\n",
+             count, static_cast<double>(bytes.size()) / 1024, mib / file_write_s, mib / file_read_s, mib / db_write_s,
+             mib / db_read_s, db_write_s / file_write_s, db_read_s / file_read_s);
+}
+
 }  // namespace
 
 void run_farm_bench(const FarmBenchOptions& o) {
@@ -159,6 +221,7 @@ void run_farm_bench(const FarmBenchOptions& o) {
   if (!o.store.empty()) {
     run_tiny_jobs(o, dir / "tiny-postgresql-1", "PostgreSQL", o.store, 1);
     run_tiny_jobs(o, dir / "tiny-postgresql-2", "PostgreSQL", o.store, 2);
+    compare_result_storage(o.store, dir / "results", 500);
   }
 }
 
