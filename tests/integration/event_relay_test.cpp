@@ -71,24 +71,11 @@ struct Scheduler {
   EventRelay relay;
 };
 
-NewJob a_job(const std::string& id) {
-  NewJob j;
-  j.id = id;
-  j.name = id;
-  j.spec.set_job_json("{}");
-  j.scene_hash = std::string(64, 'a');
-  j.engine = "raster";
-  j.width = 32;
-  j.height = 16;
-  j.tiles = {{0, 0, 16, 16}, {16, 0, 32, 16}};
-  return j;
-}
-
 TEST(EventRelayTest, OneSchedulersEventsReachTheOthersWatchersWithTheJobAsStored) {
   test::StoreLocation where(SqlDialect::PostgreSQL);
   ASSERT_TRUE(where.problem().empty()) << where.problem();
   Scheduler a(where.location()), b(where.location());
-  a.store.add_job(a_job("job1"), 1);
+  a.store.add_job(test::one_row_job("job1", 2), 1);
   auto on_a = std::make_shared<JobEventQueue>();
   auto on_b = std::make_shared<JobEventQueue>();
   a.events.subscribe("job1", on_a);
@@ -123,7 +110,7 @@ TEST(EventRelayTest, RelaysCarryOnAfterTheServerWentAwayAndCameBack) {
   test::StoreLocation where(SqlDialect::PostgreSQL);
   ASSERT_TRUE(where.problem().empty()) << where.problem();
   Scheduler a(where.location()), b(where.location());
-  a.store.add_job(a_job("job1"), 1);
+  a.store.add_job(test::one_row_job("job1", 2), 1);
   auto on_b = std::make_shared<JobEventQueue>();
   b.events.subscribe("job1", on_b);
   ASSERT_TRUE(where.server()->stop()) << where.server()->problem();

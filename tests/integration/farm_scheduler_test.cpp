@@ -126,6 +126,19 @@ class FarmSchedulerTest : public ::testing::Test {
     return job;
   }
 
+  // CancelJob through stub_; the job as the scheduler answered.
+  v1::Job cancel_ok(const std::string& id) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + 10s);
+    v1::CancelJobRequest request;
+    request.set_job_id(id);
+    v1::CancelJobResponse response;
+    const grpc::Status call = stub_->CancelJob(&context, request, &response);
+    EXPECT_TRUE(call.ok()) << call.error_code() << ": " << call.error_message();
+    EXPECT_EQ(response.job().state(), v1::JOB_STATE_CANCELLED);
+    return response.job();
+  }
+
   // Submits `spec`, sends `signal` to `victim` once a few tiles are done, and returns the job
   // once it is final (nullopt when it never gets there).
   std::optional<v1::Job> signal_worker_mid_job(const v1::JobSpec& spec, test::WorkerProcess& victim,
@@ -544,14 +557,8 @@ TEST_F(FarmSchedulerOnPostgresTest, ACancelOnOneSchedulerStopsTheUnitsOfTheOther
                                  [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
   auto cancels = start_scheduler({});  // stub_ talks to it from here on
   ASSERT_TRUE(stub_);
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + 10s);
-  v1::CancelJobRequest request;
-  request.set_job_id(big.job_id());
-  v1::CancelJobResponse response;
-  const grpc::Status call = stub_->CancelJob(&context, request, &response);
-  ASSERT_TRUE(call.ok()) << call.error_message();
-  EXPECT_EQ(response.job().state(), v1::JOB_STATE_CANCELLED);
+  const v1::Job at_cancel = cancel_ok(big.job_id());
+  ASSERT_EQ(at_cancel.state(), v1::JOB_STATE_CANCELLED);
   EXPECT_TRUE(renders->process().wait_for_line("JOB_STATE_CANCELLED on another scheduler: its units in flight here stopped", 30s))
       << renders->process().output();
 
@@ -562,7 +569,7 @@ TEST_F(FarmSchedulerOnPostgresTest, ACancelOnOneSchedulerStopsTheUnitsOfTheOther
   const auto cancelled = test::get_job(*stub_, big.job_id());
   ASSERT_TRUE(cancelled);
   EXPECT_EQ(cancelled->state(), v1::JOB_STATE_CANCELLED);
-  EXPECT_EQ(cancelled->tiles_done(), response.job().tiles_done());
+  EXPECT_EQ(cancelled->tiles_done(), at_cancel.tiles_done());
 }
 
 // One worker given both schedulers of a farm (`farm worker --scheduler A,B`): it registers with
@@ -724,15 +731,9 @@ TEST_F(FarmSchedulerTest, CancelStopsTheJobQuicklyAndTheWorkerServesTheNextJob) 
   ASSERT_TRUE(test::wait_for_job(*stub_, big.job_id(),
                                  [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
   const auto start = std::chrono::steady_clock::now();
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + 10s);
-  v1::CancelJobRequest request;
-  request.set_job_id(big.job_id());
-  v1::CancelJobResponse response;
-  const grpc::Status call = stub_->CancelJob(&context, request, &response);
-  ASSERT_TRUE(call.ok()) << call.error_code() << ": " << call.error_message();
-  EXPECT_EQ(response.job().state(), v1::JOB_STATE_CANCELLED);
-  const std::uint32_t done_at_cancel = response.job().tiles_done();
+  const v1::Job at_cancel = cancel_ok(big.job_id());
+  ASSERT_EQ(at_cancel.state(), v1::JOB_STATE_CANCELLED);
+  const std::uint32_t done_at_cancel = at_cancel.tiles_done();
 
   // The worker is free again within a second or two: a small job goes straight through.
   const v1::Job small = submit_ok(cornell("raster", 32, 32, 1, 16));
@@ -765,12 +766,7 @@ TEST_F(FarmSchedulerTest, CancellingAHugeSppJobFreesTheWorkerForTheNextJob) {
   ASSERT_TRUE(test::wait_for_job(*stub_, huge.job_id(),
                                  [](const v1::Job& j) { return j.state() == v1::JOB_STATE_RUNNING; }, 30s));
   std::this_thread::sleep_for(500ms);  // into the render (an earlier cancel proves less, never fails)
-  grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + 10s);
-  v1::CancelJobRequest request;
-  request.set_job_id(huge.job_id());
-  v1::CancelJobResponse response;
-  ASSERT_TRUE(stub_->CancelJob(&context, request, &response).ok());
+  ASSERT_EQ(cancel_ok(huge.job_id()).state(), v1::JOB_STATE_CANCELLED);
 
   const v1::Job small = submit_ok(cornell("raster", 32, 32, 1, 16));
   const auto small_done = test::wait_for_job(*stub_, small.job_id(), done, 30s);

@@ -14,18 +14,7 @@
 namespace farm {
 namespace {
 
-NewJob one_row_job(const std::string& id, int tiles) {
-  NewJob j;
-  j.id = id;
-  j.name = id;
-  j.spec.set_job_json("{}");
-  j.scene_hash = std::string(64, 'a');
-  j.engine = "raster";
-  j.width = 16 * tiles;
-  j.height = 16;
-  for (int i = 0; i < tiles; ++i) j.tiles.push_back({16 * i, 0, 16 * i + 16, 16});
-  return j;
-}
+using test::one_row_job;
 
 TEST(PostgresStoreTest, PlaceholdersAreNumberedAsSqliteNumbersThemAndQuotedTextIsLeftAlone) {
   EXPECT_EQ(postgres_placeholders("a = ? AND b = ?"), "a = $1 AND b = $2");

@@ -30,9 +30,16 @@ std::string quoted(const std::vector<std::string>& argv) {
   return line;
 }
 
+// Deletes a namespace, killing what still runs in it first (a lab whose test process was killed
+// leaves its servers running: nothing else stops them).
+void delete_namespace(const std::string& name) {
+  const std::string ns = shell_quote(name);
+  run_command(fmt::format("{0} netns pids {1} 2>/dev/null | xargs -r kill -9; {0} netns delete {1} 2>&1", ip_program(), ns));
+}
+
 // Labs of test processes that are gone: namespaces "flPID-..." whose PID no longer runs.
 void delete_abandoned_labs() {
-  const CommandResult list = run_command("ip netns list 2>/dev/null");
+  const CommandResult list = run_command(ip_program() + " netns list 2>/dev/null");
   std::istringstream lines(list.output);
   for (std::string line; std::getline(lines, line);) {
     const std::string name = line.substr(0, line.find(' '));
@@ -43,7 +50,7 @@ void delete_abandoned_labs() {
     if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
     const pid_t owner = static_cast<pid_t>(std::stol(pid));
     if (::kill(owner, 0) == 0 || errno != ESRCH) continue;
-    run_command("ip netns delete " + shell_quote(name) + " 2>/dev/null");
+    delete_namespace(name);
   }
 }
 
@@ -87,8 +94,8 @@ NetworkLab::NetworkLab(const std::vector<std::string>& hosts)
 }
 
 NetworkLab::~NetworkLab() {
-  // Hosts first: a namespace goes once no process is left in it (the test stopped them).
-  for (auto it = made_.rbegin(); it != made_.rend(); ++it) run_command("ip netns delete " + shell_quote(*it) + " 2>&1");
+  // Hosts first, the switch last. The test has stopped its processes; any left are killed.
+  for (auto it = made_.rbegin(); it != made_.rend(); ++it) delete_namespace(*it);
 }
 
 std::string NetworkLab::namespace_of(const std::string& host) const { return prefix_ + host; }

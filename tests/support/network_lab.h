@@ -3,8 +3,9 @@
 // a network namespace of its own with its loopback and one link, eth0, at 10.77.0.N/24, cabled by
 // a veth pair to a bridge that lives in a namespace of its own too. Nothing is added to the
 // machine's own network: the hosts reach each other and nothing else, and deleting the
-// namespaces takes their links and the bridge with them. The destructor deletes them, and a lab
-// left behind by a test process that died (its pid gone) is deleted by the next one.
+// namespaces takes their links and the bridge with them. The destructor deletes them (killing
+// anything still running in them), and a lab left behind by a test process that died (its pid
+// gone) is deleted, its servers killed, by the next one.
 //
 // Needs root (CAP_SYS_ADMIN and CAP_NET_ADMIN) and iproute2's `ip`; problem() says why not.
 // Processes on a host run under on(host, argv): `ip netns exec NAMESPACE argv...`, which execs

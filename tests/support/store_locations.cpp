@@ -52,4 +52,17 @@ StoreLocation::StoreLocation(SqlDialect dialect) {
   location_ = with_database(server.url(), name);
 }
 
+NewJob one_row_job(const std::string& id, int tiles) {
+  NewJob j;
+  j.id = id;
+  j.name = id;
+  j.spec.set_job_json("{}");
+  j.scene_hash = std::string(64, 'a');
+  j.engine = "raster";
+  j.width = 16 * tiles;
+  j.height = 16;
+  for (int i = 0; i < tiles; ++i) j.tiles.push_back({16 * i, 0, 16 * i + 16, 16});
+  return j;
+}
+
 }  // namespace farm::test

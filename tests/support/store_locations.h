@@ -8,6 +8,7 @@
 #include <ostream>
 #include <string>
 
+#include "server/scheduler/store/job_store.h"
 #include "server/scheduler/store/sql_connection.h"
 #include "tests/support/temp_dir.h"
 
@@ -19,6 +20,10 @@ void PrintTo(SqlDialect dialect, std::ostream* os);
 namespace farm::test {
 
 class PostgresServer;
+
+// A job of `tiles` 16x16 tiles in one row, as a store keeps it (its text is "{}"): for tests of
+// the store itself, which never parse it.
+NewJob one_row_job(const std::string& id, int tiles);
 
 inline constexpr SqlDialect kBothStores[] = {SqlDialect::SQLite, SqlDialect::PostgreSQL};
 
