@@ -16,6 +16,7 @@ namespace {
 constexpr std::size_t kChunk = 1 << 20;
 constexpr int kDefaultPageSize = 50;
 constexpr int kMaxPageSize = 1000;
+constexpr std::size_t kMaxNameFilterBytes = 256;
 // A watch of a job on a shared store hears nothing for this long: the job is read (WatchJob).
 constexpr auto kQuietWatchPoll = std::chrono::seconds(3);
 
@@ -102,11 +103,21 @@ grpc::Status SchedulerService::ListJobs(grpc::ServerContext* context, const v1::
                                      request->page_token().substr(0, 40)));
       }
     }
-    std::vector<v1::JobState> states;
-    for (int s : request->states()) states.push_back(static_cast<v1::JobState>(s));
-    std::optional<std::string> owner;  // a submitter lists its own jobs
-    if (!who.roles.any_of(kAllJobReaders)) owner = who.name;
-    auto [jobs, next] = core_.store().list_jobs(states, size, before, owner);
+    JobFilter filter;
+    for (int s : request->states()) filter.states.push_back(static_cast<v1::JobState>(s));
+    if (!who.roles.any_of(kAllJobReaders)) filter.owner = who.name;  // a submitter lists its own jobs
+    if (request->name().size() > kMaxNameFilterBytes) {
+      throw InputError(fmt::format("ListJobs: name filter of {} bytes (at most {})", request->name().size(),
+                                   kMaxNameFilterBytes));
+    }
+    filter.name = request->name();
+    if (request->id_prefix().size() > 64 ||
+        request->id_prefix().find_first_not_of("0123456789abcdef") != std::string::npos) {
+      throw InputError(fmt::format("ListJobs: id_prefix '{}' is not the start of a job id (lowercase hex)",
+                                   request->id_prefix().substr(0, 64)));
+    }
+    filter.id_prefix = request->id_prefix();
+    auto [jobs, next] = core_.store().list_jobs(filter, size, before);
     for (v1::Job& job : jobs) *response->add_jobs() = std::move(job);
     if (next > 0) response->set_next_page_token(std::to_string(next));
     return grpc::Status::OK;

@@ -86,7 +86,7 @@ TEST(PostgresStoreTest, SchedulersOpeningOneNewDatabaseAtOnceMakeTheSchemaOnce) 
   for (std::thread& t : threads) t.join();
   for (const std::string& e : errors) EXPECT_EQ(e, "");
   JobStore store(connect_store(where.location()));
-  EXPECT_EQ(store.list_jobs({}, 10, 0).first.size(), static_cast<std::size_t>(kSchedulers));
+  EXPECT_EQ(store.list_jobs(JobFilter{}, 10, 0).first.size(), static_cast<std::size_t>(kSchedulers));
   PGconn* c = PQconnectdb(where.location().c_str());
   PGresult* r = PQexec(c, "SELECT COUNT(*) FROM schema_version");
   ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQerrorMessage(c);

@@ -2,6 +2,7 @@
 // failed attempts end a job.
 #include "server/scheduler/store/job_store.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
@@ -256,9 +257,9 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
   mine.owner = "alice";
   store.add_job(mine, 2);
   EXPECT_EQ(store.get_job("mine")->owner(), "alice");
-  EXPECT_EQ(store.list_jobs({}, 10, 0, std::string("alice")).first.size(), 1u);
-  EXPECT_EQ(store.list_jobs({}, 10, 0, std::string("bob")).first.size(), 0u);
-  EXPECT_EQ(store.list_jobs({}, 10, 0).first.size(), 2u);
+  EXPECT_EQ(store.list_jobs(JobFilter{.owner = std::string("alice")}, 10, 0).first.size(), 1u);
+  EXPECT_EQ(store.list_jobs(JobFilter{.owner = std::string("bob")}, 10, 0).first.size(), 0u);
+  EXPECT_EQ(store.list_jobs(JobFilter{}, 10, 0).first.size(), 2u);
 }
 
 // A store of the scheduler before lost workers were counted apart (schema 3): its tiles keep their
@@ -551,18 +552,54 @@ TEST_P(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {
   JobStore store(connect());
   for (int i = 0; i < 5; ++i) store.add_job(make_job(std::to_string(i), 0, 1), i);
   store.cancel_job("3", 10);
-  auto [page1, next1] = store.list_jobs({}, 2, 0);
+  auto [page1, next1] = store.list_jobs(JobFilter{}, 2, 0);
   ASSERT_EQ(page1.size(), 2u);
   EXPECT_EQ(page1[0].job_id(), "4");
   EXPECT_EQ(page1[1].job_id(), "3");
   ASSERT_NE(next1, 0);
-  auto [page2, next2] = store.list_jobs({}, 10, next1);
+  auto [page2, next2] = store.list_jobs(JobFilter{}, 10, next1);
   ASSERT_EQ(page2.size(), 3u);
   EXPECT_EQ(page2[0].job_id(), "2");
   EXPECT_EQ(next2, 0);
-  auto [cancelled, none] = store.list_jobs({v1::JOB_STATE_CANCELLED}, 10, 0);
+  auto [cancelled, none] = store.list_jobs(JobFilter{.states = {v1::JOB_STATE_CANCELLED}}, 10, 0);
   ASSERT_EQ(cancelled.size(), 1u);
   EXPECT_EQ(cancelled[0].job_id(), "3");
+}
+
+// A name glob (case-insensitive, `*` and `?`; LIKE's own `%` and `_` taken literally), an id
+// prefix, and both with the owner, the states and the pages: the same on both stores.
+TEST_P(JobStoreTest, ListJobsFiltersByNameGlobAndIdPrefix) {
+  JobStore store(connect());
+  const std::vector<std::pair<std::string, std::string>> jobs{
+      {"ab12", "Cow turntable"}, {"ab34", "cow_still"}, {"cd56", "cornell 100%"}, {"ab78", "cowl"}, {"ef90", "c_w"}};
+  int seq = 0;
+  for (const auto& [id, name] : jobs) {
+    NewJob j = make_job(id, 0, 1);
+    j.name = name;
+    j.owner = id == "ab78" ? "bob" : "alice";
+    store.add_job(j, ++seq);
+  }
+  const auto ids = [&](const JobFilter& f, int limit = 10) {
+    std::vector<std::string> out;
+    for (const v1::Job& j : store.list_jobs(f, limit, 0).first) out.push_back(j.job_id());
+    return out;
+  };
+  using V = std::vector<std::string>;
+  EXPECT_EQ(ids({.name = "cow*"}), (V{"ab78", "ab34", "ab12"}));
+  EXPECT_EQ(ids({.name = "COW?"}), (V{"ab78"}));
+  EXPECT_EQ(ids({.name = "c_w"}), (V{"ef90"}));         // `_` is no wildcard: not "cow"
+  EXPECT_EQ(ids({.name = "*100%"}), (V{"cd56"}));
+  EXPECT_EQ(ids({.name = "*10%"}), (V{}));              // `%` is no wildcard either
+  EXPECT_EQ(ids({.id_prefix = "ab"}), (V{"ab78", "ab34", "ab12"}));
+  EXPECT_EQ(ids({.id_prefix = "ab3"}), (V{"ab34"}));
+  EXPECT_EQ(ids({.id_prefix = "a_"}), (V{}));
+  EXPECT_EQ(ids({.owner = std::string("alice"), .name = "cow*", .id_prefix = "ab"}), (V{"ab34", "ab12"}));
+  store.cancel_job("ab12", 10);
+  EXPECT_EQ(ids({.states = {v1::JOB_STATE_CANCELLED}, .name = "cow*"}), (V{"ab12"}));
+  auto [first, next] = store.list_jobs({.name = "c*"}, 2, 0);
+  ASSERT_EQ(first.size(), 2u);
+  ASSERT_NE(next, 0);
+  EXPECT_EQ(store.list_jobs({.name = "c*"}, 10, next).first.size(), 3u);  // ab34, cd56, ab12
 }
 
 }  // namespace
@@ -768,7 +805,7 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
   constexpr int kJobs = 3, kTiles = 40;
   {
     JobStore store(connect());
-    for (int j = 0; j < kJobs; ++j) store.add_job(make_job("j" + std::to_string(j), 0, kTiles), 1);
+    for (int j = 0; j < kJobs; ++j) store.add_job(make_job(fmt::format("j{}", j), 0, kTiles), 1);
   }
   JobStore a(connect()), b(connect());
   std::mutex mutex;
@@ -805,7 +842,7 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
   for (const auto& [tile, claims] : claimed) shared += claims > 1 ? 1 : 0;
   EXPECT_EQ(shared, 0);
   for (int j = 0; j < kJobs; ++j) {
-    const v1::Job job = *a.get_job("j" + std::to_string(j));
+    const v1::Job job = *a.get_job(fmt::format("j{}", j));
     EXPECT_EQ(job.tiles_done(), static_cast<std::uint32_t>(kTiles));
     EXPECT_EQ(job.tiles_rendered(), static_cast<std::uint32_t>(kTiles));
     EXPECT_EQ(job.stats().samples(), static_cast<std::uint64_t>(kTiles));

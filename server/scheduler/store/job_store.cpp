@@ -388,23 +388,58 @@ std::optional<v1::JobSpec> JobStore::get_spec(const std::string& id) const {
   return spec;
 }
 
-std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(
-    const std::vector<v1::JobState>& states, int limit, std::int64_t before_seq,
-    const std::optional<std::string>& owner) const {
+std::string like_escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '%' || c == '_' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+std::string like_pattern_of_glob(const std::string& glob) {
+  std::string out;
+  for (char c : glob) {
+    if (c == '*') {
+      out += '%';
+    } else if (c == '?') {
+      out += '_';
+    } else {
+      out += like_escaped(std::string(1, c));
+    }
+  }
+  return out;
+}
+
+std::pair<std::vector<v1::Job>, std::int64_t> JobStore::list_jobs(const JobFilter& filter, int limit,
+                                                                  std::int64_t before_seq) const {
   std::string where = before_seq > 0 ? fmt::format("seq < {}", before_seq) : "1 = 1";
-  if (!states.empty()) {
+  if (!filter.states.empty()) {
     std::string in;
-    for (v1::JobState s : states) in += fmt::format("{}{}", in.empty() ? "" : ", ", static_cast<int>(s));
+    for (v1::JobState s : filter.states) in += fmt::format("{}{}", in.empty() ? "" : ", ", static_cast<int>(s));
     where += fmt::format(" AND state IN ({})", in);
   }
-  if (owner) where += " AND owner = ?2";
+  // The texts are bound, never written into the statement, and numbered in the order they
+  // appear. LIKE is case-insensitive on SQLite and not on PostgreSQL: both sides lowered.
+  std::vector<std::string> texts;
+  const auto bound = [&](std::string text) {
+    texts.push_back(std::move(text));
+    return fmt::format("?{}", texts.size() + 1);
+  };
+  if (filter.owner) where += " AND owner = " + bound(*filter.owner);
+  if (!filter.name.empty()) {
+    where += fmt::format(" AND lower(name) LIKE lower({}) ESCAPE '\\'", bound(like_pattern_of_glob(filter.name)));
+  }
+  if (!filter.id_prefix.empty()) {
+    where += fmt::format(" AND id LIKE {} ESCAPE '\\'", bound(like_escaped(filter.id_prefix) + "%"));
+  }
   std::lock_guard lock(mutex_);
   // Not cached: the text varies with the filter and the page.
   const std::unique_ptr<SqlStatement> statement =
       db_->prepare_once(fmt::format("SELECT {} FROM jobs WHERE {} ORDER BY seq DESC LIMIT ?1", kJobColumns, where));
   Query s(*statement);
   s.bind(1, limit + 1);
-  if (owner) s.bind(2, *owner);
+  for (std::size_t i = 0; i < texts.size(); ++i) s.bind(static_cast<int>(i) + 2, texts[i]);
   std::vector<v1::Job> jobs;
   std::int64_t last_seq = 0, next = 0;
   while (s.step()) {

@@ -109,6 +109,21 @@ struct TileBatch {
 // (counted only up to claim_next_batch's `count_up_to`).
 using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
 
+// Which jobs ListJobs returns; each part left empty keeps every job.
+struct JobFilter {
+  std::vector<v1::JobState> states = {};
+  std::optional<std::string> owner = {};  // the name of the token that submitted it
+  // A shell glob on the job's name: `*` any run, `?` any one character; case-insensitive (ASCII).
+  std::string name = {};
+  std::string id_prefix = {};  // the start of its id (lowercase hex)
+};
+
+// `text` matched literally by LIKE with `\` as its escape: `%`, `_` and `\` escaped.
+std::string like_escaped(const std::string& text);
+// `glob` as a LIKE pattern with `\` as its escape: `*` -> `%`, `?` -> `_`, and the characters LIKE
+// reads as its own (`%`, `_`, `\`) escaped.
+std::string like_pattern_of_glob(const std::string& glob);
+
 // A scheduler whose lease ran out, and how many of the tiles it had handed out came back.
 struct ReapedScheduler {
   std::string id;
@@ -146,11 +161,10 @@ class JobStore {
 
   std::optional<v1::Job> get_job(const std::string& id) const;
   std::optional<v1::JobSpec> get_spec(const std::string& id) const;
-  // Newest first; `states` empty = all; starts below submission order `before_seq` (0 = newest);
-  // only `owner`'s jobs when given. Returns the jobs and the seq to continue from (0 = no more).
-  std::pair<std::vector<v1::Job>, std::int64_t> list_jobs(const std::vector<v1::JobState>& states,
-                                                         int limit, std::int64_t before_seq,
-                                                         const std::optional<std::string>& owner = {}) const;
+  // The jobs that `filter` keeps, newest first, starting below submission order `before_seq`
+  // (0 = newest). Returns the jobs and the seq to continue from (0 = no more).
+  std::pair<std::vector<v1::Job>, std::int64_t> list_jobs(const JobFilter& filter, int limit,
+                                                         std::int64_t before_seq) const;
   std::vector<TileRecord> tiles(const std::string& id) const;
   // Jobs QUEUED or RUNNING, in submission order.
   std::vector<std::string> active_jobs() const;
