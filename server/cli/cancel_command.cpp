@@ -17,7 +17,7 @@ void add_cancel_command(CLI::App& app, CommandTable& commands) {
   add_job_on_scheduler_options(*cancel, *o);
   commands.add(cancel, [o] {
     SchedulerClient client(resolve_scheduler_connection(o->scheduler));
-    const v1::Job job = client.cancel(o->job_id);
+    const v1::Job job = client.cancel(client.resolve_job_id(o->job_id));
     fmt::print("job {}: {} ({})\n", job.job_id(), to_string(job.state()), progress_of(job));
     return 0;
   });

@@ -21,7 +21,7 @@ struct FetchOptions {
 
 int run_fetch(const FetchOptions& o) {
   SchedulerClient client(resolve_scheduler_connection(o.target.scheduler));
-  const v1::Job job = client.get(o.target.job_id);
+  const v1::Job job = client.get(client.resolve_job_id(o.target.job_id));
   download_job_results(client, job,
                        [&](v1::ResultKind kind, const std::string& name, int) {
                          const std::string fallback = job.name() + (kind == v1::RESULT_KIND_EXR       ? ".exr"

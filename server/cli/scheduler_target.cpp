@@ -31,7 +31,7 @@ std::optional<SchedulerConnection> resolve_optional_scheduler(const std::optiona
 }
 
 void add_job_on_scheduler_options(CLI::App& command, JobOnScheduler& target) {
-  command.add_option("id", target.job_id, "Job id")->required();
+  command.add_option("id", target.job_id, "Job id, or any unique start of it")->required();
   add_scheduler_connection_options(command, target.scheduler);
 }
 

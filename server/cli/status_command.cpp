@@ -1,11 +1,15 @@
 #include "server/cli/status_command.h"
 
 #include <fmt/format.h>
+#include <google/protobuf/util/json_util.h>
 
+#include <chrono>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "renderer/scene/input_error.h"
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
@@ -13,35 +17,117 @@
 namespace farm {
 namespace {
 
-// job_id empty: list every job.
-int run_status(const JobOnScheduler& o) {
-  SchedulerClient client(resolve_scheduler_connection(o.scheduler));
-  if (!o.job_id.empty()) {
-    print_job(client.get(o.job_id));
+struct StatusOptions {
+  JobOnScheduler target;  // job_id empty: list
+  std::string states;     // comma-separated state names
+  std::string name;
+  std::size_t limit = 50;
+  bool json = false;
+};
+
+std::vector<v1::JobState> parse_states(const std::string& list) {
+  std::vector<v1::JobState> out;
+  std::istringstream in(list);
+  for (std::string name; std::getline(in, name, ',');) {
+    if (name.empty()) continue;
+    bool known = false;
+    for (int s = v1::JobState_MIN; s <= v1::JobState_MAX; ++s) {
+      if (v1::JobState_IsValid(s) && s != v1::JOB_STATE_UNSPECIFIED && to_string(static_cast<v1::JobState>(s)) == name) {
+        out.push_back(static_cast<v1::JobState>(s));
+        known = true;
+      }
+    }
+    if (!known) {
+      throw InputError(fmt::format("--state: '{}' is not a job state (queued, running, succeeded, failed, cancelled)",
+                                   name));
+    }
+  }
+  return out;
+}
+
+std::string json_of(const v1::Job& job) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.always_print_primitive_fields = true;
+  std::string out;
+  if (!google::protobuf::util::MessageToJsonString(job, &out, options).ok()) {
+    throw std::runtime_error("cannot write job " + job.job_id() + " as JSON");
+  }
+  return out;
+}
+
+// How long the job has run: from its start to its end, or to now while it runs; "-" before.
+std::string duration_of(const v1::Job& job) {
+  if (!job.has_started_at() || job.started_at().seconds() == 0) return "-";
+  const double end = job.has_finished_at() && job.finished_at().seconds() > 0
+                         ? static_cast<double>(job.finished_at().seconds()) + job.finished_at().nanos() * 1e-9
+                         : std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const double s = std::max(0.0, end - (static_cast<double>(job.started_at().seconds()) + job.started_at().nanos() * 1e-9));
+  const auto whole = static_cast<long long>(s);
+  if (s < 60) return fmt::format("{:.1f}s", s);
+  if (s < 3600) return fmt::format("{}m{:02}s", whole / 60, whole % 60);
+  return fmt::format("{}h{:02}m", whole / 3600, whole / 60 % 60);
+}
+
+// At most `n` characters (bytes of ASCII; a cut never splits a UTF-8 sequence), "..." when cut.
+std::string clipped(const std::string& text, std::size_t n) {
+  if (text.size() <= n) return text;
+  std::size_t cut = n - 3;
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xc0) == 0x80) --cut;
+  return text.substr(0, cut) + "...";
+}
+
+int run_status(StatusOptions& o) {
+  SchedulerClient client(resolve_scheduler_connection(o.target.scheduler));
+  if (!o.target.job_id.empty()) {
+    const v1::Job job = client.get(client.resolve_job_id(o.target.job_id));
+    if (o.json) {
+      fmt::print("{}\n", json_of(job));
+    } else {
+      print_job(job);
+    }
     return 0;
   }
-  const std::vector<v1::Job> jobs = client.list();
+  bool more = false;
+  const std::vector<v1::Job> jobs = client.list({.states = parse_states(o.states), .name = o.name, .limit = o.limit}, &more);
+  if (o.json) {
+    fmt::print("[");
+    for (std::size_t i = 0; i < jobs.size(); ++i) fmt::print("{}{}", i == 0 ? "" : ",\n ", json_of(jobs[i]));
+    fmt::print("]\n");
+    return 0;
+  }
   if (jobs.empty()) {
-    fmt::print("no jobs on {}\n", client.address());
+    fmt::print("no jobs on {}{}\n", client.address(), o.states.empty() && o.name.empty() ? "" : " match");
     return 0;
   }
-  fmt::print("{:<36} {:<20} {:<10} {:>13} {:<8} {:>11} {}\n", "ID", "NAME", "STATE", "PROGRESS", "ENGINE", "SIZE",
-             "SUBMITTED");
+  constexpr const char* kRow = "{:<16}  {:<20}  {:<9}  {:>3}  {:>20}  {:>8}  {:<19}  {}\n";
+  const auto row = [](std::string line) {  // without the blanks an empty last column leaves
+    while (line.size() > 1 && line[line.size() - 2] == ' ') line.erase(line.size() - 2, 1);
+    fmt::print("{}", line);
+  };
+  row(fmt::format(kRow, "ID", "NAME", "STATE", "PRI", "PROGRESS", "DURATION", "SUBMITTED", "FAILURE"));
   for (const v1::Job& job : jobs) {
-    fmt::print("{:<36} {:<20} {:<10} {:>13} {:<8} {:>11} {}\n", job.job_id(), job.name().substr(0, 20),
-               to_string(job.state()), progress_of(job), job.engine(), fmt::format("{}x{}", job.width(), job.height()),
-               local_time(job.submitted_at()));
+    row(fmt::format(kRow, job.job_id(), clipped(job.name(), 20), to_string(job.state()), job.priority(),
+                    progress_of(job), duration_of(job), local_time(job.submitted_at()),
+                    clipped(job.failure_reason(), 60)));
   }
+  if (more) fmt::print("(the newest {}; more match: --limit 0 lists them all)\n", jobs.size());
   return 0;
 }
 
 }  // namespace
 
 void add_status_command(CLI::App& app, CommandTable& commands) {
-  auto o = std::make_shared<JobOnScheduler>();
+  auto o = std::make_shared<StatusOptions>();
   CLI::App* status = app.add_subcommand("status", "List the scheduler's jobs, or show one");
-  status->add_option("id", o->job_id, "Job id (default: list all jobs)");
-  add_scheduler_connection_options(*status, o->scheduler);
+  status->add_option("id", o->target.job_id, "Job id, or any unique start of it (default: list jobs)");
+  status->add_option("--state", o->states,
+                     "List only jobs in these states, comma-separated: queued, running, succeeded, failed, "
+                     "cancelled");
+  status->add_option("--name", o->name, "List only jobs whose name matches this glob (* and ?; case-insensitive)");
+  status->add_option("--limit", o->limit, "List at most the newest N (0 = all)")->capture_default_str();
+  status->add_flag("--json", o->json, "Print the job, or the list, as JSON (the fields of farm.v1.Job)");
+  add_scheduler_connection_options(*status, o->target.scheduler);
   commands.add(status, [o] { return run_status(*o); });
 }
 

@@ -46,6 +46,7 @@ void add_watch_command(CLI::App& app, CommandTable& commands) {
   watch->footer("Exit codes: 0 the job succeeded, 1 it failed or was cancelled.");
   commands.add(watch, [o] {
     SchedulerClient client(resolve_scheduler_connection(o->target.scheduler));
+    o->target.job_id = client.resolve_job_id(o->target.job_id);
     const auto refresh = [&](const v1::JobEvent& event) {
       if (o->preview.empty()) return;
       const auto wanted = preview_after(event);

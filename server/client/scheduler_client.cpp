@@ -130,17 +130,47 @@ v1::Job SchedulerClient::get(const std::string& job_id) {
   return call<v1::Job>(&v1::Scheduler::Stub::GetJob, request, "GetJob");
 }
 
-std::vector<v1::Job> SchedulerClient::list() {
+std::vector<v1::Job> SchedulerClient::list(const JobListing& listing, bool* more) {
+  constexpr std::size_t kPage = 1000;  // the scheduler's largest page
   std::vector<v1::Job> jobs;
   std::string token;
+  if (more) *more = false;
   do {
     v1::ListJobsRequest request;
+    for (v1::JobState s : listing.states) request.add_states(s);
+    request.set_name(listing.name);
+    request.set_id_prefix(listing.id_prefix);
     request.set_page_token(token);
+    // One more than the limit, so that `more` can be told.
+    const std::size_t wanted = listing.limit == 0 ? kPage : listing.limit + 1 - jobs.size();
+    request.set_page_size(static_cast<int>(std::min(wanted, kPage)));
     const auto response = call<v1::ListJobsResponse>(&v1::Scheduler::Stub::ListJobs, request, "ListJobs");
     jobs.insert(jobs.end(), response.jobs().begin(), response.jobs().end());
     token = response.next_page_token();
-  } while (!token.empty());
+  } while (!token.empty() && (listing.limit == 0 || jobs.size() <= listing.limit));
+  if (listing.limit > 0 && jobs.size() > listing.limit) {
+    if (more) *more = true;
+    jobs.resize(listing.limit);
+  }
   return jobs;
+}
+
+std::string SchedulerClient::resolve_job_id(const std::string& id_or_prefix) {
+  // Not an id's start at all: asked for as it is, and the scheduler says what is wrong with it.
+  if (id_or_prefix.empty() || id_or_prefix.find_first_not_of("0123456789abcdef") != std::string::npos) {
+    return id_or_prefix;
+  }
+  bool more = false;
+  const std::vector<v1::Job> matches = list({.id_prefix = id_or_prefix, .limit = 3}, &more);
+  if (matches.size() == 1) return matches.front().job_id();
+  if (matches.empty()) {
+    throw ServiceError(grpc::StatusCode::NOT_FOUND,
+                       fmt::format("no job on {} whose id starts with '{}'", address_, id_or_prefix));
+  }
+  std::string named;
+  for (const v1::Job& j : matches) named += fmt::format("{}{} '{}'", named.empty() ? "" : ", ", j.job_id(), j.name());
+  throw InputError(fmt::format("job id '{}' is ambiguous on {}: {}{}; give more of it", id_or_prefix, address_, named,
+                               more ? " and more" : ""));
 }
 
 v1::Job SchedulerClient::watch(const std::string& job_id,

@@ -15,6 +15,14 @@
 
 namespace farm {
 
+// Which jobs list() asks for; what is left empty keeps every job (ListJobsRequest).
+struct JobListing {
+  std::vector<v1::JobState> states = {};
+  std::string name = {};       // a glob: `*`, `?`; case-insensitive
+  std::string id_prefix = {};  // lowercase hex
+  std::size_t limit = 0;       // at most this many, newest first; 0: every one
+};
+
 class SchedulerClient {
  public:
   explicit SchedulerClient(SchedulerConnection connection);
@@ -27,7 +35,12 @@ class SchedulerClient {
   std::size_t upload_missing(const JobSubmission& submission);
   v1::Job submit(const JobSubmission& submission, int priority);
   v1::Job get(const std::string& job_id);
-  std::vector<v1::Job> list();
+  // The jobs `listing` asks for, newest first; `more` (when given) says whether others beyond
+  // its limit match too.
+  std::vector<v1::Job> list(const JobListing& listing = {}, bool* more = nullptr);
+  // The id of the one job whose id starts with `id_or_prefix` (a whole id is its own prefix).
+  // ServiceError NOT_FOUND when none does; InputError naming a few when several do.
+  std::string resolve_job_id(const std::string& id_or_prefix);
   // Streams the job's events to `on_event` until it reaches a final state; returns that job.
   v1::Job watch(const std::string& job_id, const std::function<void(const v1::JobEvent&)>& on_event);
   v1::Job cancel(const std::string& job_id);
