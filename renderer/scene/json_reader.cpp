@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/util/utf8_prefix.h"
 
 namespace farm {
 
@@ -16,14 +17,6 @@ using Json = nlohmann::json;
 
 constexpr std::size_t kMaxShownChars = 48;
 constexpr std::size_t kMaxShownPath = 240;
-
-// Cuts at a UTF-8 boundary so the shortened text is still valid for dump().
-std::string shorten_utf8(const std::string& s, std::size_t max_bytes) {
-  if (s.size() <= max_bytes) return s;
-  std::size_t cut = max_bytes;
-  while (cut > 0 && (static_cast<unsigned char>(s[cut]) & 0xC0u) == 0x80u) --cut;
-  return s.substr(0, cut);
-}
 
 bool is_identifier(std::string_view key) {
   if (key.empty()) return false;
@@ -78,7 +71,7 @@ class StrictDomBuilder final : public nlohmann::json_sax<Json> {
     if (ex.id == 406) {  // out_of_range: a number literal that overflows a double
       throw_at(file_, pending_path(),
                fmt::format("number {} is out of range (not finite as a double)",
-                           shorten_utf8(token, kMaxShownChars)));
+                           utf8_prefix(token, kMaxShownChars)));
     }
     const auto [line, column] = line_and_column(position);
     throw InputError(fmt::format("{}:{}:{}: JSON syntax error: {}", file_, line, column,
@@ -193,7 +186,7 @@ Json parse_json_strict(const std::string& text, const std::string& file) {
 
 std::string json_path_key(const std::string& parent, std::string_view key) {
   if (is_identifier(key)) return parent.empty() ? std::string(key) : fmt::format("{}.{}", parent, key);
-  const std::string quoted = Json(shorten_utf8(std::string(key), kMaxShownChars)).dump();
+  const std::string quoted = Json(utf8_prefix(std::string(key), kMaxShownChars)).dump();
   return fmt::format("{}[{}]", parent, quoted);
 }
 
@@ -219,7 +212,7 @@ std::string describe_json(const Json& value) {
     case Json::value_t::number_float: return value.dump();
     case Json::value_t::string: {
       const auto& s = value.get_ref<const std::string&>();
-      const std::string shown = Json(shorten_utf8(s, kMaxShownChars)).dump();
+      const std::string shown = Json(utf8_prefix(s, kMaxShownChars)).dump();
       return fmt::format("a string ({}{})", shown, s.size() > kMaxShownChars ? "..." : "");
     }
     case Json::value_t::array: return fmt::format("an array of {}", value.size());

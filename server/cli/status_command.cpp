@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/util/utf8_prefix.h"
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
@@ -72,9 +73,7 @@ std::string duration_of(const v1::Job& job) {
 // At most `n` characters (bytes of ASCII; a cut never splits a UTF-8 sequence), "..." when cut.
 std::string clipped(const std::string& text, std::size_t n) {
   if (text.size() <= n) return text;
-  std::size_t cut = n - 3;
-  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xc0) == 0x80) --cut;
-  return text.substr(0, cut) + "...";
+  return utf8_prefix(text, n - 3) + "...";
 }
 
 int run_status(StatusOptions& o) {

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "renderer/scene/input_error.h"
+#include "server/common/hex.h"
 #include "server/common/service_error.h"
 #include "server/common/sha256.h"
 
@@ -157,7 +158,7 @@ std::vector<v1::Job> SchedulerClient::list(const JobListing& listing, bool* more
 
 std::string SchedulerClient::resolve_job_id(const std::string& id_or_prefix) {
   // Not an id's start at all: asked for as it is, and the scheduler says what is wrong with it.
-  if (id_or_prefix.empty() || id_or_prefix.find_first_not_of("0123456789abcdef") != std::string::npos) {
+  if (id_or_prefix.empty() || !is_lowercase_hex(id_or_prefix)) {
     return id_or_prefix;
   }
   bool more = false;

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "server/common/hex.h"
+
 namespace farm {
 
 struct Sha256::Context {
@@ -36,14 +38,7 @@ std::string Sha256::finish_hex() {
   if (EVP_DigestFinal_ex(ctx_->md, digest.data(), &length) != 1) {
     throw std::runtime_error("OpenSSL: SHA-256 final failed");
   }
-  static constexpr char kHex[] = "0123456789abcdef";
-  std::string hex;
-  hex.reserve(2 * length);
-  for (unsigned int i = 0; i < length; ++i) {
-    hex += kHex[digest[i] >> 4];
-    hex += kHex[digest[i] & 0xf];
-  }
-  return hex;
+  return to_hex(std::string_view(reinterpret_cast<const char*>(digest.data()), length));
 }
 
 std::string sha256_hex(std::string_view bytes) {
@@ -65,12 +60,6 @@ std::string sha256_file_hex(const std::filesystem::path& file) {
   return h.finish_hex();
 }
 
-bool is_sha256_hex(std::string_view s) {
-  if (s.size() != 64) return false;
-  for (char c : s) {
-    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return false;
-  }
-  return true;
-}
+bool is_sha256_hex(std::string_view s) { return s.size() == 64 && is_lowercase_hex(s); }
 
 }  // namespace farm

@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
-#include <charconv>
 #include <random>
 #include <vector>
+
+#include "renderer/util/utf8_prefix.h"
+#include "server/common/hex.h"
 
 namespace farm {
 
@@ -15,30 +17,6 @@ constexpr std::size_t kMaxReasonBytes = 1000;
 constexpr std::size_t kMaxPayloadBytes = 7900;
 // Events sent in one statement, at most.
 constexpr std::size_t kMaxBatch = 256;
-
-std::string to_hex(const std::string& bytes) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string out;
-  out.reserve(bytes.size() * 2);
-  for (unsigned char c : bytes) {
-    out += kDigits[c >> 4];
-    out += kDigits[c & 0xf];
-  }
-  return out;
-}
-
-std::optional<std::string> from_hex(std::string_view hex) {
-  if (hex.size() % 2 != 0) return std::nullopt;
-  std::string out(hex.size() / 2, '\0');
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    unsigned value = 0;
-    const char* begin = hex.data() + 2 * i;
-    const auto [end, error] = std::from_chars(begin, begin + 2, value, 16);
-    if (error != std::errc() || end != begin + 2) return std::nullopt;
-    out[i] = static_cast<char>(value);
-  }
-  return out;
-}
 
 std::string new_origin() {
   std::random_device random;
@@ -54,10 +32,7 @@ std::string encode_relayed_event(const std::string& origin, std::uint64_t seq, c
   slim.mutable_job()->set_job_id(id);
   if (slim.has_tile_failed() && slim.tile_failed().reason().size() > kMaxReasonBytes) {
     // Cut on a UTF-8 boundary: the receiver's watchers get a string proto accepts.
-    std::string reason = slim.tile_failed().reason().substr(0, kMaxReasonBytes);
-    while (!reason.empty() && (static_cast<unsigned char>(reason.back()) & 0xc0) == 0x80) reason.pop_back();
-    if (!reason.empty() && static_cast<unsigned char>(reason.back()) >= 0xc0) reason.pop_back();
-    slim.mutable_tile_failed()->set_reason(reason + "...");
+    slim.mutable_tile_failed()->set_reason(utf8_prefix(slim.tile_failed().reason(), kMaxReasonBytes) + "...");
   }
   return fmt::format("{} {:x} {}", origin, seq, to_hex(slim.SerializeAsString()));
 }

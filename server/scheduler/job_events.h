@@ -4,9 +4,9 @@
 // pace; publishing never waits for a watcher.
 //
 // Locks: JobEvents::mutex_ guards the subscriptions and is held while an event is made and pushed
-// to every subscriber of its job; under it the job store's lock (to read the job) and each
-// queue's lock are taken, both leaves, and the relay's queue (forward_, a leaf). No other lock of the scheduler is held when an event is
-// published, so it takes part in no cycle.
+// to every subscriber of its job; under it the job store's lock (to read the job), each queue's
+// lock and the relay's queue (forward_) are taken, all leaves. No other lock of the scheduler is
+// held when an event is published, so it takes part in no cycle.
 #include <chrono>
 #include <condition_variable>
 #include <deque>

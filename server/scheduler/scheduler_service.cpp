@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "renderer/scene/input_error.h"
+#include "server/common/hex.h"
 #include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"
 #include "server/common/sha256.h"
@@ -112,7 +113,7 @@ grpc::Status SchedulerService::ListJobs(grpc::ServerContext* context, const v1::
     }
     filter.name = request->name();
     if (request->id_prefix().size() > 64 ||
-        request->id_prefix().find_first_not_of("0123456789abcdef") != std::string::npos) {
+        !is_lowercase_hex(request->id_prefix())) {
       throw InputError(fmt::format("ListJobs: id_prefix '{}' is not the start of a job id (lowercase hex)",
                                    request->id_prefix().substr(0, 64)));
     }
