@@ -33,8 +33,57 @@ std::string local_time(const google::protobuf::Timestamp& t) {
   return text;
 }
 
+std::string state_label(const v1::Job& job) {
+  return job.paused() && !is_final(job.state()) ? "paused" : to_string(job.state());
+}
+
+std::string describe_event(const v1::JobEvent& event) {
+  const v1::Job& job = event.job();
+  switch (event.event_case()) {
+    case v1::JobEvent::kSnapshot:
+      return fmt::format("{} ({})", state_label(job), progress_of(job));
+    case v1::JobEvent::kStateChanged: {
+      const v1::JobStateChanged& c = event.state_changed();
+      if (c.from() == v1::JOB_STATE_UNSPECIFIED) {
+        return fmt::format("submitted: {}, {} {}", to_string(c.to()), job.tiles_total(),
+                           job.tiles_total() == 1 ? "unit" : "units");
+      }
+      return fmt::format("{} -> {} ({}){}", to_string(c.from()), to_string(c.to()), progress_of(job),
+                         c.to() == v1::JOB_STATE_FAILED && !job.failure_reason().empty() ? ": " + job.failure_reason()
+                                                                                          : "");
+    }
+    case v1::JobEvent::kTileFinished: {
+      const v1::TileFinished& f = event.tile_finished();
+      return fmt::format("{} of frame {} done on {}", describe_tiles(f.tile_index(), std::max(1u, f.tile_count())),
+                         f.frame(), f.worker());
+    }
+    case v1::JobEvent::kTileFailed: {
+      const v1::TileFailed& f = event.tile_failed();
+      return fmt::format("{} failed on {}: {}{}", describe_tiles(f.tile_index(), std::max(1u, f.tile_count())),
+                         f.worker().empty() ? "the scheduler" : f.worker(), f.reason(),
+                         f.will_retry() ? " (will retry)" : "");
+    }
+    case v1::JobEvent::kFrameFinished:
+      return fmt::format("frame {} merged ({})", event.frame_finished().frame(), progress_of(job));
+    case v1::JobEvent::kPassFinished: {
+      const v1::PassFinished& p = event.pass_finished();
+      return fmt::format("frame {}: sample pass {}/{} done", p.frame(), p.pass() + 1, p.passes());
+    }
+    case v1::JobEvent::kUpdated:
+      return fmt::format("{}{}", event.updated().change(),
+                         event.updated().by().empty() ? "" : " (by " + event.updated().by() + ")");
+    case v1::JobEvent::EVENT_NOT_SET:
+      break;
+  }
+  return "an event this client does not know";
+}
+
+void print_log_entry(const v1::JobLogEntry& entry) {
+  fmt::print("{}.{:03}  {}\n", local_time(entry.at()), entry.at().nanos() / 1000000, describe_event(entry.event()));
+}
+
 void print_job(const v1::Job& job) {
-  fmt::print("job {} '{}': {}, {}\n", job.job_id(), job.name(), to_string(job.state()), progress_of(job));
+  fmt::print("job {} '{}': {}, {}\n", job.job_id(), job.name(), state_label(job), progress_of(job));
   fmt::print("  {} engine, {}x{}, scene {}\n", job.engine(), job.width(), job.height(),
              job.scene_hash().substr(0, 16));
   if (job.passes() > 1) {

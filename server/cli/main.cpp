@@ -10,7 +10,6 @@
 
 #include "renderer/scene/input_error.h"
 #include "server/cli/bench_command.h"
-#include "server/cli/cancel_command.h"
 #include "server/cli/check_scene_command.h"
 #include "server/cli/command_table.h"
 #include "server/cli/compare_command.h"
@@ -18,6 +17,8 @@
 #include "server/cli/token_command.h"
 #include "server/cli/grade_command.h"
 #include "server/cli/info_command.h"
+#include "server/cli/job_action_commands.h"
+#include "server/cli/log_command.h"
 #include "server/cli/regress_command.h"
 #include "server/cli/render_command.h"
 #include "server/cli/scheduler_command.h"
@@ -27,6 +28,7 @@
 #include "server/cli/version.h"
 #include "server/cli/watch_command.h"
 #include "server/cli/worker_command.h"
+#include "server/cli/workers_command.h"
 #include "server/common/service_error.h"
 
 namespace {
@@ -72,7 +74,9 @@ int main(int argc, char** argv) {
   farm::add_submit_command(app, commands);
   farm::add_status_command(app, commands);
   farm::add_watch_command(app, commands);
-  farm::add_cancel_command(app, commands);
+  farm::add_job_action_commands(app, commands);
+  farm::add_log_command(app, commands);
+  farm::add_workers_command(app, commands);
   farm::add_fetch_command(app, commands);
   farm::add_token_command(app, commands);
   farm::add_check_scene_command(app, commands);

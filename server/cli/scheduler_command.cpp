@@ -10,10 +10,14 @@
 #include <memory>
 
 #include "renderer/scene/input_error.h"
+#include "server/cli/duration_option.h"
 #include "server/cli/log_level_option.h"
 #include "server/cli/server_security_flags.h"
 #include "server/common/farm_server.h"
 #include "server/common/server_shutdown.h"
+#include "server/common/listen_policy.h"
+#include "server/scheduler/http/dashboard_server.h"
+#include "server/scheduler/http/webhook_notifier.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
 #include "server/scheduler/store/postgres_connection.h"
@@ -61,6 +65,8 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.lease = ms(o.lease_s);
   options.tile_deadline = ms(o.tile_deadline_s);
   options.max_attempts = o.max_attempts;
+  if (!o.keep_finished.empty()) options.keep_finished = parse_duration(o.keep_finished, "--keep-finished");
+  if (!o.notify_url.empty()) parse_webhook_url(o.notify_url);  // refused before anything starts
   options.max_lost_worker_attempts = o.max_lost_worker_attempts;
   options.tiles_per_worker = o.tiles_per_worker;
   options.batch_target = std::chrono::milliseconds(o.batch_ms);
@@ -71,6 +77,12 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   // New jobs' scenes are loaded by this binary again, as `farm check-scene`, under the limits.
   options.scene_check_program = std::filesystem::read_symlink("/proc/self/exe");
   SchedulerCore core(options);
+  // Held by the core's listener too, so that it outlives every event the core publishes.
+  std::shared_ptr<WebhookNotifier> notifier;
+  if (!o.notify_url.empty()) {
+    notifier = std::make_shared<WebhookNotifier>(o.notify_url, core.scheduler_id(), core.log());
+    core.listen([notifier](const v1::JobEvent& event) { notifier->enqueue(event); });
+  }
   for (const std::string& address : o.workers) {
     core.add_worker(std::make_shared<RemoteTileWorker>(
         address, WorkerLink{security.outgoing, std::string(), &core.grants()}));
@@ -78,6 +90,25 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
 
   SchedulerAccess access{security.access, security.outgoing, o.max_priority};
   SchedulerService service(core, std::move(access));
+  std::unique_ptr<DashboardServer> dashboard;
+  if (!o.http.empty()) {
+    // The gRPC port's rules: beyond loopback only with tokens (or --insecure); HTTPS when the
+    // scheduler has a certificate.
+    // A browser presents no client certificate: only tokens count as authentication here.
+    for (const std::string& warning : check_listen_security({.listen = o.http,
+                                                             .tokens = security.access.requires_tokens(),
+                                                             .client_certificates = false,
+                                                             .tls = o.security.tls.has_certificate(),
+                                                             .insecure = o.security.insecure},
+                                                            "the scheduler's dashboard (--http)")) {
+      security.warnings.push_back(warning);
+    }
+    dashboard = std::make_unique<DashboardServer>(
+        service, core,
+        DashboardOptions{.listen = o.http, .access = security.access, .tls_cert = o.security.tls.cert,
+                         .tls_key = o.security.tls.key},
+        core.log());
+  }
   grpc::ServerBuilder builder;
   int port = 0;
   builder.AddListeningPort(o.listen, security.credentials, &port);
@@ -91,8 +122,13 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   fmt::print("  data dir {}, job store {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
              o.data_dir.string(), core.store().describe(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
   if (core.store().is_shared()) fmt::print("  scheduler {}, lease {} s\n", core.scheduler_id(), o.lease_s);
+  if (!o.keep_finished.empty()) fmt::print("  finished jobs kept {} after they end, then deleted\n", o.keep_finished);
+  if (notifier) fmt::print("  each job's end posted to {}\n", o.notify_url);
   fmt::print("  {}, {}\n", security.access.requires_tokens() ? "tokens required" : "no tokens",
              o.security.tls.has_certificate() ? (o.security.tls.ca.empty() ? "TLS" : "mTLS") : "plain text");
+  if (dashboard) {
+    fmt::print("dashboard on {}://{}:{}/\n", dashboard->scheme(), host_of(o.http), dashboard->port());
+  }
   std::fflush(stdout);
 
   int signal_number = 0;
@@ -104,7 +140,9 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   // those calls depend on, and its grace period outlasts a worker's heartbeat limit: a worker
   // would be dropped, or fail its tiles, and every call in flight be counted lost. The clients'
   // calls (the store's, the events') still get their grace.
+  if (dashboard) dashboard->stop();  // its event streams end, its calls finish
   core.stop();
+  if (notifier) notifier->stop();
   const bool drained = shut_down_within(*server, kShutdownGrace, kShutdownUnwind);
   if (!drained) {
     // Safe to leave mid-call. The job store is SQLite in WAL mode, which a process that dies in
@@ -157,6 +195,21 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "worker lost while rendering it counts under --max-lost-worker-attempts instead")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
+  s->add_option("--http", o->http,
+                "Serve the web dashboard, its JSON API (/api/v1/) and /metrics on HOST:PORT (port 0: any "
+                "free one; the address is printed). Same tokens and roles as the gRPC API; beyond "
+                "loopback it needs --tokens; HTTPS with --tls-cert")
+      ->envname("FARM_HTTP");
+  s->add_option("--notify-url", o->notify_url,
+                "POST a JSON event ({\"event\": \"job.succeeded\"|\"job.failed\"|\"job.cancelled\", "
+                "\"scheduler\", \"job\"}) to this http(s) URL when a job ends: a CI's or a chat's "
+                "webhook. Retried with backoff (1 s doubling to 60 s, 8 attempts); never holds dispatch")
+      ->envname("FARM_NOTIFY_URL");
+  s->add_option("--keep-finished", o->keep_finished,
+                "Delete jobs (from the store, with their tiles and result files) this long after "
+                "they succeeded, failed or were cancelled: 90s, 30m, 12h, 7d, 2w. Running and "
+                "queued jobs are never deleted. Default: keep every job")
+      ->envname("FARM_KEEP_FINISHED");
   s->add_option("--max-lost-worker-attempts", o->max_lost_worker_attempts,
                 "Workers one tile may lose while rendering it (the call ended UNAVAILABLE: its process "
                 "died; or it missed its heartbeats) before its job fails: counted apart from "

@@ -20,6 +20,9 @@ struct SchedulerCommandOptions {
   std::vector<std::string> workers;   // static `farm worker` addresses
   double tile_deadline_s = 600;
   int max_attempts = 3;
+  std::string keep_finished;          // a duration (duration_option.h); empty: for ever
+  std::string http;                   // the dashboard's HOST:PORT; empty: none
+  std::string notify_url;             // the webhook a job's end is posted to; empty: none
   int max_lost_worker_attempts = 10;  // SchedulerOptions::max_lost_worker_attempts
   int tiles_per_worker = 2;
   int batch_ms = 200;

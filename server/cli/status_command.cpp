@@ -1,7 +1,6 @@
 #include "server/cli/status_command.h"
 
 #include <fmt/format.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <chrono>
 #include <memory>
@@ -46,17 +45,6 @@ std::vector<v1::JobState> parse_states(const std::string& list) {
   return out;
 }
 
-std::string json_of(const v1::Job& job) {
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.always_print_primitive_fields = true;
-  std::string out;
-  if (!google::protobuf::util::MessageToJsonString(job, &out, options).ok()) {
-    throw std::runtime_error("cannot write job " + job.job_id() + " as JSON");
-  }
-  return out;
-}
-
 // How long the job has run: from its start to its end, or to now while it runs; "-" before.
 std::string duration_of(const v1::Job& job) {
   if (!job.has_started_at() || job.started_at().seconds() == 0) return "-";
@@ -90,9 +78,7 @@ int run_status(StatusOptions& o) {
   bool more = false;
   const std::vector<v1::Job> jobs = client.list({.states = parse_states(o.states), .name = o.name, .limit = o.limit}, &more);
   if (o.json) {
-    fmt::print("[");
-    for (std::size_t i = 0; i < jobs.size(); ++i) fmt::print("{}{}", i == 0 ? "" : ",\n ", json_of(jobs[i]));
-    fmt::print("]\n");
+    print_json_array(jobs);
     return 0;
   }
   if (jobs.empty()) {
@@ -106,7 +92,7 @@ int run_status(StatusOptions& o) {
   };
   row(fmt::format(kRow, "ID", "NAME", "STATE", "PRI", "PROGRESS", "DURATION", "SUBMITTED", "FAILURE"));
   for (const v1::Job& job : jobs) {
-    row(fmt::format(kRow, job.job_id(), clipped(job.name(), 20), to_string(job.state()), job.priority(),
+    row(fmt::format(kRow, job.job_id(), clipped(job.name(), 20), state_label(job), job.priority(),
                     progress_of(job), duration_of(job), local_time(job.submitted_at()),
                     clipped(job.failure_reason(), 60)));
   }

@@ -1,13 +1,12 @@
 #include "server/cli/token_command.h"
 
 #include <fmt/format.h>
-#include <openssl/rand.h>
 
-#include <array>
 #include <memory>
 #include <string>
 
 #include "server/common/access_roles.h"
+#include "server/common/random_token.h"
 #include "server/common/sha256.h"
 #include "server/common/token_table.h"
 
@@ -18,17 +17,6 @@ struct TokenOptions {
   std::string name;
   std::string roles;
 };
-
-// 256 random bits from OpenSSL's CSPRNG, as 64 hex digits.
-std::string random_token() {
-  std::array<unsigned char, 32> bytes{};
-  if (RAND_bytes(bytes.data(), static_cast<int>(bytes.size())) != 1) {
-    throw std::runtime_error("no random bytes from OpenSSL");
-  }
-  std::string token;
-  for (unsigned char b : bytes) token += fmt::format("{:02x}", b);
-  return token;
-}
 
 int run_token(const TokenOptions& o) {
   const Roles roles = parse_roles(o.roles, "--roles");

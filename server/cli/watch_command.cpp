@@ -35,7 +35,8 @@ std::optional<std::pair<v1::ResultKind, int>> preview_after(const v1::JobEvent& 
 
 void add_watch_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<WatchOptions>();
-  CLI::App* watch = app.add_subcommand("watch", "Follow a job with a progress bar until it ends");
+  CLI::App* watch = app.add_subcommand(
+      "watch", "Follow a job with a progress bar until it ends; a job that has ended has its event log replayed");
   add_job_on_scheduler_options(*watch, o->target);
   watch->add_option("--preview", o->preview,
                     "Keep this PNG up to date with the newest preview while the job renders: after each "
@@ -47,6 +48,12 @@ void add_watch_command(CLI::App& app, CommandTable& commands) {
   commands.add(watch, [o] {
     SchedulerClient client(resolve_scheduler_connection(o->target.scheduler));
     o->target.job_id = client.resolve_job_id(o->target.job_id);
+    if (const v1::Job now = client.get(o->target.job_id); is_final(now.state())) {
+      // Nothing more will happen: what did happen is replayed from its log.
+      for (const v1::JobLogEntry& e : client.log(o->target.job_id)) print_log_entry(e);
+      print_job(now);
+      return exit_code_of(now);
+    }
     const auto refresh = [&](const v1::JobEvent& event) {
       if (o->preview.empty()) return;
       const auto wanted = preview_after(event);

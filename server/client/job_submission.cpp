@@ -33,15 +33,17 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
   for (std::size_t i = 0; i < objects.size(); ++i) {
     objects[i]["file"] = job.scene.objects[i].file.lexically_relative(root).generic_string();
   }
-  auto& render = doc["render"];
-  if (o.engine) render["engine"] = *o.engine;
-  if (o.width) render["width"] = *o.width;
-  if (o.height) render["height"] = *o.height;
-  if (o.spp) render["spp"] = *o.spp;
-  if (o.threads) render["threads"] = *o.threads;
-  if (o.tile_size) render["tile_size"] = *o.tile_size;
-  if (o.max_depth) render["max_depth"] = *o.max_depth;
-  if (o.seed) render["seed"] = *o.seed;
+  // The render block is touched only for an override of it: `doc["render"]` on a job without one
+  // would write "render": null, which the scheduler refuses.
+  const auto render = [&]() -> nlohmann::ordered_json& { return doc["render"]; };
+  if (o.engine) render()["engine"] = *o.engine;
+  if (o.width) render()["width"] = *o.width;
+  if (o.height) render()["height"] = *o.height;
+  if (o.spp) render()["spp"] = *o.spp;
+  if (o.threads) render()["threads"] = *o.threads;
+  if (o.tile_size) render()["tile_size"] = *o.tile_size;
+  if (o.max_depth) render()["max_depth"] = *o.max_depth;
+  if (o.seed) render()["seed"] = *o.seed;
   if (!o.add_aovs.empty()) {
     // The job's AOVs as parsed (overrides applied), written back in the job file's names.
     nlohmann::ordered_json aovs = nlohmann::ordered_json::array();

@@ -59,17 +59,6 @@ void throw_for_status(const grpc::Status& status, const std::string& what, const
   }
 }
 
-std::string to_string(v1::JobState state) {
-  switch (state) {
-    case v1::JOB_STATE_QUEUED: return "queued";
-    case v1::JOB_STATE_RUNNING: return "running";
-    case v1::JOB_STATE_SUCCEEDED: return "succeeded";
-    case v1::JOB_STATE_FAILED: return "failed";
-    case v1::JOB_STATE_CANCELLED: return "cancelled";
-    default: return "unknown";
-  }
-}
-
 SchedulerClient::SchedulerClient(SchedulerConnection connection)
     : address_(std::move(connection.address)),
       stub_(v1::Scheduler::NewStub(open_channel(address_, connection.identity))) {}
@@ -201,6 +190,55 @@ v1::Job SchedulerClient::cancel(const std::string& job_id) {
   v1::CancelJobRequest request;
   request.set_job_id(job_id);
   return call<v1::CancelJobResponse>(&v1::Scheduler::Stub::CancelJob, request, "CancelJob").job();
+}
+
+v1::Job SchedulerClient::pause(const std::string& job_id, bool paused) {
+  v1::PauseJobRequest request;
+  request.set_job_id(job_id);
+  request.set_paused(paused);
+  return call<v1::PauseJobResponse>(&v1::Scheduler::Stub::PauseJob, request, "PauseJob").job();
+}
+
+v1::Job SchedulerClient::set_priority(const std::string& job_id, int priority) {
+  v1::SetPriorityRequest request;
+  request.set_job_id(job_id);
+  request.set_priority(priority);
+  return call<v1::SetPriorityResponse>(&v1::Scheduler::Stub::SetPriority, request, "SetPriority").job();
+}
+
+v1::RetryJobResponse SchedulerClient::retry(const std::string& job_id) {
+  v1::RetryJobRequest request;
+  request.set_job_id(job_id);
+  return call<v1::RetryJobResponse>(&v1::Scheduler::Stub::RetryJob, request, "RetryJob");
+}
+
+v1::DeleteJobResponse SchedulerClient::remove(const std::string& job_id) {
+  v1::DeleteJobRequest request;
+  request.set_job_id(job_id);
+  return call<v1::DeleteJobResponse>(&v1::Scheduler::Stub::DeleteJob, request, "DeleteJob");
+}
+
+std::vector<v1::JobLogEntry> SchedulerClient::log(const std::string& job_id) {
+  std::vector<v1::JobLogEntry> entries;
+  v1::GetJobLogRequest request;
+  request.set_job_id(job_id);
+  for (;;) {
+    v1::GetJobLogResponse page = call<v1::GetJobLogResponse>(&v1::Scheduler::Stub::GetJobLog, request, "GetJobLog");
+    // A page that does not move past where it began would loop for ever: the reply is checked.
+    for (v1::JobLogEntry& e : *page.mutable_entries()) {
+      if (e.number() <= request.after()) throw std::runtime_error("GetJobLog: the scheduler sent entries out of order");
+      request.set_after(e.number());
+      entries.push_back(std::move(e));
+    }
+    if (!page.more() || page.entries().empty()) return entries;
+  }
+}
+
+std::vector<v1::WorkerInfo> SchedulerClient::workers() {
+  v1::ListWorkersResponse response =
+      call<v1::ListWorkersResponse>(&v1::Scheduler::Stub::ListWorkers, v1::ListWorkersRequest(), "ListWorkers");
+  return {std::make_move_iterator(response.mutable_workers()->begin()),
+          std::make_move_iterator(response.mutable_workers()->end())};
 }
 
 fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, const Destination& where,

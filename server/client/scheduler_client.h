@@ -44,6 +44,14 @@ class SchedulerClient {
   // Streams the job's events to `on_event` until it reaches a final state; returns that job.
   v1::Job watch(const std::string& job_id, const std::function<void(const v1::JobEvent&)>& on_event);
   v1::Job cancel(const std::string& job_id);
+  // Job management (PauseJob, SetPriority, RetryJob, DeleteJob, GetJobLog, ListWorkers).
+  v1::Job pause(const std::string& job_id, bool paused);
+  v1::Job set_priority(const std::string& job_id, int priority);
+  v1::RetryJobResponse retry(const std::string& job_id);
+  v1::DeleteJobResponse remove(const std::string& job_id);
+  // The job's whole event log, page after page.
+  std::vector<v1::JobLogEntry> log(const std::string& job_id);
+  std::vector<v1::WorkerInfo> workers();
   // Downloads a result to the file `where(suggested name)` returns (the name the scheduler
   // suggests, a plain file name, possibly empty), through a temporary file, checking its size and
   // SHA-256; returns the file.
@@ -67,7 +75,5 @@ class SchedulerClient {
 // runtime_error with the scheduler's message.
 [[noreturn]] void throw_for_status(const grpc::Status& status, const std::string& what,
                                    const std::string& address);
-
-std::string to_string(v1::JobState state);  // "queued", "running", ...
 
 }  // namespace farm

@@ -29,9 +29,14 @@ class AccessControl {
   // carries none, a malformed one, or one the file does not list (the token is never echoed).
   Principal authenticate(const grpc::ServerContext& context) const;
 
+  // The same for a caller that is not gRPC's (the dashboard's HTTP requests): the bearer token it
+  // presented, empty when none.
+  Principal authenticate_token(std::string_view token) const;
+
   // authenticate(), then ServiceError PERMISSION_DENIED naming the caller and the RPC unless the
-  // caller holds one of `allowed`.
+  // caller holds one of `allowed` (check()).
   Principal require(const grpc::ServerContext& context, Roles allowed, std::string_view rpc) const;
+  static void check(const Principal& who, Roles allowed, std::string_view rpc);
 
  private:
   std::shared_ptr<const TokenTable> tokens_;

@@ -158,6 +158,18 @@ v1::Job Dispatcher::cancel_job(const std::string& job_id) {
   return after;
 }
 
+std::map<std::string, std::vector<std::string>> Dispatcher::calls_in_flight() const {
+  std::lock_guard lock(mutex_);
+  std::map<std::string, std::vector<std::string>> calls;
+  for (const std::shared_ptr<InFlight>& call : in_flight_) {
+    calls[call->worker_id].push_back(fmt::format("{} {} (frame {}, pass {}){}", call->batch.job_id,
+                                                 describe(call->batch), call->batch.frame, call->batch.pass,
+                                                 call->check ? ", a spot check" : ""));
+  }
+  for (auto& [id, list] : calls) std::sort(list.begin(), list.end());
+  return calls;
+}
+
 void Dispatcher::job_ended_elsewhere(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   stop_job_locked(job_id);
@@ -324,6 +336,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
   }
   auto call = std::make_shared<InFlight>();
   call->batch = std::move(*batch);
+  call->batch.handed_out = std::chrono::steady_clock::now();
   call->worker_id = w.id;
   in_flight_.insert(call);
   return call;
@@ -621,6 +634,8 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       return;
     }
     measured(batch, stats);
+    workers_.count_units(worker_id, batch.count, 0);
+    metrics_.kept(batch.count, batch.handed_out);
     events_.publish(batch.job_id, [&](v1::JobEvent& event) {
       v1::TileFinished& f = *event.mutable_tile_finished();
       f.set_tile_index(batch.first);
@@ -755,6 +770,8 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
 void Dispatcher::fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
                             const std::string& why, int max_attempts) {
   log_.warn("job {} {}: {}", batch.job_id, describe(batch), why);
+  workers_.count_units(worker_id, 0, batch.count);
+  metrics_.failed(batch.count);
   const std::optional<v1::Job> job = store_.get_job(batch.job_id);
   if (!job) return;
   const v1::JobState before = job->state();
@@ -766,6 +783,8 @@ void Dispatcher::fail_batch(const std::string& worker_id, const std::string& wor
 void Dispatcher::lose_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
                             const std::string& why) {
   log_.warn("job {} {}: {} (its worker was lost: no attempt counted)", batch.job_id, describe(batch), why);
+  workers_.count_units(worker_id, 0, batch.count);
+  metrics_.failed(batch.count);
   const std::optional<v1::Job> job = store_.get_job(batch.job_id);
   if (!job) return;
   const v1::JobState before = job->state();
@@ -792,7 +811,7 @@ void Dispatcher::after_failure(const std::string& worker, const TileBatch& batch
       stop_job_locked(batch.job_id);
     }
     events_.publish_state(failure.job, before);
-    finisher_.release(batch.job_id);
+    finisher_.release(batch.job_id, true);  // a retry renders its failed units only
   }
   work_.notify_all();
 }

@@ -70,6 +70,7 @@
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/store_outage.h"
 #include "server/scheduler/tile_worker.h"
+#include "server/scheduler/unit_metrics.h"
 #include "server/scheduler/worker_registry.h"
 
 namespace farm {
@@ -105,6 +106,10 @@ class Dispatcher {
   // The job ended on another scheduler of the store (cancelled or failed there): its calls in
   // flight here are cancelled, their tiles left as the store has them.
   void job_ended_elsewhere(const std::string& job_id);
+  // Units kept and failed, their rate and latency (the dashboard's /metrics).
+  const UnitMetrics& metrics() const { return metrics_; }
+  // The calls in flight now, by worker id: "JOB_ID tiles A-B (frame F, pass P)" (farm workers).
+  std::map<std::string, std::vector<std::string>> calls_in_flight() const;
   // Cancels the worker's calls in flight: their tiles are retried on others (a lost-worker attempt
   // counted, not a failed one).
   void worker_left(const std::string& worker_id, const std::string& reason);
@@ -193,6 +198,7 @@ class Dispatcher {
   StoreOutage& outage_;
   spdlog::logger& log_;
   SpotCheckChooser chooser_;
+  UnitMetrics metrics_;
   mutable std::mutex mutex_;
   std::condition_variable work_;  // a job queued, a batch back in the queue, stopping
   bool stopping_ = false;

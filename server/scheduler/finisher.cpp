@@ -3,17 +3,20 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <climits>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
 #include "renderer/geometry/accel_validation.h"
+#include "renderer/image/preview.h"
 #include "renderer/prepared_scene.h"
 #include "renderer/scene/frame_range.h"
 #include "renderer/scene/scene_builder.h"
 #include "renderer/scene/video_format.h"
 #include "server/common/free_memory.h"
 #include "server/common/job_state.h"
+#include "server/common/remove_tree.h"
 #include "server/scheduler/video_encoder.h"
 
 namespace farm {
@@ -97,8 +100,14 @@ void Finisher::retry_refused() {
   for (const std::string& id : jobs) finish_if_complete(id);
 }
 
-void Finisher::release(const std::string& job_id) {
-  assembly_.remove_job(job_id);
+void Finisher::release(const std::string& job_id, bool keep_units) {
+  if (!keep_units || options_.in_memory) assembly_.remove_job(job_id);
+  {
+    std::lock_guard lock(live_mutex_);
+    live_.erase(live_.lower_bound({job_id, INT_MIN}), live_.lower_bound({job_id + '\0', INT_MIN}));
+  }
+  std::error_code ignored;
+  fs::remove_all(results_dir(job_id) / "live", ignored);  // its merged frames show instead
   previews_.forget_job(job_id);
   const std::size_t still_running = jobs_.forget(job_id);
   // What the job's submission, tiles and merge freed is held by the allocator's arenas (the
@@ -258,7 +267,7 @@ void Finisher::fail(const std::string& job_id, const std::string& reason) {
   const v1::Job after = store_.finish_job(job_id, v1::JOB_STATE_FAILED, reason, "", unix_ms_now());
   log_.error("job {} failed: {}", job_id, after.failure_reason());
   if (after.state() != before) events_.publish_state(after, before);
-  release(job_id);
+  release(job_id, true);
 }
 
 void Finisher::refine_preview(const std::string& job_id, int frame) {
@@ -280,6 +289,32 @@ void Finisher::refine_preview(const std::string& job_id, int frame) {
 }
 
 void Finisher::parts_taken_back(const std::string& job_id) { previews_.parts_taken_back(job_id); }
+
+std::optional<fs::path> Finisher::live_preview(const std::string& job_id, int frame) {
+  if (store_.is_frame_merged(job_id, frame)) return result_file(job_id, true, frame);
+  if (!assembly_.reads_parts_back()) return std::nullopt;
+  // A job that has ended shows its merged frames only: nothing of it is kept in memory any more,
+  // and a viewer must not bring it back.
+  const std::optional<v1::Job> job = store_.get_job(job_id);
+  if (!job || is_final(job->state())) return std::nullopt;
+  const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
+  if (info->passes() > 1) return progressive_result(job_id, frame);
+  const std::vector<FramePart> parts = store_.frame_parts(job_id, frame, 1);
+  if (parts.empty()) return std::nullopt;
+  const fs::path file = results_dir(job_id) / "live" / fmt::format("{}.png", frame);
+  std::lock_guard lock(live_mutex_);
+  LivePreview& live = live_[{job_id, frame}];
+  const auto now = std::chrono::steady_clock::now();
+  std::error_code ec;
+  // Made again only when more units are done, and not more often than kPartialEvery: however
+  // many viewers ask, the merge reads each frame's parts a few times a second at most.
+  if (live.parts != parts.size() && (now - live.made >= kPartialEvery || !fs::exists(file, ec))) {
+    fs::create_directories(file.parent_path());
+    write_preview(assembly_.assemble_partial(job_id, info->frame(frame), parts), file);
+    live = {parts.size(), now};
+  }
+  return file;
+}
 
 bool Finisher::make_room() {
   std::optional<v1::Job> youngest;
@@ -381,6 +416,11 @@ std::optional<fs::path> Finisher::video_file(const std::string& job_id) const {
     if (video_format_of(e.path())) return e.path();
   }
   return std::nullopt;
+}
+
+std::uintmax_t Finisher::remove_files(const std::string& job_id) {
+  previews_.forget_job(job_id);
+  return assembly_.remove_job(job_id) + remove_tree(results_dir(job_id));
 }
 
 fs::path Finisher::results_dir(const std::string& job_id) const {

@@ -22,6 +22,7 @@
 // refused_ only, and is a leaf: the merge itself runs
 // without it.
 #include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -57,8 +58,13 @@ class Finisher {
   // preview when a pass more is done (progressive_previews.h). One caller merges a job at a time; another calling meanwhile
   // returns at once, and the first looks again for complete frames before it returns.
   void finish_if_complete(const std::string& job_id, std::optional<int> frame = std::nullopt);
-  // The job is final: what is kept of it in memory and its tiles go.
-  void release(const std::string& job_id);
+  // The job is final: what is kept of it in memory goes, and its units' results too unless
+  // `keep_units` (a FAILED or CANCELLED job, which a retry finishes with the units it has: they go
+  // with the job, remove_files()). The embedded farm keeps none: nothing of it outlives it.
+  void release(const std::string& job_id, bool keep_units = false);
+  // A deleted job's files: its kept units and everything under results/<job id>. Returns the
+  // bytes freed.
+  std::uintmax_t remove_files(const std::string& job_id);
   // Merges again the jobs whose merge the disk refused (called when dispatch resumes).
   void retry_refused();
   // The disk is full and stays full (called while dispatch is paused): the youngest running job
@@ -73,6 +79,11 @@ class Finisher {
   // The newest progressive preview (PNG) of the job's frame of sample passes, until it is merged;
   // then its preview. nullopt before its first pass is done.
   std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
+  // The dashboard's live image of a frame being rendered: its merged preview once merged, its
+  // progressive preview for a frame of sample passes, else a PNG of the units done so far (made
+  // again when more are done, at most every kPartialEvery). nullopt when there is none yet, or for
+  // the embedded farm.
+  std::optional<std::filesystem::path> live_preview(const std::string& job_id, int frame);
   // Done parts of the job were taken back (the dispatcher quarantined their worker).
   void parts_taken_back(const std::string& job_id);
   // The video under results/ of a SUCCEEDED job that asked for one; nullopt otherwise.
@@ -116,6 +127,13 @@ class Finisher {
   void make_video(const std::string& job_id, const JobInfo& info) const;
   std::filesystem::path video_path(const std::string& job_id, const JobInfo& info) const;
 
+  // The units of a frame each live preview shows, and when it was made.
+  struct LivePreview {
+    std::size_t parts = 0;
+    std::chrono::steady_clock::time_point made;
+  };
+  static constexpr auto kPartialEvery = std::chrono::milliseconds(250);
+
   const SchedulerOptions& options_;
   JobStore& store_;
   FrameAssembly& assembly_;
@@ -132,6 +150,10 @@ class Finisher {
   };
   std::map<std::string, Merging> merging_;  // jobs being merged
   std::set<std::string> refused_;  // merges the disk refused, tried again by retry_refused()
+  // Live previews made (live_preview), by job and frame; under live_mutex_, a leaf, held while
+  // one is made so that two viewers of a frame make it once.
+  std::mutex live_mutex_;
+  std::map<std::pair<std::string, int>, LivePreview> live_;
   std::function<void()> on_requeued_;  // set once, before any merge
   ProgressivePreviews previews_;
   static constexpr unsigned kTrimEvery = 16;

@@ -80,6 +80,17 @@ TileBuffer TileFileAssembly::assemble(const std::string& job_id, const FrameLayo
   return film;
 }
 
+TileBuffer TileFileAssembly::assemble_partial(const std::string& job_id, const FrameLayout& frame,
+                                              const std::vector<FramePart>& parts) {
+  if (frame.folded()) throw std::logic_error("a frame of sample passes has its progressive preview instead");
+  TileBuffer film;
+  film.reset(frame.image, frame.aovs);  // cleared: the parts cover only part of it
+  read_parts(job_id, frame, parts, [&](const FramePart&, const TileBuffer& buffer, const v1::TileStats&) {
+    film.paste(buffer);
+  });
+  return film;
+}
+
 void TileFileAssembly::fold(const std::string& job_id, const FrameLayout& frame, const std::vector<FramePart>& parts,
                             PassAccumulator& into) {
   read_parts(job_id, frame, parts, [&](const FramePart& part, const TileBuffer& buffer, const v1::TileStats&) {
@@ -222,9 +233,10 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
   return std::move(f->film);
 }
 
-void InMemoryAssembly::remove_job(const std::string& job_id) {
+std::uintmax_t InMemoryAssembly::remove_job(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   films_.erase(films_.lower_bound({job_id, INT_MIN}), films_.lower_bound({job_id + '\0', INT_MIN}));
+  return 0;
 }
 
 void InMemoryAssembly::frame_merged(const std::string& job_id, int frame) {

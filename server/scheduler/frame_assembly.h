@@ -69,13 +69,18 @@ class FrameAssembly {
   // Whether parts can be read back once kept (fold()): not the embedded farm's, which keeps
   // only the merge's pixels.
   virtual bool reads_parts_back() const = 0;
+  // The frame (not of sample passes) as far as `parts` cover it, black elsewhere: the dashboard's
+  // live image of a frame being rendered. Throws as assemble() does, and std::logic_error unless
+  // reads_parts_back().
+  virtual TileBuffer assemble_partial(const std::string& job_id, const FrameLayout& frame,
+                                      const std::vector<FramePart>& parts) = 0;
   // Folds `parts` (of passes the accumulator, sized to the frame, does not hold yet, in pass
   // order) into `into`: a frame's progressive preview. Throws as assemble() does, and
   // std::logic_error unless reads_parts_back().
   virtual void fold(const std::string& job_id, const FrameLayout& frame, const std::vector<FramePart>& parts,
                     PassAccumulator& into) = 0;
-  // Forgets the job (done, failed or cancelled).
-  virtual void remove_job(const std::string& job_id) = 0;
+  // Forgets the job (done, or deleted); returns the bytes of kept data freed.
+  virtual std::uintmax_t remove_job(const std::string& job_id) = 0;
   // The frame is merged and written: what is kept of it only for the merge may go.
   virtual void frame_merged(const std::string& job_id, int frame) = 0;
   // The part's tiles are no longer done (their worker was quarantined, or the store refused
@@ -94,9 +99,11 @@ class TileFileAssembly final : public FrameAssembly {
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<FramePart>& parts) override;
   bool reads_parts_back() const override { return true; }
+  TileBuffer assemble_partial(const std::string& job_id, const FrameLayout& frame,
+                              const std::vector<FramePart>& parts) override;
   void fold(const std::string& job_id, const FrameLayout& frame, const std::vector<FramePart>& parts,
             PassAccumulator& into) override;
-  void remove_job(const std::string& job_id) override { files_.remove_job(job_id); }
+  std::uintmax_t remove_job(const std::string& job_id) override { return files_.remove_job(job_id); }
   // The files stay until the job ends: a quarantine may yet take back some of the frame's parts,
   // and its merge again needs the rest.
   void frame_merged(const std::string&, int) override {}
@@ -128,10 +135,13 @@ class InMemoryAssembly final : public FrameAssembly {
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<FramePart>& parts) override;
   bool reads_parts_back() const override { return false; }
+  TileBuffer assemble_partial(const std::string&, const FrameLayout&, const std::vector<FramePart>&) override {
+    throw std::logic_error("the embedded farm keeps no parts to assemble again");
+  }
   void fold(const std::string&, const FrameLayout&, const std::vector<FramePart>&, PassAccumulator&) override {
     throw std::logic_error("the embedded farm keeps no parts to fold again");
   }
-  void remove_job(const std::string& job_id) override;
+  std::uintmax_t remove_job(const std::string& job_id) override;  // returns 0: nothing on disk
   void frame_merged(const std::string& job_id, int frame) override;  // its film goes
   void discard(const std::string& job_id, std::uint32_t part) override;
   void free_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) override {

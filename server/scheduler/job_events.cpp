@@ -1,5 +1,10 @@
 #include "server/scheduler/job_events.h"
 
+#include <cstdint>
+#include <utility>
+
+#include "server/common/job_state.h"
+
 namespace farm {
 
 bool JobEventQueue::pop(v1::JobEvent& event, std::chrono::milliseconds timeout) {
@@ -13,9 +18,18 @@ bool JobEventQueue::pop(v1::JobEvent& event, std::chrono::milliseconds timeout) 
 void JobEventQueue::push(const v1::JobEvent& event) {
   {
     std::lock_guard lock(mutex_);
+    if (events_.size() >= capacity_) {
+      events_.pop_front();
+      dropped_ = true;
+    }
     events_.push_back(event);
   }
   ready_.notify_all();
+}
+
+bool JobEventQueue::dropped() {
+  std::lock_guard lock(mutex_);
+  return std::exchange(dropped_, false);
 }
 
 void JobEvents::subscribe(const std::string& job_id, std::shared_ptr<JobEventQueue> queue) {
@@ -53,6 +67,11 @@ void JobEvents::publish_state(const v1::Job& job, v1::JobState from) {
   push_locked(event);
 }
 
+void JobEvents::listen(std::function<void(const v1::JobEvent&)> listener) {
+  std::lock_guard lock(mutex_);
+  listeners_.push_back(std::move(listener));
+}
+
 void JobEvents::relay_to(std::function<void(const v1::JobEvent&)> forward) {
   std::lock_guard lock(mutex_);
   forward_ = std::move(forward);
@@ -61,7 +80,7 @@ void JobEvents::relay_to(std::function<void(const v1::JobEvent&)> forward) {
 void JobEvents::publish_relayed(v1::JobEvent event) {
   std::lock_guard lock(mutex_);
   const std::string& id = event.job().job_id();
-  if (watchers_.count(id) == 0) return;  // nobody here watches it: the store is not read
+  if (watchers_.count(id) == 0 && watchers_.count(kEveryJob) == 0) return;  // nobody here watches it
   const std::optional<v1::Job> job = store_.get_job(id);
   if (!job) return;
   if (event.has_state_changed()) {
@@ -73,13 +92,43 @@ void JobEvents::publish_relayed(v1::JobEvent event) {
 }
 
 void JobEvents::push_locked(const v1::JobEvent& event) {
+  log_locked(event);
   push_to_watchers_locked(event);
   if (forward_) forward_(event);
+  for (const auto& listener : listeners_) listener(event);
+}
+
+void JobEvents::log_locked(const v1::JobEvent& event) {
+  if (event.has_tile_finished() || event.has_snapshot()) return;
+  // The job as the event left it, in the fields a reader of the log looks at: the whole job in
+  // every entry would repeat its stats and times thousands of times.
+  v1::JobEvent entry = event;
+  v1::Job& job = *entry.mutable_job();
+  job.Clear();
+  const v1::Job& then = event.job();
+  job.set_job_id(then.job_id());
+  job.set_name(then.name());
+  job.set_state(then.state());
+  job.set_priority(then.priority());
+  job.set_paused(then.paused());
+  job.set_tiles_total(then.tiles_total());
+  job.set_tiles_done(then.tiles_done());
+  job.set_tile_failures(then.tile_failures());
+  job.set_frames_total(then.frames_total());
+  job.set_frames_done(then.frames_done());
+  job.set_failure_reason(then.failure_reason());
+  try {
+    store_.append_log(entry, unix_ms_now(), event.has_state_changed() || event.has_updated());
+  } catch (const std::exception&) {
+    // The store full or away: the event still reaches its watchers; the log misses it.
+  }
 }
 
 void JobEvents::push_to_watchers_locked(const v1::JobEvent& event) {
   auto [begin, end] = watchers_.equal_range(event.job().job_id());
   for (auto it = begin; it != end; ++it) it->second->push(event);
+  auto [all, all_end] = watchers_.equal_range(kEveryJob);
+  for (auto it = all; it != all_end; ++it) it->second->push(event);
 }
 
 }  // namespace farm

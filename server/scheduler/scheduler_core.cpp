@@ -1,9 +1,11 @@
 #include "server/scheduler/scheduler_core.h"
 
 #include <fmt/format.h>
+#include <google/protobuf/util/time_util.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <random>
 
@@ -28,6 +30,14 @@ std::string new_job_id() {
   static std::mt19937_64 random{std::random_device{}()};
   std::lock_guard lock(mutex);
   return fmt::format("{:016x}", random());
+}
+
+std::string describe_state(const v1::Job& job) {
+  return fmt::format("job {} is {}", job.job_id(), to_string(job.state()));
+}
+
+[[noreturn]] void no_job(const std::string& job_id) {
+  throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("no job '{}'", job_id));
 }
 
 std::unique_ptr<FrameAssembly> make_assembly(const SchedulerOptions& options) {
@@ -105,11 +115,15 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                    v1::JobState_Name(event.state_changed().to()));
       }
       dispatcher_.job_ended_elsewhere(event.job().job_id());
-      finisher_.release(event.job().job_id());
+      finisher_.release(event.job().job_id(), event.state_changed().to() != v1::JOB_STATE_SUCCEEDED);
     });
   }
   // Jobs interrupted between their last tile and their merge.
   finish_active_jobs();
+  if (options_.keep_finished.count() > 0) {
+    retention_ = std::make_unique<RetentionSweeper>(
+        options_.keep_finished, *log_, [this](std::int64_t before_ms) { return remove_finished_before(before_ms); });
+  }
 }
 
 std::string make_scheduler_id() {
@@ -128,7 +142,8 @@ void SchedulerCore::finish_active_jobs() {
 void SchedulerCore::stop() {
   // The registry first: slots waiting for a worker to come up return, and no worker is dropped
   // while the dispatcher cancels and joins.
-  if (relay_) relay_->stop();  // first: its thread calls the dispatcher and the finisher
+  if (retention_) retention_->stop();  // first: it deletes through the finisher
+  if (relay_) relay_->stop();  // its thread calls the dispatcher and the finisher
   workers_.stop();
   pause_.stop();
   dispatcher_.stop();
@@ -229,6 +244,7 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
   log_->info("job {} '{}' queued: {} {}x{}, {} frame(s), {} tiles, priority {}{}", added.job_id(), added.name(),
              added.engine(), added.width(), added.height(), added.frames_total(), added.tiles_total(), priority,
              owner.empty() ? "" : ", owner " + owner);
+  events_.publish_state(added, v1::JOB_STATE_UNSPECIFIED);  // its first log entry: submitted
   dispatcher_.work_queued();
   return added;
 }
@@ -239,14 +255,98 @@ std::optional<v1::Job> SchedulerCore::get_job(const std::string& job_id) const {
 
 v1::Job SchedulerCore::cancel(const std::string& job_id) {
   std::optional<v1::Job> before = store_.get_job(job_id);
-  if (!before) throw ServiceError(grpc::StatusCode::NOT_FOUND, "no job '" + job_id + "'");
+  if (!before) no_job(job_id);
   const v1::Job after = dispatcher_.cancel_job(job_id);
   if (after.state() != before->state()) {
     log_->info("job {} cancelled", job_id);
     events_.publish_state(after, before->state());
-    finisher_.release(job_id);
+    finisher_.release(job_id, true);  // a retry renders what the cancel stopped, and keeps the rest
   }
   return after;
+}
+
+void SchedulerCore::announce(const std::string& job_id, const std::string& change, const std::string& by) {
+  log_->info("job {} {}{}", job_id, change, by.empty() ? "" : " by " + by);
+  events_.publish(job_id, [&](v1::JobEvent& e) {
+    e.mutable_updated()->set_change(change);
+    e.mutable_updated()->set_by(by);
+  });
+}
+
+v1::Job SchedulerCore::pause(const std::string& job_id, bool paused, const std::string& by) {
+  std::optional<v1::Job> before = store_.get_job(job_id);
+  if (!before) no_job(job_id);
+  if (is_final(before->state())) {
+    throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
+                       fmt::format("{}: only a queued or running job can be {}", describe_state(*before),
+                                   paused ? "paused" : "resumed"));
+  }
+  const v1::Job after = *store_.set_paused(job_id, paused);
+  if (after.paused() != before->paused()) {
+    announce(job_id, paused ? "paused" : "resumed", by);
+    if (!paused) dispatcher_.work_queued();
+  }
+  return after;
+}
+
+v1::Job SchedulerCore::set_priority(const std::string& job_id, int priority, const std::string& by) {
+  std::optional<v1::Job> before = store_.get_job(job_id);
+  if (!before) no_job(job_id);
+  const v1::Job after = *store_.set_priority(job_id, priority);
+  if (after.priority() != before->priority()) {
+    const std::string change = fmt::format("priority {} -> {}", before->priority(), after.priority());
+    announce(job_id, change, by);
+  }
+  return after;
+}
+
+RetriedJob SchedulerCore::retry(const std::string& job_id, const std::string& by) {
+  const std::optional<v1::Job> before = store_.get_job(job_id);
+  std::optional<RetriedJob> r = store_.retry_job(job_id);
+  if (!r) no_job(job_id);
+  if (!r->retried) {
+    throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
+                       fmt::format("{}: only a failed or cancelled job can be retried", describe_state(r->job)));
+  }
+  const std::string change = fmt::format("retried: {} unit{} queued again, {} kept", r->units_queued,
+                                         r->units_queued == 1 ? "" : "s", r->job.tiles_done());
+  announce(job_id, change, by);
+  events_.publish(job_id, [&](v1::JobEvent& e) {
+    e.mutable_state_changed()->set_from(before ? before->state() : v1::JOB_STATE_FAILED);
+    e.mutable_state_changed()->set_to(e.job().state());
+  });
+  // A job whose units were all done (it failed at its end: its check, its video) ends again now.
+  finisher_.finish_if_complete(job_id);
+  dispatcher_.work_queued();
+  return *r;
+}
+
+std::uintmax_t SchedulerCore::remove(const std::string& job_id) {
+  const std::optional<bool> deleted = store_.delete_job(job_id);
+  if (!deleted) no_job(job_id);
+  if (!*deleted) {
+    throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
+                       fmt::format("{}: cancel it first (only a finished, failed or cancelled job is deleted)",
+                                   describe_state(*store_.get_job(job_id))));
+  }
+  jobs_.forget(job_id);
+  const std::uintmax_t bytes = finisher_.remove_files(job_id);
+  log_->info("job {} deleted: {} bytes of files freed", job_id, bytes);
+  return bytes;
+}
+
+std::size_t SchedulerCore::remove_finished_before(std::int64_t before_ms) {
+  constexpr int kBatch = 100;  // jobs a pass; the next pass takes the rest
+  std::size_t removed = 0;
+  for (const std::string& id : store_.finished_before(before_ms, kBatch)) {
+    try {
+      remove(id);
+      ++removed;
+    } catch (const ServiceError&) {
+      // Retried or deleted meanwhile (another scheduler of the store, an operator): nothing to do.
+    }
+  }
+  return removed;
 }
 
 std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bool preview,
@@ -258,14 +358,18 @@ std::optional<fs::path> SchedulerCore::progressive_result(const std::string& job
   return finisher_.progressive_result(job_id, frame);
 }
 
+std::optional<fs::path> SchedulerCore::live_preview(const std::string& job_id, int frame) {
+  return finisher_.live_preview(job_id, frame);
+}
+
 std::optional<fs::path> SchedulerCore::video_file(const std::string& job_id) const {
   return finisher_.video_file(job_id);
 }
 
 // ---- Events --------------------------------------------------------------------------------------
 
-std::shared_ptr<JobEventQueue> SchedulerCore::watch(const std::string& job_id) {
-  auto queue = std::make_shared<JobEventQueue>();
+std::shared_ptr<JobEventQueue> SchedulerCore::watch(const std::string& job_id, std::size_t capacity) {
+  auto queue = std::make_shared<JobEventQueue>(capacity);
   events_.subscribe(job_id, queue);
   return queue;
 }
@@ -276,10 +380,10 @@ void SchedulerCore::unwatch(const std::string& job_id, const std::shared_ptr<Job
 
 // ---- Workers -------------------------------------------------------------------------------------
 
-std::string SchedulerCore::add_worker(std::shared_ptr<TileWorker> worker, bool registered) {
+std::string SchedulerCore::add_worker(std::shared_ptr<TileWorker> worker, bool registered, WorkerFacts facts) {
   // Its slots start once the registry's prober finds it up: a worker that never answers costs
   // no threads.
-  return workers_.add(std::move(worker), registered)->id;
+  return workers_.add(std::move(worker), registered, std::move(facts))->id;
 }
 
 void SchedulerCore::remove_worker(const std::string& worker_id, const std::string& reason) {
@@ -291,5 +395,33 @@ bool SchedulerCore::heartbeat(const std::string& worker_id) { return workers_.he
 std::size_t SchedulerCore::worker_count() const { return workers_.count(); }
 
 std::vector<WorkerStatus> SchedulerCore::workers() const { return workers_.workers(); }
+
+std::vector<v1::WorkerInfo> SchedulerCore::worker_infos() const {
+  using google::protobuf::util::TimeUtil;
+  const auto ms = [](std::chrono::system_clock::time_point t) {
+    return TimeUtil::MillisecondsToTimestamp(
+        std::chrono::duration_cast<std::chrono::milliseconds>(t.time_since_epoch()).count());
+  };
+  std::map<std::string, std::vector<std::string>> calls = dispatcher_.calls_in_flight();
+  std::vector<v1::WorkerInfo> out;
+  for (const WorkerStatus& s : workers_.workers()) {
+    v1::WorkerInfo& w = out.emplace_back();
+    w.set_worker_id(s.id);
+    w.set_address(s.address);
+    w.set_state(s.quarantined ? v1::WORKER_STATE_QUARANTINED : s.up ? v1::WORKER_STATE_UP : v1::WORKER_STATE_DOWN);
+    w.set_quarantine_reason(s.quarantine_reason);
+    w.set_registered(s.registered);
+    w.set_threads(s.facts.threads);
+    for (const std::string& e : s.facts.engines) w.add_engines(e);
+    w.set_hostname(s.facts.hostname);
+    w.set_version(s.facts.version);
+    w.set_units_done(s.units_done);
+    w.set_units_failed(s.units_failed);
+    for (std::string& c : calls[s.id]) w.add_current(std::move(c));
+    if (s.registered) *w.mutable_last_heartbeat() = ms(s.last_heartbeat);
+    *w.mutable_added_at() = ms(s.added_at);
+  }
+  return out;
+}
 
 }  // namespace farm

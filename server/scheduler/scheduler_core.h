@@ -18,6 +18,8 @@
 //   SchedulerLease  on a store several schedulers share: this one's lease, the dead ones' units
 //                   queued again (scheduler_lease.h)
 //   EventRelay      likewise: the jobs' events to and from the other schedulers (event_relay.h)
+//   RetentionSweeper  final jobs deleted with their files once older than --keep-finished
+//                   (retention.h)
 //
 // Locks: each part has its own mutex, and its header says what it guards. A part holds its lock
 // while it calls another only along these arrows (A -> B: B is taken while A is held):
@@ -46,6 +48,7 @@
 #include "server/scheduler/finisher.h"
 #include "server/scheduler/frame_assembly.h"
 #include "server/scheduler/job_events.h"
+#include "server/scheduler/retention.h"
 #include "server/scheduler/running_jobs.h"
 #include "server/scheduler/scene_check.h"
 #include "server/scheduler/scheduler_options.h"
@@ -98,6 +101,7 @@ class SchedulerCore {
   AssetGrants& grants() { return grants_; }
   const JobStore& store() const { return store_; }
   const std::string& scheduler_id() const { return scheduler_id_; }
+  spdlog::logger& log() const { return *log_; }
   const SchedulerOptions& options() const { return options_; }
 
   // Validates like `farm render` (asset refs, parse_job, loading the models) and queues the job.
@@ -114,6 +118,18 @@ class SchedulerCore {
   std::optional<v1::Job> get_job(const std::string& job_id) const;
   // Drops the job's queued tiles and cancels its calls in flight. ServiceError NOT_FOUND.
   v1::Job cancel(const std::string& job_id);
+  // Operator actions, each announced to the job's watchers and its log as a JobUpdated naming
+  // `by` (the caller's token name). ServiceError NOT_FOUND for an unknown job, FAILED_PRECONDITION
+  // for one whose state the action does not apply to (proto/farm.proto says which).
+  v1::Job pause(const std::string& job_id, bool paused, const std::string& by = {});
+  v1::Job set_priority(const std::string& job_id, int priority, const std::string& by = {});
+  // A FAILED or CANCELLED job's units that are not done rendered again (JobStore::retry_job).
+  RetriedJob retry(const std::string& job_id, const std::string& by = {});
+  // A final job gone from the store with its files; returns the bytes freed.
+  std::uintmax_t remove(const std::string& job_id);
+  // Every final job that finished before `before_ms` (Unix ms) removed; returns how many (the
+  // scheduler's --keep-finished).
+  std::size_t remove_finished_before(std::int64_t before_ms);
   // The merged EXR or PNG of a frame once it is merged (no frame: the first, of a SUCCEEDED
   // job); nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
@@ -124,18 +140,27 @@ class SchedulerCore {
   // otherwise.
   std::optional<std::filesystem::path> video_file(const std::string& job_id) const;
 
-  // Events of `job_id` from now on; pass the queue to unwatch() when done.
-  std::shared_ptr<JobEventQueue> watch(const std::string& job_id);
+  // Events of `job_id` (JobEvents::kEveryJob: of every job) from now on, kept in a queue of
+  // `capacity`; pass the queue to unwatch() when done.
+  std::shared_ptr<JobEventQueue> watch(const std::string& job_id, std::size_t capacity = SIZE_MAX);
+  // Every event this scheduler publishes from now on, in order (JobEvents::listen: must not block).
+  void listen(std::function<void(const v1::JobEvent&)> listener) { events_.listen(std::move(listener)); }
+  // The dashboard's live image of a frame (Finisher::live_preview).
+  std::optional<std::filesystem::path> live_preview(const std::string& job_id, int frame);
+  // Units kept and failed, their rate and latency (the dashboard's /metrics).
+  UnitMetrics::Snapshot unit_metrics() const { return dispatcher_.metrics().snapshot(); }
   void unwatch(const std::string& job_id, const std::shared_ptr<JobEventQueue>& queue);
 
   // Workers. A static worker is never dropped, only probed while down; a registered one is
   // dropped when it misses heartbeats, and its tiles are queued again.
-  std::string add_worker(std::shared_ptr<TileWorker> worker, bool registered = false);
+  std::string add_worker(std::shared_ptr<TileWorker> worker, bool registered = false, WorkerFacts facts = {});
   void remove_worker(const std::string& worker_id, const std::string& reason);
   bool heartbeat(const std::string& worker_id);  // false: unknown worker (register again)
   std::size_t worker_count() const;
   // Every worker now: up or down, and quarantined with the reason.
   std::vector<WorkerStatus> workers() const;
+  // The same with what each renders now, as ListWorkers answers (farm workers).
+  std::vector<v1::WorkerInfo> worker_infos() const;
 
   // Jobs whose state is kept in memory now (RunningJobs): none once every job is final.
   std::size_t jobs_in_memory() const { return jobs_.count(); }
@@ -144,6 +169,8 @@ class SchedulerCore {
   // Merges the complete frames of every active job and ends those with all merged: the ones a
   // stop (at start) or an outage of the store (when it answers again) interrupted.
   void finish_active_jobs();
+  // An operator's action on the job logged and announced to its watchers (JobUpdated).
+  void announce(const std::string& job_id, const std::string& change, const std::string& by);
   // Adds a validated job to the store and the dispatch.
   v1::Job queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
                     std::shared_ptr<JobInfo> info, const std::string& owner = {});
@@ -168,6 +195,7 @@ class SchedulerCore {
   std::string scheduler_id_ = make_scheduler_id();
   std::unique_ptr<SchedulerLease> lease_;  // on a shared store (PostgreSQL) only
   std::unique_ptr<EventRelay> relay_;      // likewise: WatchJob's events to and from the others
+  std::unique_ptr<RetentionSweeper> retention_;  // with options_.keep_finished
 };
 
 }  // namespace farm

@@ -24,6 +24,9 @@ struct SchedulerOptions {
   // wait before the others (or its successor) render them.
   std::chrono::milliseconds lease = std::chrono::seconds(10);
   std::chrono::milliseconds tile_deadline = std::chrono::minutes(10);
+  // Final jobs older than this (since they ended) are deleted with their files (retention.h);
+  // 0: kept for ever.
+  std::chrono::milliseconds keep_finished{0};
   int max_attempts = 3;            // failed attempts of one tile before its job fails
   // Workers a tile may lose while rendering it (their process died: the call ended UNAVAILABLE;
   // or they stopped heartbeating) before its job fails. Counted apart from max_attempts, since a

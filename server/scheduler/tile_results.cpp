@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "server/common/disk_full.h"
+#include "server/common/remove_tree.h"
 #include "server/common/sha256.h"
 
 namespace farm {
@@ -96,9 +97,12 @@ void TileResults::remove(const std::string& job_id, std::uint32_t part) const {
   fs::remove(path_of(job_id, part), ignored);
 }
 
-void TileResults::remove_job(const std::string& job_id) const {
-  std::error_code ignored;
-  fs::remove_all(dir_ / job_id, ignored);
+std::uintmax_t TileResults::remove_job(const std::string& job_id) const {
+  try {
+    return remove_tree(dir_ / job_id);
+  } catch (const fs::filesystem_error&) {
+    return 0;  // what is left is removed with the job (farm delete) or never read again
+  }
 }
 
 }  // namespace farm

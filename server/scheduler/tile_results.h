@@ -42,7 +42,7 @@ class TileResults {
   void write(const std::string& job_id, std::uint32_t part, const v1::RenderTileResponse& tile) const;
   // DamagedTileResult when the file is missing, unreadable, truncated or fails its checksum.
   v1::RenderTileResponse read(const std::string& job_id, std::uint32_t part) const;
-  void remove_job(const std::string& job_id) const;
+  std::uintmax_t remove_job(const std::string& job_id) const;  // returns the bytes freed
   void remove(const std::string& job_id, std::uint32_t part) const;  // nothing if it is absent
 
   std::filesystem::path path_of(const std::string& job_id, std::uint32_t part) const;

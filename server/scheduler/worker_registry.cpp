@@ -37,10 +37,12 @@ void WorkerRegistry::stop() {
   if (prober_.joinable()) prober_.join();
 }
 
-std::shared_ptr<WorkerEntry> WorkerRegistry::add(std::shared_ptr<TileWorker> worker, bool registered) {
+std::shared_ptr<WorkerEntry> WorkerRegistry::add(std::shared_ptr<TileWorker> worker, bool registered,
+                                                 WorkerFacts facts) {
   auto entry = std::make_shared<WorkerEntry>();
   entry->worker = std::move(worker);
   entry->registered = registered;
+  entry->facts = std::move(facts);
   entry->retry = kFirstRetry;
   std::string quarantined;
   {
@@ -78,6 +80,14 @@ bool WorkerRegistry::heartbeat(const std::string& worker_id) {
   if (it == workers_.end()) return false;
   it->second->last_heartbeat = Clock::now();
   return true;
+}
+
+void WorkerRegistry::count_units(const std::string& worker_id, std::uint64_t done, std::uint64_t failed) {
+  std::lock_guard lock(mutex_);
+  auto it = workers_.find(worker_id);
+  if (it == workers_.end()) return;
+  it->second->units_done += done;
+  it->second->units_failed += failed;
 }
 
 std::size_t WorkerRegistry::count() const {
@@ -140,13 +150,22 @@ int WorkerRegistry::slots_up() const {
 std::vector<WorkerStatus> WorkerRegistry::workers() const {
   std::lock_guard lock(mutex_);
   std::vector<WorkerStatus> out;
+  // The heartbeat's steady time as wall-clock time, for display.
+  const auto steady_now = Clock::now();
+  const auto wall_now = std::chrono::system_clock::now();
   for (const auto& [id, w] : workers_) {
     out.push_back({.id = id,
                    .address = w->worker->describe(),
                    .registered = w->registered,
                    .up = !w->down,
                    .quarantined = w->quarantined,
-                   .quarantine_reason = w->quarantine_reason});
+                   .quarantine_reason = w->quarantine_reason,
+                   .facts = w->facts,
+                   .added_at = w->added_at,
+                   .last_heartbeat = wall_now - std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                                    steady_now - w->last_heartbeat),
+                   .units_done = w->units_done,
+                   .units_failed = w->units_failed});
   }
   return out;
 }

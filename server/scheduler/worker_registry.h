@@ -39,12 +39,23 @@
 
 namespace farm {
 
+// What a worker said of itself when it registered (RegisterWorkerRequest, bounded); a static
+// worker (--worker) says nothing.
+struct WorkerFacts {
+  int threads = 0;
+  std::vector<std::string> engines = {};
+  std::string hostname = {};
+  std::string version = {};
+};
+
 struct WorkerEntry {
   using Clock = std::chrono::steady_clock;
 
   std::string id;
   std::shared_ptr<TileWorker> worker;
   bool registered = false;
+  WorkerFacts facts;
+  std::chrono::system_clock::time_point added_at = std::chrono::system_clock::now();
   // ---- Under WorkerRegistry::mutex_:
   bool removed = false;
   bool down = true;  // probed before the first tile
@@ -58,6 +69,8 @@ struct WorkerEntry {
   // first (a worker just started connects within milliseconds), longer while it stays away.
   std::chrono::milliseconds retry{0};
   Clock::time_point last_heartbeat = Clock::now();
+  std::uint64_t units_done = 0;    // units it rendered that were kept
+  std::uint64_t units_failed = 0;  // units whose call to it failed or whose worker was lost
   // Scenes whose job this worker was sent in a call it answered: later calls for them leave the
   // job text out (a worker that no longer holds one answers NOT_FOUND and is sent it again).
   RecentHashes scenes_sent{256};
@@ -71,6 +84,11 @@ struct WorkerStatus {
   bool up = false;
   bool quarantined = false;
   std::string quarantine_reason;
+  WorkerFacts facts = {};
+  std::chrono::system_clock::time_point added_at = {};
+  std::chrono::system_clock::time_point last_heartbeat = {};  // registered workers
+  std::uint64_t units_done = 0;
+  std::uint64_t units_failed = 0;
 };
 
 class WorkerRegistry {
@@ -84,7 +102,9 @@ class WorkerRegistry {
   WorkerRegistry(const WorkerRegistry&) = delete;
   WorkerRegistry& operator=(const WorkerRegistry&) = delete;
 
-  std::shared_ptr<WorkerEntry> add(std::shared_ptr<TileWorker> worker, bool registered);
+  std::shared_ptr<WorkerEntry> add(std::shared_ptr<TileWorker> worker, bool registered, WorkerFacts facts = {});
+  // Counts units the worker rendered and that were kept, or that failed on it (farm workers).
+  void count_units(const std::string& worker_id, std::uint64_t done, std::uint64_t failed);
   // False when the worker is unknown (removed already).
   bool remove(const std::string& worker_id, const std::string& reason);
   bool heartbeat(const std::string& worker_id);  // false: unknown worker (register again)

@@ -1162,47 +1162,60 @@ TEST_F(FarmSchedulerTest, SchedulerFlagsSetTheSubmitLimits) {
   submit_ok(cornell("raster", 64, 64, 1, 32));  // 4 tiles, 4096 samples: within every one
 }
 
-TEST_F(FarmSchedulerTest, PythonClientGeneratedFromTheProtoSubmitsAndFetches) {
-  // Another language speaking the wire contract: tests/python/farm_client.py generates its stubs
-  // from proto/farm.proto with grpc_tools (Debian's python3-grpc-tools) in a venv of this test,
-  // uploads, submits, watches and fetches; the EXR it gets equals the one the C++ client fetches.
-  // Debian's own python3 (not one on PATH from elsewhere) has the python3-grpc* packages. The
-  // scheduler asks for tokens (#15): the script sends FARM_TOKEN, and is refused without it.
+TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFetches) {
+  // Another language speaking the wire contract: the farm_client package (proto/python), built by
+  // pip into a fresh venv with its stubs generated from proto/farm.proto at build time (Debian's
+  // python3-grpc-tools), finds the job's assets itself as `farm submit` does, uploads, submits,
+  // watches and fetches (tests/python/farm_client_package_check.py); the EXR it gets equals the one
+  // the C++ client fetches. The scheduler asks for tokens (#15): refused without one.
   const std::string token = "python-client-token-0123456789", admin = "test-admin-token-0123456789";
   const fs::path tokens = dir_ / "tokens.txt";
   std::ofstream(tokens) << sha256_hex(token) << " py submit\n" << sha256_hex(admin) << " tests admin\n";
+  const fs::path token_file = dir_ / "py-token.txt";
+  std::ofstream(token_file) << token << "\n";
   auto worker = start_worker("w1", 2);
   auto scheduler = start_scheduler({"--worker", worker->address(), "--tokens", tokens.string()});
   ASSERT_TRUE(stub_);
   stub_ = test::scheduler_stub(scheduler->address(), ClientIdentity{admin, false, {}});
+
+  // The package is built from a copy, so that pip's build folders stay out of the source tree.
+  const fs::path source = dir_ / "src" / "proto";
+  fs::create_directories(source);
+  fs::copy(test::kSource / "proto/python", source / "python", fs::copy_options::recursive);
+  fs::copy_file(test::kSource / "proto/farm.proto", source / "farm.proto");
+  const fs::path venv = dir_ / "venv";
+  const test::CommandResult made = test::run_command(
+      "/usr/bin/python3 -m venv --system-site-packages " + test::shell_quote(venv.string()) + " && " +
+      test::shell_quote((venv / "bin/pip").string()) + " install --quiet --no-build-isolation --no-index " +
+      test::shell_quote((source / "python").string()));
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  const test::CommandResult where = test::run_command(
+      test::shell_quote((venv / "bin/python").string()) + " -c 'import farm_client._gen.farm_pb2 as m; print(m.__file__)'");
+  ASSERT_EQ(where.exit_code, 0) << where.output;
+  EXPECT_NE(where.output.find(venv.string()), std::string::npos) << "stubs generated into the installed package: " << where.output;
+
+  // The job file in a folder with its model and materials, as a user has them.
   const v1::JobSpec spec = cornell("raster", 48, 32, 1, 16);
   const fs::path job = dir_ / "job" / "cornell.json";
-  fs::create_directories(job.parent_path());
+  fs::create_directories(job.parent_path() / "assets");
   std::ofstream(job) << spec.job_json();
-  const fs::path venv = dir_ / "venv", out = dir_ / "python.exr";
-  const test::CommandResult made = test::run_command(
-      "/usr/bin/python3 -m venv --system-site-packages " + test::shell_quote(venv.string()));
-  ASSERT_EQ(made.exit_code, 0) << made.output;
-  std::string command = test::shell_quote((venv / "bin/python").string()) + " " +
-                        test::shell_quote((test::kSource / "tests/python/farm_client.py").string()) +
-                        " --proto " + test::shell_quote((test::kSource / "proto/farm.proto").string()) +
-                        " --gen-dir " + test::shell_quote((dir_ / "gen").string()) + " --scheduler " +
-                        scheduler->address() + " --job " + test::shell_quote(job.string()) + " --out " +
-                        test::shell_quote(out.string());
-  for (const auto& [path, file] : test::cornell_assets()) {
-    command += " --asset " + test::shell_quote(path + "=" + file.string());
-  }
+  for (const auto& [path, file] : test::cornell_assets()) fs::copy_file(file, job.parent_path() / path);
+  const fs::path out = dir_ / "python-out";
+  const std::string command = test::shell_quote((venv / "bin/python").string()) + " " +
+                              test::shell_quote((test::kSource / "tests/python/farm_client_package_check.py").string()) +
+                              " --scheduler " + scheduler->address() + " --job " + test::shell_quote(job.string()) +
+                              " --out " + test::shell_quote(out.string());
   const test::CommandResult refused = test::run_command(command);
   EXPECT_EQ(refused.exit_code, 1) << refused.output;
-  EXPECT_NE(refused.output.find("\"error\": \"UNAUTHENTICATED\""), std::string::npos) << refused.output;
-  const test::CommandResult r = test::run_command("FARM_TOKEN=" + token + " " + command);
+  EXPECT_NE(refused.output.find("UNAUTHENTICATED"), std::string::npos) << refused.output;
+  const test::CommandResult r = test::run_command(command + " --token-file " + test::shell_quote(token_file.string()));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("\"state\": \"JOB_STATE_SUCCEEDED\""), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("\"sha256_ok\": true"), std::string::npos) << r.output;
-  const auto id_at = r.output.find("\"job_id\": \"");
-  ASSERT_NE(id_at, std::string::npos) << r.output;
-  const std::string id = r.output.substr(id_at + 11, r.output.find('"', id_at + 11) - id_at - 11);
-  EXPECT_EQ(differing_pixels(read_exr(out), fetch_exr(id)), 0);
+  const nlohmann::json result = nlohmann::json::parse(r.output.substr(r.output.rfind('{')));
+  EXPECT_EQ(result["state"], "SUCCEEDED") << r.output;
+  EXPECT_EQ(result["uploaded"], 2) << r.output;  // the model and its material library, found by the package
+  EXPECT_TRUE(result["listed"].get<bool>()) << r.output;
+  EXPECT_GT(result["events"].get<int>(), 1) << r.output;
+  EXPECT_EQ(differing_pixels(read_exr(result["exr"].get<std::string>()), fetch_exr(result["job_id"])), 0);
 }
 
 }  // namespace

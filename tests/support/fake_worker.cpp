@@ -82,6 +82,7 @@ class FakeWorker::Service final : public v1::Worker::Service {
 
   grpc::Status RenderTile(grpc::ServerContext* context, const v1::RenderTileRequest* request,
                           v1::RenderTileResponse* response) override {
+    ++owner_.arrived_;
     {
       std::unique_lock lock(owner_.mutex_);
       while (owner_.hold_after_ >= 0 && owner_.answered_.load() >= owner_.hold_after_) {

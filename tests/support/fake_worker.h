@@ -53,6 +53,7 @@ class FakeWorker {
   // longer holds the scene answers.
   void forget_scenes_for(int n) { forget_ = n; }
   int calls_received() const { return calls_.load(); }  // every RenderTile, answered or not
+  int calls_arrived() const { return arrived_.load(); }  // likewise, and the ones held now
   int calls_with_job() const { return calls_with_job_.load(); }
   std::uint64_t job_text_bytes() const { return job_bytes_.load(); }  // job_json received, all calls
 
@@ -60,7 +61,7 @@ class FakeWorker {
   class Service;
 
   std::atomic<Lie> lie_;
-  std::atomic<int> answered_{0}, lies_{0}, calls_{0}, calls_with_job_{0};
+  std::atomic<int> answered_{0}, lies_{0}, calls_{0}, calls_with_job_{0}, arrived_{0};
   std::atomic<std::uint64_t> job_bytes_{0};
   std::atomic<int> forget_{0};
   std::mutex mutex_;  // guards hold_after_

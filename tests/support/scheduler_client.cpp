@@ -3,6 +3,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <fstream>
+#include <regex>
 #include <thread>
 
 #include "server/common/sha256.h"
@@ -28,6 +29,18 @@ SchedulerProcess::SchedulerProcess(const std::filesystem::path& data_dir,
         return argv;
       }()),
       address_(wait_for_listening(process_, "scheduler", kStartTimeout)) {}
+
+std::string SchedulerProcess::dashboard_url() {
+  const std::regex line(R"(dashboard on (https?://[0-9.]+:[0-9]+)/)");
+  const auto until = std::chrono::steady_clock::now() + kStartTimeout;
+  std::smatch m;
+  while (std::chrono::steady_clock::now() < until) {
+    const std::string out = process_.output();
+    if (std::regex_search(out, m, line)) return m[1];
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return {};
+}
 
 LocalFarm start_local_farm(const std::filesystem::path& dir, int workers, const std::vector<std::string>& scheduler_args) {
   LocalFarm farm;

@@ -23,6 +23,9 @@ class SchedulerProcess {
   SchedulerProcess(const std::filesystem::path& data_dir, const std::vector<std::string>& extra_args);
   const std::string& address() const { return address_; }  // empty if it did not start
   BackgroundProcess& process() { return process_; }
+  // With --http: the dashboard's "http://HOST:PORT" from its "dashboard on" line (waited for,
+  // bounded); empty when it never came.
+  std::string dashboard_url();
 
  private:
   BackgroundProcess process_;

@@ -213,7 +213,7 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
     // Back to what version 1 had: no part column, no owner.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -241,7 +241,7 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     // Back to what version 2 had: no owner column, no lost_attempts.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -275,7 +275,7 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -295,13 +295,13 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
     EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
     EXPECT_EQ(store.tiles("a")[0].lost_attempts, 1);
   }
-  // Upgraded once: it opens as version 7 from now on.
+  // Upgraded once: it opens as version 8 from now on.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* s = nullptr;
   ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(s, 0), 7);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 8);
   sqlite3_finalize(s);
   sqlite3_close(db);
 }
@@ -322,7 +322,7 @@ TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZ
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -400,7 +400,7 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
                             "UPDATE schema_version SET version = 5"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -434,7 +434,7 @@ TEST(SqliteStoreUpgradeTest, AVersion6StoreIsUpgradedAndItsRunningTilesAreQueued
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
                             "UPDATE tiles SET state = 1 WHERE idx = 0", "UPDATE schema_version SET version = 6"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -916,6 +916,132 @@ TEST_P(JobStoreTest, OneSchedulerClaimsEachMergeAndEndAndAClaimDiesWithItsLease)
   EXPECT_FALSE(b.claim_frame_merge("j", 2));
   ASSERT_EQ(b.reap_expired(2000).size(), 1u);
   EXPECT_TRUE(b.claim_frame_merge("j", 2));
+}
+
+// ---- Operator actions (issue #19) ----------------------------------------------------------------
+
+TEST_P(JobStoreTest, APausedJobHandsOutNothingUntilResumedAndPriorityReordersTheQueue) {
+  JobStore store(connect());
+  store.add_job(make_job("a", 5, 3), 1);
+  store.add_job(make_job("b", 0, 3), 2);
+  EXPECT_TRUE(store.set_paused("a", true)->paused());
+  EXPECT_TRUE(store.get_job("a")->paused());
+  EXPECT_EQ(store.claim_next_batch("w", 3)->job_id, "b");  // a ranks first, but is paused
+  EXPECT_FALSE(store.set_paused("a", false)->paused());
+  EXPECT_EQ(store.claim_next_batch("w", 4)->job_id, "a");
+  EXPECT_EQ(store.set_priority("b", 9)->priority(), 9);
+  EXPECT_EQ(store.claim_next_batch("w", 5)->job_id, "b");  // now above a
+  EXPECT_FALSE(store.set_paused("none", true));
+  EXPECT_FALSE(store.set_priority("none", 1));
+  // A final job is not paused: nothing would ever resume it.
+  store.cancel_job("b", 6);
+  EXPECT_FALSE(store.set_paused("b", true)->paused());
+}
+
+TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes) {
+  JobStore store(connect());
+  store.add_job(make_job("a", 0, 4), 1);
+  ASSERT_EQ(store.claim_next_batch("w", 2)->first, 0u);
+  ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
+  ASSERT_EQ(store.claim_next_batch("w", 3)->first, 1u);
+  ASSERT_EQ(store.claim_next_batch("w", 4)->first, 2u);  // running when the job fails
+  const TileFailure f = store.batch_failed("a", 1, 1, "boom", 1, 5, "w");
+  ASSERT_EQ(f.job.state(), v1::JOB_STATE_FAILED);
+
+  const std::optional<RetriedJob> r = store.retry_job("a");
+  ASSERT_TRUE(r && r->retried);
+  EXPECT_EQ(r->units_queued, 3u);  // the failed one, the running one, the queued one
+  EXPECT_EQ(r->job.state(), v1::JOB_STATE_RUNNING);  // a unit is done
+  EXPECT_EQ(r->job.failure_reason(), "");
+  EXPECT_EQ(r->job.tiles_done(), 1u);
+  EXPECT_FALSE(r->job.has_finished_at());
+  const std::vector<TileRecord> tiles = store.tiles("a");
+  EXPECT_EQ(tiles[0].state, TileState::Done);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_EQ(tiles[i].state, TileState::Queued) << i;
+    EXPECT_EQ(tiles[i].attempts, 0) << i;
+  }
+  // Only those are handed out, and the job can succeed.
+  for (std::uint32_t i = 1; i < 4; ++i) {
+    const auto b = store.claim_next_batch("w", 6);
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->first, i);
+    ASSERT_TRUE(store.batch_done("a", i, 1, {}, "w"));
+  }
+  EXPECT_FALSE(store.claim_next_batch("w", 7));
+  ASSERT_TRUE(store.frame_merged("a", 0));
+  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 8).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(store.get_job("a")->tiles_rendered(), 4u);  // none rendered twice
+
+  // Only a failed or cancelled job is retried.
+  const std::optional<RetriedJob> again = store.retry_job("a");
+  ASSERT_TRUE(again);
+  EXPECT_FALSE(again->retried);
+  EXPECT_EQ(again->job.state(), v1::JOB_STATE_SUCCEEDED);
+  store.add_job(make_job("b", 0, 1), 9);
+  EXPECT_FALSE(store.retry_job("b")->retried);
+  EXPECT_FALSE(store.retry_job("none"));
+  store.cancel_job("b", 10);
+  EXPECT_EQ(store.retry_job("b")->job.state(), v1::JOB_STATE_QUEUED);  // nothing done: queued
+}
+
+TEST_P(JobStoreTest, DeleteRemovesAFinalJobWithEveryRowOfItAndRefusesAnActiveOne) {
+  JobStore store(connect());
+  store.add_job(make_job("a", 0, 2), 1);
+  store.add_job(make_job("b", 0, 1), 2);
+  EXPECT_EQ(store.delete_job("a"), std::optional<bool>(false));  // queued: cancel it first
+  ASSERT_TRUE(store.claim_next_batch("w", 3));
+  ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
+  v1::JobEvent e;
+  *e.mutable_job() = *store.get_job("a");
+  e.mutable_updated()->set_change("paused");
+  store.append_log(e, 4, true);
+  store.cancel_job("a", 10);
+  EXPECT_TRUE(store.finished_before(10, 100).empty());
+  EXPECT_EQ(store.finished_before(11, 100), std::vector<std::string>{"a"});
+
+  EXPECT_EQ(store.delete_job("a"), std::optional<bool>(true));
+  EXPECT_FALSE(store.get_job("a"));
+  EXPECT_TRUE(store.tiles("a").empty());
+  EXPECT_TRUE(store.job_log("a", 0, 10).empty());
+  EXPECT_FALSE(store.delete_job("a"));  // gone
+  EXPECT_TRUE(store.finished_before(11, 100).empty());
+  // The other job is untouched, and a new one reuses nothing of the old.
+  EXPECT_EQ(store.claim_next_batch("w", 11)->job_id, "b");
+  store.add_job(make_job("a", 0, 2), 12);
+  EXPECT_EQ(store.get_job("a")->tiles_done(), 0u);
+  EXPECT_TRUE(store.job_log("a", 0, 10).empty());
+}
+
+TEST_P(JobStoreTest, TheLogKeepsEventsInOrderInPagesAndPastItsLimitOnlyTheEssentialOnes) {
+  JobStore store(connect());
+  store.add_job(make_job("a", 0, 1), 1);
+  v1::JobEvent e;
+  *e.mutable_job() = *store.get_job("a");
+  for (int frame = 0; frame < 4; ++frame) {
+    e.mutable_frame_finished()->set_frame(frame);
+    store.append_log(e, 100 + frame, false, 3);  // the fourth is past the limit
+  }
+  e.mutable_updated()->set_change("resumed");
+  store.append_log(e, 200, true, 3);  // essential: kept all the same
+  v1::JobEvent other = e;
+  other.mutable_job()->set_job_id("none");
+  store.append_log(other, 300, true, 3);  // no such job: nothing
+
+  bool more = false;
+  const std::vector<v1::JobLogEntry> first = store.job_log("a", 0, 2, &more);
+  ASSERT_EQ(first.size(), 2u);
+  EXPECT_TRUE(more);
+  EXPECT_EQ(first[0].number(), 1u);
+  EXPECT_EQ(first[0].event().frame_finished().frame(), 0);
+  EXPECT_EQ(first[1].event().frame_finished().frame(), 1);
+  EXPECT_EQ(first[1].at().seconds() * 1000 + first[1].at().nanos() / 1000000, 101);
+  const std::vector<v1::JobLogEntry> rest = store.job_log("a", first.back().number(), 10, &more);
+  EXPECT_FALSE(more);
+  ASSERT_EQ(rest.size(), 2u);
+  EXPECT_EQ(rest[0].event().frame_finished().frame(), 2);
+  EXPECT_EQ(rest[1].number(), 4u);
+  EXPECT_EQ(rest[1].event().updated().change(), "resumed");
 }
 
 INSTANTIATE_TEST_SUITE_P(BothStores, JobStoreTest, ::testing::ValuesIn(test::kBothStores),

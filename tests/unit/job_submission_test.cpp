@@ -91,6 +91,22 @@ TEST(JobSubmission, ModelsOutsideTheJobFolderArePathsUnderTheAssetRoot) {
   EXPECT_EQ(nlohmann::json::parse(s.spec.job_json())["scene"]["objects"][0]["file"], "dae/cow.dae");
 }
 
+TEST(JobSubmission, AJobWithoutARenderBlockSentFromAnotherRootStillHasNone) {
+  // Rewritten for its model paths only: no "render": null appears (the scheduler refuses one).
+  TempDir dir;
+  fs::create_directories(dir / "assets");
+  fs::copy_file(kSource / "jobs/assets/cornell_box.obj", dir / "assets/box.obj");
+  fs::copy_file(kSource / "jobs/assets/cornell_box.mtl", dir / "assets/cornell_box.mtl");
+  const fs::path job = dir.write("jobs/plain.json", R"({"version": 1, "scene": {"objects": [{"file": "../assets/box.obj"}]}})");
+  JobLoadOptions load;
+  load.asset_root = dir / "assets";
+  const JobSubmission s = make_job_submission(job, load, {});
+  const auto doc = nlohmann::json::parse(s.spec.job_json());
+  EXPECT_FALSE(doc.contains("render")) << s.spec.job_json();
+  EXPECT_EQ(doc["scene"]["objects"][0]["file"], "box.obj");
+  parse_job(s.spec.job_json(), dir / "assets" / "plain.json");  // laid out as the scheduler does: no InputError
+}
+
 TEST(JobSubmission, AReferenceOutsideTheAssetRootIsRefusedNamingBoth) {
   TempDir dir;
   fs::create_directories(dir / "job");

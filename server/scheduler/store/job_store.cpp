@@ -17,7 +17,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 7;
+constexpr int kSchemaVersion = 8;
 
 // The tables, written once for both stores: {integer}, {blob} and {key} are each dialect's types
 // (PostgreSQL's integers all bigint, as the store binds them), {empty_blob} its empty blob.
@@ -50,7 +50,8 @@ CREATE TABLE IF NOT EXISTS jobs (
   frame_step {integer} NOT NULL DEFAULT 1,
   frames_total {integer} NOT NULL DEFAULT 1,
   frames_done {integer} NOT NULL DEFAULT 0,
-  passes {integer} NOT NULL DEFAULT 1
+  passes {integer} NOT NULL DEFAULT 1,
+  paused {integer} NOT NULL DEFAULT 0
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -83,6 +84,13 @@ CREATE TABLE IF NOT EXISTS claims (
   what TEXT NOT NULL,
   scheduler TEXT NOT NULL,
   PRIMARY KEY (job_seq, what)
+);
+CREATE TABLE IF NOT EXISTS job_log (
+  job_seq {integer} NOT NULL REFERENCES jobs (seq),
+  n {integer} NOT NULL,
+  at_ms {integer} NOT NULL,
+  event {blob} NOT NULL,
+  PRIMARY KEY (job_seq, n)
 );
 CREATE TABLE IF NOT EXISTS parts (
   job_seq {integer} NOT NULL REFERENCES jobs (seq),
@@ -118,7 +126,7 @@ constexpr std::int64_t kSchemaLockKey = 0x6661726d;
 constexpr const char* kJobColumns =
     "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
     "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
-    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done, passes";
+    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done, passes, paused";
 
 const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
@@ -157,6 +165,7 @@ v1::Job job_from_row(const Query& s) {
   job.set_frames_total(static_cast<std::uint32_t>(s.i64(23)));
   job.set_frames_done(static_cast<std::uint32_t>(s.i64(24)));
   job.set_passes(static_cast<std::uint32_t>(s.i64(25)));
+  job.set_paused(s.i64(26) != 0);
   return job;
 }
 
@@ -294,6 +303,12 @@ void JobStore::upgrade_from_6(int version) {
     // it out, and each scheduler holds a lease (the schedulers table the schema made). Tiles
     // running in an older store name none: queued again at open.
     db_->exec("ALTER TABLE tiles ADD COLUMN scheduler TEXT NOT NULL DEFAULT ''");
+  }
+  if (version <= 7) {
+    // Version 8: operators pause jobs, and each job keeps its event log (the job_log table the
+    // schema made). No older job is paused.
+    db_->exec(fmt::format("ALTER TABLE jobs ADD COLUMN paused {} NOT NULL DEFAULT 0",
+                          db_->dialect() == SqlDialect::PostgreSQL ? "BIGINT" : "INTEGER"));
   }
   db_->exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion));
 }
@@ -496,7 +511,8 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
     // The active jobs in queue order, each asked for its first queued tile through tiles_by_state
     // (one seek a job): a join sorted over every queued tile would cost each claim as much as the
     // queue is long, and a job of many frames queues tens of thousands.
-    Query jobs(db_->prepared(fmt::format("SELECT seq, id FROM jobs WHERE state IN {} ORDER BY priority DESC, seq ASC",
+    Query jobs(db_->prepared(fmt::format("SELECT seq, id FROM jobs WHERE state IN {} AND paused = 0 "
+                                         "ORDER BY priority DESC, seq ASC",
                                         kActiveSql)));
     Query first(db_->prepared("SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame, pass FROM tiles "
                              "WHERE state = 0 AND job_seq = ? ORDER BY idx LIMIT 1"));
@@ -961,6 +977,150 @@ v1::Job JobStore::cancel_job(const std::string& id, std::int64_t now_ms) {
                                  kActiveSql)))
       .bind(1, static_cast<int>(v1::JOB_STATE_CANCELLED)).bind(2, now_ms).bind(3, id).run();
   return load_job_locked(id);
+}
+
+// ---- Operator actions ------------------------------------------------------------------------------
+
+std::optional<v1::Job> JobStore::set_paused(const std::string& id, bool paused) {
+  std::lock_guard lock(mutex_);
+  Query(db_->prepared(fmt::format("UPDATE jobs SET paused = ? WHERE id = ? AND state IN {}", kActiveSql)))
+      .bind(1, paused ? 1 : 0).bind(2, id).run();
+  return find_job_locked(id);
+}
+
+std::optional<v1::Job> JobStore::set_priority(const std::string& id, int priority) {
+  std::lock_guard lock(mutex_);
+  Query(db_->prepared("UPDATE jobs SET priority = ? WHERE id = ?")).bind(1, priority).bind(2, id).run();
+  return find_job_locked(id);
+}
+
+std::optional<RetriedJob> JobStore::retry_job(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  SqlTransaction t(*db_);
+  lock_job_locked(id);
+  std::optional<v1::Job> job = find_job_locked(id);
+  if (!job) return std::nullopt;
+  RetriedJob out;
+  if (job->state() != v1::JOB_STATE_FAILED && job->state() != v1::JOB_STATE_CANCELLED) {
+    out.job = std::move(*job);
+    return out;
+  }
+  std::int64_t seq = 0;
+  {
+    Query s(db_->prepared("SELECT seq FROM jobs WHERE id = ?"));
+    s.bind(1, id);
+    if (!s.step()) return std::nullopt;
+    seq = s.i64(0);
+  }
+  // Every unit not done goes back with a clean slate: failed ones, queued ones, and the ones the
+  // cancel found running (their calls were stopped). Done units and merged frames stay.
+  Query requeue(db_->prepared("UPDATE tiles SET state = 0, attempts = 0, lost_attempts = 0, worker = '', "
+                              "scheduler = '' WHERE job_seq = ? AND state <> 2"));
+  requeue.bind(1, seq).run();
+  out.units_queued = static_cast<std::uint32_t>(requeue.changes());
+  // Who merges a frame or ends the job is decided again, by whichever scheduler gets there.
+  Query(db_->prepared("DELETE FROM claims WHERE job_seq = ?")).bind(1, seq).run();
+  Query(db_->prepared("UPDATE jobs SET state = CASE WHEN tiles_done > 0 THEN ? ELSE ? END, finished_ms = 0, "
+                      "failure_reason = '', validation = '', paused = 0 WHERE seq = ?"))
+      .bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, static_cast<int>(v1::JOB_STATE_QUEUED))
+      .bind(3, seq).run();
+  t.commit();
+  out.job = load_job_locked(id);
+  out.retried = true;
+  return out;
+}
+
+std::optional<bool> JobStore::delete_job(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  SqlTransaction t(*db_);
+  lock_job_locked(id);
+  std::int64_t seq = 0;
+  {
+    Query s(db_->prepared("SELECT seq, state FROM jobs WHERE id = ?"));
+    s.bind(1, id);
+    if (!s.step()) return std::nullopt;
+    if (!is_final(static_cast<v1::JobState>(s.i32(1)))) return false;
+    seq = s.i64(0);
+  }
+  // The rows that name the job first: they reference it.
+  for (const char* table : {"tiles", "frames", "claims", "parts", "job_log"}) {
+    Query(db_->prepared(fmt::format("DELETE FROM {} WHERE job_seq = ?", table))).bind(1, seq).run();
+  }
+  Query(db_->prepared("DELETE FROM jobs WHERE seq = ?")).bind(1, seq).run();
+  t.commit();
+  return true;
+}
+
+JobStore::Counts JobStore::counts() const {
+  std::lock_guard lock(mutex_);
+  Counts c;
+  {
+    Query s(db_->prepared("SELECT state, COUNT(*), SUM(CASE WHEN paused <> 0 THEN 1 ELSE 0 END) FROM jobs GROUP BY state"));
+    while (s.step()) {
+      c.jobs[static_cast<v1::JobState>(s.i32(0))] = s.i64(1);
+      if (is_final(static_cast<v1::JobState>(s.i32(0)))) continue;
+      c.paused += s.i64(2);
+    }
+  }
+  // Through tiles_by_state: the queued units, then their jobs' state.
+  Query q(db_->prepared(fmt::format("SELECT COUNT(*) FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE t.state = 0 "
+                                    "AND j.state IN {} AND j.paused = 0",
+                                    kActiveSql)));
+  if (q.step()) c.queued_units = q.i64(0);
+  return c;
+}
+
+std::vector<std::string> JobStore::finished_before(std::int64_t ms, int limit) const {
+  std::lock_guard lock(mutex_);
+  Query s(db_->prepared(fmt::format("SELECT id FROM jobs WHERE state NOT IN {} AND finished_ms > 0 AND finished_ms < ? "
+                                    "ORDER BY seq LIMIT ?",
+                                    kActiveSql)));
+  s.bind(1, ms).bind(2, limit);
+  std::vector<std::string> ids;
+  while (s.step()) ids.push_back(s.text(0));
+  return ids;
+}
+
+// ---- The event log -----------------------------------------------------------------------------------
+
+void JobStore::append_log(const v1::JobEvent& event, std::int64_t now_ms, bool essential, std::int64_t limit) {
+  std::lock_guard lock(mutex_);
+  SqlTransaction t(*db_, kRedoable);
+  lock_job_locked(event.job().job_id());
+  std::int64_t seq = 0, last = 0;
+  {
+    Query s(db_->prepared("SELECT j.seq, (SELECT MAX(n) FROM job_log l WHERE l.job_seq = j.seq) FROM jobs j "
+                          "WHERE j.id = ?"));
+    s.bind(1, event.job().job_id());
+    if (!s.step()) return;  // deleted meanwhile
+    seq = s.i64(0);
+    last = s.is_null(1) ? 0 : s.i64(1);
+  }
+  if (last >= limit && !essential) return;
+  Query(db_->prepared("INSERT INTO job_log (job_seq, n, at_ms, event) VALUES (?, ?, ?, ?)"))
+      .bind(1, seq).bind(2, last + 1).bind(3, now_ms).bind_blob(4, event.SerializeAsString()).run();
+  t.commit();
+}
+
+std::vector<v1::JobLogEntry> JobStore::job_log(const std::string& id, std::uint32_t after, int limit,
+                                               bool* more) const {
+  std::lock_guard lock(mutex_);
+  Query s(db_->prepared("SELECT l.n, l.at_ms, l.event FROM job_log l JOIN jobs j ON l.job_seq = j.seq "
+                        "WHERE j.id = ? AND l.n > ? ORDER BY l.n LIMIT ?"));
+  s.bind(1, id).bind(2, static_cast<std::int64_t>(after)).bind(3, limit + 1);
+  std::vector<v1::JobLogEntry> entries;
+  if (more) *more = false;
+  while (s.step()) {
+    if (static_cast<int>(entries.size()) == limit) {
+      if (more) *more = true;
+      break;
+    }
+    v1::JobLogEntry& e = entries.emplace_back();
+    e.set_number(static_cast<std::uint32_t>(s.i64(0)));
+    *e.mutable_at() = timestamp(s.i64(1));
+    e.mutable_event()->ParseFromString(s.blob(2));
+  }
+  return entries;
 }
 
 }  // namespace farm

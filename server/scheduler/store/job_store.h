@@ -6,7 +6,7 @@
 // lost with the process) and keeps done tiles done (their data is on disk, written before they
 // were marked).
 //
-// Schema (version 7; a SQLite store of version 1 to 6 is upgraded in place, a PostgreSQL store,
+// Schema (version 8; a SQLite store of version 1 to 7 is upgraded in place, a PostgreSQL store,
 // which began at 6 in PostgreSQL's types, from 6):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
@@ -17,7 +17,8 @@
 //        owner (version 3: the submitter's token name, '' without tokens), frame_first,
 //        frame_last, frame_step, frames_total, frames_done (version 5: the frames it renders and
 //        how many are merged; a still is frame 0 alone), passes (version 6: sample passes a
-//        frame is rendered in, 1 without))
+//        frame is rendered in, 1 without), paused (version 8: an operator paused it: none of
+//        its units is claimed))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart
@@ -29,6 +30,8 @@
 //         who merges a frame, who ends a job
 //   parts(job_seq, part, stats BLOB (farm.v1.TileStats of the batch); PRIMARY KEY (job_seq, part))
 //   frames(job_seq, frame; PRIMARY KEY (job_seq, frame))  -- version 5: the frames merged
+//   job_log(job_seq, n, at_ms, event BLOB (farm.v1.JobEvent); PRIMARY KEY (job_seq, n))  -- version
+//         8: the job's events, numbered from 1 (append_log)
 // A job's tiles (its units) are numbered frame after frame and, within a frame, pass after pass:
 // idx = (k * passes + pass) * (tiles of a frame's grid) + tile, k the frame's place among the
 // job's frames, so that the queue hands out a frame's passes in order.
@@ -38,9 +41,11 @@
 // DiskFull (server/common/disk_full.h) when SQLite finds no room (SQLITE_FULL), or
 // StoreUnavailable (store/postgres_connection.h) when the PostgreSQL server cannot be reached: its
 // transaction is rolled back, so the store stays as it was and the call can be made again later.
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -103,6 +108,8 @@ struct TileBatch {
   int lost_attempts = 0;  // workers lost while rendering it before (a batch of more than one: 0)
   int frame = 0;          // the frame its tiles belong to
   int pass = 0;           // the sample pass they render
+  // When this process handed it out (the dispatcher's unit latency, unit_metrics.h).
+  std::chrono::steady_clock::time_point handed_out = {};
 };
 
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued
@@ -123,6 +130,16 @@ std::string like_escaped(const std::string& text);
 // `glob` as a LIKE pattern with `\` as its escape: `*` -> `%`, `?` -> `_`, and the characters LIKE
 // reads as its own (`%`, `_`, `\`) escaped.
 std::string like_pattern_of_glob(const std::string& glob);
+
+// What retry_job did.
+struct RetriedJob {
+  bool retried = false;             // false: the job was not FAILED or CANCELLED, and is unchanged
+  v1::Job job;                      // as it is now
+  std::uint32_t units_queued = 0;   // units queued again
+};
+
+// A job keeps this many log entries; past them only the essential ones (append_log).
+inline constexpr std::int64_t kMaxLogEntries = 10000;
 
 // A scheduler whose lease ran out, and how many of the tiles it had handed out came back.
 struct ReapedScheduler {
@@ -262,6 +279,37 @@ class JobStore {
   v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
                      const std::string& validation, std::int64_t now_ms);
   v1::Job cancel_job(const std::string& id, std::int64_t now_ms);
+
+  // Operator actions; each returns the job as it is now, nullopt when there is no such job.
+  // A paused job keeps its state, and none of its units is claimed until it is resumed; only an
+  // active job is paused or resumed (a final one is returned unchanged).
+  std::optional<v1::Job> set_paused(const std::string& id, bool paused);
+  std::optional<v1::Job> set_priority(const std::string& id, int priority);
+  // A FAILED or CANCELLED job active again: its units not done queued with no attempt counted,
+  // done units and merged frames kept, its claims dropped, its failure reason cleared, not paused.
+  // RUNNING when some unit is done, else QUEUED. One transaction.
+  std::optional<RetriedJob> retry_job(const std::string& id);
+  // A final job and every row of it (tiles, frames, parts, claims, log) gone: true; false (and
+  // nothing done) when the job is active. One transaction.
+  std::optional<bool> delete_job(const std::string& id);
+  // How many jobs are in each state (paused ones counted in theirs), how many of the active ones
+  // are paused, and how many units wait in the queue of jobs that are not: the dashboard's /metrics.
+  struct Counts {
+    std::map<v1::JobState, std::int64_t> jobs;
+    std::int64_t paused = 0;
+    std::int64_t queued_units = 0;
+  };
+  Counts counts() const;
+  // Final jobs that finished before `ms` (Unix ms), oldest first, at most `limit`.
+  std::vector<std::string> finished_before(std::int64_t ms, int limit) const;
+
+  // The job's event log: `event` (its job the job then) appended as the next entry, at `now_ms`.
+  // Past `limit` entries only an `essential` event is kept. Nothing for a job that is gone.
+  void append_log(const v1::JobEvent& event, std::int64_t now_ms, bool essential,
+                  std::int64_t limit = kMaxLogEntries);
+  // Entries numbered above `after`, in order, at most `limit`; `more` says whether others follow.
+  std::vector<v1::JobLogEntry> job_log(const std::string& id, std::uint32_t after, int limit,
+                                       bool* more = nullptr) const;
 
  private:
   enum class AttemptKind { Failed, WorkerLost };

@@ -1,0 +1,79 @@
+#include "server/cli/job_action_commands.h"
+
+#include <fmt/format.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "server/cli/job_display.h"
+#include "server/cli/scheduler_target.h"
+#include "server/client/scheduler_client.h"
+
+namespace farm {
+
+namespace {
+
+struct PriorityOptions {
+  JobOnScheduler target;
+  int priority = 0;
+};
+
+void print_state(const v1::Job& job, const std::string& what) {
+  fmt::print("job {}: {}{} ({}, priority {})\n", job.job_id(), what.empty() ? "" : what + ", ", state_label(job),
+             progress_of(job), job.priority());
+}
+
+// A command `name` on one job: `act` is given the client and the job's whole id.
+void add_action(CLI::App& app, CommandTable& commands, const std::string& name, const std::string& help,
+                const std::function<void(SchedulerClient&, const std::string&)>& act) {
+  auto o = std::make_shared<JobOnScheduler>();
+  CLI::App* command = app.add_subcommand(name, help);
+  add_job_on_scheduler_options(*command, *o);
+  commands.add(command, [o, act] {
+    SchedulerClient client(resolve_scheduler_connection(o->scheduler));
+    act(client, client.resolve_job_id(o->job_id));
+    return 0;
+  });
+}
+
+}  // namespace
+
+void add_job_action_commands(CLI::App& app, CommandTable& commands) {
+  add_action(app, commands, "cancel", "Cancel a job: its queued units are dropped, running ones stopped (farm retry renders them later)",
+             [](SchedulerClient& client, const std::string& id) { print_state(client.cancel(id), ""); });
+  add_action(app, commands, "pause",
+             "Pause a queued or running job: none of its units is handed out until `farm resume`; units in "
+             "flight finish",
+             [](SchedulerClient& client, const std::string& id) { print_state(client.pause(id, true), ""); });
+  add_action(app, commands, "resume", "Resume a paused job",
+             [](SchedulerClient& client, const std::string& id) { print_state(client.pause(id, false), ""); });
+  add_action(app, commands, "retry",
+             "Render a failed or cancelled job's units that are not done (failed, queued or stopped), with "
+             "their attempts counted from zero; done units and merged frames are kept",
+             [](SchedulerClient& client, const std::string& id) {
+               const v1::RetryJobResponse r = client.retry(id);
+               print_state(r.job(), fmt::format("{} unit{} queued again", r.units_queued(), r.units_queued() == 1 ? "" : "s"));
+             });
+  add_action(app, commands, "delete",
+             "Delete a finished, failed or cancelled job from the scheduler: its record, event log, kept "
+             "units and result files (cancel a running job first)",
+             [](SchedulerClient& client, const std::string& id) {
+               const v1::DeleteJobResponse r = client.remove(id);
+               fmt::print("job {} deleted, {:.1f} MB of files freed\n", r.job_id(),
+                          static_cast<double>(r.bytes_freed()) / 1e6);
+             });
+
+  auto p = std::make_shared<PriorityOptions>();
+  CLI::App* priority = app.add_subcommand("priority", "Change a job's priority: higher runs first (from its next unit on)");
+  add_job_on_scheduler_options(*priority, p->target);
+  priority->add_option("priority", p->priority, "The new priority (above the scheduler's --max-priority needs the admin role)")
+      ->required();
+  commands.add(priority, [p] {
+    SchedulerClient client(resolve_scheduler_connection(p->target.scheduler));
+    print_state(client.set_priority(client.resolve_job_id(p->target.job_id), p->priority), "");
+    return 0;
+  });
+}
+
+}  // namespace farm

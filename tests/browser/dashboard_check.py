@@ -1,0 +1,163 @@
+#!/usr/bin/python3
+"""The scheduler's dashboard in a real browser: Debian's chromium, driven by Selenium
+(python3-selenium) through chromium-driver, headless.
+
+  dashboard_check.py --url http://127.0.0.1:PORT --token TOKEN --job RENDERING_JOB --cancel JOB \\
+      --workers 2 --screenshot FILE.png [--measure-job JOB --runs N]
+
+Logs in with the token, then checks what a person would look at: the jobs page lists the
+rendering job and its progress increases without a reload; the job page's image changes while it
+renders (its pixels, read back from the page); the cancel button cancels the other job; the
+workers page shows every worker up. Saves a screenshot of the job page while it renders. With
+--measure-job, loads that job's page --runs times and reports its first contentful paint and the
+time until the job's facts are shown (performance mark `farm-job-shown`).
+
+Prints one JSON line of what it saw; exit 0 only when every check held.
+"""
+import argparse
+import hashlib
+import json
+import statistics
+import sys
+import time
+
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.by import By
+
+WAIT = 120  # seconds any one thing may take to appear
+
+
+def browser():
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--window-size=1400,1000"):
+        options.add_argument(flag)
+    return webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+
+
+def wait_for(what, check, timeout=WAIT, every=0.1):
+    """check() until it returns something truthy; that value, or an AssertionError naming `what`."""
+    until = time.monotonic() + timeout
+    while time.monotonic() < until:
+        try:
+            value = check()
+            if value:
+                return value
+        except Exception:  # an element not there yet, a page between loads
+            pass
+        time.sleep(every)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def text_of(driver, selector):
+    """The text of the element `selector` picks, read in one step: the pages redraw rows and facts
+    as events arrive, so an element found earlier may be gone by the time it is read."""
+    return driver.execute_script("const e = document.querySelector(arguments[0]); return e ? e.textContent : null;",
+                                 selector)
+
+
+def click(driver, selector):
+    """Finds and clicks in one step of the page (an element found earlier may have been redrawn)."""
+    return driver.execute_script("const e = document.querySelector(arguments[0]); if (!e) return false; "
+                                 "e.click(); return true;", selector)
+
+
+def units_done(text):
+    """'3/16 tiles' or '1/4 frames, 30/64 units' -> the units done."""
+    return int(text.split(",")[-1].strip().split("/")[0])
+
+
+def image_digest(driver):
+    """The SHA-256 of the live image's pixels as the page shows them (drawn into a canvas)."""
+    data = driver.execute_script("""
+        const img = document.getElementById('live');
+        if (!img.complete || img.naturalWidth === 0) return null;
+        const c = document.createElement('canvas');
+        c.width = img.naturalWidth; c.height = img.naturalHeight;
+        const g = c.getContext('2d');
+        g.drawImage(img, 0, 0);
+        return Array.from(g.getImageData(0, 0, c.width, c.height).data).join(',');""")
+    return hashlib.sha256(data.encode()).hexdigest() if data else None
+
+
+def run(args, driver, seen):
+    driver.get(args.url + "/login.html")
+    driver.find_element(By.ID, "token").send_keys(args.token)
+    driver.find_element(By.CSS_SELECTOR, "#login button").click()
+    wait_for("the jobs page after logging in", lambda: text_of(driver, f"#job-{args.job} td.state"))
+
+    # Progress grows on the page without a reload: a marker set now must still be there.
+    driver.execute_script("window.farmNoReload = true;")
+    cell = f"#job-{args.job} td.progress span"
+    first = units_done(wait_for("the job's progress", lambda: text_of(driver, cell)))
+    later = wait_for("the job's progress to increase",
+                     lambda: (lambda n: n if n > first else None)(units_done(text_of(driver, cell))))
+    assert driver.execute_script("return window.farmNoReload === true;"), "the jobs page reloaded"
+    seen["progress"] = [first, later]
+
+    # The job page: its image changes while the job renders.
+    driver.get(f"{args.url}/job.html?id={args.job}")
+    digest = wait_for("the live image", lambda: image_digest(driver))
+    changed = wait_for("the live image to change",
+                       lambda: (lambda d: d if d and d != digest else None)(image_digest(driver)))
+    state = text_of(driver, "#facts dd.state")
+    driver.save_screenshot(args.screenshot)
+    seen["image_changed"] = digest != changed
+    seen["state_at_screenshot"] = state
+    seen["log_rows"] = len(driver.find_elements(By.CSS_SELECTOR, "#log tbody tr"))
+    assert state == "running", f"the job was {state} when its page was captured"
+
+    # The cancel button, on the jobs page.
+    driver.get(args.url + "/")
+    wait_for("the cancel button", lambda: click(driver, f"#job-{args.cancel} button.cancel"))
+    seen["cancelled"] = wait_for("the job to show cancelled",
+                                 lambda: text_of(driver, f"#job-{args.cancel} td.state") == "cancelled")
+
+    # The workers page: every worker, up.
+    driver.get(args.url + "/workers.html")
+    seen["workers_up"] = wait_for(f"{args.workers} workers up", lambda: (lambda n: n if n == args.workers else None)(
+        driver.execute_script("return [...document.querySelectorAll('#workers tbody td.state')]"
+                              ".filter(td => td.textContent === 'up').length;")))
+
+    if args.measure_job:
+        paints, shown = [], []
+        for _ in range(args.runs):
+            driver.get(f"{args.url}/job.html?id={args.measure_job}")
+            wait_for("the measured job's facts", lambda: driver.execute_script(
+                "return performance.getEntriesByName('farm-job-shown').length > 0"))
+            paints.append(driver.execute_script(
+                "const p = performance.getEntriesByName('first-contentful-paint'); return p.length ? p[0].startTime : null;"))
+            shown.append(driver.execute_script("return performance.getEntriesByName('farm-job-shown')[0].startTime;"))
+        seen["first_contentful_paint_ms"] = {"median": statistics.median(paints), "max": max(paints)}
+        seen["job_shown_ms"] = {"median": statistics.median(shown), "max": max(shown)}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--url", required=True)
+    parser.add_argument("--token", required=True)
+    parser.add_argument("--job", required=True, help="a job that renders for a while")
+    parser.add_argument("--cancel", required=True, help="an active job for the cancel button")
+    parser.add_argument("--workers", type=int, required=True)
+    parser.add_argument("--screenshot", required=True)
+    parser.add_argument("--measure-job")
+    parser.add_argument("--runs", type=int, default=10)
+    args = parser.parse_args()
+    seen = {}
+    driver = browser()
+    try:
+        run(args, driver, seen)
+        seen["ok"] = True
+    except AssertionError as e:
+        seen["ok"] = False
+        seen["problem"] = str(e)
+    finally:
+        driver.quit()
+    print(json.dumps(seen))
+    return 0 if seen["ok"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
