@@ -9,6 +9,7 @@
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
+#include "server/common/disk_full.h"
 
 namespace farm {
 
@@ -60,8 +61,7 @@ void add_job_action_commands(CLI::App& app, CommandTable& commands) {
              "units and result files (cancel a running job first)",
              [](SchedulerClient& client, const std::string& id) {
                const v1::DeleteJobResponse r = client.remove(id);
-               fmt::print("job {} deleted, {:.1f} MB of files freed\n", r.job_id(),
-                          static_cast<double>(r.bytes_freed()) / 1e6);
+               fmt::print("job {} deleted, {} of files freed\n", r.job_id(), describe_bytes(r.bytes_freed()));
              });
 
   auto p = std::make_shared<PriorityOptions>();

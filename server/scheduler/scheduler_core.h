@@ -25,7 +25,8 @@
 // while it calls another only along these arrows (A -> B: B is taken while A is held):
 //   Dispatcher -> JobStore -> {WorkerRegistry, RunningJobs}   claiming a batch (batch sizing)
 //   Dispatcher -> {WorkerRegistry, TileCancel}                claiming, cancelling calls in flight
-//   JobEvents -> {JobStore, JobEventQueue, EventRelay}        publishing an event in store order
+//   JobEvents -> {JobStore, JobEventQueue, EventRelay,        publishing an event in store order
+//                 its listeners (WebhookNotifier)}            (and logging it in the store)
 //   Dispatcher -> DiskFullPause                               claiming (is dispatch paused?)
 // The others (Finisher, RunningJobs, WorkerRegistry, JobStore, DiskFullPause, StoreOutage, the queues) are
 // leaves: nothing is taken under them (StoreOutage's on_back runs with no lock held). The arrows make no cycle, so no two threads can deadlock on them.

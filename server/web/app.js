@@ -110,6 +110,9 @@ const farm = (() => {
     const source = new EventSource('/api/v1/events' + (job ? '?job=' + encodeURIComponent(job) : ''));
     source.addEventListener('job', (e) => onEvent(JSON.parse(e.data), Number(e.lastEventId)));
     source.addEventListener('resync', () => onResync && onResync());
+    // The browser reconnects a stream that broke by itself; what happened meanwhile was missed.
+    let opened = 0;
+    source.addEventListener('open', () => { if (opened++ > 0 && onResync) onResync(); });
     return source;
   }
 

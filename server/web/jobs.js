@@ -34,7 +34,15 @@
     farm.cell(tr, 'priority', String(job.priority));
     farm.cell(tr, 'submitted', farm.when(job.submitted_at));
     farm.cell(tr, 'duration', farm.duration(job));
-    farm.cell(tr, '', farm.actionButtons(job, (reply) => reply && refresh(reply.job || reply), show));
+    farm.cell(tr, '', farm.actionButtons(job, (reply) => {
+      if (!reply) return;
+      if (reply.bytes_freed !== undefined) {  // deleted: no event says so
+        tr.remove();
+        shown.delete(job.job_id);
+        return;
+      }
+      refresh(reply.job || reply);
+    }, show));
     farm.cell(tr, 'failure', job.failure_reason || '');
     return tr;
   }

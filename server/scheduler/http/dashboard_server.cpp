@@ -29,8 +29,7 @@ constexpr std::size_t kMaxBody = 64 * 1024;
 constexpr std::size_t kEventQueue = 4096;  // events a slow reader may fall behind by
 constexpr auto kEventWait = std::chrono::seconds(1);
 constexpr std::size_t kFileChunk = 1 << 20;
-// A job id as the routes take it: lowercase hex, 1 to 64 digits (resolved as a prefix by nobody:
-// the pages hold whole ids).
+// A whole job id as the routes take it (the pages hold whole ids): lowercase hex, 1 to 64 digits.
 constexpr const char* kJobRoute = "/api/v1/jobs/([0-9a-f]{1,64})";
 
 const Roles kReaders = Role::submit | Role::read | Role::admin;
