@@ -40,6 +40,8 @@ packages=(
   python3-grpcio python3-grpc-tools python3-protobuf python3-setuptools python3-pip
   # the scheduler's dashboard (`farm scheduler --http`), and the browser its test drives
   libcpp-httplib-dev chromium chromium-driver python3-selenium
+  # Prometheus's own parser of its text format, which reads the dashboard's /metrics in its test
+  python3-prometheus-client
 )
 
 missing=()

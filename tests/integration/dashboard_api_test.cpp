@@ -11,7 +11,6 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
-#include <sstream>
 #include <string>
 #include <thread>
 
@@ -257,29 +256,37 @@ TEST_F(DashboardApiTest, EventsArriveInOrderAndMetricsParseWithTheFarmsFigures) 
   EXPECT_EQ(last_done, 16u);
   EXPECT_GE(finished, 1);
 
-  // /metrics: Prometheus text, every sample a `name{labels} value` line.
+  // /metrics, read by Prometheus's own parser (tests/python/prometheus_metrics.py), which also
+  // holds the histogram to its rules.
   httplib::Client c = client();
   EXPECT_EQ(c.Get("/metrics")->status, 401);
   const httplib::Result m = c.Get("/metrics", bearer(kReader));
   ASSERT_TRUE(m);
   ASSERT_EQ(m->status, 200) << m->body;
-  std::map<std::string, double> samples;
-  std::istringstream lines(m->body);
-  const std::regex sample(R"(([a-z_]+(?:\{[a-z_]+="[^"]*"\})?) ([-+.0-9eE]+|\+Inf|NaN))");
-  for (std::string line; std::getline(lines, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::smatch s;
-    ASSERT_TRUE(std::regex_match(line, s, sample)) << line;
-    samples[s[1]] = std::stod(s[2]);
-  }
-  EXPECT_EQ(samples["farm_jobs{state=\"succeeded\"}"], 1);
-  EXPECT_EQ(samples["farm_jobs{state=\"running\"}"], 0);
-  EXPECT_EQ(samples["farm_workers{state=\"up\"}"], 1);
-  EXPECT_EQ(samples["farm_units_done_total"], 16);
-  EXPECT_EQ(samples["farm_queue_depth"], 0);
-  EXPECT_GT(samples["farm_units_per_second"], 0);
-  EXPECT_EQ(samples["farm_unit_latency_seconds_bucket{le=\"+Inf\"}"], samples["farm_unit_latency_seconds_count"]);
-  EXPECT_GE(samples["farm_unit_latency_seconds_count"], 1);
+  const fs::path text = dir_.write("metrics.txt", m->body);
+  const test::CommandResult parsed = test::run_command(
+      fmt::format("/usr/bin/python3 {} < {}", test::shell_quote((fs::path(FARM_SOURCE_DIR) / "tests/python/prometheus_metrics.py").string()),
+                  test::shell_quote(text.string())));
+  ASSERT_EQ(parsed.exit_code, 0) << parsed.output << "\n" << m->body;
+  const json metrics = json::parse(parsed.output);
+  const json& families = metrics["families"];
+  EXPECT_EQ(families["farm_jobs"], "gauge");
+  EXPECT_EQ(families["farm_units_done"], "counter");  // the parser names a counter without _total
+  EXPECT_EQ(families["farm_unit_latency_seconds"], "histogram");
+  const std::map<std::string, double> samples = metrics["samples"].get<std::map<std::string, double>>();
+  const auto sample = [&](const std::string& key) {
+    const auto it = samples.find(key);
+    EXPECT_NE(it, samples.end()) << key << " missing from\n" << m->body;
+    return it == samples.end() ? -1.0 : it->second;
+  };
+  EXPECT_EQ(sample("farm_jobs{state=\"succeeded\"}"), 1);
+  EXPECT_EQ(sample("farm_jobs{state=\"running\"}"), 0);
+  EXPECT_EQ(sample("farm_workers{state=\"up\"}"), 1);
+  EXPECT_EQ(sample("farm_units_done_total"), 16);
+  EXPECT_EQ(sample("farm_queue_depth"), 0);
+  EXPECT_GT(sample("farm_units_per_second"), 0);
+  EXPECT_EQ(sample("farm_unit_latency_seconds_bucket{le=\"+Inf\"}"), sample("farm_unit_latency_seconds_count"));
+  EXPECT_GE(sample("farm_unit_latency_seconds_count"), 1);
 }
 
 TEST(DashboardListenTest, BeyondLoopbackWithoutTokensTheDashboardIsRefused) {
