@@ -123,7 +123,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
              o.data_dir.string(), core.store().describe(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
   if (core.store().is_shared()) fmt::print("  scheduler {}, lease {} s\n", core.scheduler_id(), o.lease_s);
   if (!o.keep_finished.empty()) fmt::print("  finished jobs kept {} after they end, then deleted\n", o.keep_finished);
-  if (notifier) fmt::print("  each job's end posted to {}\n", o.notify_url);
+  if (notifier) fmt::print("  each job's end posted to {}\n", parse_webhook_url(o.notify_url).shown());
   fmt::print("  {}, {}\n", security.access.requires_tokens() ? "tokens required" : "no tokens",
              o.security.tls.has_certificate() ? (o.security.tls.ca.empty() ? "TLS" : "mTLS") : "plain text");
   if (dashboard) {
@@ -203,7 +203,9 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
   s->add_option("--notify-url", o->notify_url,
                 "POST a JSON event ({\"event\": \"job.succeeded\"|\"job.failed\"|\"job.cancelled\", "
                 "\"scheduler\", \"job\"}) to this http(s) URL when a job ends: a CI's or a chat's "
-                "webhook. Retried with backoff (1 s doubling to 60 s, 8 attempts); never holds dispatch")
+                "webhook. Retried with backoff (1 s doubling to 60 s, 8 attempts); never holds dispatch. "
+                "Logs show its origin only (a chat's webhook keeps its secret in the path); "
+                "FARM_NOTIFY_URL keeps it out of the process list too")
       ->envname("FARM_NOTIFY_URL");
   s->add_option("--keep-finished", o->keep_finished,
                 "Delete jobs (from the store, with their tiles and result files) this long after "

@@ -55,12 +55,13 @@ class DashboardApiTest : public ::testing::Test {
 
   // A job submitted over gRPC as `token`'s holder.
   std::string submit(const std::string& token, const std::string& name, int size = 32,
-                     const std::string& engine = "whitted", int spp = 1) {
+                     const std::string& engine = "whitted", int spp = 1, const std::string& image = "") {
     auto stub = test::scheduler_stub(scheduler_->address(), ClientIdentity{token, false, {}});
     EXPECT_TRUE(test::upload_assets(*stub, test::cornell_assets()).ok());
     json job = json::parse(test::cornell_job_json(engine, size, size, spp));
     job["name"] = name;
     job["render"]["tile_size"] = 16;
+    if (!image.empty()) job["output"]["image"] = image;
     v1::Job submitted;
     const grpc::Status status =
         test::submit(*stub, test::make_job_spec(job.dump(), test::cornell_assets(), "cornell.json"), submitted);
@@ -160,6 +161,17 @@ TEST_F(DashboardApiTest, JobsLogAndActionsMirrorTheRpcsWithTheirRoles) {
   r = post("/api/v1/jobs/" + mine + "/delete", bearer(kAlice));
   EXPECT_EQ(r->status, 200) << r->body;
   get("/api/v1/jobs/" + mine, kAdmin, 404);
+
+  // A download is named after the submitter's output name: a quote or a line break in it becomes
+  // '_', so that the header is well formed (httplib drops one with a line break, name and all).
+  const std::string odd = submit(kAlice, "odd-name", 16, "whitted", 1, "out/we\"ird\r\nX-Injected: yes.exr");
+  ASSERT_EQ(wait_final(odd)["state"], "JOB_STATE_SUCCEEDED");
+  const httplib::Result exr = c.Get("/api/v1/jobs/" + odd + "/file?kind=exr", bearer(kAlice));
+  ASSERT_TRUE(exr);
+  EXPECT_EQ(exr->status, 200) << exr->body;
+  EXPECT_EQ(exr->get_header_value("Content-Disposition"), "attachment; filename=\"we_ird__X-Injected__yes.exr\"");
+  EXPECT_FALSE(exr->has_header("X-Injected"));
+  EXPECT_EQ(exr->body.substr(0, 4), std::string("\x76\x2f\x31\x01", 4));  // OpenEXR's magic number
 }
 
 TEST_F(DashboardApiTest, ALoginSessionActsAndAPageElsewhereCannot) {

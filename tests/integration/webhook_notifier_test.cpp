@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <future>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -31,13 +32,17 @@ using json = nlohmann::json;
 constexpr auto kWait = 120s;
 
 // An HTTP server on a free port of 127.0.0.1 that records the bodies POSTed to /hook and answers
-// 500 to the first `failures` of them.
+// 500 to the first `failures` of them. One made `held` answers nothing until release().
 class Receiver {
  public:
-  explicit Receiver(int failures, std::chrono::milliseconds hang = {}) : failures_(failures), hang_(hang) {
+  explicit Receiver(int failures, std::chrono::milliseconds hang = {}, bool held = false)
+      : failures_(failures), hang_(hang), held_(held) {
     server_.Post("/hook", [this](const httplib::Request& request, httplib::Response& response) {
       if (hang_.count() > 0) std::this_thread::sleep_for(hang_);
-      std::lock_guard lock(mutex_);
+      std::unique_lock lock(mutex_);
+      ++arrived_;
+      received_.notify_all();
+      received_.wait(lock, [&] { return !held_; });
       ++requests_;
       if (requests_ <= failures_) {
         response.status = 500;
@@ -50,6 +55,7 @@ class Receiver {
     thread_ = std::thread([this] { server_.listen_after_bind(); });
   }
   ~Receiver() {
+    release();
     server_.stop();
     thread_.join();
   }
@@ -64,10 +70,22 @@ class Receiver {
     std::lock_guard lock(mutex_);
     return requests_;
   }
+  // True once a POST has arrived (bounded wait), answered or held.
+  bool wait_arrived() {
+    std::unique_lock lock(mutex_);
+    return received_.wait_for(lock, kWait, [&] { return arrived_ > 0; });
+  }
+  void release() {
+    std::lock_guard lock(mutex_);
+    held_ = false;
+    received_.notify_all();
+  }
 
  private:
   const int failures_;
   const std::chrono::milliseconds hang_;
+  bool held_;
+  int arrived_ = 0;
   httplib::Server server_;
   int port_ = 0;
   std::thread thread_;
@@ -117,10 +135,25 @@ TEST(WebhookNotifierTest, AReceiverThatHangsHoldsNothingUpAndTheQueueIsBounded) 
   EXPECT_LE(receiver.requests(), 1);
 }
 
+TEST(WebhookNotifierTest, StopCutsOffAPostTheReceiverHolds) {
+  Receiver receiver(0, {}, true);
+  auto log = make_logger("webhook-test", LogLevel::off);
+  // Timeouts far beyond the test's wait: only cutting the POST off lets stop() return in time.
+  WebhookNotifier notifier(receiver.url(), "sched-1", *log, 20ms, std::chrono::hours(1));
+  notifier.enqueue(job_ended("a", v1::JOB_STATE_SUCCEEDED));
+  ASSERT_TRUE(receiver.wait_arrived());
+  auto stopped = std::async(std::launch::async, [&] { notifier.stop(); });
+  const bool in_time = stopped.wait_for(kWait) == std::future_status::ready;
+  receiver.release();  // lets a stop() that failed to cut it off end too, so the test ends
+  EXPECT_TRUE(in_time) << "stop() waited for the held POST";
+}
+
 TEST(WebhookNotifierTest, OnlyHttpUrlsWithAHostAreTaken) {
   EXPECT_EQ(parse_webhook_url("https://ci.example:8443/hooks/farm").origin, "https://ci.example:8443");
   EXPECT_EQ(parse_webhook_url("https://ci.example:8443/hooks/farm").path, "/hooks/farm");
   EXPECT_EQ(parse_webhook_url("http://127.0.0.1").path, "/");
+  EXPECT_EQ(parse_webhook_url("https://chat.example/hooks/T0/SECRET").shown(), "https://chat.example/...");
+  EXPECT_EQ(parse_webhook_url("http://127.0.0.1:9").shown(), "http://127.0.0.1:9");
   for (const char* bad : {"ftp://x/y", "http://", "file:///etc/passwd", "http://a b/", "ci.example/hook"}) {
     EXPECT_THROW(parse_webhook_url(bad), InputError) << bad;
   }

@@ -155,6 +155,18 @@ std::string content_type_of(const fs::path& file) {
   return "application/octet-stream";
 }
 
+// A file's name as a download header may carry it: the stem is the submitter's output name, so
+// anything but letters, digits, '.', '-' and '_' (a quote, a line break) becomes '_'.
+std::string download_name(const fs::path& file) {
+  std::string name = file.filename().string();
+  for (char& c : name) {
+    const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
+                       c == '-' || c == '_';
+    if (!plain) c = '_';
+  }
+  return name;
+}
+
 }  // namespace
 
 DashboardServer::DashboardServer(SchedulerService& service, SchedulerCore& core, DashboardOptions options,
@@ -235,14 +247,14 @@ void DashboardServer::check_post(const httplib::Request& request) const {
 
 void DashboardServer::serve_file(const fs::path& file, const std::string& type, bool download,
                                  httplib::Response& response) const {
-  std::error_code ec;
-  const std::uintmax_t size = fs::file_size(file, ec);
-  if (ec) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("{} is gone", file.filename().string()));
-  auto in = std::make_shared<std::ifstream>(file, std::ios::binary);
-  if (!*in) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("cannot read {}", file.filename().string()));
+  // The size is the open file's: a live image is replaced (renamed over) while it is served.
+  auto in = std::make_shared<std::ifstream>(file, std::ios::binary | std::ios::ate);
+  if (!*in) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("{} is gone", download_name(file)));
+  const std::streamoff size = in->tellg();
+  if (size < 0) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("cannot read {}", download_name(file)));
   response.set_header("Cache-Control", "no-store");
   if (download) {
-    response.set_header("Content-Disposition", fmt::format("attachment; filename=\"{}\"", file.filename().string()));
+    response.set_header("Content-Disposition", fmt::format("attachment; filename=\"{}\"", download_name(file)));
   }
   response.set_content_provider(static_cast<std::size_t>(size), type,
                                 [in](std::size_t offset, std::size_t length, httplib::DataSink& sink) {

@@ -15,7 +15,6 @@ namespace farm {
 
 namespace {
 constexpr auto kMaxBackoff = std::chrono::seconds(60);
-constexpr time_t kTimeoutSeconds = 10;  // connecting, and each read and write of a POST
 }  // namespace
 
 WebhookUrl parse_webhook_url(const std::string& url) {
@@ -28,11 +27,12 @@ WebhookUrl parse_webhook_url(const std::string& url) {
 }
 
 WebhookNotifier::WebhookNotifier(const std::string& url, std::string scheduler_id, spdlog::logger& log,
-                                 std::chrono::milliseconds first_backoff)
+                                 std::chrono::milliseconds first_backoff, std::chrono::seconds timeout)
     : url_(parse_webhook_url(url)),
       scheduler_id_(std::move(scheduler_id)),
       log_(log),
       first_backoff_(first_backoff),
+      timeout_(timeout),
       thread_([this] { loop(); }) {}
 
 WebhookNotifier::~WebhookNotifier() { stop(); }
@@ -41,6 +41,7 @@ void WebhookNotifier::stop() {
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
+    if (posting_) posting_->stop();  // a receiver that hangs does not hold the scheduler's exit
   }
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
@@ -65,12 +66,25 @@ void WebhookNotifier::enqueue(const v1::JobEvent& event) {
   wake_.notify_all();
 }
 
-bool WebhookNotifier::post(const std::string& body, std::string& problem) const {
+bool WebhookNotifier::post(const std::string& body, std::string& problem) {
   httplib::Client client(url_.origin);
-  client.set_connection_timeout(kTimeoutSeconds, 0);
-  client.set_read_timeout(kTimeoutSeconds, 0);
-  client.set_write_timeout(kTimeoutSeconds, 0);
+  const auto seconds = static_cast<time_t>(timeout_.count());
+  client.set_connection_timeout(seconds, 0);
+  client.set_read_timeout(seconds, 0);
+  client.set_write_timeout(seconds, 0);
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) {
+      problem = "stopping";
+      return false;
+    }
+    posting_ = &client;
+  }
   const httplib::Result r = client.Post(url_.path, body, "application/json");
+  {
+    std::lock_guard lock(mutex_);
+    posting_ = nullptr;
+  }
   if (!r) {
     problem = httplib::to_string(r.error());
     return false;
@@ -100,10 +114,10 @@ void WebhookNotifier::loop() {
       lock.lock();
       if (delivered) break;
       if (attempt == kMaxAttempts) {
-        log_.error("--notify-url {}{}: gave up after {} attempts: {}", url_.origin, url_.path, attempt, problem);
+        log_.error("--notify-url {}: gave up after {} attempts: {}", url_.shown(), attempt, problem);
         break;
       }
-      log_.warn("--notify-url {}{}: attempt {} failed ({}); again in {} ms", url_.origin, url_.path, attempt, problem,
+      log_.warn("--notify-url {}: attempt {} failed ({}); again in {} ms", url_.shown(), attempt, problem,
                 backoff.count());
       if (wake_.wait_for(lock, backoff, [&] { return stopping_; })) {
         log_.warn("--notify-url: stopping with a notification not delivered");

@@ -19,6 +19,8 @@
 
 #include <spdlog/logger.h>
 
+namespace httplib { class Client; }
+
 #include "proto/farm.pb.h"
 
 namespace farm {
@@ -28,6 +30,8 @@ namespace farm {
 struct WebhookUrl {
   std::string origin;  // "https://ci.example:8443"
   std::string path;    // "/hooks/farm" ("/" when none)
+  // What logs and messages show: the origin only, as a chat's webhook keeps its secret in the path.
+  std::string shown() const { return path == "/" ? origin : origin + "/..."; }
 };
 WebhookUrl parse_webhook_url(const std::string& url);
 
@@ -36,8 +40,10 @@ class WebhookNotifier {
   static constexpr std::size_t kMaxQueued = 1000;
   static constexpr int kMaxAttempts = 8;
 
+  // `timeout` bounds connecting, and each read and write of a POST.
   WebhookNotifier(const std::string& url, std::string scheduler_id, spdlog::logger& log,
-                  std::chrono::milliseconds first_backoff = std::chrono::seconds(1));
+                  std::chrono::milliseconds first_backoff = std::chrono::seconds(1),
+                  std::chrono::seconds timeout = std::chrono::seconds(10));
   ~WebhookNotifier();  // stop()
   WebhookNotifier(const WebhookNotifier&) = delete;
   WebhookNotifier& operator=(const WebhookNotifier&) = delete;
@@ -45,22 +51,25 @@ class WebhookNotifier {
   // Called with every event this scheduler publishes; queues the job's end, if it is one. Never
   // blocks.
   void enqueue(const v1::JobEvent& event);
-  // Stops posting (a notification not yet delivered is dropped, and logged). Idempotent.
+  // Stops posting: a POST under way is cut off, and what is not yet delivered is dropped (and
+  // logged). Idempotent.
   void stop();
 
  private:
   void loop();
   // One POST; true on a 2xx. `problem` says what went wrong otherwise.
-  bool post(const std::string& body, std::string& problem) const;
+  bool post(const std::string& body, std::string& problem);
 
   const WebhookUrl url_;
   const std::string scheduler_id_;
   spdlog::logger& log_;
   const std::chrono::milliseconds first_backoff_;
+  const std::chrono::seconds timeout_;
   std::mutex mutex_;
   std::condition_variable wake_;
   std::deque<std::string> queue_;  // bodies to post, oldest first
   bool stopping_ = false;
+  httplib::Client* posting_ = nullptr;  // the POST under way, which stop() cuts off
   std::thread thread_;
 };
 
