@@ -5,8 +5,9 @@ document.getElementById('login').addEventListener('submit', async (e) => {
   e.preventDefault();
   try {
     await farm.post('/api/v1/login', { token: document.getElementById('token').value });
-    const next = new URLSearchParams(location.search).get('next') || '/';
-    location.href = next.startsWith('/') && !next.startsWith('//') ? next : '/';
+    // Back to a page of this dashboard only: '//elsewhere' or '/\elsewhere' would leave it.
+    const next = new URL(new URLSearchParams(location.search).get('next') || '/', location.origin);
+    location.href = next.origin === location.origin ? next.pathname + next.search : '/';
   } catch (err) {
     document.getElementById('error').textContent = err.message;
   }

@@ -20,6 +20,7 @@ import json
 import statistics
 import sys
 import time
+import urllib.parse
 
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
@@ -83,9 +84,14 @@ def image_digest(driver):
 
 
 def run(args, driver, seen):
-    driver.get(args.url + "/login.html")
+    # Logged in from a link whose `next` leads elsewhere ("/\host" is "//host" to a browser): the
+    # login stays on the dashboard, on its jobs page.
+    driver.get(args.url + "/login.html?next=" + urllib.parse.quote("/\\elsewhere.invalid/"))
     driver.find_element(By.ID, "token").send_keys(args.token)
     driver.find_element(By.CSS_SELECTOR, "#login button").click()
+    landed = wait_for("a page after logging in", lambda: (lambda u: u if "/login.html" not in u else None)(
+        driver.current_url))
+    assert landed.startswith(args.url + "/"), f"the login led off the dashboard, to {landed}"
     wait_for("the jobs page after logging in", lambda: text_of(driver, f"#job-{args.job} td.state"))
 
     # Progress grows on the page without a reload: a marker set now must still be there.
