@@ -110,9 +110,9 @@ const farm = (() => {
     const source = new EventSource('/api/v1/events' + (job ? '?job=' + encodeURIComponent(job) : ''));
     source.addEventListener('job', (e) => onEvent(JSON.parse(e.data), Number(e.lastEventId)));
     source.addEventListener('resync', () => onResync && onResync());
-    // The browser reconnects a stream that broke by itself; what happened meanwhile was missed.
-    let opened = 0;
-    source.addEventListener('open', () => { if (opened++ > 0 && onResync) onResync(); });
+    // What happened before the stream opened (after the page read the farm), or while a broken
+    // stream was being reconnected by the browser, came as no event: read again once it is open.
+    source.addEventListener('open', () => onResync && onResync());
     return source;
   }
 

@@ -77,6 +77,7 @@
       img.dataset.frame = String(f);
       img.alt = `frame ${f}`;
       img.title = `frame ${f}`;
+      img.addEventListener('error', () => { delete img.dataset.asked; });
       img.addEventListener('click', () => {
         frame = f;
         for (const t of strip.children) t.classList.toggle('chosen', t === img);
@@ -86,9 +87,19 @@
     }
   }
 
+  // A thumbnail is asked for once its frame is merged (a frame_finished event, live or in the log),
+  // and asked for again only if that failed.
   function thumbDone(f) {
     const img = document.querySelector(`#thumbs img[data-frame="${f}"]`);
-    if (img) img.src = `/api/v1/jobs/${id}/file?kind=preview&frame=${f}`;
+    if (!img || img.dataset.asked) return;
+    img.dataset.asked = '1';
+    img.src = `/api/v1/jobs/${id}/file?kind=preview&frame=${f}`;
+  }
+
+  // Every frame of a job that succeeded is merged (its log may have dropped some merges past its
+  // limit).
+  function thumbsIfSucceeded() {
+    if (job.state === 'JOB_STATE_SUCCEEDED' && farm.isAnimation(job)) for (const f of frames()) thumbDone(f);
   }
 
   function downloads() {
@@ -118,11 +129,13 @@
     document.title = `farm: ${job.name}`;
     facts();
     if (job.frames_done !== merged) downloads();
+    thumbsIfSucceeded();
   }
 
   function logEntry(number, at, event) {
     if (number <= lastLogged) return;
     lastLogged = number;
+    if (event.frame_finished) thumbDone(event.frame_finished.frame);
     const tr = document.createElement('tr');
     farm.cell(tr, '', String(number));
     farm.cell(tr, '', new Date(at).toLocaleTimeString());
@@ -147,8 +160,8 @@
       thumbs();
       downloads();
       refreshImage(job.frame_first);
-      for (const f of frames()) if (f <= job.frame_last && job.frames_done > 0) thumbDone(f);
-      await loadLog();
+      thumbsIfSucceeded();
+      await loadLog();  // its merges ask for their frames' thumbnails
     } catch (e) { show(e); return; }
     farm.events(id, (event) => {
       update(event.job);

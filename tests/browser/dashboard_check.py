@@ -127,6 +127,9 @@ def run(args, driver, seen):
         driver.execute_script("return [...document.querySelectorAll('#workers tbody td.state')]"
                               ".filter(td => td.textContent === 'up').length;")))
 
+    if args.animation:
+        animation(args, driver, seen)
+
     if args.measure_job:
         paints, shown = [], []
         for _ in range(args.runs):
@@ -140,12 +143,36 @@ def run(args, driver, seen):
         seen["job_shown_ms"] = {"median": statistics.median(shown), "max": max(shown)}
 
 
+def animation(args, driver, seen):
+    """The paused animation resumed; its job page opened once a frame is merged and before the last
+    is; once it succeeded, every frame's thumbnail must have loaded."""
+    job = f"/api/v1/jobs/{args.animation}"
+    api = "return fetch(arguments[0], arguments[1]).then(r => r.ok ? r.json() : null);"
+    resumed = driver.execute_script(api, job + "/resume", {
+        "method": "POST", "headers": {"Content-Type": "application/json"}, "body": "{}"})
+    assert resumed, "the animation could not be resumed"
+    frames = resumed["frames_total"]
+    done = wait_for("the animation's first frame", lambda: (lambda j: j if j and j["frames_done"] > 0 else None)(
+        driver.execute_script(api, job, {})), every=0.02)
+    seen["animation_frames_done_at_open"] = done["frames_done"]
+    driver.get(f"{args.url}/job.html?id={args.animation}")
+    wait_for("the animation to succeed", lambda: text_of(driver, "#facts dd.state") == "succeeded")
+    loaded = "return [...document.querySelectorAll('#thumbs img')].filter(i => i.complete && i.naturalWidth > 0).length"
+    try:
+        seen["animation_thumbnails"] = wait_for(f"{frames} thumbnails", lambda: (lambda n: n if n == frames else None)(
+            driver.execute_script(loaded)), timeout=30)
+    except AssertionError:
+        seen["animation_thumbnails"] = driver.execute_script(loaded)
+        raise AssertionError(f"{seen['animation_thumbnails']} of the animation's {frames} thumbnails loaded")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--url", required=True)
     parser.add_argument("--token", required=True)
     parser.add_argument("--job", required=True, help="a job that renders for a while")
     parser.add_argument("--cancel", required=True, help="an active job for the cancel button")
+    parser.add_argument("--animation", help="a paused animation, resumed here and watched as its frames merge")
     parser.add_argument("--workers", type=int, required=True)
     parser.add_argument("--screenshot", required=True)
     parser.add_argument("--measure-job")
