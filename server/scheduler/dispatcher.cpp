@@ -269,6 +269,7 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
         requeue_when_stored(call->batch, w->id);
       }
     };
+    if (call->batch.started_job) announce_started(call->batch.job_id);
     try {
       const grpc::Status status = render(*w, *call, result);
       handle_result(*w, *call, status, result);
@@ -288,6 +289,15 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
     }
     std::lock_guard lock(mutex_);
     in_flight_.erase(call);
+  }
+}
+
+void Dispatcher::announce_started(const std::string& job_id) {
+  try {
+    events_.publish_started(job_id);
+  } catch (const std::exception& e) {
+    // The store away or full: watchers see it running from its next event; the batch renders.
+    log_.warn("job {}: its start not announced: {}", job_id, e.what());
   }
 }
 

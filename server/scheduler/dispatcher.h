@@ -133,6 +133,8 @@ class Dispatcher {
   // A slot's thread: slot_loop, then its handle goes to exited_ to be joined.
   void slot_main(const std::shared_ptr<WorkerEntry>& w);
   void slot_loop(const std::shared_ptr<WorkerEntry>& w);
+  // The job's first batch since it was queued was claimed: watchers and the log hear that it runs.
+  void announce_started(const std::string& job_id);
   void join_exited();
   // The next batch for `w` (or a batch to check), in flight from now on; null when there was
   // none (after a wait). `store_answered`: the store answered (it may have had nothing to give).

@@ -67,6 +67,17 @@ void JobEvents::publish_state(const v1::Job& job, v1::JobState from) {
   push_locked(event);
 }
 
+void JobEvents::publish_started(const std::string& job_id) {
+  std::lock_guard lock(mutex_);  // read under it, as publish() does: in the store's order
+  std::optional<v1::Job> job = store_.get_job(job_id);
+  if (!job || job->state() != v1::JOB_STATE_RUNNING) return;
+  v1::JobEvent event;
+  *event.mutable_job() = std::move(*job);
+  event.mutable_state_changed()->set_from(v1::JOB_STATE_QUEUED);
+  event.mutable_state_changed()->set_to(v1::JOB_STATE_RUNNING);
+  push_locked(event);
+}
+
 void JobEvents::listen(std::function<void(const v1::JobEvent&)> listener) {
   std::lock_guard lock(mutex_);
   listeners_.push_back(std::move(listener));

@@ -60,6 +60,9 @@ class JobEvents {
   void publish(const std::string& job_id, const std::function<void(v1::JobEvent&)>& fill);
   // `job` went from `from` to its state now.
   void publish_state(const v1::Job& job, v1::JobState from);
+  // The job's first batch since it was queued was claimed: QUEUED -> RUNNING, unless it has
+  // already left RUNNING (cancelled meanwhile), as the store has it now.
+  void publish_started(const std::string& job_id);
 
   // Every event published from now on is given to `forward` too (under mutex_, so in order; it
   // must not block): the schedulers sharing a store relay them to each other (event_relay.h).

@@ -13,6 +13,7 @@
 #include <regex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "server/common/job_state.h"
 #include "server/common/sha256.h"
@@ -133,6 +134,20 @@ TEST_F(DashboardApiTest, JobsLogAndActionsMirrorTheRpcsWithTheirRoles) {
   EXPECT_EQ(log["entries"][0]["number"], 1);
   EXPECT_EQ(log["entries"][0]["event"]["state_changed"]["to"], "JOB_STATE_QUEUED");
   EXPECT_EQ(log["entries"].back()["event"]["state_changed"]["to"], "JOB_STATE_SUCCEEDED");
+  // Its start is logged once, between its submission and its first merge.
+  std::vector<std::size_t> starts;
+  std::size_t first_merge = log["entries"].size();
+  for (std::size_t i = 0; i < log["entries"].size(); ++i) {
+    const json& event = log["entries"][i]["event"];
+    if (event.contains("state_changed") && event["state_changed"]["to"] == "JOB_STATE_RUNNING") {
+      EXPECT_EQ(event["state_changed"]["from"], "JOB_STATE_QUEUED");
+      starts.push_back(i);
+    }
+    if (event.contains("frame_finished")) first_merge = std::min(first_merge, i);
+  }
+  ASSERT_EQ(starts.size(), 1u) << log.dump();
+  EXPECT_EQ(starts[0], 1u) << log.dump();
+  EXPECT_LT(starts[0], first_merge) << log.dump();
 
   httplib::Result r = post("/api/v1/jobs/" + mine + "/delete", bearer(kBob));
   ASSERT_TRUE(r);

@@ -941,9 +941,15 @@ TEST_P(JobStoreTest, APausedJobHandsOutNothingUntilResumedAndPriorityReordersThe
 TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes) {
   JobStore store(connect());
   store.add_job(make_job("a", 0, 4), 1);
-  ASSERT_EQ(store.claim_next_batch("w", 2)->first, 0u);
+  const std::optional<TileBatch> first = store.claim_next_batch("w", 2);
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->first, 0u);
+  EXPECT_TRUE(first->started_job);  // the claim that started it says so, and only that one
   ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
-  ASSERT_EQ(store.claim_next_batch("w", 3)->first, 1u);
+  const std::optional<TileBatch> second = store.claim_next_batch("w", 3);
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->first, 1u);
+  EXPECT_FALSE(second->started_job);
   ASSERT_EQ(store.claim_next_batch("w", 4)->first, 2u);  // running when the job fails
   const TileFailure f = store.batch_failed("a", 1, 1, "boom", 1, 5, "w");
   ASSERT_EQ(f.job.state(), v1::JOB_STATE_FAILED);
@@ -966,6 +972,7 @@ TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes
     const auto b = store.claim_next_batch("w", 6);
     ASSERT_TRUE(b);
     EXPECT_EQ(b->first, i);
+    EXPECT_FALSE(b->started_job);  // retried with a unit done: running already
     ASSERT_TRUE(store.batch_done("a", i, 1, {}, "w"));
   }
   EXPECT_FALSE(store.claim_next_batch("w", 7));
@@ -983,6 +990,11 @@ TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes
   EXPECT_FALSE(store.retry_job("none"));
   store.cancel_job("b", 10);
   EXPECT_EQ(store.retry_job("b")->job.state(), v1::JOB_STATE_QUEUED);  // nothing done: queued
+  const std::optional<TileBatch> restarted = store.claim_next_batch("w", 11);
+  ASSERT_TRUE(restarted);
+  EXPECT_EQ(restarted->job_id, "b");
+  EXPECT_TRUE(restarted->started_job);
+  EXPECT_EQ(store.get_job("b")->state(), v1::JOB_STATE_RUNNING);
 }
 
 TEST_P(JobStoreTest, DeleteRemovesAFinalJobWithEveryRowOfItAndRefusesAnActiveOne) {

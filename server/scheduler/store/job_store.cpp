@@ -573,9 +573,14 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
   }
   Query(db_->prepared("UPDATE tiles SET state = 1, worker = ?, scheduler = ? WHERE job_seq = ? AND idx >= ? AND idx < ?"))
       .bind(1, worker).bind(2, scheduler_).bind(3, seq).bind(4, batch.first).bind(5, batch.first + batch.count).run();
-  Query(db_->prepared("UPDATE jobs SET state = ?, started_ms = CASE WHEN started_ms = 0 THEN ? ELSE "
-                     "started_ms END WHERE seq = ?"))
-      .bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, now_ms).bind(3, seq).run();
+  {
+    // The job's first claim since it was queued (at its submission, or by a retry) starts it.
+    Query start(db_->prepared("UPDATE jobs SET state = ?, started_ms = CASE WHEN started_ms = 0 THEN ? ELSE "
+                              "started_ms END WHERE seq = ? AND state = ? RETURNING seq"));
+    start.bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, now_ms).bind(3, seq)
+        .bind(4, static_cast<int>(v1::JOB_STATE_QUEUED));
+    batch.started_job = start.step();
+  }
   t.commit();
   return batch;
 }

@@ -108,6 +108,7 @@ struct TileBatch {
   int lost_attempts = 0;  // workers lost while rendering it before (a batch of more than one: 0)
   int frame = 0;          // the frame its tiles belong to
   int pass = 0;           // the sample pass they render
+  bool started_job = false;  // this claim took the job from QUEUED to RUNNING
   // When this process handed it out (the dispatcher's unit latency, unit_metrics.h).
   std::chrono::steady_clock::time_point handed_out = {};
 };
