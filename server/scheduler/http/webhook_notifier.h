@@ -8,8 +8,9 @@
 // scheduler saw happen are posted (not those relayed from others of a shared store), so each end
 // is posted once. http:// and https:// (OpenSSL, the system's CAs).
 //
-// Lock: WebhookNotifier::mutex_ guards the queue and stopping_, and is a leaf: JobEvents calls
-// enqueue() under its own lock, and nothing is taken under this one.
+// Lock: WebhookNotifier::mutex_ guards the queue, stopping_ and posting_: JobEvents calls
+// enqueue() under its own lock, and nothing of ours is taken under this one (stop() cuts the POST
+// under way off under it: httplib's own socket lock, a leaf).
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -19,9 +20,11 @@
 
 #include <spdlog/logger.h>
 
-namespace httplib { class Client; }
-
 #include "proto/farm.pb.h"
+
+namespace httplib {
+class Client;
+}
 
 namespace farm {
 
