@@ -167,21 +167,7 @@ def main():
                 result["jobs_submitted"] = len(ids) + 2 * args.rounds + 1
                 result["submit_seconds"] = time.monotonic() - started
                 wait_done(farm, address, ids[-1])
-                target = ids[len(ids) // 2]
-                paints, shown = [], []
-                for _ in range(args.paints):
-                    driver.get(f"{url}/job.html?id={target}")
-                    until = time.monotonic() + 30
-                    while time.monotonic() < until and not driver.execute_script(
-                            "return performance.getEntriesByName('farm-job-shown').length > 0"):
-                        time.sleep(0.02)
-                    paints.append(driver.execute_script(
-                        "const p = performance.getEntriesByName('first-contentful-paint');"
-                        "return p.length ? p[0].startTime : null;"))
-                    shown.append(driver.execute_script(
-                        "return performance.getEntriesByName('farm-job-shown')[0].startTime;"))
-                result["first_contentful_paint_ms"] = {"median": statistics.median(paints), "max": max(paints)}
-                result["job_facts_shown_ms"] = {"median": statistics.median(shown), "max": max(shown)}
+                result.update(dashboard_check.job_page_paints(driver, url, ids[len(ids) // 2], args.paints))
                 driver.get(url + "/")
                 time.sleep(1)
                 result["jobs_page_rows"] = driver.execute_script("return document.querySelectorAll('#jobs tbody tr').length")

@@ -59,22 +59,21 @@ void JobEvents::publish(const std::string& job_id, const std::function<void(v1::
 }
 
 void JobEvents::publish_state(const v1::Job& job, v1::JobState from) {
-  v1::JobEvent event;
-  *event.mutable_job() = job;
-  event.mutable_state_changed()->set_from(from);
-  event.mutable_state_changed()->set_to(job.state());
   std::lock_guard lock(mutex_);
-  push_locked(event);
+  push_state_locked(job, from);
 }
 
 void JobEvents::publish_started(const std::string& job_id) {
   std::lock_guard lock(mutex_);  // read under it, as publish() does: in the store's order
-  std::optional<v1::Job> job = store_.get_job(job_id);
-  if (!job || job->state() != v1::JOB_STATE_RUNNING) return;
+  const std::optional<v1::Job> job = store_.get_job(job_id);
+  if (job && job->state() == v1::JOB_STATE_RUNNING) push_state_locked(*job, v1::JOB_STATE_QUEUED);
+}
+
+void JobEvents::push_state_locked(const v1::Job& job, v1::JobState from) {
   v1::JobEvent event;
-  *event.mutable_job() = std::move(*job);
-  event.mutable_state_changed()->set_from(v1::JOB_STATE_QUEUED);
-  event.mutable_state_changed()->set_to(v1::JOB_STATE_RUNNING);
+  *event.mutable_job() = job;
+  event.mutable_state_changed()->set_from(from);
+  event.mutable_state_changed()->set_to(job.state());
   push_locked(event);
 }
 

@@ -78,6 +78,7 @@ class JobEvents {
 
  private:
   void push_locked(const v1::JobEvent& event);  // under mutex_: the log, the watchers, then forward_
+  void push_state_locked(const v1::Job& job, v1::JobState from);  // `job` went from `from` to its state
   void log_locked(const v1::JobEvent& event);
   void push_to_watchers_locked(const v1::JobEvent& event);
 

@@ -3,14 +3,14 @@
 (python3-selenium) through chromium-driver, headless.
 
   dashboard_check.py --url http://127.0.0.1:PORT --token TOKEN --job RENDERING_JOB --cancel JOB \\
-      --workers 2 --screenshot FILE.png [--measure-job JOB --runs N]
+      --workers 2 --screenshot FILE.png [--animation PAUSED_ANIMATION]
 
 Logs in with the token, then checks what a person would look at: the jobs page lists the
 rendering job and its progress increases without a reload; the job page's image changes while it
 renders (its pixels, read back from the page); the cancel button cancels the other job; the
 workers page shows every worker up. Saves a screenshot of the job page while it renders. With
---measure-job, loads that job's page --runs times and reports its first contentful paint and the
-time until the job's facts are shown (performance mark `farm-job-shown`).
+--animation, resumes it, opens its page while its frames merge, and wants every thumbnail loaded.
+job_page_paints() is how tools/measure_dashboard.py times the job page's first paint.
 
 Prints one JSON line of what it saw; exit 0 only when every check held.
 """
@@ -130,17 +130,20 @@ def run(args, driver, seen):
     if args.animation:
         animation(args, driver, seen)
 
-    if args.measure_job:
-        paints, shown = [], []
-        for _ in range(args.runs):
-            driver.get(f"{args.url}/job.html?id={args.measure_job}")
-            wait_for("the measured job's facts", lambda: driver.execute_script(
-                "return performance.getEntriesByName('farm-job-shown').length > 0"))
-            paints.append(driver.execute_script(
-                "const p = performance.getEntriesByName('first-contentful-paint'); return p.length ? p[0].startTime : null;"))
-            shown.append(driver.execute_script("return performance.getEntriesByName('farm-job-shown')[0].startTime;"))
-        seen["first_contentful_paint_ms"] = {"median": statistics.median(paints), "max": max(paints)}
-        seen["job_shown_ms"] = {"median": statistics.median(shown), "max": max(shown)}
+
+def job_page_paints(driver, url, job_id, runs):
+    """The job's page loaded `runs` times: the median and worst first contentful paint, and time
+    until the job's facts are shown (performance mark `farm-job-shown`), in ms."""
+    paints, shown = [], []
+    for _ in range(runs):
+        driver.get(f"{url}/job.html?id={job_id}")
+        wait_for("the measured job's facts", lambda: driver.execute_script(
+            "return performance.getEntriesByName('farm-job-shown').length > 0"))
+        paints.append(driver.execute_script(
+            "const p = performance.getEntriesByName('first-contentful-paint'); return p.length ? p[0].startTime : null;"))
+        shown.append(driver.execute_script("return performance.getEntriesByName('farm-job-shown')[0].startTime;"))
+    return {"first_contentful_paint_ms": {"median": statistics.median(paints), "max": max(paints)},
+            "job_facts_shown_ms": {"median": statistics.median(shown), "max": max(shown)}}
 
 
 def animation(args, driver, seen):
@@ -175,8 +178,6 @@ def main():
     parser.add_argument("--animation", help="a paused animation, resumed here and watched as its frames merge")
     parser.add_argument("--workers", type=int, required=True)
     parser.add_argument("--screenshot", required=True)
-    parser.add_argument("--measure-job")
-    parser.add_argument("--runs", type=int, default=10)
     args = parser.parse_args()
     seen = {}
     driver = browser()
