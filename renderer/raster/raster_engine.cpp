@@ -8,6 +8,7 @@
 
 #include "renderer/raster/sample_pattern.h"
 #include "renderer/scene/blinn_phong.h"
+#include "renderer/scene/radiance_limit.h"
 
 namespace farm::raster {
 namespace {
@@ -130,8 +131,9 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       const glm::vec3 to_eye = glm::normalize(frame.eye - world);
       glm::vec3 n = glm::normalize(hit.world_normal);
       if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: light the face we see
-      pixel += glm::vec4(
-          shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights, scene.ambient), 1.0f);
+      pixel += glm::vec4(limit_radiance(shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights,
+                                                          scene.ambient)),
+                         1.0f);
       if (!write_aovs) continue;
       if (out.aovs().depth) out.depth(x, y) = -hit.view_position.z;
       if (out.aovs().normal) out.normal(x, y) = n;

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <utility>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
@@ -23,6 +24,12 @@ constexpr std::size_t kSetupGrain = 8192;
 // counting triangles alone would let one poll cover seconds of binning.
 constexpr int kSetupUnitsPerPoll = 8192;
 constexpr int kUnitsPerTriangle = 32;
+// A chunk adds its bin entries to the frame's shared count once it has this many unreported (and
+// at its end): one write to the shared cache line per tens of thousands of entries. One write
+// per triangle, as before, made two threads slower than one (issue #32): the line bounced
+// between the cores for every triangle. The frame may overshoot kMaxBinEntries by at most this
+// much (plus one triangle's entries) per thread before the bound is seen.
+constexpr std::uint64_t kEntriesPerReport = 1 << 16;
 
 // One mesh of one object: where its vertices and triangles sit in the frame's flat numbering.
 struct MeshRange {
@@ -32,12 +39,15 @@ struct MeshRange {
   std::size_t first_triangle;
 };
 
-// What one set-up chunk produces, merged in chunk order afterwards.
-struct SetupChunk {
+// What one set-up chunk produces, merged in chunk order afterwards. The chunks lie side by side
+// in one vector and two threads write the counts of neighbouring ones for every triangle: each on
+// cache lines of its own, or the lines bounce between the cores (false sharing, issue #32).
+struct alignas(64) SetupChunk {
   TriangleChunk triangles;
   std::vector<ScreenVertex> clipped_vertices;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> binned;  // (bin, local triangle)
   std::vector<std::uint32_t> bin_counts;                          // entries per bin
+  std::uint64_t unreported_entries = 0;  // filed here, not yet added to the frame's count
 };
 
 // A local triangle index with this bit refers to TriangleChunk::from_clipping.
@@ -46,8 +56,8 @@ constexpr std::uint32_t kFromClipping = 0x80000000u;
 class FrameBuilder {
  public:
   FrameBuilder(const PreparedScene& scene, const RenderSettings& settings, RasterFrame& frame,
-               const CancelFlag& cancel)
-      : frame_(frame), cancel_(cancel), centres_only_(settings.spp <= 1) {
+               const CancelFlag& cancel, SetupObserver* observer)
+      : frame_(frame), cancel_(cancel), observer_(observer), centres_only_(settings.spp <= 1) {
     const Camera& camera = scene.scene().camera;
     view_ = camera.view_matrix();
     view_projection_ = camera.projection_matrix(camera.aspect_for(settings.width, settings.height)) * view_;
@@ -85,17 +95,24 @@ class FrameBuilder {
     const auto check = [this] {
       if (cancel_.stop_requested()) throw RenderStopped(cancel_.reason());
     };
-    parallel(frame_.vertices.size(), kVertexGrain, [this, &check](std::size_t b, std::size_t e, int) {
+    const auto observe = [this](SetupObserver::Stage stage, int worker, std::size_t items) {
+      if (observer_) observer_->chunk(stage, worker, items);
+    };
+    parallel(frame_.vertices.size(), kVertexGrain, [&](std::size_t b, std::size_t e, int worker) {
+      observe(SetupObserver::Stage::vertices, worker, e - b);
       check();
       transform_vertices(b, e);
     });
     chunks_.resize((frame_.input_triangles + kSetupGrain - 1) / kSetupGrain);
-    parallel(frame_.input_triangles, kSetupGrain,
-             [this](std::size_t b, std::size_t e, int) { set_up(b, e, chunks_[b / kSetupGrain]); });
+    parallel(frame_.input_triangles, kSetupGrain, [&](std::size_t b, std::size_t e, int worker) {
+      observe(SetupObserver::Stage::triangles, worker, e - b);
+      set_up(b, e, chunks_[b / kSetupGrain]);
+    });
     check();
     plan_merge();
     frame_.triangle_chunks.resize(chunks_.size());
-    parallel(chunks_.size(), 1, [this, &check](std::size_t b, std::size_t e, int) {
+    parallel(chunks_.size(), 1, [&](std::size_t b, std::size_t e, int worker) {
+      observe(SetupObserver::Stage::merge, worker, e - b);
       for (std::size_t c = b; c < e; ++c) {
         check();
         merge_chunk(c);
@@ -204,13 +221,8 @@ class FrameBuilder {
     const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
     const auto bins = static_cast<std::uint64_t>(t.y1 / kBinSize - t.y0 / kBinSize + 1) *
                       static_cast<std::uint64_t>(row_bins);
-    if (bin_entries_.fetch_add(bins, std::memory_order_relaxed) + bins > kMaxBinEntries) {
-      throw InputError(fmt::format(
-          "render: the rasterizer would file more than {} triangle-in-bin entries for this {}x{} "
-          "frame (its triangles cover the image that many times over in {}-pixel bins); "
-          "render a smaller image, or fewer large triangles",
-          kMaxBinEntries, frame_.width, frame_.height, kBinSize));
-    }
+    chunk.unreported_entries += bins;
+    if (chunk.unreported_entries >= kEntriesPerReport) report_entries(chunk);
     for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by) {
       poll.throw_if_stopped(row_bins);
       for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) {
@@ -253,6 +265,22 @@ class FrameBuilder {
       for (std::uint32_t k = 2; k < poly.size; ++k) {
         emit(chunk, poll, true, material, first, first + k - 1, first + k);
       }
+    }
+    report_entries(chunk);
+  }
+
+  // Adds the chunk's unreported bin entries to the frame's count (the one write every set-up
+  // thread shares, kEntriesPerReport entries apart) and refuses a frame past kMaxBinEntries.
+  void report_entries(SetupChunk& chunk) const {
+    const std::uint64_t entries = std::exchange(chunk.unreported_entries, 0);
+    if (entries == 0) return;
+    if (observer_) observer_->shared_write();
+    if (bin_entries_.fetch_add(entries, std::memory_order_relaxed) + entries > kMaxBinEntries) {
+      throw InputError(fmt::format(
+          "render: the rasterizer would file more than {} triangle-in-bin entries for this {}x{} "
+          "frame (its triangles cover the image that many times over in {}-pixel bins); "
+          "render a smaller image, or fewer large triangles",
+          kMaxBinEntries, frame_.width, frame_.height, kBinSize));
     }
   }
 
@@ -315,16 +343,18 @@ class FrameBuilder {
 
   RasterFrame& frame_;
   const CancelFlag& cancel_;
+  SetupObserver* observer_;
   bool centres_only_;  // spp 1: a triangle between pixel centres can be dropped here
-  // Bin entries filed so far by every chunk: bounded, as their memory and the tiles' work grow
-  // with it (a frame's total must also fit the 32-bit bin cursors).
-  mutable std::atomic<std::uint64_t> bin_entries_{0};  // counted by the const set-up steps
   glm::mat4 view_{1.0f}, view_projection_{1.0f};
   std::vector<MeshRange> ranges_;
   std::vector<std::uint8_t> mirrored_;  // per range: its object's transform flips handedness
   std::vector<SetupChunk> chunks_;
   std::vector<std::size_t> vertex_base_;
   std::vector<std::uint32_t> bin_cursor_;
+  // Bin entries filed so far by every chunk, reported kEntriesPerReport at a time: bounded, as
+  // their memory and the tiles' work grow with it (a frame's total must also fit the 32-bit bin
+  // cursors). Last and aligned: a cache line of its own, away from the fields every thread reads.
+  alignas(64) mutable std::atomic<std::uint64_t> bin_entries_{0};  // counted by the const set-up steps
 };
 
 }  // namespace
@@ -336,9 +366,10 @@ Rect RasterFrame::bin_rect(int bx, int by) const {
 
 std::shared_ptr<const RasterFrame> build_raster_frame(const PreparedScene& scene,
                                                       const RenderSettings& settings,
-                                                      ThreadPool* pool, const CancelFlag& cancel) {
+                                                      ThreadPool* pool, const CancelFlag& cancel,
+                                                      SetupObserver* observer) {
   auto frame = std::make_shared<RasterFrame>();
-  FrameBuilder builder(scene, settings, *frame, cancel);
+  FrameBuilder builder(scene, settings, *frame, cancel, observer);
   builder.run(pool);
   return frame;
 }

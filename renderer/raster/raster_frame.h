@@ -91,11 +91,27 @@ struct RasterFrame {
 // why, before its memory or its tiles' work can grow with resolution x triangle area.
 inline constexpr std::uint64_t kMaxBinEntries = std::uint64_t{1} << 26;
 
+// What the set-up's threads did, counted: how each stage was split across the pool's threads and
+// how often a thread wrote state the others share. Tests hold the set-up to scaling with these
+// counts rather than with a clock (raster_setup_split_test.cpp). Called from the pool's threads.
+class SetupObserver {
+ public:
+  enum class Stage { vertices, triangles, merge };
+  virtual ~SetupObserver() = default;
+  // Before a chunk of `items` (vertices, triangles, or set-up chunks merged) runs on pool thread
+  // `worker` (0 when there is no pool).
+  virtual void chunk(Stage stage, int worker, std::size_t items) = 0;
+  // A write to a counter every set-up thread writes (the frame's bin-entry budget): such writes
+  // bounce a cache line between cores, so there must be few per chunk, not one per triangle.
+  virtual void shared_write() = 0;
+};
+
 // Builds the frame's set-up on `pool` (or on the calling thread when null). Polls `cancel` every
-// few hundred triangles or few thousand bin entries filed, and throws RenderStopped when it asks; throws InputError for a frame of
-// more than kMaxBinEntries bin entries.
+// few hundred triangles or few thousand bin entries filed, and throws RenderStopped when it asks;
+// throws InputError for a frame of more than kMaxBinEntries bin entries.
 std::shared_ptr<const RasterFrame> build_raster_frame(const PreparedScene& scene,
                                                       const RenderSettings& settings,
-                                                      ThreadPool* pool, const CancelFlag& cancel);
+                                                      ThreadPool* pool, const CancelFlag& cancel,
+                                                      SetupObserver* observer = nullptr);
 
 }  // namespace farm::raster

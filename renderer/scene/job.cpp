@@ -16,6 +16,7 @@
 #include "renderer/scene/input_error.h"
 #include "renderer/scene/job_animation.h"
 #include "renderer/scene/job_limits.h"
+#include "renderer/scene/radiance_limit.h"
 #include "renderer/scene/json_reader.h"
 #include "renderer/scene/video_format.h"
 #include "renderer/util/confined_file.h"
@@ -30,6 +31,8 @@ constexpr std::size_t kMaxShownText = 64;
 
 const NumberRange kNonNegative = NumberRange::at_least(0.0);
 const NumberRange kPositive = NumberRange::above(0.0);
+// Light and colour: what renders to finite pixels (radiance_limit.h).
+const NumberRange kRadiometric = NumberRange::between(0.0, kRadianceBound);
 
 struct Context {
   fs::path job_dir;     // absolute
@@ -78,10 +81,10 @@ MaterialOverride parse_material(const JsonValue& v) {
       {"ambient", "diffuse", "specular", "emission", "shininess", "ior", "transmission",
        "emission_sides"});
   MaterialOverride m;
-  if (auto x = obj.get("ambient")) m.ambient = x->vec3(kNonNegative);
-  if (auto x = obj.get("diffuse")) m.diffuse = x->vec3(kNonNegative);
-  if (auto x = obj.get("specular")) m.specular = x->vec3(kNonNegative);
-  if (auto x = obj.get("emission")) m.emission = x->vec3(kNonNegative);
+  if (auto x = obj.get("ambient")) m.ambient = x->vec3(kRadiometric);
+  if (auto x = obj.get("diffuse")) m.diffuse = x->vec3(kRadiometric);
+  if (auto x = obj.get("specular")) m.specular = x->vec3(kRadiometric);
+  if (auto x = obj.get("emission")) m.emission = x->vec3(kRadiometric);
   if (auto x = obj.get("shininess")) m.shininess = x->real(kNonNegative);
   if (auto x = obj.get("ior")) m.ior = x->real(kPositive);
   if (auto x = obj.get("transmission")) m.transmission = x->real(NumberRange::between(0.0, 1.0));
@@ -190,9 +193,9 @@ Camera parse_camera(const JsonValue& v) {
 }
 
 glm::vec3 parse_intensity(const JsonValue& v) {
-  if (v.raw().is_array()) return v.vec3(kNonNegative);
+  if (v.raw().is_array()) return v.vec3(kRadiometric);
   if (!v.raw().is_number()) v.fail_expected("a number or 3 numbers");
-  return glm::vec3(v.real(kNonNegative));
+  return glm::vec3(v.real(kRadiometric));
 }
 
 std::vector<Light> parse_lights(const JsonValue& v) {
@@ -217,8 +220,8 @@ JobScene parse_scene(const JsonValue& v, const Context& ctx) {
   for (const JsonValue& item : items) scene.objects.push_back(parse_object(item, ctx));
   if (auto x = obj.get("camera")) scene.camera = parse_camera(*x);
   if (auto x = obj.get("lights")) scene.lights = parse_lights(*x);
-  if (auto x = obj.get("ambient")) scene.ambient = x->vec3(kNonNegative);
-  if (auto x = obj.get("background")) scene.background = x->vec3(kNonNegative);
+  if (auto x = obj.get("ambient")) scene.ambient = x->vec3(kRadiometric);
+  if (auto x = obj.get("background")) scene.background = x->vec3(kRadiometric);
   return scene;
 }
 

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "renderer/geometry/scene_intersector.h"
+#include "renderer/scene/radiance_limit.h"
 #include "renderer/trace/bsdf.h"
 #include "renderer/trace/emitters.h"
 #include "renderer/trace/ray_offset.h"
@@ -264,12 +265,12 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
         // counts it as a 0 too.
         const bool valid = finite(r.radiance);
-        if (!valid) {
-          ++out.stats().invalid_samples;  // counted, and never allowed into the pixel
-        } else {
-          sum += r.radiance;
-        }
-        if (out.aovs().variance) variance.add(valid ? r.radiance : glm::vec3(0.0f));
+        // A finite sample is held to the one radiance bound of every engine (radiance_limit.h),
+        // so that the sums below stay finite.
+        const glm::vec3 radiance = valid ? limit_radiance(r.radiance) : glm::vec3(0.0f);
+        if (!valid) ++out.stats().invalid_samples;  // counted, and never allowed into the pixel
+        sum += radiance;
+        if (out.aovs().variance) variance.add(radiance);
         coverage += r.hit ? 1.0f : 0.0f;
         // The first-hit AOVs are those of the buffer's first sample: global sample 0 in pass 0
         // (what the merged frame keeps), and each later pass's own first so that a pass's

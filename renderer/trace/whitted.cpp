@@ -6,6 +6,7 @@
 
 #include "renderer/geometry/scene_intersector.h"
 #include "renderer/scene/blinn_phong.h"
+#include "renderer/scene/radiance_limit.h"
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/sampler.h"
@@ -159,7 +160,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
           out.discard_pixels();
           return cancel.reason();
         }
-        sum += glm::vec4(p.color, p.hit ? 1.0f : 0.0f);
+        sum += glm::vec4(limit_radiance(p.color), p.hit ? 1.0f : 0.0f);
         if (s != 0) continue;
         if (out.aovs().bvh_cost) out.bvh_cost(x, y) = static_cast<float>(stats.cost());
         if (!p.hit) continue;

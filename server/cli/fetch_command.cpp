@@ -10,6 +10,7 @@
 #include "server/cli/result_download.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
+#include "server/common/plain_file_name.h"
 
 namespace farm {
 namespace {
@@ -24,10 +25,14 @@ int run_fetch(const FetchOptions& o) {
   const v1::Job job = client.get(client.resolve_job_id(o.target.job_id));
   download_job_results(client, job,
                        [&](v1::ResultKind kind, const std::string& name, int) {
-                         const std::string fallback = job.name() + (kind == v1::RESULT_KIND_EXR       ? ".exr"
-                                                                    : kind == v1::RESULT_KIND_VIDEO ? ".mp4"
-                                                                                                    : ".png");
-                         return o.output_dir / (name.empty() ? fallback : name);
+                         // Both names come from the scheduler: each is one plain file name in -o,
+                         // whatever it says ("../../x" included).
+                         const std::string fallback =
+                             plain_file_name(job.name(), "job-" + job.job_id().substr(0, 12)) +
+                             (kind == v1::RESULT_KIND_EXR     ? ".exr"
+                              : kind == v1::RESULT_KIND_VIDEO ? ".mp4"
+                                                              : ".png");
+                         return o.output_dir / (name.empty() ? fallback : plain_file_name(name, fallback));
                        },
                        true, VideoDownload::if_any);
   return 0;

@@ -106,7 +106,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
     dashboard = std::make_unique<DashboardServer>(
         service, core,
         DashboardOptions{.listen = o.http, .access = security.access, .tls_cert = o.security.tls.cert,
-                         .tls_key = o.security.tls.key},
+                         .tls_key = o.security.tls.key, .host_names = o.http_hosts},
         core.log());
   }
   grpc::ServerBuilder builder;
@@ -200,6 +200,10 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "free one; the address is printed). Same tokens and roles as the gRPC API; beyond "
                 "loopback it needs --tokens; HTTPS with --tls-cert")
       ->envname("FARM_HTTP");
+  s->add_option("--http-host", o->http_hosts,
+                "A DNS name the dashboard answers to (repeatable), as browsers reach it: besides "
+                "--http's own host, localhost and IP addresses, a request naming any other Host is "
+                "refused (421), so that a DNS name rebound to this machine reaches nothing");
   s->add_option("--notify-url", o->notify_url,
                 "POST a JSON event ({\"event\": \"job.succeeded\"|\"job.failed\"|\"job.cancelled\", "
                 "\"scheduler\", \"job\"}) to this http(s) URL when a job ends: a CI's or a chat's "

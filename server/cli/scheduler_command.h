@@ -22,6 +22,7 @@ struct SchedulerCommandOptions {
   int max_attempts = 3;
   std::string keep_finished;          // a duration (duration_option.h); empty: for ever
   std::string http;                   // the dashboard's HOST:PORT; empty: none
+  std::vector<std::string> http_hosts;  // --http-host: more names the dashboard answers to
   std::string notify_url;             // the webhook a job's end is posted to; empty: none
   int max_lost_worker_attempts = 10;  // SchedulerOptions::max_lost_worker_attempts
   int tiles_per_worker = 2;

@@ -13,6 +13,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "server/common/hex.h"
+#include "server/common/plain_file_name.h"
 #include "server/common/service_error.h"
 #include "server/common/sha256.h"
 
@@ -257,9 +258,8 @@ fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, 
   std::uint64_t written = 0, total = 0;
   while (reader->Read(&chunk)) {
     if (!out.is_open()) {
-      // Only a plain file name from the scheduler is passed on, never a path.
-      const fs::path suggested = fs::path(chunk.file_name()).filename();
-      file = where(suggested == fs::path(chunk.file_name()) ? suggested.string() : std::string());
+      // Only a plain file name from the scheduler is passed on, never a path ("..", "a/b").
+      file = where(plain_file_name(chunk.file_name(), ""));
       temp = file;
       temp += ".part";
       if (file.has_parent_path()) fs::create_directories(file.parent_path());

@@ -324,5 +324,61 @@ TEST(DashboardListenTest, BeyondLoopbackWithoutTokensTheDashboardIsRefused) {
   EXPECT_NE(r.output.find("--tokens"), std::string::npos) << r.output;
 }
 
+// DNS rebinding (issue #32): a page on attacker.example whose name is made to resolve to
+// 127.0.0.1 talks to a token-less dashboard as its own origin, Host and Origin alike
+// attacker.example. The dashboard answers only to the names it serves.
+TEST(DashboardListenTest, ARequestForAnotherHostNameIsRefusedAndTheNamesItServesAreAnswered) {
+  test::TempDir dir;
+  auto worker = std::make_unique<test::WorkerProcess>(
+      std::vector<std::string>{"--threads", "1", "--cache-dir", (dir / "w1").string()});
+  ASSERT_FALSE(worker->address().empty());
+  test::SchedulerProcess scheduler(dir / "data", {"--http", "127.0.0.1:0", "--http-host", "Farm.Example.org",
+                                                  "--worker", worker->address()});
+  const std::string url = scheduler.dashboard_url();
+  ASSERT_FALSE(url.empty()) << scheduler.process().output();
+  const std::string address = url.substr(std::string("http://").size());
+  const std::string port = address.substr(address.rfind(':') + 1);
+
+  auto stub = test::scheduler_stub(scheduler.address());
+  ASSERT_TRUE(test::upload_assets(*stub, test::cornell_assets()).ok());
+  v1::Job job;
+  ASSERT_TRUE(test::submit(*stub,
+                           test::make_job_spec(test::cornell_job_json("raster", 16, 16, 1), test::cornell_assets(),
+                                               "cornell.json"),
+                           job)
+                  .ok());
+  ASSERT_TRUE(test::wait_for_job(*stub, job.job_id(), [](const v1::Job& j) { return is_final(j.state()); }, kWait));
+
+  httplib::Client c("http://" + address);
+  c.set_read_timeout(30, 0);
+  const httplib::Headers rebound{{"Host", "attacker.example:" + port}, {"Origin", "http://attacker.example:" + port}};
+  httplib::Result r = c.Get("/api/v1/jobs", rebound);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 421) << r->body;
+  EXPECT_EQ(r->body.find(job.job_id()), std::string::npos) << r->body;
+  EXPECT_NE(r->body.find("--http-host"), std::string::npos) << r->body;
+  r = c.Post("/api/v1/jobs/" + job.job_id() + "/delete", rebound, "{}", "application/json");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 421) << r->body;
+  r = c.Get("/", rebound);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 421);
+  // A name under an allowed one is not allowed, nor one that only starts like it.
+  for (const char* host : {"sub.farm.example.org", "farm.example.org.attacker.example", ""}) {
+    r = c.Get("/api/v1/jobs", {{"Host", host}});
+    ASSERT_TRUE(r);
+    EXPECT_NE(r->status, 200) << host;
+  }
+
+  // The job is still there, and the names the dashboard serves get it.
+  for (const std::string& host : {"127.0.0.1:" + port, "localhost:" + port, "farm.example.org:" + port,
+                                 std::string("FARM.EXAMPLE.ORG"), "[::1]:" + port}) {
+    r = c.Get("/api/v1/jobs", {{"Host", host}});
+    ASSERT_TRUE(r) << host;
+    EXPECT_EQ(r->status, 200) << host << ": " << r->body;
+    EXPECT_NE(r->body.find(job.job_id()), std::string::npos) << host;
+  }
+}
+
 }  // namespace
 }  // namespace farm

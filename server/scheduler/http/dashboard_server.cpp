@@ -13,6 +13,7 @@
 
 #include "renderer/scene/input_error.h"
 #include "server/common/hex.h"
+#include "server/common/plain_file_name.h"
 #include "server/common/proto_json.h"
 #include "server/common/service_error.h"
 #include "server/scheduler/http/prometheus_text.h"
@@ -155,17 +156,8 @@ std::string content_type_of(const fs::path& file) {
   return "application/octet-stream";
 }
 
-// A file's name as a download header may carry it: the stem is the submitter's output name, so
-// anything but letters, digits, '.', '-' and '_' (a quote, a line break) becomes '_'.
-std::string download_name(const fs::path& file) {
-  std::string name = file.filename().string();
-  for (char& c : name) {
-    const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '.' ||
-                       c == '-' || c == '_';
-    if (!plain) c = '_';
-  }
-  return name;
-}
+// A file's name as a download header may carry it: the stem is the submitter's output name.
+std::string download_name(const fs::path& file) { return plain_file_name(file.filename().string(), "download"); }
 
 }  // namespace
 
@@ -190,11 +182,25 @@ DashboardServer::DashboardServer(SchedulerService& service, SchedulerCore& core,
   // An idle or slow connection holds a thread of the pool, and stop() waits for it: bounded.
   server_->set_keep_alive_timeout(1);
   server_->set_read_timeout(2, 0);
-  routes();
   const std::size_t colon = options_.listen.rfind(':');
   if (colon == std::string::npos) throw InputError(fmt::format("--http '{}': give HOST:PORT", options_.listen));
   std::string host = options_.listen.substr(0, colon);
   if (host.size() > 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  hosts_ = std::make_unique<HostAllowlist>(host, options_.host_names);
+  // Before any route: a request for another name (DNS rebinding) reaches no page and no call.
+  server_->set_pre_routing_handler([this](const httplib::Request& request, httplib::Response& response) {
+    const std::string name = request.get_header_value("Host");
+    if (hosts_->allows(name)) return httplib::Server::HandlerResponse::Unhandled;
+    secure_headers(response);
+    reply_json(response,
+               fmt::format("{{\"error\": \"MISDIRECTED\", \"message\": {}}}",
+                           json_string(fmt::format("this dashboard does not answer to Host '{}': it answers to {} "
+                                                   "(farm scheduler --http-host NAME adds a name)",
+                                                   name.substr(0, 100), hosts_->describe()))),
+               421);
+    return httplib::Server::HandlerResponse::Handled;
+  });
+  routes();
   int port = 0;
   const std::string port_text = options_.listen.substr(colon + 1);
   const auto [end, error] = std::from_chars(port_text.data(), port_text.data() + port_text.size(), port);

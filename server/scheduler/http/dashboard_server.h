@@ -26,17 +26,20 @@
 // Without tokens every caller holds every role, and --http must be a loopback address (or
 // --insecure), as for gRPC. A POST must be `Content-Type: application/json` and, when it says
 // where it came from (Origin), come from this server's own pages: no other site can make a
-// browser act on the farm. Bodies are bounded, and so are the event streams open at once.
+// browser act on the farm. Every request must name this server in Host (host_allowlist.h), so a
+// rebound DNS name reaches nothing. Bodies are bounded, and so are the event streams open at once.
 #include <atomic>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <spdlog/logger.h>
 
 #include "server/common/access_control.h"
 #include "server/scheduler/http/dashboard_sessions.h"
+#include "server/scheduler/http/host_allowlist.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/scheduler_service.h"
 
@@ -54,6 +57,9 @@ struct DashboardOptions {
   std::filesystem::path tls_cert;    // with tls_key: HTTPS
   std::filesystem::path tls_key;
   int max_event_streams = 32;        // open at once; more are answered 503
+  // --http-host: names beyond the listen address, loopback and IP literals that requests may
+  // carry in Host (host_allowlist.h); any other Host is answered 421.
+  std::vector<std::string> host_names;
 };
 
 class DashboardServer {
@@ -85,6 +91,7 @@ class DashboardServer {
   spdlog::logger& log_;
   DashboardSessions sessions_;
   std::unique_ptr<httplib::Server> server_;
+  std::unique_ptr<HostAllowlist> hosts_;
   std::string scheme_ = "http";
   int port_ = 0;
   std::atomic<bool> stopping_{false};
