@@ -26,6 +26,7 @@
 #include "server/cli/log_level_option.h"
 #include "server/cli/server_security_flags.h"
 #include "server/common/listen_policy.h"
+#include "server/common/network_address.h"
 #include "server/cli/version.h"
 #include "server/common/farm_server.h"
 #include "server/common/server_shutdown.h"
@@ -42,11 +43,6 @@ constexpr auto kShutdownUnwind = std::chrono::milliseconds(400);
 // A request carries the job file (at most 16 MiB) and, for a worker without --scheduler, the
 // job's files inline (RenderTileRequest.assets).
 constexpr int kMaxRequestBytes = 1 << 30;
-
-std::string host_of(const std::string& address) {
-  const std::size_t colon = address.rfind(':');
-  return colon == std::string::npos ? address : address.substr(0, colon);
-}
 
 // With --scheduler, the worker registers itself with each scheduler (Scheduler.RegisterWorker)
 // and heartbeats until stopped; registers again when the scheduler forgot it (restarted), retries

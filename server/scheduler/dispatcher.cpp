@@ -43,6 +43,23 @@ std::uint64_t random_key() {
   return (static_cast<std::uint64_t>(device()) << 32) ^ device();
 }
 
+// How a worker's error answer to RenderTile is accounted (worker_failures.h): a refusal is never
+// the unit's fault; INVALID_ARGUMENT says the unit can never render.
+FailureKind failure_kind(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::INVALID_ARGUMENT: return FailureKind::NeverRenders;
+    case grpc::StatusCode::UNIMPLEMENTED:  // not a worker at all (a scheduler's own address)
+    case grpc::StatusCode::UNAUTHENTICATED:
+    case grpc::StatusCode::PERMISSION_DENIED:
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+    case grpc::StatusCode::FAILED_PRECONDITION:
+    case grpc::StatusCode::NOT_FOUND:
+    case grpc::StatusCode::CANCELLED:
+    case grpc::StatusCode::ABORTED: return FailureKind::Refused;
+    default: return FailureKind::Unit;
+  }
+}
+
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
 // How long an idle slot waits before it looks for work again, unless woken earlier.
@@ -85,7 +102,9 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       pause_(parts.pause),
       outage_(parts.outage),
       log_(parts.log),
-      chooser_(options.verify_fraction, random_key()) {}
+      chooser_(options.verify_fraction, random_key()),
+      failures_(WorkerFailures::Options{options.job_failures_per_worker, options.worker_backoff,
+                                        options.worker_backoff_max}) {}
 
 Dispatcher::~Dispatcher() { stop(); }
 
@@ -331,7 +350,8 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
     // batch_size's answer stops changing at 2 x slots x kMaxBatch queued tiles: counted up to that.
     batch = store_.claim_next_batch(
         w.id, unix_ms_now(), [this](const std::string& job_id, int queued) { return batch_size(job_id, queued); },
-        2 * std::max(1, workers_.slots_up()) * kMaxBatch);
+        2 * std::max(1, workers_.slots_up()) * kMaxBatch,
+        [this, &w](const std::string& job_id) { return failures_.blocked(w.id, job_id); });
     store_answered = true;
   } catch (const DiskFull& e) {
     pause_.report(e);  // the store could not mark the claim: nothing was claimed
@@ -644,6 +664,7 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       return;
     }
     measured(batch, stats);
+    failures_.succeeded(worker_id);
     workers_.count_units(worker_id, batch.count, 0);
     metrics_.kept(batch.count, batch.handed_out);
     events_.publish(batch.job_id, [&](v1::JobEvent& event) {
@@ -741,7 +762,6 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
   const TileBatch& batch = call.batch;
   const std::string worker = w.worker->describe();
   std::string why;
-  int max_attempts = options_.max_attempts;
   bool went_down = false;
   // The worker, not the tile: its process died or it stopped answering.
   bool worker_lost = false;
@@ -760,21 +780,81 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
     worker_disk_full(w, batch, status);  // the worker's disk, not the job: no attempt counted
     return;
   } else {
-    why = fmt::format("worker {}: {}: {}", worker, status_code_name(status.error_code()), status.error_message());
-    // A job every worker must refuse: retrying only wastes the farm's time.
-    if (status.error_code() == grpc::StatusCode::INVALID_ARGUMENT) max_attempts = 1;
-    if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
-      workers_.mark_down(w, options_.probe_interval);
-      went_down = true;
-      worker_lost = true;
+    // Every failure says why, even a worker's that said nothing (a server that is no worker).
+    why = fmt::format("worker {}: {}: {}", worker, status_code_name(status.error_code()),
+                      status.error_message().empty() ? "(it gave no reason)" : status.error_message());
+    if (status.error_code() != grpc::StatusCode::UNAVAILABLE) {
+      charge_failure(w, batch, why, failure_kind(status.error_code()));
+      return;
     }
+    workers_.mark_down(w, options_.probe_interval);
+    went_down = true;
+    worker_lost = true;
   }
   if (worker_lost) {
     lose_batch(w.id, worker, batch, why);
   } else {
-    fail_batch(w.id, worker, batch, why, max_attempts);
+    fail_batch(w.id, worker, batch, why, options_.max_attempts);
   }
   if (went_down) settle_stranded();  // a check that only this worker could have taken
+}
+
+void Dispatcher::charge_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind) {
+  const std::string worker = w.worker->describe();
+  const FailureCharge charge = failures_.failed(w.id, batch.job_id, kind);
+  if (charge.blocked_now) {
+    log_.warn("job {}: worker {} is kept off it from now on: {}", batch.job_id, worker,
+              kind == FailureKind::NeverRenders ? "it says its units can never render"
+                                                : fmt::format("it failed {} of its units", options_.job_failures_per_worker));
+  }
+  if (charge.back_off.count() > 0) {
+    log_.warn("worker {} is backed off for {} ms: it {} ({})", worker, charge.back_off.count(),
+              kind == FailureKind::Refused ? "refused a call" : "fails units of several jobs in a row", why);
+    workers_.back_off(w, charge.back_off, why);
+  }
+  // Nobody left to render it: the job ends here rather than waiting for ever.
+  const bool nobody_left = charge.blocked_now && every_worker_blocked(batch.job_id);
+  if (charge.charge_unit || nobody_left) {
+    // Two workers that each say a unit can never render agree: no need for a third.
+    const int max_attempts = nobody_left                         ? 1
+                             : kind == FailureKind::NeverRenders ? std::min(2, options_.max_attempts)
+                                                                 : options_.max_attempts;
+    fail_batch(w.id, worker, batch, nobody_left ? why + "; every worker of the farm is kept off the job" : why,
+               max_attempts);
+  } else {
+    uncharged_failure(w, batch, why);
+  }
+  if (charge.back_off.count() > 0) settle_stranded();  // a check that only this worker could have taken
+}
+
+void Dispatcher::uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why) {
+  const std::string worker = w.worker->describe();
+  // Not the unit's own failure (the worker's: it fails other jobs too, or failed this one
+  // before): queued again with no attempt counted, and said.
+  log_.warn("job {} {}: {} (no attempt counted: the worker's failure, not the unit's)", batch.job_id, describe(batch),
+            why);
+  workers_.count_units(w.id, 0, batch.count);
+  metrics_.failed(batch.count);
+  events_.publish(batch.job_id, [&](v1::JobEvent& event) {
+    v1::TileFailed& f = *event.mutable_tile_failed();
+    f.set_tile_index(batch.first);
+    f.set_tile_count(batch.count);
+    f.set_worker(worker);
+    f.set_reason(why);
+    f.set_will_retry(true);
+  });
+  requeue_when_stored(batch, w.id);
+  work_.notify_all();
+}
+
+bool Dispatcher::every_worker_blocked(const std::string& job_id) const {
+  bool any = false;
+  for (const WorkerStatus& s : workers_.workers()) {
+    if (s.quarantined) continue;
+    if (!failures_.blocked(s.id, job_id)) return false;
+    any = true;
+  }
+  return any;
 }
 
 void Dispatcher::fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,

@@ -71,6 +71,7 @@
 #include "server/scheduler/store_outage.h"
 #include "server/scheduler/tile_worker.h"
 #include "server/scheduler/unit_metrics.h"
+#include "server/scheduler/worker_failures.h"
 #include "server/scheduler/worker_registry.h"
 
 namespace farm {
@@ -110,6 +111,8 @@ class Dispatcher {
   const UnitMetrics& metrics() const { return metrics_; }
   // The calls in flight now, by worker id: "JOB_ID tiles A-B (frame F, pass P)" (farm workers).
   std::map<std::string, std::vector<std::string>> calls_in_flight() const;
+  // The jobs the worker is kept off for failing their units (worker_failures.h).
+  std::vector<std::string> blocked_jobs(const std::string& worker_id) const { return failures_.blocked_jobs(worker_id); }
   // Cancels the worker's calls in flight: their tiles are retried on others (a lost-worker attempt
   // counted, not a failed one).
   void worker_left(const std::string& worker_id, const std::string& reason);
@@ -158,6 +161,15 @@ class Dispatcher {
   void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
+  // A failure of `kind` on `w` accounted as WorkerFailures says: an attempt charged to the batch
+  // (fail_batch) or the batch queued again uncharged, the worker kept off the job or backed off;
+  // the job fails when every worker of the farm is kept off it.
+  void charge_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind);
+  // Not the unit's own failure (the worker's): the batch queued again with no attempt counted,
+  // the failure logged and announced as TileFailed.
+  void uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why);
+  // Whether every worker not quarantined is kept off the job (and there is one).
+  bool every_worker_blocked(const std::string& job_id) const;
   // The batch (running on worker_id) back in the queue with no attempt counted, once the store
   // takes it: while the store itself is full, tried again each time dispatch resumes, while its
   // server is away every second (or dropped at stop(), when a restarted store queues running
@@ -209,6 +221,7 @@ class Dispatcher {
   std::set<std::shared_ptr<InFlight>> in_flight_;
   std::list<std::shared_ptr<SpotCheck>> checks_;    // batches waiting for a spot check
   std::map<std::string, RetryBackoff> worker_disk_full_;  // by worker id, while its disk is full
+  WorkerFailures failures_;  // its own lock (a leaf)
 };
 
 }  // namespace farm

@@ -408,7 +408,16 @@ std::vector<v1::WorkerInfo> SchedulerCore::worker_infos() const {
     v1::WorkerInfo& w = out.emplace_back();
     w.set_worker_id(s.id);
     w.set_address(s.address);
-    w.set_state(s.quarantined ? v1::WORKER_STATE_QUARANTINED : s.up ? v1::WORKER_STATE_UP : v1::WORKER_STATE_DOWN);
+    const bool backed_off = !s.up && s.backed_off_until > std::chrono::system_clock::now();
+    w.set_state(s.quarantined  ? v1::WORKER_STATE_QUARANTINED
+                : s.up         ? v1::WORKER_STATE_UP
+                : backed_off   ? v1::WORKER_STATE_BACKED_OFF
+                               : v1::WORKER_STATE_DOWN);
+    if (backed_off) {
+      *w.mutable_backed_off_until() = ms(s.backed_off_until);
+      w.set_back_off_reason(s.back_off_reason);
+    }
+    for (std::string& job : dispatcher_.blocked_jobs(s.id)) w.add_blocked_jobs(std::move(job));
     w.set_quarantine_reason(s.quarantine_reason);
     w.set_registered(s.registered);
     w.set_threads(s.facts.threads);

@@ -43,6 +43,12 @@ struct SchedulerOptions {
   // tries again, doubling up to the maximum (disk_full_pause.h).
   std::chrono::milliseconds disk_full_backoff = std::chrono::seconds(1);
   std::chrono::milliseconds disk_full_backoff_max = std::chrono::seconds(30);
+  // A worker that fails this many units of one job is kept off that job (worker_failures.h).
+  int job_failures_per_worker = 3;
+  // A worker that fails units of several jobs in a row, or refuses calls, gets nothing this long,
+  // doubling with each further failure up to the maximum (worker_failures.h).
+  std::chrono::milliseconds worker_backoff = std::chrono::seconds(1);
+  std::chrono::milliseconds worker_backoff_max = std::chrono::seconds(60);
   // Spot checks: this fraction of each job's tiles (at least one when > 0) is rendered again on
   // another worker and compared bit for bit before it is kept (spot_checks.h). 0: none.
   double verify_fraction = 0.0;

@@ -6,8 +6,10 @@
 #include <fstream>
 
 #include "renderer/scene/input_error.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/util/utf8_prefix.h"
 #include "server/common/hex.h"
+#include "server/common/network_address.h"
 #include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"
 #include "server/common/sha256.h"
@@ -60,7 +62,7 @@ WorkerFacts facts_of(const v1::RegisterWorkerRequest& r) {
   constexpr int kMaxEngines = 8;
   constexpr std::size_t kMaxText = 64;
   WorkerFacts f;
-  f.threads = std::clamp(r.threads(), 0, 1 << 16);
+  f.threads = r.threads();  // RegisterWorker refused one outside [0, kMaxThreads]
   for (int i = 0; i < std::min(r.engines_size(), kMaxEngines); ++i) f.engines.push_back(utf8_prefix(r.engines(i), kMaxText));
   f.hostname = utf8_prefix(r.hostname(), 255);
   f.version = utf8_prefix(r.version(), kMaxText);
@@ -490,7 +492,12 @@ grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext* context,
                                               v1::RegisterWorkerResponse* response) {
   return guarded([&] {
     const Principal who = access_.access.require(*context, Role::worker | Role::admin, "RegisterWorker");
-    if (request->address().empty()) throw InputError("RegisterWorker: address is empty");
+    if (const std::string problem = worker_address_problem(request->address()); !problem.empty()) {
+      throw InputError(fmt::format("RegisterWorker: address '{}': {}", utf8_prefix(request->address(), 80), problem));
+    }
+    if (request->threads() < 0 || request->threads() > kMaxThreads) {
+      throw InputError(fmt::format("RegisterWorker: threads {}: give 0 (not known) to {}", request->threads(), kMaxThreads));
+    }
     std::string old;
     {
       std::lock_guard lock(mutex_);
@@ -522,8 +529,20 @@ grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext* context,
 grpc::Status SchedulerService::Heartbeat(grpc::ServerContext* context, const v1::HeartbeatRequest* request,
                                          v1::HeartbeatResponse* response) {
   return guarded([&] {
-    access_.access.require(*context, Role::worker | Role::admin, "Heartbeat");
-    response->set_register_again(!core_.heartbeat(request->worker_id()));
+    const Principal who = access_.access.require(*context, Role::worker | Role::admin, "Heartbeat");
+    // Only for a worker this caller registered: a worker token cannot keep another's worker alive.
+    std::optional<std::string> registered_by;
+    {
+      std::lock_guard lock(mutex_);
+      for (const auto& [address, r] : registered_) {
+        if (r.worker_id == request->worker_id()) registered_by = r.principal;
+      }
+    }
+    if (registered_by && *registered_by != who.name && !who.roles.has(Role::admin)) {
+      deny(who, fmt::format("heartbeat for worker {}: '{}' registered it", utf8_prefix(request->worker_id(), 80),
+                            *registered_by));
+    }
+    response->set_register_again(!registered_by || !core_.heartbeat(request->worker_id()));
     return grpc::Status::OK;
   });
 }

@@ -126,6 +126,15 @@ void WorkerRegistry::mark_down(WorkerEntry& w, std::chrono::milliseconds wait) {
   probe_.notify_all();
 }
 
+void WorkerRegistry::back_off(WorkerEntry& w, std::chrono::milliseconds wait, const std::string& reason) {
+  {
+    std::lock_guard lock(mutex_);
+    w.backed_off_until = std::chrono::system_clock::now() + wait;
+    w.back_off_reason = reason;
+  }
+  mark_down(w, wait);
+}
+
 bool WorkerRegistry::quarantine(const std::string& worker_id, const std::string& reason) {
   {
     std::lock_guard lock(mutex_);
@@ -165,7 +174,9 @@ std::vector<WorkerStatus> WorkerRegistry::workers() const {
                    .last_heartbeat = wall_now - std::chrono::duration_cast<std::chrono::system_clock::duration>(
                                                     steady_now - w->last_heartbeat),
                    .units_done = w->units_done,
-                   .units_failed = w->units_failed});
+                   .units_failed = w->units_failed,
+                   .backed_off_until = w->backed_off_until,
+                   .back_off_reason = w->back_off_reason});
   }
   return out;
 }

@@ -71,6 +71,9 @@ struct WorkerEntry {
   Clock::time_point last_heartbeat = Clock::now();
   std::uint64_t units_done = 0;    // units it rendered that were kept
   std::uint64_t units_failed = 0;  // units whose call to it failed or whose worker was lost
+  // Set by back_off (worker_failures.h): no units until then, and why.
+  std::chrono::system_clock::time_point backed_off_until{};
+  std::string back_off_reason;
   // Scenes whose job this worker was sent in a call it answered: later calls for them leave the
   // job text out (a worker that no longer holds one answers NOT_FOUND and is sent it again).
   RecentHashes scenes_sent{256};
@@ -89,6 +92,8 @@ struct WorkerStatus {
   std::chrono::system_clock::time_point last_heartbeat = {};  // registered workers
   std::uint64_t units_done = 0;
   std::uint64_t units_failed = 0;
+  std::chrono::system_clock::time_point backed_off_until = {};  // in the future: backed off
+  std::string back_off_reason = {};
 };
 
 class WorkerRegistry {
@@ -119,6 +124,9 @@ class WorkerRegistry {
   bool any_available_except(const std::set<std::string>& ids) const;
   // `w` gets no more tiles until it answers a probe, tried no sooner than `wait` from now.
   void mark_down(WorkerEntry& w, std::chrono::milliseconds wait);
+  // mark_down for `wait`, shown as backed off until then with `reason` (farm workers): the worker
+  // failed units of several jobs in a row, or refused calls (worker_failures.h).
+  void back_off(WorkerEntry& w, std::chrono::milliseconds wait, const std::string& reason);
   // The worker gets no more tiles, and neither does a worker registering later at its address.
   // False when it is unknown or quarantined already.
   bool quarantine(const std::string& worker_id, const std::string& reason);

@@ -4,6 +4,7 @@
 // accepted before their worker was caught are rendered again. And RegisterWorker, called a
 // thousand times, leaves the scheduler's threads and memory flat. Every wait is bounded; nothing
 // asserts on wall-clock time.
+#include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
@@ -358,6 +359,59 @@ TEST_F(UntrustedWorkersTest, SpotChecksCatchAWorkerWhosePixelsOnlyLookRight) {
   EXPECT_TRUE(failures_of(honest2.address()).empty());
 }
 
+// A worker that answers every unit INTERNAL at once (a broken install) beside an honest one: it
+// took 3 of 3 jobs down with it, each unit burning its attempts on it in milliseconds (issue
+// #32). Now its failures are charged to no unit but its first, it is kept off each job it failed
+// three times, it is backed off once it fails several jobs in a row, and all three jobs succeed
+// on the honest worker. The honest worker waits until the broken one has been backed off, so
+// that the broken one certainly fails two jobs first.
+TEST_F(UntrustedWorkersTest, AWorkerThatFailsEveryCallAtOnceFailsNoJobAndIsKeptOffAndBackedOff) {
+  const auto fakes = std::array{fake_worker("broken", test::Lie::FailsAtOnce), fake_worker("honest")};
+  test::FakeWorker &broken = *fakes[0], &honest = *fakes[1];
+  ASSERT_FALSE(broken.address().empty() || honest.address().empty());
+  honest.hold_after(0);
+  ASSERT_NO_FATAL_FAILURE(start_scheduler({"--float", "--batch-ms", "0", "--worker", broken.address(), "--worker",
+                                           honest.address()}));
+  ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+  std::vector<std::string> ids;
+  for (int i = 0; i < 3; ++i) {
+    v1::Job job;
+    ASSERT_TRUE(test::submit(*stub_, job_spec(), job).ok());
+    ids.push_back(job.job_id());
+  }
+  const auto said = [&](const std::string& text) {
+    return scheduler_->process().output().find(text) != std::string::npos;
+  };
+  ASSERT_TRUE(eventually([&] { return said("worker " + broken.address() + " is backed off"); }))
+      << scheduler_->process().output();
+  EXPECT_TRUE(said("job " + ids[0] + ": worker " + broken.address() + " is kept off it from now on"))
+      << scheduler_->process().output();
+  honest.release();
+
+  for (const std::string& id : ids) {
+    const std::optional<v1::Job> job = test::wait_for_job(*stub_, id, final_state, 180s);
+    ASSERT_TRUE(job) << scheduler_->process().output();
+    EXPECT_EQ(job->state(), v1::JOB_STATE_SUCCEEDED) << job->failure_reason() << "\n" << scheduler_->process().output();
+  }
+  // Its failures said why even though it said nothing, and it was never quarantined: a broken
+  // worker is no liar.
+  EXPECT_TRUE(said("INTERNAL: (it gave no reason)")) << scheduler_->process().output();
+  EXPECT_FALSE(quarantined(broken.address()));
+  // Backed off, its calls stayed few: three a job at most, and those of its two slots.
+  EXPECT_GT(broken.lies_told(), 0);
+  EXPECT_LE(broken.lies_told(), 3 * 3 + 2);
+  // farm workers lists the job it is kept off.
+  grpc::ClientContext context;
+  v1::ListWorkersResponse workers;
+  ASSERT_TRUE(stub_->ListWorkers(&context, v1::ListWorkersRequest(), &workers).ok());
+  bool listed = false;
+  for (const v1::WorkerInfo& w : workers.workers()) {
+    if (w.address() != broken.address()) continue;
+    listed = std::find(w.blocked_jobs().begin(), w.blocked_jobs().end(), ids[0]) != w.blocked_jobs().end();
+  }
+  EXPECT_TRUE(listed) << workers.DebugString();
+}
+
 // RegisterWorker from fresh addresses (which never answer) and again and again from one that
 // does: the scheduler's threads and memory do not grow with the number of calls.
 TEST_F(UntrustedWorkersTest, AThousandRegistrationsLeaveThreadsAndMemoryFlat) {
@@ -369,9 +423,10 @@ TEST_F(UntrustedWorkersTest, AThousandRegistrationsLeaveThreadsAndMemoryFlat) {
   const auto register_some = [&](int n) {
     for (int i = 0; i < n; ++i, ++calls) {
       v1::RegisterWorkerRequest request;
-      // Odd calls: the same worker registering again; even calls: a worker never seen before.
+      // Odd calls: the same worker registering again; even calls: a worker never seen before, at
+      // a loopback address where nothing listens (port 9 of 127.0.x.y).
       request.set_address(calls % 2 ? same.address()
-                                    : "unix:" + (dir_ / ("nowhere-" + std::to_string(calls) + ".sock")).string());
+                                    : fmt::format("127.0.{}.{}:9", 1 + calls / 250, 1 + calls % 250));
       request.set_threads(1);
       v1::RegisterWorkerResponse response;
       grpc::ClientContext context;

@@ -35,6 +35,7 @@ const char* to_string(Lie lie) {
     case Lie::NaN: return "nan";
     case Lie::NegativeDepth: return "negative-depth";
     case Lie::FlippedBits: return "flipped-bits";
+    case Lie::FailsAtOnce: return "fails-at-once";
   }
   return "?";
 }
@@ -43,6 +44,7 @@ void tell_lie(Lie lie, v1::RenderTileResponse& reply) {
   v1::TileData& t = *reply.mutable_tile();
   switch (lie) {
     case Lie::None:
+    case Lie::FailsAtOnce:  // answered before any rendering
       return;
     case Lie::ShiftedRect:
       t.mutable_rect()->set_x0(t.rect().x0() + 1);
@@ -92,6 +94,10 @@ class FakeWorker::Service final : public v1::Worker::Service {
       }
     }
     ++owner_.calls_;
+    if (owner_.lie_.load() == Lie::FailsAtOnce) {
+      ++owner_.lies_;
+      return {grpc::StatusCode::INTERNAL, ""};
+    }
     if (request->has_job()) {
       ++owner_.calls_with_job_;
       owner_.job_bytes_ += request->job().job_json().size();

@@ -28,6 +28,7 @@ enum class Lie {
   NaN,            // one red value NaN
   NegativeDepth,  // one depth -1
   FlippedBits,    // a few red and green values with a mantissa bit flipped: plausible, wrong
+  FailsAtOnce,    // every RenderTile answered INTERNAL at once, with no message (a broken install)
 };
 const char* to_string(Lie lie);
 

@@ -502,7 +502,8 @@ std::vector<std::string> JobStore::active_jobs() const {
 }
 
 std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, std::int64_t now_ms,
-                                                    const BatchSize& batch_size, int count_up_to) {
+                                                    const BatchSize& batch_size, int count_up_to,
+                                                    const std::function<bool(const std::string&)>& skip_job) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_, kRedoable);
   TileBatch batch;
@@ -518,6 +519,7 @@ std::optional<TileBatch> JobStore::claim_next_batch(const std::string& worker, s
                              "WHERE state = 0 AND job_seq = ? ORDER BY idx LIMIT 1"));
     bool found = false;
     while (!found && jobs.step()) {
+      if (skip_job && skip_job(jobs.text(1))) continue;
       first.reset();
       first.bind(1, jobs.i64(0));
       if (!first.step()) continue;
