@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <cstdint>
 #include <vector>
 
 namespace farm {
@@ -37,11 +39,25 @@ struct Image {
 // A blank image of the given size and channels, every value 0.
 Image make_image(int width, int height, std::vector<std::string> channels);
 
+// An image compared may hold at most this many pixels: 8192 x 8192, 1 GiB as RGBA floats. A
+// 1 MB PNG can declare 16384 x 16384 and decode to 5 GB (issue #32); its header is refused instead.
+inline constexpr std::uint64_t kMaxComparedPixels = std::uint64_t{1} << 26;
+
+// An image's size and kind from its header alone: width, height and display_referred set, no
+// channels and no values; nothing decoded. Throws InputError as read_image does.
+Image read_image_header(const std::filesystem::path& file);
+
 // Reads an EXR (every channel of its first part, as float), a PNG (8 or 16 bit) or a JPEG by
 // its contents, not its extension. Throws InputError naming the file on a missing or unreadable
-// file, and refuses images wider or taller than `max_side` (job_limits' bound by default)
-// before their pixels are decoded, so a hostile header cannot make it allocate gigabytes.
+// file, and refuses images wider or taller than `max_side` (job_limits' bound by default) or of
+// more than kMaxComparedPixels from their header, before their pixels are decoded, so a hostile
+// header cannot make it allocate gigabytes.
 Image read_image(const std::filesystem::path& file, int max_side = 0);
+
+// A reference and a new image to compare: their headers first, and when their sizes differ
+// the headers only (compare_images says so without a pixel decoded), else both read whole.
+std::pair<Image, Image> read_images_to_compare(const std::filesystem::path& reference,
+                                               const std::filesystem::path& test);
 
 // The colour channels a metric compares: R G B when present, else Y (grey). Empty when neither.
 std::vector<int> colour_channels(const Image& image);

@@ -46,7 +46,31 @@ Decoded decode(jpeg_decompress_struct& cinfo, JpegError& error, std::FILE* in, i
   return Decoded::ok;
 }
 
+bool read_header_size(jpeg_decompress_struct& cinfo, JpegError& error, std::FILE* in, int& width, int& height) {
+  if (setjmp(error.jump) != 0) return false;
+  jpeg_stdio_src(&cinfo, in);
+  jpeg_read_header(&cinfo, TRUE);
+  width = static_cast<int>(cinfo.image_width);
+  height = static_cast<int>(cinfo.image_height);
+  return true;
+}
+
 }  // namespace
+
+std::pair<int, int> read_jpeg_size(std::FILE* in, const std::filesystem::path& name) {
+  jpeg_decompress_struct cinfo{};
+  JpegError error;
+  cinfo.err = jpeg_std_error(&error.manager);
+  error.manager.error_exit = on_jpeg_error;
+  error.manager.emit_message = on_jpeg_message;
+  cinfo.client_data = &error;
+  jpeg_create_decompress(&cinfo);
+  int width = 0, height = 0;
+  const bool read = read_header_size(cinfo, error, in, width, height);
+  jpeg_destroy_decompress(&cinfo);
+  if (!read) throw std::runtime_error(fmt::format("{}: cannot read JPEG: {}", name.string(), error.message));
+  return {width, height};
+}
 
 DecodedImage read_jpeg(std::FILE* in, const std::filesystem::path& name, int max_side) {
   jpeg_decompress_struct cinfo{};

@@ -55,8 +55,8 @@ void print_human(const CompareCommandOptions& o, const Image& reference, const I
 int run_compare_command(CompareCommandOptions& o) {
   o.settings.metric = *metric_from_string(o.metric);  // CLI11 checked the name
   o.settings.ssim_channels = *ssim_channels_from_string(o.ssim_channels);
-  const Image reference = read_image(o.reference);
-  const Image test = read_image(o.test);
+  // Sizes from the headers first: images of different sizes fail without a pixel decoded.
+  const auto [reference, test] = read_images_to_compare(o.reference, o.test);
   const CompareResult result = compare_images(reference, test, o.settings);
   if (o.diff && result.difference.pixel_count() > 0) {
     if (o.diff->extension() == ".exr") {

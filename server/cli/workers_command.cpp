@@ -24,6 +24,7 @@ std::string state_of(const v1::WorkerInfo& w) {
     case v1::WORKER_STATE_UP: return "up";
     case v1::WORKER_STATE_DOWN: return "down";
     case v1::WORKER_STATE_QUARANTINED: return "quarantined";
+    case v1::WORKER_STATE_BACKED_OFF: return "backed-off";
     default: return "unknown";
   }
 }
@@ -57,6 +58,12 @@ int run_workers(const WorkersOptions& o) {
     fmt::print(kRow, w.address(), state_of(w), w.threads() > 0 ? std::to_string(w.threads()) : "-",
                engines.empty() ? "-" : engines, w.units_done(), w.units_failed(), heartbeat_of(w), current);
     if (!w.quarantine_reason().empty()) fmt::print("    quarantined: {}\n", w.quarantine_reason());
+    if (w.state() == v1::WORKER_STATE_BACKED_OFF) {
+      const double until = static_cast<double>(w.backed_off_until().seconds()) + w.backed_off_until().nanos() * 1e-9;
+      const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+      fmt::print("    backed off for {:.1f}s more: {}\n", std::max(0.0, until - now), w.back_off_reason());
+    }
+    for (const std::string& job : w.blocked_jobs()) fmt::print("    kept off job {}: it failed its units\n", job);
   }
   return 0;
 }
@@ -66,8 +73,8 @@ int run_workers(const WorkersOptions& o) {
 void add_workers_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<WorkersOptions>();
   CLI::App* workers = app.add_subcommand(
-      "workers", "List the scheduler's workers: address, state (up, down, quarantined), threads, engines, units "
-                 "done and failed, last heartbeat, units rendering now");
+      "workers", "List the scheduler's workers: address, state (up, down, backed-off, quarantined), threads, "
+                 "engines, units done and failed, last heartbeat, units rendering now, jobs it is kept off");
   workers->add_flag("--json", o->json, "Print the list as JSON (the fields of farm.v1.WorkerInfo)");
   add_scheduler_connection_options(*workers, o->scheduler);
   commands.add(workers, [o] { return run_workers(*o); });
