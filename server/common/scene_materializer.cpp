@@ -148,6 +148,36 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
 // The job's text under `job_name` in a published folder: the folder holds the text under the
 // name the first submission of its scene gave it, and the same text may come under another name
 // (the file name is not part of the scene hash), so it is written beside, atomically.
+// A scene folder found laid out (by an earlier call, or a process before a restart) is a cache on
+// disk: each of its files is hashed against its ref before the scene is loaded from it (DESIGN.md,
+// "every reply from another process or from a cache on disk is checked before it is trusted").
+// Its files are links to the blobs, so a byte changed on disk changes both (issue #32: a job
+// SUCCEEDED with 92% of its pixels wrong from such a file). True when every file is intact.
+bool laid_out_intact(const v1::JobSpec& spec, const fs::path& dir) {
+  for (const v1::AssetRef& ref : spec.assets()) {
+    const fs::path file = dir / checked_relative_path(ref);
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::symlink_status(file, ec)) || fs::file_size(file, ec) != ref.size() || ec) return false;
+    try {
+      if (sha256_file_hex(file) != ref.sha256()) return false;
+    } catch (const std::exception&) {
+      return false;  // unreadable: laid out again
+    }
+  }
+  return true;
+}
+
+// Takes a damaged scene folder out of its name at once (a rename: whoever looks next lays it out
+// anew), then deletes it.
+void discard_scene_folder(const fs::path& dir) {
+  static std::atomic<std::uint64_t> counter{0};
+  const fs::path aside = dir.parent_path() / fmt::format(".damaged-{}-{}-{}", dir.filename().string().substr(0, 16),
+                                                         ::getpid(), counter++);
+  std::error_code ec;
+  fs::rename(dir, aside, ec);
+  if (!ec) fs::remove_all(aside, ec);
+}
+
 void ensure_job_file(const fs::path& dir, const std::string& job_name, const std::string& job_json) {
   const fs::path file = dir / job_name;
   std::error_code ec;
@@ -237,7 +267,9 @@ MaterializedScene materialize_scene(const v1::JobSpec& spec, const std::string& 
     rethrow_as_disk_full(scenes);
   }
   MaterializedScene result{scenes / scene_hash, scenes / scene_hash / job_name, {}};
-  // A published folder is complete: it only ever appears by rename.
+  // A published folder is complete (it only ever appears by rename), but its files may have been
+  // damaged since: checked, and laid out again from the blobs (themselves checked) if one was.
+  if (fs::is_directory(result.dir) && !laid_out_intact(spec, result.dir)) discard_scene_folder(result.dir);
   if (!fs::is_directory(result.dir)) {
     if (auto missing = missing_assets(spec, store); !missing.empty()) {
       throw MissingAssetsError(std::move(missing));

@@ -176,6 +176,50 @@ TEST_F(SceneMaterializer, ADamagedBlobIsRemovedAndNamedNotUsed) {
   }
 }
 
+// A scene folder already laid out (a worker restarted on its cache) is checked before it is
+// used (issue #32: a file of it damaged on disk rendered a job with 92% of its pixels wrong).
+// Damaged through the blob it links to: refused and the blob removed, to be sent again. Damaged
+// alone (a copy, or replaced): laid out again from the intact blob.
+TEST_F(SceneMaterializer, ADamagedFileOfALaidOutSceneIsNeverLoaded) {
+  const v1::JobSpec spec = test::cornell_job_spec("raster", 32, 24, 1);
+  const v1::AssetRef& obj = *std::find_if(spec.assets().begin(), spec.assets().end(),
+                                          [](const v1::AssetRef& r) { return r.path().ends_with(".obj"); });
+  const auto flip_bytes = [](const fs::path& file) {  // in place: every hard link sees it
+    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(100);
+    char c = 0;
+    f.get(c);
+    f.seekp(100);
+    f.put(static_cast<char>(c ^ 0x5a));
+  };
+  store_cornell_assets();
+  const MaterializedScene first = materialize(spec);
+  const fs::path laid_out = first.dir / obj.path();
+  const std::string good = test::read_file(laid_out);
+
+  // Through the link: the blob is damaged too.
+  flip_bytes(laid_out);
+  try {
+    materialize(spec);
+    ADD_FAILURE() << "a damaged laid-out file was used";
+  } catch (const CorruptAssetsError& e) {
+    EXPECT_NE(std::string(e.what()).find(obj.path()), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(store_.has(obj.sha256()));
+  store_cornell_assets();  // sent again
+  EXPECT_EQ(test::read_file(materialize(spec).dir / obj.path()), good);
+
+  // The laid-out file alone (its link broken): laid out again, the blob kept.
+  fs::remove(laid_out);
+  std::string damaged = good;
+  damaged[100] ^= 0x5a;
+  std::ofstream(laid_out, std::ios::binary) << damaged;
+  const MaterializedScene again = materialize(spec);
+  EXPECT_EQ(test::read_file(again.dir / obj.path()), good);
+  EXPECT_TRUE(store_.intact(obj.sha256()));
+  EXPECT_EQ(again.job.render.width, 32);
+}
+
 TEST_F(SceneMaterializer, BadJobMessageNamesTheSubmittedFileNotTheCache) {
   store_cornell_assets();
   v1::JobSpec spec = test::cornell_job_spec("raster", 8, 8, 1);
