@@ -443,7 +443,7 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
   if (auto x = top.get("output")) parse_output(*x, job);
   if (auto x = top.get("validate")) {
     const JsonObject obj = x->object({"embree_rays"});
-    if (auto rays = obj.get("embree_rays")) job.embree_rays = rays->integer(0);
+    if (auto rays = obj.get("embree_rays")) job.embree_rays = rays->integer(0, kMaxEmbreeRays);
   }
   if (auto x = top.get("animate")) {
     if (!job.frames) x->fail("keyframes need a frame range: give \"frames\": {\"start\": 1, \"end\": 48}");

@@ -21,6 +21,11 @@ inline constexpr int kMaxImageSide = 16384;
 inline constexpr int kMaxTileSize = kMaxImageSide;
 // render.spp: 2^20 samples per pixel is beyond any reference render; more is a typo.
 inline constexpr int kMaxSpp = 1 << 20;
+// validate.embree_rays (and `farm validate --rays`): each ray is traced twice, by our BVH and by
+// Embree, at about ten million a second here: 10^8 is a 20 s check. `farm render` had no bound
+// (issue #32: 10^12 took 4 GB in 5 s before it was stopped); a scheduler's --max-embree-rays is
+// lower still.
+inline constexpr std::int64_t kMaxEmbreeRays = 100'000'000;
 // render.threads (0 = all hardware threads): each is a std::thread, so a count no machine has is
 // refused rather than attempted.
 inline constexpr int kMaxThreads = 1024;

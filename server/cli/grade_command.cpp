@@ -30,6 +30,7 @@ struct GradeCommandOptions {
   int jobs = 0;
   int threads = 0;
   bool gradescope = false;
+  bool keep_work = false;
   fs::path gradescope_root = "/autograder";
 };
 
@@ -45,6 +46,7 @@ int run_grade_command(const GradeCommandOptions& o) {
   GradeOptions options;
   options.jobs = o.jobs;
   options.threads = o.threads;
+  options.keep_work = o.keep_work;
   options.scheduler = resolve_optional_scheduler(o.scheduler, o.identity);
 
   if (o.gradescope) {
@@ -87,6 +89,9 @@ void add_grade_command(CLI::App& app, CommandTable& commands) {
   grade->add_option("--jobs", o->jobs, "Students graded at a time (default: one per core)")->check(CLI::Range(0, 256));
   grade->add_option("--threads", o->threads, "Embedded farm render threads (default: all cores)")
       ->check(CLI::Range(0, kMaxThreads));
+  grade->add_flag("--keep-work", o->keep_work,
+                  "Keep each program's work copy (OUT/work/STUDENT/TASK/, up to 1 GiB each) after it is graded, to "
+                  "look into it; by default only the pictures the feedback shows are kept");
   grade->add_flag("--gradescope", o->gradescope,
                   "Grade the one submission in /autograder/submission and write /autograder/results/results.json "
                   "(inside Gradescope's autograder; jobs/grade/run_autograder)");

@@ -9,6 +9,7 @@
 
 #include "renderer/geometry/embree_intersector.h"
 #include "renderer/geometry/scene_intersector.h"
+#include "renderer/scene/job_limits.h"
 #include "renderer/scene/scene_builder.h"
 #include "server/cli/job_file_options.h"
 
@@ -56,7 +57,7 @@ void add_validate_command(CLI::App& app, CommandTable& commands) {
   validate->add_option("--rays", o->rays,
                        "Rays to compare, half primary and half from inside the scene "
                        "(default: the job's validate.embree_rays, else 100000)")
-      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 32));
+      ->check(CLI::Range(std::uint64_t{1}, static_cast<std::uint64_t>(kMaxEmbreeRays)));
   validate->add_option("--accel", o->accel,
                        "Ours to compare: bvh, bvh-median or naive (default: the job's render.accel; "
                        "bvh when that is embree)")

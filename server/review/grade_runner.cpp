@@ -157,7 +157,7 @@ void judge(const GradeTask& task, const Image& student, const Reference& ref, co
 }
 
 TaskGrade grade_task(const GradeTask& task, const fs::path& folder, const Reference& ref, const fs::path& work,
-                     bool folder_is_link, int compare_threads) {
+                     bool folder_is_link, int compare_threads, bool keep_work) {
   const auto start = Clock::now();
   TaskGrade grade;
   grade.task = task.name;
@@ -183,6 +183,11 @@ TaskGrade grade_task(const GradeTask& task, const fs::path& folder, const Refere
     grade.points = 0.0;
     grade.reason = fmt::format("could not be graded: {}", e.what());
   }
+  // A class of 40 kept 40 copies of up to 1 GiB (issue #32): the copy goes once its image is read.
+  if (task.run && !keep_work) {
+    std::error_code ignored;
+    fs::remove_all(work / task.name, ignored);
+  }
   grade.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return grade;
 }
@@ -197,7 +202,8 @@ StudentGrade grade_one(const Rubric& rubric, const std::map<fs::path, Reference>
   const bool is_link = fs::is_symlink(fs::symlink_status(folder, ec));
   const fs::path work = options.output_dir / "work" / id;
   for (const GradeTask& task : rubric.tasks) {
-    student.tasks.push_back(grade_task(task, folder, references.at(task.job), work, is_link, compare_threads));
+    student.tasks.push_back(
+        grade_task(task, folder, references.at(task.job), work, is_link, compare_threads, options.keep_work));
   }
   student.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return student;

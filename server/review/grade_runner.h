@@ -21,6 +21,9 @@ struct GradeOptions {
   int jobs = 0;                          // students graded at a time (0: one per core)
   int threads = 0;                       // embedded farm render threads (0: all cores)
   std::filesystem::path output_dir;      // references/ and work/ go here
+  // Keep each program's work copy (work/<student>/<task>/) once graded; by default it is removed,
+  // and only the pictures the feedback shows stay in work/<student>/.
+  bool keep_work = false;
 };
 
 struct GradeEvents {

@@ -338,6 +338,17 @@ TEST_F(FarmGradeTest, HostileProgramsScoreZeroWithTheirReasonAndTheRestOfTheClas
   }
   EXPECT_NE(page("memory").find("MemoryError"), std::string::npos) << "the program's output is on its page";
   EXPECT_NE(page("broken-build").find("missing semicolon"), std::string::npos);
+  // Each program's work copy (the disk filler's held 1 GiB) is gone once graded; the picture its
+  // feedback shows stays.
+  for (const auto& [id, script] : programs) EXPECT_FALSE(fs::exists(dir_ / "run-grades/work" / id / "program")) << id;
+  EXPECT_TRUE(fs::exists(dir_ / "run-grades/work/honest/program.student.png"));
+
+  // With --keep-work a copy stays to look into.
+  const test::CommandResult kept = test::run_command(test::farm_command(
+      fmt::format("grade {} {} --out {} --keep-work 2>&1", test::shell_quote(rubric.string()),
+                  test::shell_quote(subs.string()), test::shell_quote((dir_ / "kept-grades").string()))));
+  ASSERT_EQ(kept.exit_code, 0) << kept.output;
+  EXPECT_TRUE(fs::exists(dir_ / "kept-grades/work/honest/program/work/render.sh"));
 }
 
 }  // namespace

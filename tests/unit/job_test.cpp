@@ -476,6 +476,9 @@ const std::vector<BadJob> kBadJobs = {
      "expected an integer <= 1024, got 1025"},
     {"NegativeEmbreeRays", job_with_keys(R"("validate": {"embree_rays": -3})"),
      "validate.embree_rays", ">= 0"},
+    // farm render had no bound: 10^12 rays took 4 GB in 5 s (issue #32)
+    {"EmbreeRaysAboveLimit", job_with_keys(R"("validate": {"embree_rays": 1000000000000})"),
+     "validate.embree_rays", "expected an integer <= 100000000, got 1000000000000"},
     // enumerations
     {"UnknownEngine", job_with_keys(R"("render": {"engine": "foo"})"), "render.engine",
      "unknown engine 'foo' (expected raster, whitted or path)"},
