@@ -4,7 +4,11 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <signal.h>
+
 #include <atomic>
+#include <cerrno>
+#include <cstdlib>
 #include <fstream>
 #include <system_error>
 
@@ -26,6 +30,33 @@ fs::path temp_name(const fs::path& dir, std::string_view sha256) {
 }  // namespace
 
 AssetStore::AssetStore(fs::path dir) : dir_(std::move(dir)) { fs::create_directories(dir_); }
+
+std::size_t AssetStore::sweep_abandoned_uploads(std::chrono::seconds stale) const {
+  std::size_t removed = 0;
+  std::error_code ec;
+  const auto now = fs::file_time_type::clock::now();
+  for (fs::directory_iterator it(dir_, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(".tmp-", 0) != 0) continue;
+    // .tmp-<hash prefix>-<pid>-<counter>
+    bool writer_gone = false;
+    const std::size_t last = name.rfind('-'), before = last == std::string::npos ? last : name.rfind('-', last - 1);
+    if (before != std::string::npos) {
+      const std::string pid_text = name.substr(before + 1, last - before - 1);
+      char* stop = nullptr;
+      const long pid = std::strtol(pid_text.c_str(), &stop, 10);
+      writer_gone = !pid_text.empty() && *stop == '\0' && pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 &&
+                    errno == ESRCH;
+    }
+    std::error_code time_ec;
+    const auto written = fs::last_write_time(it->path(), time_ec);
+    const bool idle = !time_ec && now - written > stale;
+    if (!writer_gone && !idle) continue;
+    std::error_code remove_ec;
+    if (fs::remove(it->path(), remove_ec)) ++removed;
+  }
+  return removed;
+}
 
 bool AssetStore::has(std::string_view sha256) const {
   if (!is_sha256_hex(sha256)) return false;

@@ -4,6 +4,7 @@
 // (and size, when known) checked, and then renamed into place, so a crash, a concurrent writer of
 // the same blob or a lying peer never leaves a wrong or partial file under a hash's name.
 #include <cstdint>
+#include <chrono>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -26,6 +27,11 @@ class AssetStore {
   bool intact(std::string_view sha256) const;
   // Removes the blob (a damaged one, so that it can be uploaded again); nothing if it is absent.
   void remove(std::string_view sha256) const;
+  // Removes what uploads cut short left behind (a process killed mid-upload leaves its temporary
+  // file): each `.tmp-*` file whose writer, by the PID in its name, is no longer alive here, or
+  // that nobody wrote to for `stale` (another host's, on a shared folder). A live upload keeps
+  // both. Returns how many were removed. Called when a scheduler or worker starts.
+  std::size_t sweep_abandoned_uploads(std::chrono::seconds stale = std::chrono::hours(1)) const;
   // Where the blob named `sha256` lives (or would); InputError unless it is 64 lowercase hex digits.
   std::filesystem::path path_of(std::string_view sha256) const;
 

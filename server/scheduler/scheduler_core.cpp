@@ -82,7 +82,10 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                              .pause = pause_,
                              .outage = outage_,
                              .log = *log_}) {
-  // Room on the disk again: the slots claim, and the merges the disk refused are done.
+  // A scheduler killed mid-upload left the upload's temporary file: not counted, never published.
+  if (const std::size_t swept = assets_.sweep_abandoned_uploads()) {
+    log_->info("removed {} upload(s) cut short from {}", swept, assets_.dir().string());
+  }
   // Room on the disk again: the merges the disk refused first (they free their tiles), then
   // the slots. Still none: the youngest job holding tiles gives them back.
   pause_.on_resume([this] {

@@ -170,7 +170,12 @@ TileRenderer::TileRenderer(const TileRendererOptions& options)
                    ? nullptr
                    : std::make_unique<AssetFetcher>(options.schedulers, options.scheduler_identity)),
       cache_({options.max_scenes, options.cache_memory_mb << 20}),
-      pool_(options.threads) {}
+      pool_(options.threads) {
+  // A worker killed mid-fetch left the fetch's temporary file in its store.
+  if (const std::size_t swept = store_.sweep_abandoned_uploads()) {
+    log_->info("removed {} fetch(es) cut short from {}", swept, store_.dir().string());
+  }
+}
 
 void TileRenderer::scheduler_registered(const std::string& scheduler_id, const std::string& address) {
   if (fetcher_) fetcher_->learn(scheduler_id, address);

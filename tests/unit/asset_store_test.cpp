@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "renderer/scene/input_error.h"
@@ -18,6 +22,33 @@ std::size_t files_in(const fs::path& dir) {
   std::size_t n = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++n;
   return n;
+}
+
+// An upload cut short by a crash leaves its temporary file (issue #32): a restart removes those
+// whose writer is gone, and those nobody wrote to for the stale time (another host's), and keeps
+// an upload in progress.
+TEST(AssetStore, AStartSweepsUploadsCutShortAndKeepsLiveOnes) {
+  test::TempDir dir;
+  const AssetStore store(dir / "blobs");
+  const pid_t dead = fork();
+  if (dead == 0) _exit(0);
+  ASSERT_GT(dead, 0);
+  waitpid(dead, nullptr, 0);  // its PID names no process now
+  const auto put = [&](const std::string& name) {
+    const fs::path file = dir / "blobs" / name;
+    std::ofstream(file) << "part of an upload";
+    return file;
+  };
+  const fs::path crashed = put(".tmp-0123456789abcdef-" + std::to_string(dead) + "-0");
+  const fs::path live = put(".tmp-0123456789abcdef-" + std::to_string(::getpid()) + "-1");
+  const fs::path abandoned = put(".tmp-0123456789abcdef-" + std::to_string(::getppid()) + "-2");
+  fs::last_write_time(abandoned, fs::file_time_type::clock::now() - std::chrono::hours(2));
+  const std::string blob = store.add("a published blob");
+  EXPECT_EQ(store.sweep_abandoned_uploads(), 2u);
+  EXPECT_FALSE(fs::exists(crashed));
+  EXPECT_FALSE(fs::exists(abandoned));
+  EXPECT_TRUE(fs::exists(live));
+  EXPECT_TRUE(store.intact(blob));
 }
 
 TEST(AssetStore, AddStoresTheBytesUnderTheirHash) {
