@@ -61,6 +61,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.lease = ms(o.lease_s);
   options.tile_deadline = ms(o.tile_deadline_s);
   options.max_attempts = o.max_attempts;
+  options.upload_idle_timeout = ms(o.upload_idle_timeout_s);
   if (!o.keep_finished.empty()) options.keep_finished = parse_duration(o.keep_finished, "--keep-finished");
   if (!o.notify_url.empty()) parse_webhook_url(o.notify_url);  // refused before anything starts
   options.max_lost_worker_attempts = o.max_lost_worker_attempts;
@@ -285,7 +286,13 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->capture_default_str();
   s->add_option("--max-asset-store-bytes", o->limits.max_asset_store_bytes,
                 "Most bytes the scheduler's asset store holds together (UploadAsset is "
-                "RESOURCE_EXHAUSTED beyond); 0 for no limit")
+                "RESOURCE_EXHAUSTED beyond; one owner's uploads in flight hold at most a quarter of it); "
+                "0 for no limit")
+      ->capture_default_str();
+  s->add_option("--upload-idle-timeout", o->upload_idle_timeout_s,
+                "Seconds an UploadAsset stream may send nothing before it is ended and its share of the "
+                "quota freed")
+      ->check(CLI::Range(0.05, 86400.0))
       ->capture_default_str();
   s->add_option("--max-scene-memory", o->limits.max_scene_memory,
                 "Memory, in bytes, that loading a new job's models and building its scene may take "

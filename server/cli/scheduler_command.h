@@ -20,6 +20,7 @@ struct SchedulerCommandOptions {
   std::vector<std::string> workers;   // static `farm worker` addresses
   double tile_deadline_s = 600;
   int max_attempts = 3;
+  double upload_idle_timeout_s = 30;  // SchedulerOptions::upload_idle_timeout
   std::string keep_finished;          // a duration (duration_option.h); empty: for ever
   std::string http;                   // the dashboard's HOST:PORT; empty: none
   std::vector<std::string> http_hosts;  // --http-host: more names the dashboard answers to

@@ -43,6 +43,8 @@ struct SchedulerOptions {
   // tries again, doubling up to the maximum (disk_full_pause.h).
   std::chrono::milliseconds disk_full_backoff = std::chrono::seconds(1);
   std::chrono::milliseconds disk_full_backoff_max = std::chrono::seconds(30);
+  // An UploadAsset stream that sends nothing this long is ended, its quota freed (stream_watchdog.h).
+  std::chrono::milliseconds upload_idle_timeout = std::chrono::seconds(30);
   // A worker that fails this many units of one job is kept off that job (worker_failures.h).
   int job_failures_per_worker = 3;
   // A worker that fails units of several jobs in a row, or refuses calls, gets nothing this long,

@@ -407,7 +407,8 @@ grpc::Status SchedulerService::UploadAsset(grpc::ServerContext* context,
                                            grpc::ServerReader<v1::UploadAssetRequest>* reader,
                                            v1::UploadAssetResponse* response) {
   return guarded([&] {
-    access_.access.require(*context, kJobSubmitters, "UploadAsset");
+    const Principal who = access_.access.require(*context, kJobSubmitters, "UploadAsset");
+    StreamWatchdog::Watch watch = uploads_.watch(*context);
     v1::UploadAssetRequest part;
     if (!reader->Read(&part) || !part.has_header()) {
       throw InputError("UploadAsset: the first message must be an AssetHeader");
@@ -424,20 +425,25 @@ grpc::Status SchedulerService::UploadAsset(grpc::ServerContext* context,
     response->set_sha256(header.sha256());
     response->set_size(header.size());
     if (core_.assets().has(header.sha256())) {
-      while (reader->Read(&part)) {
-      }
+      while (reader->Read(&part)) watch.touch();
       response->set_already_present(true);
       return grpc::Status::OK;
     }
-    const AssetQuota::Reservation reserved = core_.asset_quota().reserve(header.size());
+    const AssetQuota::Reservation reserved = core_.asset_quota().reserve(header.size(), who.name);
     AssetStore::Writer writer = core_.assets().begin(header.sha256(), header.size());
     while (reader->Read(&part)) {
+      watch.touch();
       if (!part.has_data() && part.has_header()) throw InputError("UploadAsset: a second AssetHeader");
       if (writer.bytes_written() + part.data().size() > header.size()) {
         throw InputError(fmt::format("UploadAsset: more than the {} bytes the header announced",
                                      header.size()));
       }
       writer.append(part.data());
+    }
+    if (watch.timed_out()) {
+      throw ServiceError(grpc::StatusCode::DEADLINE_EXCEEDED,
+                         fmt::format("UploadAsset: nothing arrived for {} ms; the upload was ended and its quota freed",
+                                     uploads_.idle_limit().count()));
     }
     writer.commit();  // InputError when the bytes do not hash to the header's sha256
     return grpc::Status::OK;

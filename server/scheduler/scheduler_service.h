@@ -8,6 +8,7 @@
 #include "proto/farm.grpc.pb.h"
 #include "server/common/access_control.h"
 #include "server/common/client_identity.h"
+#include "server/scheduler/stream_watchdog.h"
 #include "server/scheduler/scheduler_core.h"
 
 namespace farm {
@@ -33,7 +34,7 @@ struct SchedulerAccess {
 class SchedulerService final : public v1::Scheduler::Service {
  public:
   explicit SchedulerService(SchedulerCore& core, SchedulerAccess access = {})
-      : core_(core), access_(std::move(access)) {}
+      : core_(core), access_(std::move(access)), uploads_(core.options().upload_idle_timeout) {}
 
   grpc::Status SubmitJob(grpc::ServerContext*, const v1::SubmitJobRequest*, v1::SubmitJobResponse*) override;
   grpc::Status GetJob(grpc::ServerContext*, const v1::GetJobRequest*, v1::Job*) override;
@@ -92,6 +93,7 @@ class SchedulerService final : public v1::Scheduler::Service {
   const SchedulerAccess access_;
   std::mutex mutex_;
   std::map<std::string, Registered> registered_;  // by worker address
+  StreamWatchdog uploads_;  // UploadAsset streams that stop sending are ended
 };
 
 }  // namespace farm
