@@ -1,6 +1,8 @@
 #include "server/client/job_submission.h"
 
 #include <fmt/format.h>
+
+#include <algorithm>
 #include <unistd.h>
 
 #include <array>
@@ -55,7 +57,7 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
   if (o.image) doc["output"]["image"] = o.image->generic_string();
   if (o.preview) {
     if (o.preview->empty()) {
-      doc["output"].erase("preview");
+      if (doc.contains("output")) doc["output"].erase("preview");
     } else {
       doc["output"]["preview"] = o.preview->generic_string();
     }
@@ -114,7 +116,13 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   const fs::path job_dir = fs::weakly_canonical(fs::absolute(job_file).parent_path());
   const fs::path& root = out.job.asset_root;  // what parse_job confined the models to
 
-  const bool as_written = job_dir == root && !any_override(overrides);
+  // The text goes as written only when it names each model as the scheduler will find it: by the
+  // path under the root it resolves to. An absolute path inside the root, or a link in it, is
+  // written as that path (issue #32: `farm submit` refused both, which `farm render` accepts).
+  const bool models_as_resolved = std::all_of(out.job.scene.objects.begin(), out.job.scene.objects.end(), [&](const JobObject& o) {
+    return fs::path(o.file_as_written).lexically_normal() == o.file.lexically_relative(root);
+  });
+  const bool as_written = job_dir == root && !any_override(overrides) && models_as_resolved;
   out.spec.set_job_json(as_written ? text : rewritten_job_text(text, out.job, root, overrides));
   out.spec.set_file_name(job_file.filename().string());
 

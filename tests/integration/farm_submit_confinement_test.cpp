@@ -151,5 +151,30 @@ TEST(FarmSubmitAssetSizes, ASubmissionWhoseAssetRefSizeDiffersFromItsFileIsRefus
   }
 }
 
+// What `farm render` accepts, `farm submit` accepts (issue #32): a model named by an absolute path
+// inside the asset root, and one named through a link inside it. Both are sent under the path they
+// resolve to, the job text names them so, and a worker renders them.
+TEST(FarmSubmitAssetSizes, AnAbsoluteInRootModelAndAnInRootLinkAreSubmittedAsFarmRenderTakesThem) {
+  test::TempDir dir;
+  dir.write("root/models/plain.mtl", test::plain_mtl());
+  const fs::path model = dir.write("root/models/tri.obj", test::triangle_obj("plain.mtl"));
+  fs::create_symlink("tri.obj", dir / "root/models/link.obj");
+  test::LocalFarm farm = test::start_local_farm(dir / "farm", 1);
+  ASSERT_TRUE(farm.problem.empty()) << farm.problem;
+  for (const std::string& named : {model.string(), std::string("models/link.obj")}) {
+    SCOPED_TRACE(named);
+    const fs::path job = dir.write("root/job.json", R"({"version": 1, "scene": {"objects": [{"file": ")" + named +
+                                                        R"("}]}, "render": {"width": 8, "height": 8}})");
+    const test::CommandResult render =
+        test::run_command(test::farm_command("render " + test::shell_quote(job.string()) + " --quiet --preview none"));
+    EXPECT_EQ(render.exit_code, 0) << render.output;
+    const test::CommandResult submit = test::run_command(test::farm_command(
+        "submit " + test::shell_quote(job.string()) + " --wait --scheduler " + farm.address()));
+    EXPECT_EQ(submit.exit_code, 0) << submit.output;
+    const JobSubmission submission = make_job_submission(job, {}, {});
+    EXPECT_TRUE(contains(submission.spec.job_json(), "\"models/tri.obj\"")) << submission.spec.job_json();
+  }
+}
+
 }  // namespace
 }  // namespace farm
