@@ -41,6 +41,7 @@ struct Context {
   // Model paths resolved so far, by the text written: an animated job's scene is read once per
   // frame, and its files (which no keyframe can change) are resolved once.
   std::shared_ptr<std::map<std::string, fs::path>> resolved = std::make_shared<std::map<std::string, fs::path>>();
+  std::shared_ptr<const std::string> asset_root_hint = std::make_shared<const std::string>();  // JobLoadOptions'
 };
 
 // An animated job's scene is read once per frame when it is loaded, so that no frame fails
@@ -62,7 +63,11 @@ fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
   const ConfinedFile file =
       confine_file(ctx.asset_root, ctx.job_file, written, ReferenceForm::relative_or_absolute);
   if (file.verdict == Confinement::missing) v.fail(fmt::format("no such file '{}'", shown(written)));
-  if (!file.allowed()) v.fail(file.reason);
+  if (!file.allowed()) {
+    v.fail(file.verdict == Confinement::outside && !ctx.asset_root_hint->empty()
+               ? fmt::format("{}; {}", file.reason, *ctx.asset_root_hint)
+               : file.reason);
+  }
   ctx.resolved->emplace(written, file.resolved);
   return file.resolved;
 }
@@ -427,6 +432,7 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
     const fs::path job_dir = fs::weakly_canonical(ctx.job_dir, ec);
     if (ec) throw InputError(fmt::format("{}: cannot resolve its folder: {}", file, ec.message()));
     ctx.job_file = job_dir / (path.empty() ? fs::path("job.json") : path.filename());
+    ctx.asset_root_hint = std::make_shared<const std::string>(options.asset_root_hint);
   }
 
   Job job;

@@ -81,6 +81,9 @@ Job job_at_frame(const Job& job, int frame);
 struct JobLoadOptions {
   // Model files must resolve inside this folder; empty = the job file's folder.
   std::filesystem::path asset_root;
+  // How the person reading a refusal can widen the root, added to a "lies outside the asset root"
+  // message (the commands: "give --asset-root DIR ..."); empty where nobody can (a worker).
+  std::string asset_root_hint;
 };
 
 // Parses and validates `path`. Model files must exist; they are not loaded here.

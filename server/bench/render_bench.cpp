@@ -138,7 +138,7 @@ void run_render_bench(const RenderBenchOptions& o) {
   if (!fs::exists(o.cow_job)) {
     throw InputError(fmt::format("{}: no such job (pass --cow-job PATH to jobs/cow.json)", o.cow_job.string()));
   }
-  BenchJob cow{"cow", o.cow_job, {o.asset_root}};
+  BenchJob cow{"cow", o.cow_job, {.asset_root = o.asset_root, .asset_root_hint = {}}};
   const Job cow_job = load_job(cow.file, cow.load);
   const bench::ScratchDir scratch("bench-render");
   const fs::path& dir = scratch.path();

@@ -77,6 +77,23 @@ TEST_F(FarmCliTest, MissingModelFileExitsWith2AndNamesIt) {
   EXPECT_NE(r.output.find("missing.dae"), std::string::npos) << r.output;
 }
 
+// The first thing a new user meets (issue #32): the example cow job names ../shared/assets, and
+// the refusal says how to let it reach there, in render and in submit alike.
+TEST_F(FarmCliTest, AModelOutsideTheAssetRootIsRefusedWithTheAssetRootHint) {
+  std::ofstream(dir_ / "m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const fs::path job = dir_.write("jobs/outside.json", R"({"version": 1, "scene": {"objects": [{"file": "../m.obj"}]}})");
+  for (const std::string command : {"render", "submit --scheduler 127.0.0.1:1"}) {
+    const auto r = run_command(farm(command + " " + shell_quote(job.string())));
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
+    EXPECT_NE(r.output.find("lies outside the asset root"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("give --asset-root DIR"), std::string::npos) << r.output;
+  }
+  const auto ok = run_command(farm("render " + shell_quote(job.string()) + " --asset-root " +
+                                   shell_quote(dir_.path().string()) + " --quiet --out " +
+                                   shell_quote((dir_ / "o.exr").string()) + " --preview none"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
 TEST_F(FarmCliTest, PathEngineRendersTheCornellBoxWithFiniteColours) {
   const fs::path exr = dir_ / "p.exr";
   const auto r = run_command(farm("render " + shell_quote((kSource / "jobs/cornell.json").string()) +
