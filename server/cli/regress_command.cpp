@@ -35,11 +35,18 @@ struct RegressCommandOptions {
   std::optional<fs::path> report;
 };
 
-// "PASS cow-raster exact", "FAIL cbox-path ztest: <summary>".
+// "PASS cow-raster exact", "FAIL cbox-path ztest: <summary>"; with --update, "NEW cow-raster
+// exact: reference written to PATH" for a test that had none and "UPDATED ...: reference written
+// to PATH (it was: <summary>)" for one whose reference was replaced: no FAIL for what was fixed.
 std::string outcome_line(const TestOutcome& o) {
+  if (o.reference_updated) {
+    const bool was_passing = o.status == TestStatus::passed || o.status == TestStatus::warned;
+    return fmt::format("{:<5} {} {}: reference written to {}{}", o.reference_missing ? "NEW" : "UPDATED", o.name,
+                       to_string(o.settings.metric), o.reference.string(),
+                       o.reference_missing || was_passing ? "" : fmt::format(" (it was: {})", o.message));
+  }
   std::string line = fmt::format("{:<5} {} {}", to_string(o.status), o.name, to_string(o.settings.metric));
   if (o.status != TestStatus::passed && o.status != TestStatus::skipped) line += ": " + o.message;
-  if (o.reference_updated) line += fmt::format(" [reference {} {}]", o.reference_missing ? "created:" : "replaced:", o.reference.string());
   return line;
 }
 

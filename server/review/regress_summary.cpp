@@ -7,11 +7,14 @@
 namespace farm {
 
 std::string RegressCounts::line() const {
-  std::string out = fmt::format("{} passed, {} failed", passed + warned, failed + errors);
+  // A failure whose reference --update just wrote is no failure any more: counted as written.
+  std::string out = fmt::format("{} passed, {} failed", passed + warned, failed_not_updated + errors);
   if (warned > 0) out += fmt::format(", {} with warnings", warned);
   if (errors > 0) out += fmt::format(" ({} could not be rendered or compared)", errors);
   if (skipped > 0) out += fmt::format(", {} skipped", skipped);
-  if (updated > 0) out += fmt::format(", {} reference{} written", updated, updated == 1 ? "" : "s");
+  if (updated > 0) {
+    out += fmt::format(", {} reference{} written ({} new)", updated, updated == 1 ? "" : "s", created);
+  }
   return out;
 }
 
@@ -28,6 +31,7 @@ RegressCounts count_outcomes(const std::vector<TestOutcome>& outcomes) {
       case TestStatus::skipped: ++c.skipped; break;
     }
     c.updated += o.reference_updated ? 1 : 0;
+    c.created += o.reference_updated && o.reference_missing ? 1 : 0;
     c.seconds += o.seconds;
   }
   return c;

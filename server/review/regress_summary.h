@@ -14,8 +14,10 @@ namespace farm {
 
 struct RegressCounts {
   std::size_t passed = 0, warned = 0, failed = 0, errors = 0, skipped = 0, updated = 0;
+  std::size_t created = 0;  // of `updated`: references that did not exist before
   double seconds = 0.0;
-  // "3 passed, 1 failed" (+ ", 1 warned", ", 1 error", ", 2 skipped", ", 1 reference updated").
+  // "3 passed, 1 failed" (+ ", 1 warned", ", 1 error", ", 2 skipped", ", 3 references written (2
+  // new)"); a failure whose reference was just written counts as written, not failed.
   std::string line() const;
   // 0 when nothing failed or errored (warnings pass), or when every failure's reference was
   // just written by --update; else 1.

@@ -119,8 +119,17 @@ TEST_F(FarmRegressTest, VerdictsExitCodeConsoleJunitAndReportThenUpdateWritesExa
   const std::string pass_before = test::read_file(refs_ / "cornell-pass.exr"), warn_before = test::read_file(refs_ / "cornell-warn.exr");
   const test::CommandResult update = regress(fmt::format("--report {} --update", test::shell_quote(report.string())));
   EXPECT_EQ(update.exit_code, 0) << update.output;
-  EXPECT_NE(update.output.find("reference replaced: " + (refs_ / "whitted-fail.exr").string()), std::string::npos) << update.output;
-  EXPECT_NE(update.output.find("reference created: " + (refs_ / "torus-missing.exr").string()), std::string::npos) << update.output;
+  // Said as what happened (issue #32: FAIL lines and "0 passed, 3 failed" while it wrote them).
+  EXPECT_NE(update.output.find("UPDATED whitted-fail threshold: reference written to " + (refs_ / "whitted-fail.exr").string() +
+                               " (it was: "),
+            std::string::npos)
+      << update.output;
+  EXPECT_NE(update.output.find("NEW   torus-missing threshold: reference written to " + (refs_ / "torus-missing.exr").string() + "\n"),
+            std::string::npos)
+      << update.output;
+  EXPECT_EQ(update.output.find("FAIL"), std::string::npos) << update.output;
+  EXPECT_NE(update.output.find("2 passed, 0 failed, 1 with warnings, 2 references written (1 new)\n"), std::string::npos)
+      << update.output;
   EXPECT_EQ(test::read_file(refs_ / "cornell-pass.exr"), pass_before);
   EXPECT_EQ(test::read_file(refs_ / "cornell-warn.exr"), warn_before);
   EXPECT_EQ(test::read_file(refs_ / "whitted-fail.exr"), test::read_file(report / "images/whitted-fail.new.exr"));
