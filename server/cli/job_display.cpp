@@ -18,9 +18,9 @@ std::string frames_of(const v1::Job& job) {
 
 std::string progress_of(const v1::Job& job) {
   const std::string frames = frames_of(job);
-  // With sample passes, each tile of each pass is a unit of its own.
-  const std::string units = job.passes() > 1 ? "units" : "tiles";
-  return fmt::format("{}{}/{} {}", frames.empty() ? "" : frames + ", ", job.tiles_done(), job.tiles_total(), units);
+  // The one word for the scheduler's piece of work (a tile of a frame's sample pass) in every
+  // message: a unit (issue #32: submit said tiles, status units, log tiles, for the same things).
+  return fmt::format("{}{}/{} units", frames.empty() ? "" : frames + ", ", job.tiles_done(), job.tiles_total());
 }
 
 std::string local_time(const google::protobuf::Timestamp& t) {
@@ -48,18 +48,19 @@ std::string describe_event(const v1::JobEvent& event) {
         return fmt::format("submitted: {}, {} {}", to_string(c.to()), job.tiles_total(),
                            job.tiles_total() == 1 ? "unit" : "units");
       }
-      return fmt::format("{} -> {} ({}){}", to_string(c.from()), to_string(c.to()), progress_of(job),
+      return fmt::format("{} -> {} ({}){}{}", to_string(c.from()), to_string(c.to()), progress_of(job),
+                         c.by().empty() ? "" : " by " + c.by(),
                          c.to() == v1::JOB_STATE_FAILED && !job.failure_reason().empty() ? ": " + job.failure_reason()
                                                                                           : "");
     }
     case v1::JobEvent::kTileFinished: {
       const v1::TileFinished& f = event.tile_finished();
-      return fmt::format("{} of frame {} done on {}", describe_tiles(f.tile_index(), std::max(1u, f.tile_count())),
+      return fmt::format("{} of frame {} done on {}", describe_units(f.tile_index(), std::max(1u, f.tile_count())),
                          f.frame(), f.worker());
     }
     case v1::JobEvent::kTileFailed: {
       const v1::TileFailed& f = event.tile_failed();
-      return fmt::format("{} failed on {}: {}{}", describe_tiles(f.tile_index(), std::max(1u, f.tile_count())),
+      return fmt::format("{} failed on {}: {}{}", describe_units(f.tile_index(), std::max(1u, f.tile_count())),
                          f.worker().empty() ? "the scheduler" : f.worker(), f.reason(),
                          f.will_retry() ? " (will retry)" : "");
     }
@@ -123,7 +124,7 @@ v1::Job follow(SchedulerClient& client, const std::string& job_id,
     }
     if (event.has_tile_failed()) {
       const v1::TileFailed& f = event.tile_failed();
-      fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, describe_tiles(f.tile_index(), f.tile_count()),
+      fmt::print(stderr, "job {}: {} failed on {}: {}{}\n", job_id, describe_units(f.tile_index(), f.tile_count()),
                  f.worker(), f.reason(), f.will_retry() ? " (will retry)" : "");
     }
     if (also) also(event);

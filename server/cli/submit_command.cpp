@@ -34,7 +34,7 @@ int run_submit(const SubmitOptions& o) {
   const std::size_t uploaded = client.upload_missing(submission);
   const v1::Job job = client.submit(submission, o.priority);
   fmt::print("{}\n", job.job_id());
-  fmt::print(stderr, "submitted '{}' to {}: {} tiles, {} of {} assets uploaded\n", job.name(), client.address(),
+  fmt::print(stderr, "submitted '{}' to {}: {} units, {} of {} assets uploaded\n", job.name(), client.address(),
              job.tiles_total(), uploaded, submission.spec.assets_size());
   if (!o.wait) return 0;
   const v1::Job last = follow(client, job.job_id());

@@ -11,8 +11,8 @@ bool is_final(v1::JobState state) {
          state == v1::JOB_STATE_CANCELLED;
 }
 
-std::string describe_tiles(std::uint32_t first, std::uint32_t count) {
-  return count > 1 ? fmt::format("tiles {}-{}", first, first + count - 1) : fmt::format("tile {}", first);
+std::string describe_units(std::uint32_t first, std::uint32_t count) {
+  return count > 1 ? fmt::format("units {}-{}", first, first + count - 1) : fmt::format("unit {}", first);
 }
 
 std::int64_t unix_ms_now() {

@@ -11,7 +11,7 @@ namespace farm {
 bool is_final(v1::JobState state);
 std::string to_string(v1::JobState state);  // "queued", "running", ...
 // "tile 7" or "tiles 7-9", for messages about a batch.
-std::string describe_tiles(std::uint32_t first, std::uint32_t count);
+std::string describe_units(std::uint32_t first, std::uint32_t count);
 // Wall-clock time as the store and the proto keep it.
 std::int64_t unix_ms_now();
 

@@ -27,8 +27,8 @@ v1::TileRect to_proto(const Rect& r) {
   return t;
 }
 
-std::string describe(const TileBatch& batch) { return describe_tiles(batch.first, batch.count); }
-std::string describe(const TileSpan& span) { return describe_tiles(span.first, span.count); }
+std::string describe(const TileBatch& batch) { return describe_units(batch.first, batch.count); }
+std::string describe(const TileSpan& span) { return describe_units(span.first, span.count); }
 
 // Pixels rendered in this process come as a buffer; a spot check compares encoded tiles.
 void encode_pixels(RenderedTiles& result) {
@@ -771,7 +771,7 @@ void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status
   } else if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
     why = fmt::format("worker {}: no result within the tile deadline of {} ms{}", worker,
                       options_.tile_deadline.count(),
-                      batch.count > 1 ? fmt::format(" (x {} tiles)", batch.count) : std::string());
+                      batch.count > 1 ? fmt::format(" (x {} units)", batch.count) : std::string());
     // Slow or hung? It gets no more tiles until it answers a health check: a hung one would
     // otherwise take tile after tile to its deadline.
     workers_.mark_down(w, std::chrono::milliseconds(0));

@@ -256,7 +256,7 @@ void Finisher::end_job(const std::string& job_id) {
               after.tiles_total() - after.tiles_done(), after.tiles_total());
     return;
   }
-  log_.info("job {} done: {} tiles, {} frame{} merged", job_id, after.tiles_total(), after.frames_total(),
+  log_.info("job {} done: {} units, {} frame{} merged", job_id, after.tiles_total(), after.frames_total(),
             after.frames_total() == 1 ? "" : "s");
   events_.publish_state(after, before->state());
   release(job_id);

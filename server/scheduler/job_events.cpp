@@ -58,9 +58,9 @@ void JobEvents::publish(const std::string& job_id, const std::function<void(v1::
   push_locked(event);
 }
 
-void JobEvents::publish_state(const v1::Job& job, v1::JobState from) {
+void JobEvents::publish_state(const v1::Job& job, v1::JobState from, const std::string& by) {
   std::lock_guard lock(mutex_);
-  push_state_locked(job, from);
+  push_state_locked(job, from, by);
 }
 
 void JobEvents::publish_started(const std::string& job_id) {
@@ -69,11 +69,12 @@ void JobEvents::publish_started(const std::string& job_id) {
   if (job && job->state() == v1::JOB_STATE_RUNNING) push_state_locked(*job, v1::JOB_STATE_QUEUED);
 }
 
-void JobEvents::push_state_locked(const v1::Job& job, v1::JobState from) {
+void JobEvents::push_state_locked(const v1::Job& job, v1::JobState from, const std::string& by) {
   v1::JobEvent event;
   *event.mutable_job() = job;
   event.mutable_state_changed()->set_from(from);
   event.mutable_state_changed()->set_to(job.state());
+  event.mutable_state_changed()->set_by(by);
   push_locked(event);
 }
 

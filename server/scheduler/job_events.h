@@ -59,7 +59,7 @@ class JobEvents {
   // An event carrying the job as the store has it now, filled in by `fill`.
   void publish(const std::string& job_id, const std::function<void(v1::JobEvent&)>& fill);
   // `job` went from `from` to its state now.
-  void publish_state(const v1::Job& job, v1::JobState from);
+  void publish_state(const v1::Job& job, v1::JobState from, const std::string& by = {});
   // The job's first batch since it was queued was claimed: QUEUED -> RUNNING, unless it has
   // already left RUNNING (cancelled meanwhile), as the store has it now.
   void publish_started(const std::string& job_id);
@@ -78,7 +78,7 @@ class JobEvents {
 
  private:
   void push_locked(const v1::JobEvent& event);  // under mutex_: the log, the watchers, then forward_
-  void push_state_locked(const v1::Job& job, v1::JobState from);  // `job` went from `from` to its state
+  void push_state_locked(const v1::Job& job, v1::JobState from, const std::string& by = {});  // `job` went from `from` to its state
   void log_locked(const v1::JobEvent& event);
   void push_to_watchers_locked(const v1::JobEvent& event);
 

@@ -244,7 +244,7 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
     if (watcher) events_.unsubscribe(job.id, watcher);
     throw;
   }
-  log_->info("job {} '{}' queued: {} {}x{}, {} frame(s), {} tiles, priority {}{}", added.job_id(), added.name(),
+  log_->info("job {} '{}' queued: {} {}x{}, {} frame(s), {} units, priority {}{}", added.job_id(), added.name(),
              added.engine(), added.width(), added.height(), added.frames_total(), added.tiles_total(), priority,
              owner.empty() ? "" : ", owner " + owner);
   events_.publish_state(added, v1::JOB_STATE_UNSPECIFIED);  // its first log entry: submitted
@@ -256,13 +256,13 @@ std::optional<v1::Job> SchedulerCore::get_job(const std::string& job_id) const {
   return store_.get_job(job_id);
 }
 
-v1::Job SchedulerCore::cancel(const std::string& job_id) {
+v1::Job SchedulerCore::cancel(const std::string& job_id, const std::string& by) {
   std::optional<v1::Job> before = store_.get_job(job_id);
   if (!before) no_job(job_id);
   const v1::Job after = dispatcher_.cancel_job(job_id);
   if (after.state() != before->state()) {
-    log_->info("job {} cancelled", job_id);
-    events_.publish_state(after, before->state());
+    log_->info("job {} cancelled{}", job_id, by.empty() ? "" : " by " + by);
+    events_.publish_state(after, before->state(), by);
     finisher_.release(job_id, true);  // a retry renders what the cancel stopped, and keeps the rest
   }
   return after;

@@ -118,7 +118,8 @@ class SchedulerCore {
                            const std::shared_ptr<JobEventQueue>& watcher = nullptr);
   std::optional<v1::Job> get_job(const std::string& job_id) const;
   // Drops the job's queued tiles and cancels its calls in flight. ServiceError NOT_FOUND.
-  v1::Job cancel(const std::string& job_id);
+  // `by`: who asked (the caller's token name), said in the job's log and its watchers' events.
+  v1::Job cancel(const std::string& job_id, const std::string& by = {});
   // Operator actions, each announced to the job's watchers and its log as a JobUpdated naming
   // `by` (the caller's token name). ServiceError NOT_FOUND for an unknown job, FAILED_PRECONDITION
   // for one whose state the action does not apply to (proto/farm.proto says which).

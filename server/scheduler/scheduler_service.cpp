@@ -224,7 +224,7 @@ grpc::Status SchedulerService::CancelJob(grpc::ServerContext* context, const v1:
 v1::Job SchedulerService::cancel_job(const Principal& who, const std::string& job_id) {
   AccessControl::check(who, kJobSubmitters, "CancelJob");
   visible_job(who, job_id, Role::admin, "cancel");
-  return core_.cancel(job_id);
+  return core_.cancel(job_id, who.name);
 }
 
 grpc::Status SchedulerService::PauseJob(grpc::ServerContext* context, const v1::PauseJobRequest* request,

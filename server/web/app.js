@@ -23,7 +23,7 @@ const farm = (() => {
   const isFinal = (job) => FINAL.includes(job.state);
   const stateName = (state) => String(state).replace('JOB_STATE_', '').toLowerCase();
   const stateOf = (job) => (job.paused && !isFinal(job) ? 'paused' : stateName(job.state));
-  const units = (job) => (job.passes > 1 ? 'units' : 'tiles');
+  const units = () => 'units';  // one word for the scheduler's piece of work everywhere
   const isAnimation = (job) => job.frames_total > 1 || job.frame_first !== 0;
   function progressText(job) {
     const frames = isAnimation(job) ? `${job.frames_done}/${job.frames_total} frames, ` : '';
@@ -43,7 +43,7 @@ const farm = (() => {
     if (s < 3600) return `${Math.floor(s / 60)}m${String(Math.floor(s % 60)).padStart(2, '0')}s`;
     return `${Math.floor(s / 3600)}h${String(Math.floor((s / 60) % 60)).padStart(2, '0')}m`;
   }
-  const tiles = (first, count) => (count > 1 ? `tiles ${first}-${first + count - 1}` : `tile ${first}`);
+  const tiles = (first, count) => (count > 1 ? `units ${first}-${first + count - 1}` : `unit ${first}`);
 
   // One line for an event, as `farm log` prints it.
   function describe(event) {
@@ -52,7 +52,8 @@ const farm = (() => {
       const c = event.state_changed;
       if (c.from === 'JOB_STATE_UNSPECIFIED') return `submitted: ${stateName(c.to)}, ${job.tiles_total} units`;
       const why = c.to === 'JOB_STATE_FAILED' && job.failure_reason ? ': ' + job.failure_reason : '';
-      return `${stateName(c.from)} -> ${stateName(c.to)} (${progressText(job)})${why}`;
+      const by = c.by ? ` by ${c.by}` : '';
+      return `${stateName(c.from)} -> ${stateName(c.to)} (${progressText(job)})${by}${why}`;
     }
     if (event.tile_failed) {
       const f = event.tile_failed;

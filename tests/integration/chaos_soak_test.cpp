@@ -375,12 +375,12 @@ TEST_F(ChaosSoak, FortyJobsSurviveWorkersKilledAndStoppedAndTwoSchedulerRestarts
     // spdlog names the level "warning" (server/common/log.cpp's pattern).
     if (line.find("[warning] job ") == std::string::npos) continue;
     failure_lines += line + "\n";
-    const std::size_t tiles_at = line.find(" tile"), worker_at = line.find(": worker ");
+    const std::size_t tiles_at = line.find(" unit"), worker_at = line.find(": worker ");
     if (tiles_at == std::string::npos || worker_at == std::string::npos) continue;
-    // "job ID tile N: worker ADDR ..." or "job ID tiles A-B: worker ADDR ...".
+    // "job ID unit N: worker ADDR ..." or "job ID units A-B: worker ADDR ...".
     unsigned first = 0, last = 0;
     std::size_t count = 1;
-    if (std::sscanf(line.c_str() + tiles_at, " tiles %u-%u", &first, &last) == 2) count = last - first + 1;
+    if (std::sscanf(line.c_str() + tiles_at, " units %u-%u", &first, &last) == 2) count = last - first + 1;
     // The address (HOST:PORT) ends at a space (" left: ...") or at ": " (": UNAVAILABLE: ...").
     std::size_t end = worker_at + 9;
     while (end < line.size() && line[end] != ' ' && !(line[end] == ':' && end + 1 < line.size() && line[end + 1] == ' ')) {

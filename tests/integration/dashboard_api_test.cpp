@@ -187,6 +187,19 @@ TEST_F(DashboardApiTest, JobsLogAndActionsMirrorTheRpcsWithTheirRoles) {
   EXPECT_EQ(exr->get_header_value("Content-Disposition"), "attachment; filename=\"we_ird__X-Injected__yes.exr\"");
   EXPECT_FALSE(exr->has_header("X-Injected"));
   EXPECT_EQ(exr->body.substr(0, 4), std::string("\x76\x2f\x31\x01", 4));  // OpenEXR's magic number
+
+  // Who cancelled is said in the log (issue #32): the admin's cancel of Alice's long job.
+  const std::string long_job = submit(kAlice, "long", 128, "path", 4096);
+  r = post("/api/v1/jobs/" + long_job + "/cancel", bearer(kAdmin));
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200) << r->body;
+  const json cancel_log = get("/api/v1/jobs/" + long_job + "/log", kReader);
+  bool said = false;
+  for (const json& entry : cancel_log["entries"]) {
+    const json& change = entry["event"]["state_changed"];
+    if (change.is_object() && change["to"] == "JOB_STATE_CANCELLED") said = change["by"] == "boss";
+  }
+  EXPECT_TRUE(said) << cancel_log.dump();
 }
 
 TEST_F(DashboardApiTest, ALoginSessionActsAndAPageElsewhereCannot) {

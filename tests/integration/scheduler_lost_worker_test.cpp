@@ -200,7 +200,7 @@ TEST_F(SchedulerLostWorkerTest, ATileThatCrashesEveryWorkerFailsItsJobAtTheLostW
   ASSERT_TRUE(eventually([&] { return final_job(core, id); }));
   const v1::Job job = *core.get_job(id);
   ASSERT_EQ(job.state(), v1::JOB_STATE_FAILED);
-  EXPECT_NE(job.failure_reason().find("tile 0 lost 4 workers while rendering"), std::string::npos)
+  EXPECT_NE(job.failure_reason().find("unit 0 lost 4 workers while rendering"), std::string::npos)
       << job.failure_reason();
   EXPECT_NE(job.failure_reason().find("lost-worker attempts limit"), std::string::npos) << job.failure_reason();
   EXPECT_NE(job.failure_reason().find("UNAVAILABLE: Socket closed"), std::string::npos) << job.failure_reason();

@@ -538,7 +538,7 @@ TEST_P(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLim
   const TileFailure last = store.batch_lost("a", 0, 1, "worker w left: no heartbeat", 5, 6, "w");
   EXPECT_FALSE(last.will_retry);
   EXPECT_EQ(last.job.state(), v1::JOB_STATE_FAILED);
-  EXPECT_NE(last.job.failure_reason().find("tile 0 lost 5 workers while rendering"), std::string::npos)
+  EXPECT_NE(last.job.failure_reason().find("unit 0 lost 5 workers while rendering"), std::string::npos)
       << last.job.failure_reason();
   EXPECT_NE(last.job.failure_reason().find("lost-worker attempts limit"), std::string::npos);
   EXPECT_NE(last.job.failure_reason().find("no heartbeat"), std::string::npos);

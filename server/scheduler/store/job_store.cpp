@@ -692,11 +692,11 @@ TileFailure JobStore::count_attempt(AttemptKind kind, const std::string& job_id,
   // tile_failures counts every rendering of a tile that came to nothing, whatever the cause.
   Query(db_->prepared("UPDATE jobs SET tile_failures = tile_failures + ? WHERE seq = ?")).bind(1, count).bind(2, *seq).run();
   if (!result.will_retry) {
-    const std::string tiles = describe_tiles(first, count);
+    const std::string tiles = describe_units(first, count);
     const std::string why =
         kind == AttemptKind::Failed
             ? fmt::format("{} failed {} time{}; last error: {}", tiles, attempts, attempts == 1 ? "" : "s", reason)
-            : fmt::format("{} lost {} worker{} while rendering, the most a tile may lose (the lost-worker attempts "
+            : fmt::format("{} lost {} worker{} while rendering, the most a unit may lose (the lost-worker attempts "
                           "limit): it may take down every worker it is sent to; last error: {}",
                           tiles, attempts, attempts == 1 ? "" : "s", reason);
     Query(db_->prepared("UPDATE jobs SET state = ?, failure_reason = ?, finished_ms = ? WHERE seq = ?"))
