@@ -12,9 +12,9 @@
 namespace farm {
 namespace {
 
-grpc::StatusCode code_of_reserving(AssetQuota& quota, std::uint64_t bytes) {
+grpc::StatusCode code_of_reserving(AssetQuota& quota, std::uint64_t bytes, const std::string& owner = "other") {
   try {
-    quota.reserve(bytes);
+    quota.reserve(bytes, owner);
   } catch (const ServiceError& e) {
     return e.code();
   }
@@ -31,7 +31,7 @@ TEST(AssetQuota, StoredBlobsAndUploadsInFlightCountAgainstTheLimit) {
 
   EXPECT_EQ(code_of_reserving(quota, 401), grpc::StatusCode::RESOURCE_EXHAUSTED);
   {
-    const AssetQuota::Reservation in_flight = quota.reserve(300);
+    const AssetQuota::Reservation in_flight = quota.reserve(300, "alice");
     EXPECT_EQ(code_of_reserving(quota, 101), grpc::StatusCode::RESOURCE_EXHAUSTED);
     EXPECT_EQ(code_of_reserving(quota, 100), grpc::StatusCode::OK);
   }
@@ -42,6 +42,24 @@ TEST(AssetQuota, StoredBlobsAndUploadsInFlightCountAgainstTheLimit) {
   EXPECT_EQ(quota.stored_bytes(), 0u);
   EXPECT_EQ(code_of_reserving(quota, 1000), grpc::StatusCode::OK);
   EXPECT_EQ(code_of_reserving(quota, 1001), grpc::StatusCode::RESOURCE_EXHAUSTED);
+}
+
+// One owner's uploads in flight hold at most a quarter of the limit (issue #32), the first of
+// them whatever its size; another owner is not held back by them.
+TEST(AssetQuota, OneOwnersUploadsInFlightHoldAQuarterOfTheLimitAtMost) {
+  test::TempDir dir;
+  AssetStore store(dir / "assets");
+  AssetQuota quota(store.dir(), 1000);
+  EXPECT_EQ(quota.owner_share(), 250u);
+  const AssetQuota::Reservation big = quota.reserve(400, "alice");  // her first: allowed
+  EXPECT_EQ(code_of_reserving(quota, 1, "alice"), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(code_of_reserving(quota, 250, "bob"), grpc::StatusCode::OK);
+  {
+    const AssetQuota::Reservation bobs = quota.reserve(200, "bob");
+    EXPECT_EQ(code_of_reserving(quota, 50, "bob"), grpc::StatusCode::OK);
+    EXPECT_EQ(code_of_reserving(quota, 51, "bob"), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  }
+  EXPECT_EQ(code_of_reserving(quota, 250, "bob"), grpc::StatusCode::OK);  // his reservation ended
 }
 
 TEST(AssetQuota, TheMessageNamesTheSizesTheLimitAndTheFlag) {
