@@ -195,6 +195,7 @@ void Dispatcher::job_ended_elsewhere(const std::string& job_id) {
 }
 
 void Dispatcher::stop_job_locked(const std::string& job_id) {
+  impossible_.erase(job_id);
   cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; }, CancelReason::JobCancelled);
   drop_checks_locked(job_id);
 }
@@ -479,9 +480,7 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
   // anything of it is kept.
   if (!result.pixels) {
     if (const std::string problem = check_tile_reply(result.response, *settings, batch.rect); !problem.empty()) {
-      const std::string why = fmt::format("worker {} sent a result no engine makes: {}", worker, problem);
-      fail_batch(w.id, worker, batch, why + "; the worker is quarantined", options_.max_attempts);
-      quarantine(w.id, worker, why);
+      impossible_result(w, batch, problem);
       return;
     }
   }
@@ -514,6 +513,59 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
     }
   }
   keep(w.id, worker, batch, result);
+}
+
+namespace {
+
+// The kind of impossible value a result check found: its plane ("rgba plane", "depth plane",
+// "stats"), without the pixel and the value: what two workers' results must share to agree.
+// Empty for a reply malformed in its shape (rect, plane sizes), which only a worker gets wrong.
+std::string value_problem_kind(const std::string& problem) {
+  std::string_view rest = problem;
+  if (rest.rfind("pixel (", 0) == 0) {
+    const std::size_t colon = rest.find("): ");
+    if (colon == std::string_view::npos) return {};
+    rest.remove_prefix(colon + 3);
+  } else if (rest.rfind("stats: ", 0) != 0) {
+    return {};
+  }
+  return std::string(rest.substr(0, rest.find(':')));
+}
+
+}  // namespace
+
+void Dispatcher::impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem) {
+  const std::string worker = w.worker->describe();
+  const std::string kind = value_problem_kind(problem);
+  std::optional<ImpossibleResult> earlier;
+  if (!kind.empty()) {
+    std::lock_guard lock(mutex_);
+    const auto it = impossible_.find(batch.job_id);
+    if (it == impossible_.end()) {
+      impossible_.emplace(batch.job_id, ImpossibleResult{w.id, worker, kind});
+    } else if (it->second.worker_id != w.id && it->second.kind == kind) {
+      earlier = it->second;
+    }
+  }
+  if (earlier) {
+    // Two workers rendered the job to the same impossible values: a property of the job (an engine
+    // bug it meets), not of either worker. The job ends saying so; the farm goes on, and the
+    // worker quarantined for it first is released.
+    const std::string why = fmt::format(
+        "workers {} and {} both rendered this job to values no engine should make ({}: {}); it is the job's own, "
+        "not the workers': no worker is quarantined for it (report it with the job file)",
+        earlier->worker, worker, describe(batch), problem);
+    fail_batch(w.id, worker, batch, why, 1);
+    if (workers_.release_quarantine(earlier->worker_id, fmt::format("worker {} rendered job {} the same way",
+                                                                     worker, batch.job_id))) {
+      log_.warn("worker {} is back: its result for job {} was the job's own ({})", earlier->worker, batch.job_id,
+                kind);
+    }
+    return;
+  }
+  const std::string why = fmt::format("worker {} sent a result no engine makes: {}", worker, problem);
+  fail_batch(w.id, worker, batch, why + "; the worker is quarantined", options_.max_attempts);
+  quarantine(w.id, worker, why);
 }
 
 void Dispatcher::handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,

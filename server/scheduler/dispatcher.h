@@ -146,6 +146,10 @@ class Dispatcher {
   grpc::Status render(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   void handle_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
                      RenderedTiles& result);
+  // A reply that failed the result check (`problem`): the worker is quarantined, unless another
+  // worker already rendered the job to the same kind of impossible value, which makes it the
+  // job's own: then the job fails saying so, and that worker is released.
+  void impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem);
   // An OK reply to a batch: checked, then kept or held for a spot check.
   void accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   // The reply of a call that checks another worker's batch.
@@ -222,6 +226,11 @@ class Dispatcher {
   std::list<std::shared_ptr<SpotCheck>> checks_;    // batches waiting for a spot check
   std::map<std::string, RetryBackoff> worker_disk_full_;  // by worker id, while its disk is full
   WorkerFailures failures_;  // its own lock (a leaf)
+  // The first impossible result of each active job (impossible_result): who, and its kind.
+  struct ImpossibleResult {
+    std::string worker_id, worker, kind;
+  };
+  std::map<std::string, ImpossibleResult> impossible_;
 };
 
 }  // namespace farm

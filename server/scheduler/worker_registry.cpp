@@ -149,6 +149,29 @@ bool WorkerRegistry::quarantine(const std::string& worker_id, const std::string&
   return true;
 }
 
+bool WorkerRegistry::release_quarantine(const std::string& worker_id, const std::string& reason) {
+  {
+    std::lock_guard lock(mutex_);
+    auto it = workers_.find(worker_id);
+    if (it == workers_.end() || !it->second->quarantined) return false;
+    WorkerEntry& w = *it->second;
+    w.quarantined = false;
+    w.quarantine_reason.clear();
+    quarantined_addresses_.erase(w.worker->describe());
+    // Probed again, and its slots (which ended with the quarantine) started anew once it is up.
+    // A slot that had not yet seen the quarantine carries on beside them: a worker released
+    // gets at most one extra set of slots.
+    w.down = true;
+    w.probe_after = Clock::now();
+    w.retry = kFirstRetry;
+    w.slots_started = false;
+  }
+  log_.warn("worker {} released from quarantine: {}", worker_id, reason);
+  probe_.notify_all();
+  changed_.notify_all();
+  return true;
+}
+
 int WorkerRegistry::slots_up() const {
   std::lock_guard lock(mutex_);
   int slots = 0;

@@ -130,6 +130,10 @@ class WorkerRegistry {
   // The worker gets no more tiles, and neither does a worker registering later at its address.
   // False when it is unknown or quarantined already.
   bool quarantine(const std::string& worker_id, const std::string& reason);
+  // Undoes quarantine() when what the worker was caught on proved a property of the job (another
+  // worker rendered the same impossible values): probed again, slots started once it is up.
+  // False when it is unknown or not quarantined.
+  bool release_quarantine(const std::string& worker_id, const std::string& reason);
   // Calls the workers that are up take at once: tiles_per_worker each.
   int slots_up() const;
   std::vector<WorkerStatus> workers() const;

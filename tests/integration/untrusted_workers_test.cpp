@@ -359,6 +359,40 @@ TEST_F(UntrustedWorkersTest, SpotChecksCatchAWorkerWhosePixelsOnlyLookRight) {
   EXPECT_TRUE(failures_of(honest2.address()).empty());
 }
 
+// Two independent workers answering a job with the same impossible values (what an engine bug
+// that the job meets looks like; issue #32: a 3e38 light made every honest worker's tiles +inf,
+// and each was quarantined in turn, the job RUNNING for ever): the job fails saying it is the
+// job's own, and no worker stays quarantined for it. A worker whose impossible values nobody
+// else renders is still quarantined (MalformedRepliesNeverReachTheImage...).
+TEST_F(UntrustedWorkersTest, AJobThatTwoWorkersRenderToTheSameImpossibleValuesFailsAndNoWorkerStaysQuarantined) {
+  const auto fakes = std::array{fake_worker("first", test::Lie::NaN), fake_worker("second", test::Lie::NaN)};
+  test::FakeWorker &first = *fakes[0], &second = *fakes[1];
+  ASSERT_FALSE(first.address().empty() || second.address().empty());
+  second.hold_after(0);  // until the first has been caught, so that the two answer in turn
+  ASSERT_NO_FATAL_FAILURE(start_scheduler({"--batch-ms", "0", "--worker", first.address(), "--worker",
+                                           second.address()}));
+  const std::string id = submit(job_spec());
+  ASSERT_TRUE(watching());
+  ASSERT_TRUE(eventually([&] { return quarantined(first.address()); })) << scheduler_->process().output();
+  second.release();
+  const v1::Job job = finish(id);
+  ASSERT_EQ(job.state(), v1::JOB_STATE_FAILED) << scheduler_->process().output();
+  EXPECT_NE(job.failure_reason().find("both rendered this job to values no engine should make"), std::string::npos)
+      << job.failure_reason();
+  EXPECT_NE(job.failure_reason().find("rgba plane"), std::string::npos) << job.failure_reason();
+  EXPECT_FALSE(quarantined(second.address())) << scheduler_->process().output();
+  // The first is back: listed up (or being probed), not quarantined.
+  ASSERT_TRUE(eventually([&] {
+    grpc::ClientContext context;
+    v1::ListWorkersResponse workers;
+    if (!stub_->ListWorkers(&context, v1::ListWorkersRequest(), &workers).ok()) return false;
+    for (const v1::WorkerInfo& w : workers.workers()) {
+      if (w.state() == v1::WORKER_STATE_QUARANTINED) return false;
+    }
+    return workers.workers_size() == 2;
+  })) << scheduler_->process().output();
+}
+
 // A worker that answers every unit INTERNAL at once (a broken install) beside an honest one: it
 // took 3 of 3 jobs down with it, each unit burning its attempts on it in milliseconds (issue
 // #32). Now its failures are charged to no unit but its first, it is kept off each job it failed
