@@ -70,6 +70,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   options.heartbeat_interval = ms(o.heartbeat_interval_s);
   options.exr_type = o.float_exr ? ExrPixelType::Float : ExrPixelType::Half;
   options.verify_fraction = o.verify_fraction;
+  options.remote_verify_fraction = o.remote_verify_fraction;
   options.limits = o.limits;
   // New jobs' scenes are loaded by this binary again, as `farm check-scene`, under the limits.
   options.scene_check_program = std::filesystem::read_symlink("/proc/self/exe");
@@ -247,6 +248,12 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "a second worker) is rendered again on another worker and must come back "
                 "bit-identical; a worker whose pixels differ, by a third worker's judgement, is "
                 "quarantined and its results for unfinished jobs are rendered again")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  s->add_option("--verify-remote-fraction", o->remote_verify_fraction,
+                "The same for workers on another host (not localhost, 127.x or ::1), when higher than "
+                "--verify-fraction: on by default, since their replies cross a network; 2% of their units "
+                "rendered twice, at least one a job. 0: only --verify-fraction")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   s->add_flag("--float", o->float_exr, "Write 32-bit float EXRs instead of half");

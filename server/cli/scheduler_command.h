@@ -31,6 +31,7 @@ struct SchedulerCommandOptions {
   double heartbeat_interval_s = 1;
   bool float_exr = false;
   double verify_fraction = 0;  // SchedulerOptions::verify_fraction
+  double remote_verify_fraction = 0.02;  // SchedulerOptions::remote_verify_fraction
   ServerSecurityOptions security;
   int max_priority = 100;             // above this needs the admin role
   SubmitLimits limits;                // SchedulerOptions::limits

@@ -50,6 +50,12 @@ bool names_own_server(const std::string& address, const std::string& listen_host
   return (is_wildcard_host(listen_host) || is_loopback_host(listen_host)) && is_loopback_host(host);
 }
 
+bool on_this_host(const std::string& address) {
+  if (address == "in-process") return true;
+  const std::string host = host_of(endpoint_of(address));
+  return is_loopback_host(host) || (host.size() > 2 && host.front() == '[' && is_loopback_host(host.substr(1, host.size() - 2)));
+}
+
 std::string worker_address_problem(const std::string& address) {
   if (address.empty()) return "the address is empty";
   if (address.size() > 261) return "the address is longer than 261 bytes";

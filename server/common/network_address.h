@@ -16,6 +16,11 @@ std::optional<int> port_of(const std::string& address);
 // listens there or on every interface. A scheduler refuses to be its own worker by it.
 bool names_own_server(const std::string& address, const std::string& listen_host, int port);
 
+// Whether a worker at `address` runs on this machine: a loopback host (localhost, 127.x, ::1), or
+// "in-process" (the embedded farm's worker). Its results are trusted as far as this machine is;
+// another host's are spot-checked by default (SchedulerOptions::remote_verify_fraction).
+bool on_this_host(const std::string& address);
+
 // Why `address` cannot be a worker's address as a registering worker gives it (HOST:PORT: a DNS
 // name or an IP literal, a port from 1 to 65535; no "unix:" socket, no scheme, at most 261
 // bytes); empty when it can.

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "server/common/disk_full.h"
+#include "server/common/network_address.h"
 #include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "server/common/service_error.h"
@@ -103,6 +104,7 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       outage_(parts.outage),
       log_(parts.log),
       chooser_(options.verify_fraction, random_key()),
+      remote_chooser_(std::max(options.verify_fraction, options.remote_verify_fraction), random_key()),
       failures_(WorkerFailures::Options{options.job_failures_per_worker, options.worker_backoff,
                                         options.worker_backoff_max}) {}
 
@@ -484,10 +486,12 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
       return;
     }
   }
-  if (chooser_.enabled()) {
+  // Spot checks by default for workers on other hosts (their replies crossed a network).
+  const SpotCheckChooser& chooser = on_this_host(worker) ? chooser_ : remote_chooser_;
+  if (chooser.enabled()) {
     std::optional<TileSpan> span;
     if (const std::optional<v1::Job> job = store_.get_job(batch.job_id)) {
-      span = chooser_.span(batch, job->tiles_total(), *settings);
+      span = chooser.span(batch, job->tiles_total(), *settings);
     }
     // With no other worker to ask, there is nobody to check against: kept as it is.
     if (span && workers_.any_available_except({w.id})) {

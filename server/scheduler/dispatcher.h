@@ -215,7 +215,8 @@ class Dispatcher {
   DiskFullPause& pause_;
   StoreOutage& outage_;
   spdlog::logger& log_;
-  SpotCheckChooser chooser_;
+  SpotCheckChooser chooser_;         // workers on this host
+  SpotCheckChooser remote_chooser_;  // workers on other hosts
   UnitMetrics metrics_;
   mutable std::mutex mutex_;
   std::condition_variable work_;  // a job queued, a batch back in the queue, stopping

@@ -54,6 +54,11 @@ struct SchedulerOptions {
   // Spot checks: this fraction of each job's tiles (at least one when > 0) is rendered again on
   // another worker and compared bit for bit before it is kept (spot_checks.h). 0: none.
   double verify_fraction = 0.0;
+  // The same for workers on another host (network_address.h's on_this_host), when higher: their
+  // replies crossed a network and a machine this scheduler does not run. Chosen from its cost:
+  // 2% of such a worker's units rendered twice (at least one a job), the batch held until the
+  // second rendering agrees (README, "Spot checks"). 0 leaves only verify_fraction.
+  double remote_verify_fraction = 0.02;
   // The work one SubmitJob may start (submit_limits.h); over a limit is RESOURCE_EXHAUSTED.
   SubmitLimits limits;
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
