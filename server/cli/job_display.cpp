@@ -1,3 +1,4 @@
+#include "server/common/job_eta.h"
 #include "server/cli/job_display.h"
 
 #include <fmt/format.h>
@@ -116,9 +117,14 @@ v1::Job follow(SchedulerClient& client, const std::string& job_id,
   v1::JobState shown = v1::JOB_STATE_UNSPECIFIED;
   const v1::Job last = client.watch(job_id, [&](const v1::JobEvent& event) {
     const v1::Job& job = event.job();
-    bar.update(job.tiles_done(), std::max<std::size_t>(1, job.tiles_total()), frames_of(job));
+    const std::optional<std::chrono::seconds> eta = job_eta(job, std::chrono::system_clock::now());
+    const std::string eta_text = eta ? "ETA " + short_duration(static_cast<double>(eta->count())) : std::string();
+    const std::string frames = frames_of(job);
+    bar.update(job.tiles_done(), std::max<std::size_t>(1, job.tiles_total()),
+               frames.empty() ? eta_text : eta_text.empty() ? frames : frames + ", " + eta_text);
     if (!terminal && job.state() != shown) {
-      fmt::print("job {}: {} ({})\n", job_id, to_string(job.state()), progress_of(job));
+      fmt::print("job {}: {} ({}{})\n", job_id, to_string(job.state()), progress_of(job),
+                 eta_text.empty() ? "" : ", " + eta_text);
       std::fflush(stdout);
       shown = job.state();
     }

@@ -1,3 +1,4 @@
+#include "server/common/job_eta.h"
 #include "server/cli/status_command.h"
 
 #include <fmt/format.h>
@@ -51,11 +52,13 @@ std::string duration_of(const v1::Job& job) {
   const double end = job.has_finished_at() && job.finished_at().seconds() > 0
                          ? static_cast<double>(job.finished_at().seconds()) + job.finished_at().nanos() * 1e-9
                          : std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-  const double s = std::max(0.0, end - (static_cast<double>(job.started_at().seconds()) + job.started_at().nanos() * 1e-9));
-  const auto whole = static_cast<long long>(s);
-  if (s < 60) return fmt::format("{:.1f}s", s);
-  if (s < 3600) return fmt::format("{}m{:02}s", whole / 60, whole % 60);
-  return fmt::format("{}h{:02}m", whole / 3600, whole / 60 % 60);
+  return short_duration(end - (static_cast<double>(job.started_at().seconds()) + job.started_at().nanos() * 1e-9));
+}
+
+// "1m05s" left at the units' measured rate; "-" for a job not running or not measured yet.
+std::string eta_of(const v1::Job& job) {
+  const std::optional<std::chrono::seconds> eta = job_eta(job, std::chrono::system_clock::now());
+  return eta ? short_duration(static_cast<double>(eta->count())) : "-";
 }
 
 // At most `n` characters (bytes of ASCII; a cut never splits a UTF-8 sequence), "..." when cut.
@@ -85,15 +88,15 @@ int run_status(StatusOptions& o) {
     fmt::print("no jobs on {}{}\n", client.address(), o.states.empty() && o.name.empty() ? "" : " match");
     return 0;
   }
-  constexpr const char* kRow = "{:<16}  {:<20}  {:<9}  {:>3}  {:>20}  {:>8}  {:<19}  {}\n";
+  constexpr const char* kRow = "{:<16}  {:<20}  {:<9}  {:>3}  {:>20}  {:>8}  {:>8}  {:<19}  {}\n";
   const auto row = [](std::string line) {  // without the blanks an empty last column leaves
     while (line.size() > 1 && line[line.size() - 2] == ' ') line.erase(line.size() - 2, 1);
     fmt::print("{}", line);
   };
-  row(fmt::format(kRow, "ID", "NAME", "STATE", "PRI", "PROGRESS", "DURATION", "SUBMITTED", "FAILURE"));
+  row(fmt::format(kRow, "ID", "NAME", "STATE", "PRI", "PROGRESS", "DURATION", "ETA", "SUBMITTED", "FAILURE"));
   for (const v1::Job& job : jobs) {
     row(fmt::format(kRow, job.job_id(), clipped(job.name(), 20), state_label(job), job.priority(),
-                    progress_of(job), duration_of(job), local_time(job.submitted_at()),
+                    progress_of(job), duration_of(job), eta_of(job), local_time(job.submitted_at()),
                     clipped(job.failure_reason(), 60)));
   }
   if (more) fmt::print("(the newest {}; more match: --limit 0 lists them all)\n", jobs.size());

@@ -34,14 +34,25 @@ const farm = (() => {
     if (!t || t.startsWith('1970')) return '-';
     return new Date(t).toLocaleString();
   }
-  function duration(job) {
-    const start = seconds(job.started_at);
-    if (!start) return '-';
-    const end = seconds(job.finished_at) || Date.now() / 1000;
-    const s = Math.max(0, end - start);
+  // "42.0s", "3m05s", "2h10m", as server/common/job_eta.cpp's short_duration.
+  function shortDuration(s) {
+    s = Math.max(0, s);
     if (s < 60) return s.toFixed(1) + 's';
     if (s < 3600) return `${Math.floor(s / 60)}m${String(Math.floor(s % 60)).padStart(2, '0')}s`;
     return `${Math.floor(s / 3600)}h${String(Math.floor((s / 60) % 60)).padStart(2, '0')}m`;
+  }
+  function duration(job) {
+    const start = seconds(job.started_at);
+    if (!start) return '-';
+    return shortDuration((seconds(job.finished_at) || Date.now() / 1000) - start);
+  }
+  // Time left at the units' measured rate, as server/common/job_eta.cpp's job_eta: '-' unless the
+  // job runs, is not paused and has a unit done.
+  function eta(job) {
+    const start = seconds(job.started_at), done = Number(job.tiles_done || 0), total = Number(job.tiles_total || 0);
+    if (job.state !== 'JOB_STATE_RUNNING' || job.paused || !start || done === 0 || done >= total) return '-';
+    const elapsed = Date.now() / 1000 - start;
+    return elapsed > 0 ? shortDuration(Math.ceil((elapsed / done) * (total - done))) : '-';
   }
   const tiles = (first, count) => (count > 1 ? `units ${first}-${first + count - 1}` : `unit ${first}`);
 
@@ -143,6 +154,6 @@ const farm = (() => {
     return td;
   }
 
-  return { api, post, isFinal, stateOf, stateName, progressText, isAnimation, when, duration, describe,
+  return { api, post, isFinal, stateOf, stateName, progressText, isAnimation, when, duration, eta, describe,
            actionButtons, events, header, text, cell };
 })();

@@ -52,6 +52,7 @@
     add('Started', farm.when(job.started_at));
     add('Finished', farm.when(job.finished_at));
     add('Duration', farm.duration(job));
+    add('ETA', farm.eta(job), 'eta');
     if (job.tile_failures) add('Unit retries', String(job.tile_failures));
     if (job.failure_reason) add('Failure', job.failure_reason, 'failure');
     const s = job.stats || {};
