@@ -1,3 +1,4 @@
+#include "server/common/job_eta.h"
 #include "server/cli/workers_command.h"
 
 #include <fmt/format.h>
@@ -25,17 +26,20 @@ std::string state_of(const v1::WorkerInfo& w) {
     case v1::WORKER_STATE_DOWN: return "down";
     case v1::WORKER_STATE_QUARANTINED: return "quarantined";
     case v1::WORKER_STATE_BACKED_OFF: return "backed-off";
+    case v1::WORKER_STATE_LOST: return "lost";
     default: return "unknown";
   }
 }
 
-// "0.4s ago"; "-" for a worker that does not heartbeat (a static one).
-std::string heartbeat_of(const v1::WorkerInfo& w) {
-  if (!w.has_last_heartbeat()) return "-";
-  const double then = static_cast<double>(w.last_heartbeat().seconds()) + w.last_heartbeat().nanos() * 1e-9;
+// "0.4s ago", "3m05s ago".
+std::string ago(const google::protobuf::Timestamp& t) {
+  const double then = static_cast<double>(t.seconds()) + t.nanos() * 1e-9;
   const double now = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-  return fmt::format("{:.1f}s ago", std::max(0.0, now - then));
+  return short_duration(now - then) + " ago";
 }
+
+// "0.4s ago"; "-" for a worker that does not heartbeat (a static one).
+std::string heartbeat_of(const v1::WorkerInfo& w) { return w.has_last_heartbeat() ? ago(w.last_heartbeat()) : "-"; }
 
 int run_workers(const WorkersOptions& o) {
   SchedulerClient client(resolve_scheduler_connection(o.scheduler));
@@ -64,6 +68,9 @@ int run_workers(const WorkersOptions& o) {
       fmt::print("    backed off for {:.1f}s more: {}\n", std::max(0.0, until - now), w.back_off_reason());
     }
     for (const std::string& job : w.blocked_jobs()) fmt::print("    kept off job {}: it failed its units\n", job);
+    if (w.state() == v1::WORKER_STATE_LOST) {
+      fmt::print("    lost {}: {}\n", ago(w.lost_at()), w.lost_reason());
+    }
   }
   return 0;
 }
@@ -73,7 +80,7 @@ int run_workers(const WorkersOptions& o) {
 void add_workers_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<WorkersOptions>();
   CLI::App* workers = app.add_subcommand(
-      "workers", "List the scheduler's workers: address, state (up, down, backed-off, quarantined), threads, "
+      "workers", "List the scheduler's workers: address, state (up, down, backed-off, quarantined, lost), threads, "
                  "engines, units done and failed, last heartbeat, units rendering now, jobs it is kept off");
   workers->add_flag("--json", o->json, "Print the list as JSON (the fields of farm.v1.WorkerInfo)");
   add_scheduler_connection_options(*workers, o->scheduler);

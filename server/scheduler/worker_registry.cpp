@@ -54,6 +54,8 @@ std::shared_ptr<WorkerEntry> WorkerRegistry::add(std::shared_ptr<TileWorker> wor
       quarantined = it->second;
     }
     workers_.emplace(entry->id, entry);
+    // Back at its address: no longer listed as lost.
+    std::erase_if(lost_, [&](const WorkerStatus& s) { return s.address == entry->worker->describe(); });
   }
   probe_.notify_all();
   log_.info("worker {} added{}", entry->id, registered ? " (registered)" : "");
@@ -61,12 +63,44 @@ std::shared_ptr<WorkerEntry> WorkerRegistry::add(std::shared_ptr<TileWorker> wor
   return entry;
 }
 
+namespace {
+
+// A worker as the registry sees it now; the heartbeat's steady time as wall-clock time.
+WorkerStatus status_of(const std::string& id, const WorkerEntry& w) {
+  const auto steady_now = std::chrono::steady_clock::now();
+  const auto wall_now = std::chrono::system_clock::now();
+  return {.id = id,
+          .address = w.worker->describe(),
+          .registered = w.registered,
+          .up = !w.down,
+          .quarantined = w.quarantined,
+          .quarantine_reason = w.quarantine_reason,
+          .facts = w.facts,
+          .added_at = w.added_at,
+          .last_heartbeat = wall_now - std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                           steady_now - w.last_heartbeat),
+          .units_done = w.units_done,
+          .units_failed = w.units_failed,
+          .backed_off_until = w.backed_off_until,
+          .back_off_reason = w.back_off_reason};
+}
+
+constexpr std::size_t kLostKept = 64;
+constexpr auto kLostFor = std::chrono::hours(1);
+
+}  // namespace
+
 bool WorkerRegistry::remove(const std::string& worker_id, const std::string& reason) {
   {
     std::lock_guard lock(mutex_);
     auto it = workers_.find(worker_id);
     if (it == workers_.end()) return false;
     it->second->removed = true;
+    WorkerStatus lost = status_of(worker_id, *it->second);
+    lost.lost_at = std::chrono::system_clock::now();
+    lost.lost_reason = reason;
+    lost_.push_back(std::move(lost));
+    if (lost_.size() > kLostKept) lost_.erase(lost_.begin());
     workers_.erase(it);
   }
   log_.warn("worker {} removed: {}", worker_id, reason);
@@ -179,27 +213,20 @@ int WorkerRegistry::slots_up() const {
   return slots;
 }
 
+
 std::vector<WorkerStatus> WorkerRegistry::workers() const {
   std::lock_guard lock(mutex_);
   std::vector<WorkerStatus> out;
-  // The heartbeat's steady time as wall-clock time, for display.
-  const auto steady_now = Clock::now();
-  const auto wall_now = std::chrono::system_clock::now();
-  for (const auto& [id, w] : workers_) {
-    out.push_back({.id = id,
-                   .address = w->worker->describe(),
-                   .registered = w->registered,
-                   .up = !w->down,
-                   .quarantined = w->quarantined,
-                   .quarantine_reason = w->quarantine_reason,
-                   .facts = w->facts,
-                   .added_at = w->added_at,
-                   .last_heartbeat = wall_now - std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                                                    steady_now - w->last_heartbeat),
-                   .units_done = w->units_done,
-                   .units_failed = w->units_failed,
-                   .backed_off_until = w->backed_off_until,
-                   .back_off_reason = w->back_off_reason});
+  for (const auto& [id, w] : workers_) out.push_back(status_of(id, *w));
+  return out;
+}
+
+std::vector<WorkerStatus> WorkerRegistry::lost_workers() const {
+  std::lock_guard lock(mutex_);
+  std::vector<WorkerStatus> out;
+  const auto now = std::chrono::system_clock::now();
+  for (const WorkerStatus& s : lost_) {
+    if (now - s.lost_at < kLostFor) out.push_back(s);
   }
   return out;
 }

@@ -94,6 +94,8 @@ struct WorkerStatus {
   std::uint64_t units_failed = 0;
   std::chrono::system_clock::time_point backed_off_until = {};  // in the future: backed off
   std::string back_off_reason = {};
+  std::chrono::system_clock::time_point lost_at = {};  // set in lost_workers(): when it was removed
+  std::string lost_reason = {};
 };
 
 class WorkerRegistry {
@@ -137,6 +139,10 @@ class WorkerRegistry {
   // Calls the workers that are up take at once: tiles_per_worker each.
   int slots_up() const;
   std::vector<WorkerStatus> workers() const;
+  // Workers removed in the last hour (at most 64, newest last), with when and why: a worker
+  // killed mid-job shows as lost rather than vanishing. One that registers again at the same
+  // address is no longer listed here.
+  std::vector<WorkerStatus> lost_workers() const;
 
   // Ends the monitor, the prober and every await_up. Idempotent.
   void stop();
@@ -156,6 +162,7 @@ class WorkerRegistry {
   std::uint64_t next_id_ = 0;
   std::map<std::string, std::shared_ptr<WorkerEntry>> workers_;
   std::map<std::string, std::string> quarantined_addresses_;  // address -> why
+  std::vector<WorkerStatus> lost_;  // lost_workers(), oldest first
   // Declared last: started once the fields above exist.
   std::thread monitor_;
   std::thread prober_;

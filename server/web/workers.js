@@ -20,7 +20,7 @@
         const state = w.state.replace('WORKER_STATE_', '').toLowerCase();
         const beat = w.last_heartbeat ? ((Date.now() - Date.parse(w.last_heartbeat)) / 1000).toFixed(1) + 's ago' : '-';
         farm.cell(tr, 'address', w.address);
-        const why = w.quarantine_reason || w.back_off_reason || '';
+        const why = w.quarantine_reason || w.back_off_reason || w.lost_reason || '';
         const kept_off = (w.blocked_jobs || []).length ? ' (kept off ' + w.blocked_jobs.length + ' job(s))' : '';
         farm.cell(tr, 'state ' + state.replace('_', '-'), state.replace('_', ' ') + (why ? ': ' + why : '') + kept_off);
         farm.cell(tr, '', w.threads ? String(w.threads) : '-');

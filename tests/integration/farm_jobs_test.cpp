@@ -280,6 +280,24 @@ TEST(FarmJobsLostWorkerTest, TheLogNamesAKilledWorkerAndARetryOnAnotherFinishesT
   EXPECT_NE(log.output.find("failed on " + address), std::string::npos) << log.output;
   EXPECT_NE(log.output.find("-> failed"), std::string::npos) << log.output;
 
+  // farm workers lists it as lost, with when and why, rather than dropping it (issue #32).
+  nlohmann::json lost;
+  const auto listed_lost = [&] {
+    const test::CommandResult r = test::run_command(test::farm_command("workers --json --scheduler " + farm.address()));
+    if (r.exit_code != 0) return false;
+    for (const nlohmann::json& w : nlohmann::json::parse(r.output)) {
+      if (w["address"] == address && w["state"] == "WORKER_STATE_LOST") lost = w;
+    }
+    return lost.is_object();
+  };
+  const auto until = std::chrono::steady_clock::now() + kWait;
+  while (!listed_lost() && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(100ms);
+  ASSERT_TRUE(lost.is_object()) << "the killed worker is not listed as lost";
+  EXPECT_TRUE(lost.contains("lost_at")) << lost.dump();
+  EXPECT_NE(lost["lost_reason"].get<std::string>().find("heartbeat"), std::string::npos) << lost.dump();
+  const test::CommandResult table = test::run_command(test::farm_command("workers --scheduler " + farm.address()));
+  EXPECT_NE(table.output.find("lost"), std::string::npos) << table.output;
+
   // Another worker joins; the retry renders what was not done.
   test::WorkerProcess second({"--scheduler", farm.address(), "--threads", "1", "--cache-dir", (dir.path() / "w9").string()});
   ASSERT_FALSE(second.address().empty());
