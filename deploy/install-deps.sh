@@ -36,8 +36,8 @@ packages=(
   # which Debian ships in compiler-rt's package rather than a libfuzzer one of its own
   clang-14 libclang-rt-14-dev
   # the Python client package (proto/python: stubs generated from proto/farm.proto by grpc_tools
-  # when pip builds it)
-  python3-grpcio python3-grpc-tools python3-protobuf python3-setuptools python3-pip
+  # when pip builds it; python3-wheel: setuptools 66 builds wheels with it)
+  python3-grpcio python3-grpc-tools python3-protobuf python3-setuptools python3-wheel python3-pip
   # the scheduler's dashboard (`farm scheduler --http`), and the browser its test drives
   libcpp-httplib-dev chromium chromium-driver python3-selenium
   # Prometheus's own parser of its text format, which reads the dashboard's /metrics in its test

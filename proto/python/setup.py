@@ -14,6 +14,7 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 
 from setuptools import setup
 from setuptools.command.build_py import build_py
@@ -71,4 +72,11 @@ class BuildPyWithStubs(build_py):
         return outputs
 
 
-setup(cmdclass={"build_py": BuildPyWithStubs})
+# Nothing is written into the source folder (issue #32: pip's in-tree build left build/ and
+# farm_client.egg-info/ beside the code): setuptools' build and egg-info folders go to a temporary
+# folder of this build, which the operating system's temporary space cleans up.
+SCRATCH = tempfile.mkdtemp(prefix="farm-client-build-")
+
+setup(cmdclass={"build_py": BuildPyWithStubs},
+      options={"build": {"build_base": os.path.join(SCRATCH, "build")},
+               "egg_info": {"egg_base": SCRATCH}})

@@ -1181,17 +1181,26 @@ TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFe
   ASSERT_TRUE(stub_);
   stub_ = test::scheduler_stub(scheduler->address(), ClientIdentity{admin, false, {}});
 
-  // The package is built from a copy, so that pip's build folders stay out of the source tree.
+  // Built from a copy of the source folder, which the build must leave as it was (issue #32: pip's
+  // in-tree build wrote build/ and farm_client.egg-info/ into it).
   const fs::path source = dir_ / "src" / "proto";
   fs::create_directories(source);
   fs::copy(test::kSource / "proto/python", source / "python", fs::copy_options::recursive);
   fs::copy_file(test::kSource / "proto/farm.proto", source / "farm.proto");
+  const auto listing = [&] {
+    std::vector<std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(source)) files.push_back(fs::relative(e.path(), source).string());
+    std::sort(files.begin(), files.end());
+    return files;
+  };
+  const std::vector<std::string> before = listing();
   const fs::path venv = dir_ / "venv";
   const test::CommandResult made = test::run_command(
       "/usr/bin/python3 -m venv --system-site-packages " + test::shell_quote(venv.string()) + " && " +
       test::shell_quote((venv / "bin/pip").string()) + " install --quiet --no-build-isolation --no-index " +
       test::shell_quote((source / "python").string()));
   ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_EQ(listing(), before) << "the build wrote into the source folder";
   const test::CommandResult where = test::run_command(
       test::shell_quote((venv / "bin/python").string()) + " -c 'import farm_client._gen.farm_pb2 as m; print(m.__file__)'");
   ASSERT_EQ(where.exit_code, 0) << where.output;
