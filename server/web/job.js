@@ -97,6 +97,16 @@
     img.src = `/api/v1/jobs/${id}/file?kind=preview&frame=${f}`;
   }
 
+  // The frames known to be merged: only theirs are linked for download (issue #32: links to frames
+  // not merged yet led to errors).
+  const mergedFrames = new Set();
+  function frameMerged(f) {
+    thumbDone(f);
+    if (mergedFrames.has(f)) return;
+    mergedFrames.add(f);
+    downloads();
+  }
+
   // Every frame of a job that succeeded is merged (its log may have dropped some merges past its
   // limit).
   function thumbsIfSucceeded() {
@@ -112,8 +122,10 @@
       a.textContent = label;
       box.append(a, ' ');
     };
-    if (job.frames_done === 0) { box.textContent = 'nothing merged yet'; return; }
-    const list = farm.isAnimation(job) ? frames() : [job.frame_first];
+    const succeeded = job.state === 'JOB_STATE_SUCCEEDED';
+    const list = farm.isAnimation(job) ? frames().filter((f) => succeeded || mergedFrames.has(f))
+                                       : (job.frames_done > 0 ? [job.frame_first] : []);
+    if (list.length === 0) { box.textContent = 'nothing merged yet'; return; }
     for (const f of list.slice(0, 200)) {
       if (farm.isAnimation(job)) box.append(`frame ${f}: `);
       link(`/api/v1/jobs/${id}/file?kind=exr&frame=${f}`, 'EXR');
@@ -129,14 +141,14 @@
     document.getElementById('title').textContent = `${job.name} (${job.job_id})`;
     document.title = `farm: ${job.name}`;
     facts();
-    if (job.frames_done !== merged) downloads();
+    if (job.frames_done !== merged || job.state === 'JOB_STATE_SUCCEEDED') downloads();
     thumbsIfSucceeded();
   }
 
   function logEntry(number, at, event) {
     if (number <= lastLogged) return;
     lastLogged = number;
-    if (event.frame_finished) thumbDone(event.frame_finished.frame);
+    if (event.frame_finished) frameMerged(event.frame_finished.frame);
     const tr = document.createElement('tr');
     farm.cell(tr, '', String(number));
     farm.cell(tr, '', new Date(at).toLocaleTimeString());
@@ -168,7 +180,7 @@
       update(event.job);
       if (event.tile_finished) refreshImage(event.tile_finished.frame);
       if (event.pass_finished) refreshImage(event.pass_finished.frame);
-      if (event.frame_finished) { refreshImage(event.frame_finished.frame); thumbDone(event.frame_finished.frame); }
+      if (event.frame_finished) { refreshImage(event.frame_finished.frame); frameMerged(event.frame_finished.frame); }
       if (!event.tile_finished) loadLog().catch(show);  // the log numbers its entries: read them from it
     }, () => farm.api(`/api/v1/jobs/${id}`).then(update).then(loadLog).catch(show));
   }

@@ -34,7 +34,7 @@
     farm.cell(tr, 'priority', String(job.priority));
     farm.cell(tr, 'submitted', farm.when(job.submitted_at));
     farm.cell(tr, 'duration', farm.duration(job));
-    farm.cell(tr, '', farm.actionButtons(job, (reply) => {
+    farm.cell(tr, 'actions', farm.actionButtons(job, (reply) => {
       if (!reply) return;
       if (reply.bytes_freed !== undefined) {  // deleted: no event says so
         tr.remove();

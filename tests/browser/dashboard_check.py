@@ -33,7 +33,7 @@ def browser():
     options = webdriver.ChromeOptions()
     options.binary_location = "/usr/bin/chromium"
     for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                 "--window-size=1400,1000"):
+                 "--window-size=1280,900"):  # a laptop's width: the tables must fit it (issue #32)
         options.add_argument(flag)
     return webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
 
@@ -63,6 +63,11 @@ def click(driver, selector):
     """Finds and clicks in one step of the page (an element found earlier may have been redrawn)."""
     return driver.execute_script("const e = document.querySelector(arguments[0]); if (!e) return false; "
                                  "e.click(); return true;", selector)
+
+
+def overflow(driver):
+    """How many CSS pixels the page is wider than the window (0: it fits, no sideways scrolling)."""
+    return driver.execute_script("return Math.max(0, document.documentElement.scrollWidth - window.innerWidth);")
 
 
 def units_done(text):
@@ -102,6 +107,8 @@ def run(args, driver, seen):
                      lambda: (lambda n: n if n > first else None)(units_done(text_of(driver, cell))))
     assert driver.execute_script("return window.farmNoReload === true;"), "the jobs page reloaded"
     seen["progress"] = [first, later]
+    seen["jobs_overflow_px"] = overflow(driver)
+    assert seen["jobs_overflow_px"] == 0, f"the jobs page is {seen['jobs_overflow_px']} px wider than 1280"
 
     # The job page: its image changes while the job renders.
     driver.get(f"{args.url}/job.html?id={args.job}")
@@ -126,6 +133,8 @@ def run(args, driver, seen):
     seen["workers_up"] = wait_for(f"{args.workers} workers up", lambda: (lambda n: n if n == args.workers else None)(
         driver.execute_script("return [...document.querySelectorAll('#workers tbody td.state')]"
                               ".filter(td => td.textContent === 'up').length;")))
+    seen["workers_overflow_px"] = overflow(driver)
+    assert seen["workers_overflow_px"] == 0, f"the workers page is {seen['workers_overflow_px']} px wider than 1280"
 
     if args.animation:
         animation(args, driver, seen)
@@ -159,6 +168,14 @@ def animation(args, driver, seen):
         driver.execute_script(api, job, {})), every=0.02)
     seen["animation_frames_done_at_open"] = done["frames_done"]
     driver.get(f"{args.url}/job.html?id={args.animation}")
+    # While it renders, every download link is of a merged frame: each one is there to fetch.
+    wait_for("the first download links", lambda: driver.find_elements(By.CSS_SELECTOR, "#downloads a"))
+    links = driver.execute_script("return [...document.querySelectorAll('#downloads a')].map(a => a.href)"
+                                  ".filter(h => h.includes('frame='));")
+    statuses = driver.execute_script("return Promise.all(arguments[0].map(h => fetch(h).then(r => r.status)));", links)
+    seen["animation_links_at_open"] = len(links)
+    broken = [h for h, s in zip(links, statuses) if s != 200]
+    assert not broken, f"links to frames not merged: {broken[:4]} ({len(broken)} of {len(links)})"
     wait_for("the animation to succeed", lambda: text_of(driver, "#facts dd.state") == "succeeded")
     loaded = "return [...document.querySelectorAll('#thumbs img')].filter(i => i.complete && i.naturalWidth > 0).length"
     try:
