@@ -46,6 +46,15 @@ Decoded decode(jpeg_decompress_struct& cinfo, JpegError& error, std::FILE* in, i
   return Decoded::ok;
 }
 
+// libjpeg's errors come back to `error` (a longjmp to its jump buffer), its warnings are dropped.
+void start_decompress(jpeg_decompress_struct& cinfo, JpegError& error) {
+  cinfo.err = jpeg_std_error(&error.manager);
+  error.manager.error_exit = on_jpeg_error;
+  error.manager.emit_message = on_jpeg_message;
+  cinfo.client_data = &error;
+  jpeg_create_decompress(&cinfo);
+}
+
 bool read_header_size(jpeg_decompress_struct& cinfo, JpegError& error, std::FILE* in, int& width, int& height) {
   if (setjmp(error.jump) != 0) return false;
   jpeg_stdio_src(&cinfo, in);
@@ -60,11 +69,7 @@ bool read_header_size(jpeg_decompress_struct& cinfo, JpegError& error, std::FILE
 std::pair<int, int> read_jpeg_size(std::FILE* in, const std::filesystem::path& name) {
   jpeg_decompress_struct cinfo{};
   JpegError error;
-  cinfo.err = jpeg_std_error(&error.manager);
-  error.manager.error_exit = on_jpeg_error;
-  error.manager.emit_message = on_jpeg_message;
-  cinfo.client_data = &error;
-  jpeg_create_decompress(&cinfo);
+  start_decompress(cinfo, error);
   int width = 0, height = 0;
   const bool read = read_header_size(cinfo, error, in, width, height);
   jpeg_destroy_decompress(&cinfo);
@@ -75,11 +80,7 @@ std::pair<int, int> read_jpeg_size(std::FILE* in, const std::filesystem::path& n
 DecodedImage read_jpeg(std::FILE* in, const std::filesystem::path& name, int max_side) {
   jpeg_decompress_struct cinfo{};
   JpegError error;
-  cinfo.err = jpeg_std_error(&error.manager);
-  error.manager.error_exit = on_jpeg_error;
-  error.manager.emit_message = on_jpeg_message;
-  cinfo.client_data = &error;
-  jpeg_create_decompress(&cinfo);
+  start_decompress(cinfo, error);
   std::vector<std::uint8_t> pixels;
   int width = 0, height = 0, channels = 0;
   const Decoded result = decode(cinfo, error, in, max_side, pixels, width, height, channels);

@@ -240,14 +240,7 @@ void Dispatcher::quarantine(const std::string& worker_id, const std::string& wor
         fmt::format("the result of worker {} is discarded and rendered again: the worker is quarantined ({})",
                     worker, reason);
     log_.warn("job {} {}: {}", b.job_id, describe(b), why);
-    events_.publish(b.job_id, [&](v1::JobEvent& event) {
-      v1::TileFailed& f = *event.mutable_tile_failed();
-      f.set_tile_index(b.first);
-      f.set_tile_count(b.count);
-      f.set_worker(worker);
-      f.set_reason(why);
-      f.set_will_retry(true);
-    });
+    announce_failure(b.job_id, b.first, b.count, worker, why, true);
   }
   settle_stranded();
   work_.notify_all();
@@ -659,14 +652,7 @@ void Dispatcher::settle(SpotCheck& check, const Judgement& j, const Opinion& agr
       const std::string kept = fmt::format("worker {}: {}; the worker is quarantined, the tiles are kept as {} rendered them",
                                            o.worker, why, check.own().worker);
       log_.warn("job {} {}: {}", batch.job_id, describe(check.span), kept);
-      events_.publish(batch.job_id, [&](v1::JobEvent& event) {
-        v1::TileFailed& f = *event.mutable_tile_failed();
-        f.set_tile_index(check.span.first);
-        f.set_tile_count(check.span.count);
-        f.set_worker(o.worker);
-        f.set_reason(kept);
-        f.set_will_retry(false);
-      });
+      announce_failure(batch.job_id, check.span.first, check.span.count, o.worker, kept, false);
     }
     quarantine(o.worker_id, o.worker, fmt::format("worker {}: {}", o.worker, why));
   }
@@ -883,6 +869,18 @@ void Dispatcher::charge_failure(WorkerEntry& w, const TileBatch& batch, const st
   if (charge.back_off.count() > 0) settle_stranded();  // a check that only this worker could have taken
 }
 
+void Dispatcher::announce_failure(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                                  const std::string& worker, const std::string& why, bool will_retry) {
+  events_.publish(job_id, [&](v1::JobEvent& event) {
+    v1::TileFailed& f = *event.mutable_tile_failed();
+    f.set_tile_index(first);
+    f.set_tile_count(count);
+    f.set_worker(worker);
+    f.set_reason(why);
+    f.set_will_retry(will_retry);
+  });
+}
+
 void Dispatcher::uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why) {
   const std::string worker = w.worker->describe();
   // Not the unit's own failure (the worker's: it fails other jobs too, or failed this one
@@ -891,14 +889,7 @@ void Dispatcher::uncharged_failure(WorkerEntry& w, const TileBatch& batch, const
             why);
   workers_.count_units(w.id, 0, batch.count);
   metrics_.failed(batch.count);
-  events_.publish(batch.job_id, [&](v1::JobEvent& event) {
-    v1::TileFailed& f = *event.mutable_tile_failed();
-    f.set_tile_index(batch.first);
-    f.set_tile_count(batch.count);
-    f.set_worker(worker);
-    f.set_reason(why);
-    f.set_will_retry(true);
-  });
+  announce_failure(batch.job_id, batch.first, batch.count, worker, why, true);
   requeue_when_stored(batch, w.id);
   work_.notify_all();
 }
@@ -941,14 +932,7 @@ void Dispatcher::lose_batch(const std::string& worker_id, const std::string& wor
 
 void Dispatcher::after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
                                v1::JobState before, const TileFailure& failure) {
-  events_.publish(batch.job_id, [&](v1::JobEvent& event) {
-    v1::TileFailed& f = *event.mutable_tile_failed();
-    f.set_tile_index(batch.first);
-    f.set_tile_count(batch.count);
-    f.set_worker(worker);
-    f.set_reason(why);
-    f.set_will_retry(failure.will_retry);
-  });
+  announce_failure(batch.job_id, batch.first, batch.count, worker, why, failure.will_retry);
   if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
     log_.error("job {} failed: {}", batch.job_id, failure.job.failure_reason());
     {

@@ -169,6 +169,9 @@ class Dispatcher {
   // (fail_batch) or the batch queued again uncharged, the worker kept off the job or backed off;
   // the job fails when every worker of the farm is kept off it.
   void charge_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind);
+  // Tells the job's watchers (and its log) that units first .. first + count - 1 failed on `worker`.
+  void announce_failure(const std::string& job_id, std::uint32_t first, std::uint32_t count, const std::string& worker,
+                        const std::string& why, bool will_retry);
   // Not the unit's own failure (the worker's): the batch queued again with no attempt counted,
   // the failure logged and announced as TileFailed.
   void uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why);
