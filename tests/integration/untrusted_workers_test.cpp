@@ -8,6 +8,8 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <signal.h>
+
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -391,6 +393,58 @@ TEST_F(UntrustedWorkersTest, AJobThatTwoWorkersRenderToTheSameImpossibleValuesFa
     }
     return workers.workers_size() == 2;
   })) << scheduler_->process().output();
+}
+
+// A worker's cached scene files are checked before they are used (issue #32: one corrupted on
+// disk while the worker was down, and after its restart a job SUCCEEDED with 92% of its pixels
+// wrong). The same job again, on the restarted worker whose cached model was damaged in place,
+// renders bit-identical to the first time.
+TEST_F(UntrustedWorkersTest, ASceneFileDamagedInAWorkersCacheIsNeverRendered) {
+  ASSERT_NO_FATAL_FAILURE(start_scheduler({"--float"}));
+  const v1::JobSpec spec = job_spec();
+  const fs::path cache = dir_ / "cache";
+  v1::Job first;
+  {
+    const auto worker = std::make_unique<test::WorkerProcess>(std::vector<std::string>{
+        "--threads", "1", "--cache-dir", cache.string(), "--scheduler", scheduler_->address()});
+    ASSERT_TRUE(worker->process().wait_for_line("registered with the scheduler", 30s)) << worker->process().output();
+    ASSERT_TRUE(test::upload_assets(*stub_, test::cornell_assets()).ok());
+    ASSERT_TRUE(test::submit(*stub_, spec, first).ok());
+    const std::optional<v1::Job> done = test::wait_for_job(*stub_, first.job_id(), final_state, 120s);
+    ASSERT_TRUE(done && done->state() == v1::JOB_STATE_SUCCEEDED) << scheduler_->process().output();
+    worker->process().send_signal(SIGTERM);
+    worker->process().wait_exit(30s);
+  }
+  // Its laid-out model, damaged in place (the blob it links to with it), while it is down.
+  std::vector<fs::path> laid_out;
+  for (const auto& e : fs::recursive_directory_iterator(cache)) {
+    if (e.path().filename() == "cornell_box.obj" && e.path().string().find("/scenes/") != std::string::npos) {
+      laid_out.push_back(e.path());
+    }
+  }
+  ASSERT_EQ(laid_out.size(), 1u) << "the worker laid the scene out under " << cache;
+  {
+    // The first vertex's sign turned into a 9: "v -1 ..." becomes "v 91 ...", a plausible file
+    // of a wrong model.
+    const std::string text = test::read_file(laid_out[0]);
+    const std::size_t vertex = text.find("\nv -");
+    ASSERT_NE(vertex, std::string::npos);
+    std::fstream f(laid_out[0], std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(vertex + 3));
+    f.put('9');
+  }
+  const auto restarted = std::make_unique<test::WorkerProcess>(std::vector<std::string>{
+      "--threads", "1", "--cache-dir", cache.string(), "--scheduler", scheduler_->address()});
+  ASSERT_TRUE(restarted->process().wait_for_line("registered with the scheduler", 30s)) << restarted->process().output();
+  v1::Job again;
+  ASSERT_TRUE(test::submit(*stub_, spec, again).ok());
+  const std::optional<v1::Job> done = test::wait_for_job(*stub_, again.job_id(), final_state, 120s);
+  ASSERT_TRUE(done) << scheduler_->process().output();
+  ASSERT_EQ(done->state(), v1::JOB_STATE_SUCCEEDED) << done->failure_reason();
+  const fs::path a = dir_ / "first.exr", b = dir_ / "again.exr";
+  ASSERT_TRUE(test::fetch_result(*stub_, first.job_id(), v1::RESULT_KIND_EXR, a).ok());
+  ASSERT_TRUE(test::fetch_result(*stub_, again.job_id(), v1::RESULT_KIND_EXR, b).ok());
+  EXPECT_EQ(differing_pixels(read_exr(a), read_exr(b)), 0);
 }
 
 // A worker that answers every unit INTERNAL at once (a broken install) beside an honest one: it
