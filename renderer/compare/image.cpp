@@ -157,13 +157,11 @@ std::pair<int, int> read_png_size(std::FILE* in, const fs::path& file) {
   return {static_cast<int>(width), static_cast<int>(height)};
 }
 
-}  // namespace
-
-Image read_image_header(const fs::path& file) {
-  const File in = open_image(file);
+// The size and kind of the image open in `in` (its format sniffed already), from its header.
+Image header_of(std::FILE* in, Format format, const fs::path& file) {
   Image header;
   try {
-    switch (sniff(in.get())) {
+    switch (format) {
       case Format::exr: {
         Imf::InputFile exr(file.c_str());
         const Imath::Box2i dw = exr.header().dataWindow();
@@ -171,8 +169,8 @@ Image read_image_header(const fs::path& file) {
         header.height = dw.max.y - dw.min.y + 1;
         return header;
       }
-      case Format::png: std::tie(header.width, header.height) = read_png_size(in.get(), file); break;
-      case Format::jpeg: std::tie(header.width, header.height) = read_jpeg_size(in.get(), file); break;
+      case Format::png: std::tie(header.width, header.height) = read_png_size(in, file); break;
+      case Format::jpeg: std::tie(header.width, header.height) = read_jpeg_size(in, file); break;
       case Format::unknown: throw InputError(fmt::format("{}: not an EXR, PNG or JPEG image", file.string()));
     }
   } catch (const InputError&) {
@@ -182,8 +180,16 @@ Image read_image_header(const fs::path& file) {
   } catch (const std::exception& e) {  // the readers' errors already name the file
     throw InputError(e.what());
   }
+  std::rewind(in);  // the decoder reads from the start
   header.display_referred = true;
   return header;
+}
+
+}  // namespace
+
+Image read_image_header(const fs::path& file) {
+  const File in = open_image(file);
+  return header_of(in.get(), sniff(in.get()), file);
 }
 
 std::pair<Image, Image> read_images_to_compare(const fs::path& reference, const fs::path& test) {
@@ -194,20 +200,22 @@ std::pair<Image, Image> read_images_to_compare(const fs::path& reference, const 
 
 Image read_image(const fs::path& file, int max_side) {
   if (max_side <= 0 || max_side > kMaxImageSide) max_side = kMaxImageSide;
-  const Image header = read_image_header(file);
+  // One open, one sniff: the header is checked before the decoder is given the file.
+  const File in = open_image(file);
+  const Format format = sniff(in.get());
+  const Image header = header_of(in.get(), format, file);
   const std::uint64_t pixels = static_cast<std::uint64_t>(std::max(0, header.width)) * static_cast<std::uint64_t>(std::max(0, header.height));
   if (pixels > kMaxComparedPixels) {
     throw InputError(fmt::format("{}: a {}x{} image ({} pixels) is more than the {} pixels (8192x8192) an image "
                                  "compared may have; it was not decoded",
                                  file.string(), header.width, header.height, pixels, kMaxComparedPixels));
   }
-  const File in = open_image(file);
   try {
-    switch (sniff(in.get())) {
+    switch (format) {
       case Format::exr: return read_exr_channels(file, max_side);
       case Format::png: return from_decoded(read_png(in.get(), file, max_side));
       case Format::jpeg: return from_decoded(read_jpeg(in.get(), file, max_side));
-      case Format::unknown: break;
+      case Format::unknown: break;  // header_of refused it
     }
   } catch (const InputError&) {
     throw;

@@ -52,8 +52,7 @@ bool names_own_server(const std::string& address, const std::string& listen_host
 
 bool on_this_host(const std::string& address) {
   if (address == "in-process") return true;
-  const std::string host = host_of(endpoint_of(address));
-  return is_loopback_host(host) || (host.size() > 2 && host.front() == '[' && is_loopback_host(host.substr(1, host.size() - 2)));
+  return is_loopback_host(host_of(endpoint_of(address)));
 }
 
 std::string worker_address_problem(const std::string& address) {

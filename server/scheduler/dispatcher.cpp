@@ -8,8 +8,8 @@
 #include <random>
 
 #include "server/common/disk_full.h"
-#include "server/common/network_address.h"
 #include "server/common/job_state.h"
+#include "server/common/network_address.h"
 #include "server/common/read_whole_file.h"
 #include "server/common/service_error.h"
 #include "server/common/tile_codec.h"
@@ -198,11 +198,13 @@ void Dispatcher::job_ended_elsewhere(const std::string& job_id) {
 
 void Dispatcher::stop_job_locked(const std::string& job_id) {
   impossible_.erase(job_id);
+  failures_.forget_job(job_id);
   cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; }, CancelReason::JobCancelled);
   drop_checks_locked(job_id);
 }
 
 void Dispatcher::worker_left(const std::string& worker_id, const std::string& reason) {
+  failures_.forget_worker(worker_id);  // its id is never given again
   {
     std::lock_guard lock(mutex_);
     cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },

@@ -523,6 +523,8 @@ grpc::Status SchedulerService::RegisterWorker(grpc::ServerContext* context,
     {
       std::lock_guard lock(mutex_);
       registered_[request->address()] = Registered{id, who.name};
+      registrant_of_.erase(old);
+      registrant_of_[id] = who.name;
     }
     response->set_worker_id(id);
     response->set_scheduler_id(core_.scheduler_id());
@@ -540,9 +542,7 @@ grpc::Status SchedulerService::Heartbeat(grpc::ServerContext* context, const v1:
     std::optional<std::string> registered_by;
     {
       std::lock_guard lock(mutex_);
-      for (const auto& [address, r] : registered_) {
-        if (r.worker_id == request->worker_id()) registered_by = r.principal;
-      }
+      if (const auto it = registrant_of_.find(request->worker_id()); it != registrant_of_.end()) registered_by = it->second;
     }
     if (registered_by && *registered_by != who.name && !who.roles.has(Role::admin)) {
       deny(who, fmt::format("heartbeat for worker {}: '{}' registered it", utf8_prefix(request->worker_id(), 80),

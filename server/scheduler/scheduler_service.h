@@ -93,6 +93,9 @@ class SchedulerService final : public v1::Scheduler::Service {
   const SchedulerAccess access_;
   std::mutex mutex_;
   std::map<std::string, Registered> registered_;  // by worker address
+  // Who registered each worker id now in registered_: a heartbeat, every second from every
+  // worker, finds its registrant in one look-up.
+  std::map<std::string, std::string> registrant_of_;
   StreamWatchdog uploads_;  // UploadAsset streams that stop sending are ended
 };
 

@@ -19,7 +19,6 @@ FailureCharge WorkerFailures::failed(const std::string& worker_id, const std::st
     const int block_after = kind == FailureKind::NeverRenders ? 1 : std::max(1, options_.block_after);
     if (in_job >= block_after && r.blocked.insert(job_id).second) charge.blocked_now = true;
   }
-  ++r.streak;
   r.streak_jobs.insert(job_id);
   if (kind == FailureKind::Refused || r.streak_jobs.size() >= 2) {
     auto wait = options_.back_off_first;
@@ -35,7 +34,6 @@ void WorkerFailures::succeeded(const std::string& worker_id) {
   const auto it = workers_.find(worker_id);
   if (it == workers_.end()) return;
   Record& r = it->second;
-  r.streak = 0;
   r.streak_jobs.clear();
   r.back_offs = 0;
 }

@@ -58,7 +58,8 @@ class WorkerFailures {
   // The jobs the worker is kept off, sorted (farm workers).
   std::vector<std::string> blocked_jobs(const std::string& worker_id) const;
 
-  // A job that ended, a worker that left: nothing more to remember of it.
+  // A job that failed or was cancelled, a worker that left: nothing more to remember of it. (A job
+  // that succeeded stays listed in blocked_jobs, what farm workers shows, while its worker is.)
   void forget_job(const std::string& job_id);
   void forget_worker(const std::string& worker_id);
 
@@ -66,8 +67,7 @@ class WorkerFailures {
   struct Record {
     std::map<std::string, int> failures_by_job;  // this job's units it failed
     std::set<std::string> blocked;               // jobs it is kept off
-    int streak = 0;                              // failures since its last success
-    std::set<std::string> streak_jobs;           // the jobs of those failures
+    std::set<std::string> streak_jobs;           // the jobs it failed since its last success
     int back_offs = 0;                           // back-offs since its last success
   };
 

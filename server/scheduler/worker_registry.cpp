@@ -213,7 +213,6 @@ int WorkerRegistry::slots_up() const {
   return slots;
 }
 
-
 std::vector<WorkerStatus> WorkerRegistry::workers() const {
   std::lock_guard lock(mutex_);
   std::vector<WorkerStatus> out;
