@@ -53,29 +53,32 @@ TEST(UploadLimitsTest, AnIdleUploadIsEndedAndOneOwnerHoldsAQuarterOfTheQuotaAtMo
   test::TempDir dir;
   const auto tokens = dir.write("tokens.txt", sha256_hex(kAlice) + " alice submit\n" + sha256_hex(kBob) + " bob submit\n");
   test::SchedulerProcess scheduler(dir / "data", {"--tokens", tokens.string(), "--max-asset-store-bytes", "4000",
-                                                  "--upload-idle-timeout", "3"});
+                                                  "--upload-idle-timeout", "10"});
   ASSERT_FALSE(scheduler.address().empty()) << scheduler.process().output();
   auto alice = test::scheduler_stub(scheduler.address(), ClientIdentity{kAlice, false, {}});
   auto bob = test::scheduler_stub(scheduler.address(), ClientIdentity{kBob, false, {}});
   const std::string a(900, 'a'), b(900, 'b'), c(200, 'c');
 
-  // Alice announces 900 bytes and goes quiet: the quota holds them for her...
+  // Alice announces 900 bytes and goes quiet: the quota holds them for her. When the scheduler
+  // has read her header is seen, not guessed: an upload announcing more than the whole store is
+  // refused, changing nothing, with the bytes in flight named.
   OpenUpload idle(*alice, a, a.size());
-  // ...so that a second upload of hers would pass her share of 1000 (a quarter of 4000),
-  bool refused = false;
-  for (int tries = 0; tries < 200 && !refused; ++tries) {  // once the first header has been read
-    const std::string bytes = c + std::to_string(tries);  // new each time: never already present
-    OpenUpload more(*alice, bytes, bytes.size());
-    const grpc::Status s = more.finish(bytes);
-    if (s.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
-      refused = true;
-      EXPECT_NE(s.error_message().find("share of 1000"), std::string::npos) << s.error_message();
-    } else {
-      ASSERT_TRUE(s.ok()) << s.error_message();
-      std::this_thread::sleep_for(10ms);
-    }
+  bool reserved = false;
+  for (int tries = 0; tries < 6000 && !reserved; ++tries) {
+    OpenUpload probe(*bob, b, 4001);
+    const grpc::Status s = probe.finish();
+    ASSERT_EQ(s.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << s.error_message();
+    reserved = s.error_message().find("(900 more being uploaded)") != std::string::npos;
+    if (!reserved) std::this_thread::sleep_for(10ms);
   }
-  EXPECT_TRUE(refused) << "alice's second upload was never held to her share";
+  ASSERT_TRUE(reserved) << "alice's quiet upload was never reserved";
+  // A second upload of hers would pass her share of 1000 (a quarter of 4000)...
+  {
+    OpenUpload more(*alice, c, c.size());
+    const grpc::Status s = more.finish(c);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << s.error_message();
+    EXPECT_NE(s.error_message().find("share of 1000"), std::string::npos) << s.error_message();
+  }
   // ...while Bob still uploads.
   {
     OpenUpload upload(*bob, b, b.size());
