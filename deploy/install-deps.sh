@@ -9,7 +9,7 @@ packages=(
   # renderer (TBB, which Embree's CMake config asks for, comes with libembree-dev)
   libembree-dev libopenexr-dev libimath-dev libpng-dev libjpeg-dev
   libtinygltf-dev libassimp-dev libglm-dev
-  # OpenImageIO: farm_oiio_tests read previews back with it; `farm compare` (DESIGN.md) reads
+  # OpenImageIO: farm_oiio_tests read previews back with it; `farm compare` reads
   # images of any format, and idiff is its threshold metric's anchor
   libopenimageio-dev openimageio-tools
   # service
@@ -18,10 +18,10 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   # XML (the COLLADA files a job's models name)
   libpugixml-dev
-  # the grading sandbox (server/review/sandbox.cpp): bwrap runs a student's program; setpriv,
+  # the grading sandbox (server/grade/sandbox.cpp): bwrap runs a student's program; setpriv,
   # which drops it to a user of its own, comes with util-linux (essential, always installed)
   bubblewrap
-  # a job's output.video (server/scheduler/video_encoder.cpp): ffmpeg, run as a program, encodes
+  # a job's output.video (server/common/video_encoder.cpp): ffmpeg, run as a program, encodes
   # the frames' previews (H.264, VP9); ffprobe, in the same package, reads the videos in tests
   ffmpeg
   # the PostgreSQL job store (issue #18): libpq to talk to it, and the server, which the tests

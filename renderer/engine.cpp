@@ -2,11 +2,11 @@
 
 #include <fmt/format.h>
 
-#include "renderer/geometry/scene_intersector.h"
+#include "renderer/accel/scene_intersector.h"
 #include "renderer/raster/raster_engine.h"
-#include "renderer/scene/input_error.h"
 #include "renderer/trace/path_tracer.h"
 #include "renderer/trace/whitted.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

@@ -1,11 +1,11 @@
 #pragma once
-// The one entry point every engine implements (DESIGN.md, "The engine contract"):
+// The one entry point every engine implements (docs/architecture.md, "The engine contract"):
 //   render_tile(prepared scene, settings, tile rectangle, output buffer[, cancel flag])
 // A pure function of its inputs: a pixel's value never depends on tiling or threads, nor on
 // whether a cancel flag was passed (one that never stops the render changes no bit).
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/util/cancel_flag.h"
 #include "renderer/util/thread_pool.h"
 

@@ -6,9 +6,9 @@
 #include <cstddef>
 #include <functional>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/util/thread_pool.h"
 
 namespace farm {

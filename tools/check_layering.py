@@ -1,53 +1,127 @@
 #!/usr/bin/env python3
-"""Fails when a source file includes a header from a component it must not depend on.
+"""Fails when a source file includes a header from a component it must not depend on, or when a
+library links one it must not.
 
-The layering (DESIGN.md "Layout"; an arrow never points up):
+The components and their DAG (docs/architecture.md, "Components"; an arrow never points up):
 
-    renderer/util <- renderer <- server/common <- server/{worker,scheduler,client}
-        <- server/embedded <- server/{bench,cli}
+    renderer:  util <- geometry <- scene <- image <- loaders <- job <- accel <- {raster, trace}
+               <- renderer (engine.h, render_frame.h);  image <- compare
+    server:    renderer <- common <- {worker, scheduler, client} <- embedded <- {regress, grade}
+               <- bench <- cli
+    scheduler: options <- store <- events;  assets <- workers;  {events, workers} <- jobs
+               <- dispatch <- scheduler (core, service, lease) <- http
 
-Each component may include its own headers and those of the components below it, plus the
-generated proto headers from server/common up. Usage: check_layering.py [--root DIR]; prints
-every offending line as FILE:LINE and exits 1, or prints a one-line summary and exits 0.
+A component may include its own headers and those of every component it depends on, directly or
+through others. Usage:
+
+    check_layering.py [--root DIR]      every #include "..." under renderer/ and server/
+    check_layering.py --links FILE      the libraries' link lines as CMake wrote them (one
+                                        "library: dependency;dependency;..." per line)
+
+Prints every offending line (FILE:LINE, or the library) and exits 1, or prints a one-line
+summary and exits 0.
 """
 import argparse
 import pathlib
 import re
 import sys
 
-# component -> the components it may include (itself always included).
-ALLOWED = {
+# component -> the components it depends on directly.
+DEPENDS = {
     "renderer/util": [],
-    "renderer": ["renderer/util"],
-    "server/common": ["renderer", "renderer/util", "proto"],
-    "server/worker": ["server/common", "renderer", "renderer/util", "proto"],
-    "server/scheduler": ["server/common", "renderer", "renderer/util", "proto"],
-    "server/client": ["server/common", "renderer", "renderer/util", "proto"],
-    "server/embedded": ["server/worker", "server/scheduler", "server/client", "server/common",
-                        "renderer", "renderer/util", "proto"],
-    "server/review": ["server/embedded", "server/worker", "server/scheduler", "server/client",
-                      "server/common", "renderer", "renderer/util", "proto"],
-    "server/bench": ["server/review", "server/embedded", "server/worker", "server/scheduler", "server/client",
-                     "server/common", "renderer", "renderer/util", "proto"],
-    "server/cli": ["server/bench", "server/review", "server/embedded", "server/worker", "server/scheduler",
-                   "server/client", "server/common", "renderer", "renderer/util", "proto"],
+    "renderer/geometry": ["renderer/util"],
+    "renderer/scene": ["renderer/geometry"],
+    "renderer/image": ["renderer/scene"],
+    "renderer/loaders": ["renderer/image"],
+    "renderer/job": ["renderer/loaders"],
+    "renderer/accel": ["renderer/job"],
+    "renderer/raster": ["renderer/accel"],
+    "renderer/trace": ["renderer/accel"],
+    "renderer": ["renderer/raster", "renderer/trace"],
+    "renderer/compare": ["renderer/image"],
+    "proto": [],
+    "server/common": ["renderer", "renderer/compare", "proto"],
+    "server/worker": ["server/common"],
+    "server/client": ["server/common"],
+    "server/scheduler/options": ["server/common"],
+    "server/scheduler/store": ["server/scheduler/options"],
+    "server/scheduler/events": ["server/scheduler/store"],
+    "server/scheduler/assets": ["server/common"],
+    "server/scheduler/workers": ["server/scheduler/options", "server/scheduler/assets"],
+    "server/scheduler/jobs": ["server/scheduler/events", "server/scheduler/workers"],
+    "server/scheduler/dispatch": ["server/scheduler/jobs"],
+    "server/scheduler": ["server/scheduler/dispatch"],
+    "server/scheduler/http": ["server/scheduler"],
+    "server/embedded": ["server/worker", "server/scheduler/http", "server/client"],
+    "server/regress": ["server/embedded"],
+    "server/grade": ["server/embedded"],
+    "server/bench": ["server/regress", "server/grade"],
+    "server/cli": ["server/bench"],
+}
+
+# library -> the component (with every folder under it) it is built from.
+LIBRARIES = {
+    "farm_renderer": "renderer",
+    "farm_proto": "proto",
+    "farm_common": "server/common",
+    "farm_worker": "server/worker",
+    "farm_scheduler": "server/scheduler",
+    "farm_client": "server/client",
+    "farm_embedded": "server/embedded",
+    "farm_regress": "server/regress",
+    "farm_grade": "server/grade",
+    "farm_bench": "server/bench",
+    "farm_cli": "server/cli",
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"')
+
+
+def below(component):
+    """Every component `component` may use, itself included (the DAG's closure)."""
+    seen, stack = set(), [component]
+    while stack:
+        name = stack.pop()
+        if name not in seen:
+            seen.add(name)
+            stack.extend(DEPENDS[name])
+    return seen
+
+
+def cycle():
+    """A cycle in DEPENDS as a list of components, or None: the DAG must be one."""
+    state = {}
+
+    def visit(name, path):
+        state[name] = "open"
+        for dep in DEPENDS[name]:
+            if state.get(dep) == "open":
+                return path + [name, dep]
+            if dep not in state:
+                found = visit(dep, path + [name])
+                if found:
+                    return found
+        state[name] = "done"
+        return None
+
+    for name in DEPENDS:
+        if name not in state:
+            found = visit(name, [])
+            if found:
+                return found
+    return None
 
 
 def component_of(path: str):
     """The most specific component a repository-relative path lies in, or None."""
     best = None
-    for name in ALLOWED:
+    for name in DEPENDS:
         if path == name or path.startswith(name + "/"):
             if best is None or len(name) > len(best):
                 best = name
-    if best is None and path.startswith("proto/"):
-        return "proto"
     return best
 
 
-def check(root: pathlib.Path):
+def check_includes(root: pathlib.Path):
     problems, files = [], 0
     for top in ("renderer", "server"):
         for path in sorted((root / top).rglob("*")):
@@ -59,7 +133,7 @@ def check(root: pathlib.Path):
             if own is None:
                 problems.append(f"{rel}: lies in no known component (add it to tools/check_layering.py)")
                 continue
-            allowed = {own, *ALLOWED[own]}
+            allowed = below(own)
             text = path.read_text(encoding="utf-8", errors="replace")
             for number, line in enumerate(text.splitlines(), 1):
                 m = INCLUDE.match(line)
@@ -70,21 +144,53 @@ def check(root: pathlib.Path):
                     continue
                 problems.append(f"{rel}:{number}: includes \"{m.group(1)}\" from {target}, which "
                                 f"{own} must not depend on (it may use: {', '.join(sorted(allowed))})")
-    return problems, files
+    return problems, f"{files} files"
+
+
+def library_below(library):
+    """The libraries `library` may link: those whose component lies below its own."""
+    allowed = below(LIBRARIES[library])
+    return {name for name, component in LIBRARIES.items() if component in allowed}
+
+
+def check_links(links: pathlib.Path):
+    problems, libraries = [], 0
+    for number, line in enumerate(links.read_text(encoding="utf-8").splitlines(), 1):
+        if not line.strip():
+            continue
+        library, _, deps = line.partition(":")
+        library = library.strip()
+        if library not in LIBRARIES:
+            problems.append(f"{links}:{number}: {library} is in no known component (add it to LIBRARIES)")
+            continue
+        libraries += 1
+        allowed = library_below(library)
+        for dep in filter(None, (d.strip() for d in deps.split(";"))):
+            if dep.startswith("farm_") and dep not in allowed:
+                problems.append(f"{links}:{number}: {library} links {dep}, which it must not depend on "
+                                f"(it may link: {', '.join(sorted(allowed))})")
+    return problems, f"{libraries} libraries"
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--root", default=pathlib.Path(__file__).resolve().parent.parent,
                         type=pathlib.Path, help="repository root (default: this script's)")
+    parser.add_argument("--links", type=pathlib.Path,
+                        help="check this link graph (written by server/CMakeLists.txt) instead of the includes")
     args = parser.parse_args()
-    problems, files = check(args.root)
+    loop = cycle()
+    if loop:
+        print(f"layering: the components' dependencies form a cycle: {' -> '.join(loop)}")
+        return 1
+    problems, scope = check_links(args.links) if args.links else check_includes(args.root)
     for p in problems:
         print(p)
+    what = "link(s)" if args.links else "include(s)"
     if problems:
-        print(f"layering: {len(problems)} include(s) against the layering in {files} files")
+        print(f"layering: {len(problems)} {what} against the layering in {scope}")
         return 1
-    print(f"layering: {files} files, every include points down or sideways within its component")
+    print(f"layering: {scope}, every {what[:-3]} points down the DAG or within its component")
     return 0
 
 

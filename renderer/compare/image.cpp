@@ -16,14 +16,14 @@
 #include <memory>
 #include <stdexcept>
 
+#include "renderer/image/image_limits.h"
 #include "renderer/image/jpeg_reader.h"
-#include "renderer/image/output_file.h"
+#include "renderer/util/atomic_file.h"
 #include "renderer/image/png_reader.h"
 #include "renderer/image/png_writer.h"
 #include "renderer/image/preview.h"
 #include "renderer/image/rgb8_image.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job_limits.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {

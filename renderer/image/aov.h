@@ -1,5 +1,5 @@
 #pragma once
-// Arbitrary output variables a render can carry beside RGBA (DESIGN.md, engine contract).
+// Arbitrary output variables a render can carry beside RGBA (docs/architecture.md, "The engine contract").
 #include <optional>
 #include <string_view>
 

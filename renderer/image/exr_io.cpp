@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "renderer/image/float_to_half.h"
-#include "renderer/image/output_file.h"
+#include "renderer/util/atomic_file.h"
 #include "renderer/util/thread_pool.h"
 
 namespace farm {

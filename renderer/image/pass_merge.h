@@ -1,5 +1,5 @@
 #pragma once
-// Merging a frame's sample passes (DESIGN.md: the unit of work is frame x tile x sample pass).
+// Merging a frame's sample passes (docs/architecture.md, "Glossary": a unit is one tile of one frame in one pass).
 // Each pass's buffer is a complete image of its own samples: the mean of each pixel's samples in
 // RGB and in A (coverage), the variance AOV of that mean, and its first sample's depth, normal,
 // albedo and bvh_cost. Folding the passes in sample order gives the image of all of them at

@@ -13,7 +13,7 @@
 #include <string_view>
 
 #include "renderer/image/jpeg_writer.h"
-#include "renderer/image/output_file.h"
+#include "renderer/util/atomic_file.h"
 #include "renderer/image/png_writer.h"
 #include "renderer/image/rgb8_image.h"
 #include "renderer/util/file_extension.h"

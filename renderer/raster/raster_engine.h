@@ -6,10 +6,10 @@
 #include <cstdint>
 #include <memory>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/raster/raster_frame.h"
-#include "renderer/render_settings.h"
 #include "renderer/util/cancel_flag.h"
 #include "renderer/util/thread_pool.h"
 

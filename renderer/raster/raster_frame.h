@@ -10,11 +10,11 @@
 #include <memory>
 #include <vector>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/raster/clip_polygon.h"
 #include "renderer/raster/edge_function.h"
-#include "renderer/render_settings.h"
 #include "renderer/util/cancel_flag.h"
 #include "renderer/util/thread_pool.h"
 #include "renderer/util/uninitialized_array.h"

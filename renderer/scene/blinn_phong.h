@@ -1,5 +1,5 @@
 #pragma once
-// Blinn-Phong, the one shading function that `raster` and `whitted` share (DESIGN.md):
+// Blinn-Phong, the one shading function that `raster` and `whitted` share (docs/architecture.md, "Conventions"):
 //   ke + ka*ambient + sum over lights of (I/r^2) * (kd*max(0,n.l) + ks*max(0,n.h)^p)
 // where ke counts only on the emitting side(s) of the surface (Material::emitted), as in `path`.
 // Directional lights contribute I with no falloff. A ray tracer passes a visibility test so

@@ -1,5 +1,5 @@
 #pragma once
-// Pinhole camera of DESIGN.md: looks from `position` at `target`; view space looks down -Z.
+// The pinhole camera (docs/architecture.md, "Conventions"): looks from `position` at `target`; view space looks down -Z.
 #include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
 #include <optional>

@@ -7,7 +7,7 @@
 
 namespace farm {
 
-// Which faces of an emissive surface shine (DESIGN.md conventions). Front: only the side the
+// Which faces of an emissive surface shine (docs/architecture.md, "Conventions"). Front: only the side the
 // triangle's counter-clockwise winding faces, the side its geometric normal points to, as in
 // pbrt's and Mitsuba's area lights. Both: either side (glTF's doubleSided, or a job override).
 enum class EmissionSides { Front, Both };
@@ -30,7 +30,7 @@ struct Material {
   float transmission = 0.0f;  // 0 opaque, 1 fully transmissive (MTL 1-d, glTF transmission)
   EmissionSides emission_sides = EmissionSides::Front;
 
-  // Shininess this high means a perfect mirror (DESIGN.md conventions).
+  // Shininess this high means a perfect mirror (docs/architecture.md, "Conventions").
   bool is_mirror() const { return shininess >= 1000.0f; }
 
   // The radiance emitted towards a viewer on the front side of the surface (`front_side`: the

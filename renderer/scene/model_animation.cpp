@@ -12,8 +12,8 @@
 #include <string>
 #include <type_traits>
 
-#include "renderer/scene/input_error.h"
 #include "renderer/scene/model.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {

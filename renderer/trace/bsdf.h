@@ -1,5 +1,5 @@
 #pragma once
-// Scattering functions for the path tracer, mapped from the Phong material (DESIGN.md):
+// Scattering functions for the path tracer, mapped from the Phong material (docs/architecture.md, "Conventions"):
 //   smooth dielectric  transmission > 0 and ior > 1 (Fresnel reflection and refraction)
 //   perfect mirror     shininess >= 1000 (reflectance ks, or white when ks is black)
 //   diffuse + glossy   (1 - max ks) * Lambert(kd) + ks * GGX, roughness from the shininess, with

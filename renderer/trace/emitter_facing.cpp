@@ -6,8 +6,8 @@
 #include <map>
 #include <utility>
 
-#include "renderer/geometry/scene_intersector.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/accel/scene_intersector.h"
 #include "renderer/trace/ray_offset.h"
 
 namespace farm {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
 
 namespace farm {
 namespace {

@@ -5,7 +5,7 @@
 #include <glm/geometric.hpp>
 #include <memory>
 
-#include "renderer/geometry/scene_intersector.h"
+#include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/radiance_limit.h"
 #include "renderer/trace/bsdf.h"
 #include "renderer/trace/emitters.h"

@@ -6,9 +6,9 @@
 // sampler, so any tiling gives the same image. With sample passes (RenderSettings::pass) a call
 // traces only its pass's samples, by their global index in the pixel, and writes their mean,
 // coverage and variance: what PassAccumulator merges with the other passes.
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/util/cancel_flag.h"
 
 namespace farm::path {

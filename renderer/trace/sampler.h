@@ -1,5 +1,5 @@
 #pragma once
-// Counter-based random numbers (DESIGN.md, engine contract): a value is a pure function of
+// Counter-based random numbers (docs/architecture.md, "The engine contract"): a value is a pure function of
 // (seed, frame, pixel, sample index,
 // dimension), so an image never depends on tiling, threads or retries.
 #include <cstdint>

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 
-#include "renderer/geometry/scene_intersector.h"
+#include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/scene/radiance_limit.h"
 #include "renderer/trace/fresnel.h"

@@ -3,9 +3,9 @@
 // per light, and recursion for mirrors (shininess >= 1000, weighted by the Fresnel reflectance)
 // and smooth dielectrics (transmission > 0 and ior > 1: Fresnel-weighted reflection and
 // refraction, total internal reflection included), up to max_depth bounces.
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/util/cancel_flag.h"
 
 namespace farm::whitted {

@@ -1,7 +1,7 @@
 #include "server/bench/bench_scenes.h"
 
-#include "renderer/scene/input_error.h"
 #include "renderer/scene/transform.h"
+#include "renderer/util/input_error.h"
 
 namespace farm::bench {
 

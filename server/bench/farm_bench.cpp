@@ -12,15 +12,15 @@
 #include <thread>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/bench/bench_support.h"
 #include "server/bench/loopback_farm.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
 #include "server/embedded/embedded_farm.h"
+#include "server/scheduler/jobs/tile_results.h"
 #include "server/scheduler/store/postgres_connection.h"
-#include "server/scheduler/tile_results.h"
 
 namespace farm {
 namespace {

@@ -7,12 +7,12 @@
 #include <stdexcept>
 #include <thread>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/preview.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
 #include "server/bench/bench_support.h"
 
 namespace farm {

@@ -9,17 +9,17 @@
 #include <stdexcept>
 #include <thread>
 
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "server/bench/bench_support.h"
 #include "server/bench/loopback_farm.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/child_process.h"
-#include "server/scheduler/job_merger.h"
+#include "server/scheduler/jobs/job_merger.h"
 
 namespace farm {
 namespace {

@@ -11,8 +11,8 @@
 #include "server/bench/bench_support.h"
 #include "server/client/job_submission.h"
 #include "server/common/scene_hash.h"
-#include "server/review/grade_reports.h"
-#include "server/review/grade_runner.h"
+#include "server/grade/grade_reports.h"
+#include "server/grade/grade_runner.h"
 
 namespace farm {
 namespace {

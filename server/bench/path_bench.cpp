@@ -10,12 +10,12 @@
 #include <optional>
 #include <thread>
 
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
 #include "renderer/scene/model.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
 
 namespace farm {

@@ -6,7 +6,7 @@
 #include <thread>
 
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
 #include "server/bench/bench_support.h"
 

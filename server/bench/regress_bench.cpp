@@ -9,7 +9,7 @@
 
 #include "server/bench/bench_support.h"
 #include "server/bench/loopback_farm.h"
-#include "server/review/regress_runner.h"
+#include "server/regress/regress_runner.h"
 
 namespace farm {
 namespace {

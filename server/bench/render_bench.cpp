@@ -9,10 +9,10 @@
 #include <stdexcept>
 #include <thread>
 
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "server/bench/bench_support.h"
 #include "server/common/child_process.h"
 #include "server/common/read_whole_file.h"

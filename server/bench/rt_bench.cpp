@@ -10,10 +10,10 @@
 #include <optional>
 #include <vector>
 
-#include "renderer/geometry/scene_intersector.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/accel/scene_intersector.h"
 #include "renderer/trace/sampler.h"
+#include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
 
 namespace farm {

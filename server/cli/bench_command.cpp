@@ -4,13 +4,13 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/job_limits.h"
 #include "server/bench/farm_bench.h"
+#include "server/bench/flip_bench.h"
 #include "server/bench/frames_bench.h"
+#include "server/bench/grade_bench.h"
 #include "server/bench/path_bench.h"
 #include "server/bench/raster_bench.h"
-#include "server/bench/flip_bench.h"
-#include "server/bench/grade_bench.h"
 #include "server/bench/regress_bench.h"
 #include "server/bench/render_bench.h"
 #include "server/bench/rt_bench.h"

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "server/scheduler/scene_check.h"
+#include "server/scheduler/jobs/scene_check.h"
 
 namespace farm {
 

@@ -11,8 +11,8 @@
 
 #include "renderer/compare/compare.h"
 #include "renderer/compare/compare_json.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {

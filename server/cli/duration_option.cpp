@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/result_download.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"

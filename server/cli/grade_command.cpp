@@ -7,14 +7,14 @@
 #include <optional>
 #include <string>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/progress_bar.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
-#include "server/review/grade_reports.h"
-#include "server/review/grade_runner.h"
-#include "server/review/gradescope_results.h"
+#include "server/grade/grade_reports.h"
+#include "server/grade/grade_runner.h"
+#include "server/grade/gradescope_results.h"
 
 namespace farm {
 namespace {

@@ -5,8 +5,8 @@
 #include <glm/vec3.hpp>
 #include <memory>
 
-#include "renderer/prepared_scene.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/trace/emitter_facing.h"
 #include "server/cli/job_file_options.h"
 

@@ -2,7 +2,7 @@
 // `farm info FILE`: what a model file or a job file contains, without rendering.
 #include <filesystem>
 
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "server/cli/command_table.h"
 
 namespace farm {

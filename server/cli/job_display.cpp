@@ -1,5 +1,5 @@
-#include "server/common/job_eta.h"
 #include "server/cli/job_display.h"
+#include "server/common/job_eta.h"
 
 #include <fmt/format.h>
 

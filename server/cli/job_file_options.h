@@ -5,7 +5,7 @@
 
 #include <filesystem>
 
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 
 namespace farm {
 

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/log.h"
 
 namespace farm {

@@ -8,13 +8,12 @@
 #include <exception>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/bench_command.h"
 #include "server/cli/check_scene_command.h"
 #include "server/cli/command_table.h"
 #include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
-#include "server/cli/token_command.h"
 #include "server/cli/grade_command.h"
 #include "server/cli/info_command.h"
 #include "server/cli/job_action_commands.h"
@@ -24,12 +23,13 @@
 #include "server/cli/scheduler_command.h"
 #include "server/cli/status_command.h"
 #include "server/cli/submit_command.h"
+#include "server/cli/token_command.h"
 #include "server/cli/validate_command.h"
-#include "server/cli/version.h"
 #include "server/cli/watch_command.h"
 #include "server/cli/worker_command.h"
 #include "server/cli/workers_command.h"
 #include "server/common/service_error.h"
+#include "server/common/version.h"
 
 namespace {
 

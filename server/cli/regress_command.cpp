@@ -9,14 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/job_limits.h"
 #include "server/cli/progress_bar.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
-#include "server/review/html_report.h"
-#include "server/review/junit_report.h"
-#include "server/review/regress_runner.h"
-#include "server/review/regress_summary.h"
+#include "server/regress/html_report.h"
+#include "server/regress/junit_report.h"
+#include "server/regress/regress_runner.h"
+#include "server/regress/regress_summary.h"
 
 namespace farm {
 namespace {

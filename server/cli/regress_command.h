@@ -1,6 +1,6 @@
 #pragma once
 // `farm regress SUITE.json`: renders a regression suite on the farm and compares every image
-// with its reference (server/review/), with console lines, JUnit XML and an HTML report.
+// with its reference (server/regress/), with console lines, JUnit XML and an HTML report.
 #include "server/cli/command_table.h"
 
 namespace farm {

@@ -5,17 +5,17 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "renderer/accel/instance_intersector.h"
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/engine.h"
-#include "renderer/geometry/instance_intersector.h"
 #include "renderer/image/box_overlay.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/preview.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/job/scene_builder.h"
+#include "renderer/job/video_format.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job_limits.h"
-#include "renderer/scene/scene_builder.h"
-#include "renderer/scene/video_format.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/job_display.h"
 #include "server/cli/job_file_options.h"
 #include "server/cli/log_level_option.h"
@@ -23,8 +23,8 @@
 #include "server/cli/render_override_options.h"
 #include "server/cli/validate_command.h"
 #include "server/client/job_submission.h"
+#include "server/common/video_encoder.h"
 #include "server/embedded/embedded_farm.h"
-#include "server/scheduler/video_encoder.h"
 
 namespace farm {
 namespace {

@@ -5,7 +5,7 @@
 #include <optional>
 #include <string>
 
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "server/cli/command_table.h"
 #include "server/client/render_overrides.h"
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "renderer/render_settings.h"
-#include "renderer/scene/frame_range.h"
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/frame_range.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/job/render_settings.h"
 
 namespace farm {
 

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/job_display.h"
 
 namespace farm {

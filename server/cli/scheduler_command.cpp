@@ -2,21 +2,20 @@
 
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
-#include <signal.h>
 
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/duration_option.h"
 #include "server/cli/log_level_option.h"
 #include "server/cli/server_security_flags.h"
 #include "server/common/farm_server.h"
-#include "server/common/server_shutdown.h"
 #include "server/common/listen_policy.h"
 #include "server/common/network_address.h"
+#include "server/common/server_shutdown.h"
 #include "server/scheduler/http/dashboard_server.h"
 #include "server/scheduler/http/webhook_notifier.h"
 #include "server/scheduler/scheduler_core.h"
@@ -27,11 +26,6 @@ namespace farm {
 
 namespace {
 
-// Calls in flight get this long to finish after SIGINT/SIGTERM before they are cancelled; a call
-// still running kShutdownUnwind later (a SubmitJob loading a huge model, which cannot be
-// interrupted) is abandoned: the scheduler is gone within 2 s.
-constexpr auto kShutdownGrace = std::chrono::milliseconds(1400);
-constexpr auto kShutdownUnwind = std::chrono::milliseconds(400);
 constexpr int kMaxRequestBytes = 64 << 20;
 
 std::chrono::milliseconds ms(double seconds) {
@@ -41,11 +35,7 @@ std::chrono::milliseconds ms(double seconds) {
 }  // namespace
 
 int run_scheduler_command(const SchedulerCommandOptions& o) {
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  const StopSignals stop_signals;  // before gRPC starts its threads (server_shutdown.h)
   // Every file is read and the listen policy applied before anything starts (after the signal
   // mask: making credentials starts gRPC's threads, which must inherit it).
   ServerSecurity security = make_server_security(o.security, o.listen, "farm scheduler");
@@ -136,9 +126,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   }
   std::fflush(stdout);
 
-  int signal_number = 0;
-  sigwait(&signals, &signal_number);
-  fmt::print("scheduler: {}, shutting down\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+  fmt::print("scheduler: {}, shutting down\n", stop_signals.wait());
   std::fflush(stdout);
   // Dispatch stops first: calls to workers cancelled, their tiles queued again in the store (no
   // attempt counted). Once the server shuts down it refuses the heartbeats and asset fetches
@@ -148,7 +136,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
   if (dashboard) dashboard->stop();  // its event streams end, its calls finish
   core.stop();
   if (notifier) notifier->stop();
-  const bool drained = shut_down_within(*server, kShutdownGrace, kShutdownUnwind);
+  const bool drained = shut_down_within(*server);
   if (!drained) {
     // Safe to leave mid-call. The job store is SQLite in WAL mode, which a process that dies in
     // the middle of a transaction leaves as it was before it (the next open rolls the unfinished

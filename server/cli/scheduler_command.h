@@ -8,7 +8,7 @@
 #include "server/cli/command_table.h"
 #include "server/common/listen_policy.h"
 #include "server/common/server_security.h"
-#include "server/scheduler/submit_limits.h"
+#include "server/scheduler/options/submit_limits.h"
 
 namespace farm {
 

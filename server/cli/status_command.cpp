@@ -1,5 +1,5 @@
-#include "server/common/job_eta.h"
 #include "server/cli/status_command.h"
+#include "server/common/job_eta.h"
 
 #include <fmt/format.h>
 
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "renderer/util/utf8_prefix.h"
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"

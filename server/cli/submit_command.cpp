@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "server/cli/job_display.h"
 #include "server/cli/job_file_options.h"
 #include "server/cli/render_override_options.h"

@@ -7,10 +7,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "renderer/geometry/embree_intersector.h"
-#include "renderer/geometry/scene_intersector.h"
-#include "renderer/scene/job_limits.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/accel/embree_intersector.h"
+#include "renderer/accel/scene_intersector.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/job/scene_builder.h"
 #include "server/cli/job_file_options.h"
 
 namespace farm {

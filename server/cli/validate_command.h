@@ -1,6 +1,6 @@
 #pragma once
 // `farm validate JOB`: checks our acceleration structure against Embree on the job's scene (the
-// check itself is renderer/geometry/accel_validation.h, which the scheduler runs for
+// check itself is renderer/accel/accel_validation.h, which the scheduler runs for
 // validate.embree_rays).
 #include <cstdint>
 #include <filesystem>
@@ -8,10 +8,10 @@
 #include <optional>
 #include <string>
 
-#include "renderer/geometry/accel_validation.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
+#include "renderer/accel/accel_validation.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/util/input_error.h"
 #include "server/cli/command_table.h"
 
 namespace farm {

@@ -1,5 +1,5 @@
-#include "server/common/job_eta.h"
 #include "server/cli/workers_command.h"
+#include "server/common/job_eta.h"
 
 #include <fmt/format.h>
 

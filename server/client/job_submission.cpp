@@ -10,8 +10,8 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 
-#include "renderer/scene/input_error.h"
 #include "renderer/util/confined_file.h"
+#include "renderer/util/input_error.h"
 #include "server/client/model_dependencies.h"
 #include "server/common/sha256.h"
 

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "proto/farm.pb.h"
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "server/client/render_overrides.h"
 
 namespace farm {

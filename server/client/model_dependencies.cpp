@@ -10,8 +10,8 @@
 #include <sstream>
 #include <string>
 
-#include "renderer/scene/input_error.h"
 #include "renderer/util/file_extension.h"
+#include "renderer/util/input_error.h"
 #include "server/client/collada_images.h"
 
 namespace farm {

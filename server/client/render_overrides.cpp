@@ -4,8 +4,8 @@
 
 #include <tuple>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/video_format.h"
+#include "renderer/job/video_format.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

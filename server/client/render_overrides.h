@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 
 namespace farm {
 

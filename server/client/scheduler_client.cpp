@@ -11,7 +11,8 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/atomic_file.h"
+#include "renderer/util/input_error.h"
 #include "server/common/hex.h"
 #include "server/common/plain_file_name.h"
 #include "server/common/service_error.h"
@@ -251,47 +252,41 @@ fs::path SchedulerClient::fetch(const std::string& job_id, v1::ResultKind kind, 
   grpc::ClientContext context;
   auto reader = stub_->GetResult(&context, request);
   v1::FileChunk chunk;
-  fs::path file, temp;
-  std::ofstream out;
-  std::string expected_sha;
-  Sha256 hash;
-  std::uint64_t written = 0, total = 0;
-  while (reader->Read(&chunk)) {
-    if (!out.is_open()) {
-      // Only a plain file name from the scheduler is passed on, never a path ("..", "a/b").
-      file = where(plain_file_name(chunk.file_name(), ""));
-      temp = file;
-      temp += ".part";
-      if (file.has_parent_path()) fs::create_directories(file.parent_path());
-      out.open(temp, std::ios::binary | std::ios::trunc);
-      if (!out) throw InputError(fmt::format("{}: cannot write", temp.string()));
-      expected_sha = chunk.sha256();
-      total = chunk.total_size();
-    }
-    if (chunk.offset() != written) {
-      throw std::runtime_error(fmt::format("GetResult: chunk at offset {} where {} was expected", chunk.offset(), written));
-    }
-    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
-    hash.update(chunk.data());
-    written += chunk.data().size();
+  if (!reader->Read(&chunk)) {
+    const grpc::Status status = reader->Finish();
+    if (!status.ok()) throw_for_status(status, "GetResult", address_);
+    throw std::runtime_error("GetResult: the scheduler sent no data");
   }
-  const grpc::Status status = reader->Finish();
-  if (!status.ok()) {
-    if (out.is_open()) {
-      out.close();
-      fs::remove(temp);
+  // Only a plain file name from the scheduler is passed on, never a path ("..", "a/b").
+  const fs::path file = where(plain_file_name(chunk.file_name(), ""));
+  const std::string expected_sha = chunk.sha256();
+  const std::uint64_t total = chunk.total_size();
+  // Written whole or not at all: a call that breaks off, or bytes that arrive damaged, leave
+  // nothing where the result should be.
+  write_file_atomically(file, [&](const fs::path& temp) {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(fmt::format("{}: cannot write", temp.string()));
+    Sha256 hash;
+    std::uint64_t written = 0;
+    do {
+      if (chunk.offset() != written) {
+        throw std::runtime_error(
+            fmt::format("GetResult: chunk at offset {} where {} was expected", chunk.offset(), written));
+      }
+      out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+      hash.update(chunk.data());
+      written += chunk.data().size();
+    } while (reader->Read(&chunk));
+    const grpc::Status status = reader->Finish();
+    if (!status.ok()) throw_for_status(status, "GetResult", address_);
+    out.close();
+    if (!out) throw InputError(fmt::format("{}: cannot write", temp.string()));
+    const std::string got = hash.finish_hex();
+    if ((total != 0 && written != total) || (!expected_sha.empty() && got != expected_sha)) {
+      throw std::runtime_error(fmt::format("GetResult: {} arrived damaged ({} of {} bytes, sha256 {})",
+                                           file.string(), written, total, got));
     }
-    throw_for_status(status, "GetResult", address_);
-  }
-  if (!out.is_open()) throw std::runtime_error("GetResult: the scheduler sent no data");
-  out.close();
-  const std::string got = hash.finish_hex();
-  if ((total != 0 && written != total) || (!expected_sha.empty() && got != expected_sha)) {
-    fs::remove(temp);
-    throw std::runtime_error(fmt::format("GetResult: {} arrived damaged ({} of {} bytes, sha256 {})",
-                                         file.string(), written, total, got));
-  }
-  fs::rename(temp, file);
+  });
   return file;
 }
 

@@ -5,7 +5,7 @@
 #include <array>
 #include <utility>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {

@@ -12,7 +12,7 @@
 #include <fstream>
 #include <system_error>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/disk_full.h"
 
 namespace farm {

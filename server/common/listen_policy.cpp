@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

@@ -7,7 +7,8 @@
 #include <set>
 #include <system_error>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/atomic_file.h"
+#include "renderer/util/input_error.h"
 #include "server/common/disk_full.h"
 #include "server/common/sha256.h"
 
@@ -149,7 +150,7 @@ void lay_out(const v1::JobSpec& spec, const AssetStore& store, const fs::path& d
 // name the first submission of its scene gave it, and the same text may come under another name
 // (the file name is not part of the scene hash), so it is written beside, atomically.
 // A scene folder found laid out (by an earlier call, or a process before a restart) is a cache on
-// disk: each of its files is hashed against its ref before the scene is loaded from it (DESIGN.md,
+// disk: each of its files is hashed against its ref before the scene is loaded from it (docs/architecture.md,
 // "every reply from another process or from a cache on disk is checked before it is trusted").
 // Its files are links to the blobs, so a byte changed on disk changes both (issue #32: a job
 // SUCCEEDED with 92% of its pixels wrong from such a file). True when every file is intact.
@@ -182,17 +183,10 @@ void ensure_job_file(const fs::path& dir, const std::string& job_name, const std
   const fs::path file = dir / job_name;
   std::error_code ec;
   if (fs::is_regular_file(fs::symlink_status(file, ec))) return;
-  static std::atomic<std::uint64_t> counter{0};
-  const fs::path temp = dir / fmt::format(".tmp-job-{}-{}", ::getpid(), counter++);
   try {
-    write_file(temp, job_json);  // DiskFull naming the folder when there is no room
-  } catch (...) {
-    fs::remove(temp, ec);
-    throw;
-  }
-  fs::rename(temp, file, ec);
-  if (ec) {
-    fs::remove(temp, ec);
+    // DiskFull naming the folder when there is no room
+    write_file_atomically(file, [&](const fs::path& temp) { write_file(temp, job_json); });
+  } catch (const fs::filesystem_error&) {
     throw InputError(fmt::format("cannot write the job file '{}' into the scene folder", job_name));
   }
 }

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "proto/farm.pb.h"
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "server/common/asset_store.h"
 
 namespace farm {

@@ -8,6 +8,19 @@
 
 namespace farm {
 
+StopSignals::StopSignals() {
+  sigemptyset(&signals_);
+  sigaddset(&signals_, SIGINT);
+  sigaddset(&signals_, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals_, nullptr);
+}
+
+std::string_view StopSignals::wait() const {
+  int number = 0;
+  sigwait(&signals_, &number);
+  return number == SIGINT ? "SIGINT" : "SIGTERM";
+}
+
 bool shut_down_within(FarmServer& server, std::chrono::milliseconds grace,
                       std::chrono::milliseconds unwind) {
   const auto deadline = std::chrono::system_clock::now() + grace;

@@ -2,7 +2,7 @@
 
 #include <new>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/disk_full.h"
 #include "server/common/scene_materializer.h"
 

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 

@@ -2,7 +2,7 @@
 // What a worker's reply must be before anything of it is kept. A worker is a process on another
 // machine, so its reply is checked like any other input: the rectangle asked for, the planes the
 // job asks for and no others, each the right size, and only values an engine can write
-// (DESIGN.md, "The engine contract"):
+// (docs/architecture.md, "The engine contract"):
 //
 //   rgba      finite; A (coverage) in [0, 1], and for one sample a pixel 0 or 1 as its depth says
 //             (every engine drops a NaN or infinite sample before it reaches the pixel)
@@ -14,13 +14,13 @@
 //   stats     times finite and >= 0; path samples = pixels x the pass's samples (spp without
 //             passes; settings.pass says which), none from the other engines
 //
-// The scheduler checks every reply that crossed the wire (server/scheduler/dispatcher.cpp); the
+// The scheduler checks every reply that crossed the wire (server/scheduler/dispatch/dispatcher.cpp); the
 // unit tests render real tiles with every engine and AOV to show that honest replies pass.
 #include <string>
 
 #include "proto/farm.pb.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 
 namespace farm {
 

@@ -6,8 +6,7 @@
 #include <openssl/pem.h>
 #include <openssl/x509.h>
 
-
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/read_whole_file.h"
 
 namespace farm {

@@ -7,7 +7,7 @@
 #include <set>
 #include <sstream>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/sha256.h"
 
 namespace farm {

@@ -8,7 +8,7 @@
 #include <optional>
 #include <sstream>
 
-#include "renderer/scene/scene_builder.h"
+#include "renderer/job/scene_builder.h"
 #include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "server/common/scene_hash.h"

@@ -11,8 +11,8 @@
 #include <string_view>
 
 #include "proto/farm.pb.h"
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
 #include "server/client/job_submission.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"

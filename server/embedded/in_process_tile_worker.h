@@ -4,7 +4,7 @@
 #include <chrono>
 #include <string>
 
-#include "server/scheduler/tile_worker.h"
+#include "server/scheduler/workers/tile_worker.h"
 #include "server/worker/tile_renderer.h"
 
 namespace farm {

@@ -9,15 +9,15 @@
 #include <mutex>
 #include <random>
 
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "server/common/job_state.h"
 #include "server/common/scene_hash.h"
 #include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"
-#include "server/scheduler/video_encoder.h"
+#include "server/common/video_encoder.h"
 
 namespace farm {
 
@@ -102,7 +102,7 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
   });
   // On a store several schedulers share, this one's units are marked with its id and held under a
   // lease; the units of one that died come back when its lease runs out.
-  store_.set_scheduler(scheduler_id_);
+  store_.leases().set_scheduler(scheduler_id_);
   if (store_.is_shared()) {
     // A scheduler reaped: its units are queued again for the slots, and the merges and ends it
     // had claimed are free for this one.
@@ -139,7 +139,7 @@ std::string make_scheduler_id() {
 SchedulerCore::~SchedulerCore() { stop(); }
 
 void SchedulerCore::finish_active_jobs() {
-  for (const std::string& id : store_.active_jobs()) finisher_.finish_if_complete(id);
+  for (const std::string& id : store_.jobs().active_jobs()) finisher_.finish_if_complete(id);
 }
 
 void SchedulerCore::stop() {
@@ -237,7 +237,7 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
   jobs_.add(job.id, std::move(info));
   v1::Job added;
   try {
-    added = store_.add_job(job, unix_ms_now());
+    added = store_.jobs().add_job(job, unix_ms_now());
   } catch (...) {
     // Not queued (a full store: DiskFull): nothing of it is kept.
     jobs_.forget(job.id);
@@ -253,11 +253,11 @@ v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQue
 }
 
 std::optional<v1::Job> SchedulerCore::get_job(const std::string& job_id) const {
-  return store_.get_job(job_id);
+  return store_.jobs().get_job(job_id);
 }
 
 v1::Job SchedulerCore::cancel(const std::string& job_id, const std::string& by) {
-  std::optional<v1::Job> before = store_.get_job(job_id);
+  std::optional<v1::Job> before = store_.jobs().get_job(job_id);
   if (!before) no_job(job_id);
   const v1::Job after = dispatcher_.cancel_job(job_id);
   if (after.state() != before->state()) {
@@ -277,14 +277,14 @@ void SchedulerCore::announce(const std::string& job_id, const std::string& chang
 }
 
 v1::Job SchedulerCore::pause(const std::string& job_id, bool paused, const std::string& by) {
-  std::optional<v1::Job> before = store_.get_job(job_id);
+  std::optional<v1::Job> before = store_.jobs().get_job(job_id);
   if (!before) no_job(job_id);
   if (is_final(before->state())) {
     throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
                        fmt::format("{}: only a queued or running job can be {}", describe_state(*before),
                                    paused ? "paused" : "resumed"));
   }
-  const v1::Job after = *store_.set_paused(job_id, paused);
+  const v1::Job after = *store_.jobs().set_paused(job_id, paused);
   if (after.paused() != before->paused()) {
     announce(job_id, paused ? "paused" : "resumed", by);
     if (!paused) dispatcher_.work_queued();
@@ -293,9 +293,9 @@ v1::Job SchedulerCore::pause(const std::string& job_id, bool paused, const std::
 }
 
 v1::Job SchedulerCore::set_priority(const std::string& job_id, int priority, const std::string& by) {
-  std::optional<v1::Job> before = store_.get_job(job_id);
+  std::optional<v1::Job> before = store_.jobs().get_job(job_id);
   if (!before) no_job(job_id);
-  const v1::Job after = *store_.set_priority(job_id, priority);
+  const v1::Job after = *store_.jobs().set_priority(job_id, priority);
   if (after.priority() != before->priority()) {
     const std::string change = fmt::format("priority {} -> {}", before->priority(), after.priority());
     announce(job_id, change, by);
@@ -304,8 +304,8 @@ v1::Job SchedulerCore::set_priority(const std::string& job_id, int priority, con
 }
 
 RetriedJob SchedulerCore::retry(const std::string& job_id, const std::string& by) {
-  const std::optional<v1::Job> before = store_.get_job(job_id);
-  std::optional<RetriedJob> r = store_.retry_job(job_id);
+  const std::optional<v1::Job> before = store_.jobs().get_job(job_id);
+  std::optional<RetriedJob> r = store_.jobs().retry_job(job_id);
   if (!r) no_job(job_id);
   if (!r->retried) {
     throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
@@ -325,12 +325,12 @@ RetriedJob SchedulerCore::retry(const std::string& job_id, const std::string& by
 }
 
 std::uintmax_t SchedulerCore::remove(const std::string& job_id) {
-  const std::optional<bool> deleted = store_.delete_job(job_id);
+  const std::optional<bool> deleted = store_.jobs().delete_job(job_id);
   if (!deleted) no_job(job_id);
   if (!*deleted) {
     throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
                        fmt::format("{}: cancel it first (only a finished, failed or cancelled job is deleted)",
-                                   describe_state(*store_.get_job(job_id))));
+                                   describe_state(*store_.jobs().get_job(job_id))));
   }
   jobs_.forget(job_id);
   const std::uintmax_t bytes = finisher_.remove_files(job_id);
@@ -341,7 +341,7 @@ std::uintmax_t SchedulerCore::remove(const std::string& job_id) {
 std::size_t SchedulerCore::remove_finished_before(std::int64_t before_ms) {
   constexpr int kBatch = 100;  // jobs a pass; the next pass takes the rest
   std::size_t removed = 0;
-  for (const std::string& id : store_.finished_before(before_ms, kBatch)) {
+  for (const std::string& id : store_.jobs().finished_before(before_ms, kBatch)) {
     try {
       remove(id);
       ++removed;

@@ -40,26 +40,26 @@
 #include <spdlog/logger.h>
 
 #include "proto/farm.pb.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/scene/job.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
 #include "server/common/asset_store.h"
-#include "server/scheduler/disk_full_pause.h"
-#include "server/scheduler/dispatcher.h"
-#include "server/scheduler/event_relay.h"
-#include "server/scheduler/finisher.h"
-#include "server/scheduler/frame_assembly.h"
-#include "server/scheduler/job_events.h"
-#include "server/scheduler/retention.h"
-#include "server/scheduler/running_jobs.h"
-#include "server/scheduler/scene_check.h"
-#include "server/scheduler/scheduler_options.h"
-#include "server/scheduler/store/job_store.h"
+#include "server/scheduler/assets/asset_grants.h"
+#include "server/scheduler/assets/asset_quota.h"
+#include "server/scheduler/dispatch/dispatcher.h"
+#include "server/scheduler/events/event_relay.h"
+#include "server/scheduler/events/job_events.h"
+#include "server/scheduler/jobs/disk_full_pause.h"
+#include "server/scheduler/jobs/finisher.h"
+#include "server/scheduler/jobs/frame_assembly.h"
+#include "server/scheduler/jobs/retention.h"
+#include "server/scheduler/jobs/running_jobs.h"
+#include "server/scheduler/jobs/scene_check.h"
+#include "server/scheduler/options/scheduler_options.h"
 #include "server/scheduler/scheduler_lease.h"
-#include "server/scheduler/store_outage.h"
-#include "server/scheduler/asset_grants.h"
-#include "server/scheduler/asset_quota.h"
-#include "server/scheduler/tile_worker.h"
-#include "server/scheduler/worker_registry.h"
+#include "server/scheduler/store/job_store.h"
+#include "server/scheduler/store/store_outage.h"
+#include "server/scheduler/workers/tile_worker.h"
+#include "server/scheduler/workers/worker_registry.h"
 
 namespace farm {
 
@@ -125,7 +125,7 @@ class SchedulerCore {
   // for one whose state the action does not apply to (proto/farm.proto says which).
   v1::Job pause(const std::string& job_id, bool paused, const std::string& by = {});
   v1::Job set_priority(const std::string& job_id, int priority, const std::string& by = {});
-  // A FAILED or CANCELLED job's units that are not done rendered again (JobStore::retry_job).
+  // A FAILED or CANCELLED job's units that are not done rendered again (JobRecords::retry_job).
   RetriedJob retry(const std::string& job_id, const std::string& by = {});
   // A final job gone from the store with its files; returns the bytes freed.
   std::uintmax_t remove(const std::string& job_id);

@@ -8,7 +8,7 @@ SchedulerLease::SchedulerLease(JobStore& store, StoreOutage& outage, spdlog::log
                                std::chrono::milliseconds length, std::function<void()> on_reaped)
     : store_(store), outage_(outage), log_(log), length_(length), on_reaped_(std::move(on_reaped)) {
   // Held before the first claim can mark a unit with this scheduler.
-  store_.hold_lease(unix_ms_now() + length_.count());
+  store_.leases().hold_lease(unix_ms_now() + length_.count());
   thread_ = std::thread([this] { renew_loop(); });
 }
 
@@ -23,7 +23,7 @@ void SchedulerLease::stop() {
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
   try {
-    store_.drop_lease();
+    store_.leases().drop_lease();
   } catch (const std::exception& e) {
     log_.warn("giving up the scheduler's lease: {} (it runs out by itself)", e.what());
   }
@@ -44,8 +44,8 @@ void SchedulerLease::renew_and_reap() {
   // Nothing may end this thread (std::terminate): a failure is logged and the next round tries.
   try {
     const std::int64_t now = unix_ms_now();
-    store_.hold_lease(now + length_.count());
-    const std::vector<ReapedScheduler> reaped = store_.reap_expired(now);
+    store_.leases().hold_lease(now + length_.count());
+    const std::vector<ReapedScheduler> reaped = store_.leases().reap_expired(now);
     outage_.answered();
     for (const ReapedScheduler& r : reaped) {
       log_.warn("scheduler {}: its lease ran out; its {} running unit{} queued again", r.id, r.tiles_queued_again,

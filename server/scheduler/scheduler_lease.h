@@ -17,7 +17,7 @@
 #include <spdlog/logger.h>
 
 #include "server/scheduler/store/job_store.h"
-#include "server/scheduler/store_outage.h"
+#include "server/scheduler/store/store_outage.h"
 
 namespace farm {
 

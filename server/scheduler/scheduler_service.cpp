@@ -1,3 +1,4 @@
+#include "server/common/job_state.h"
 #include "server/scheduler/scheduler_service.h"
 
 #include <fmt/format.h>
@@ -5,8 +6,8 @@
 #include <algorithm>
 #include <fstream>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/util/input_error.h"
 #include "renderer/util/utf8_prefix.h"
 #include "server/common/hex.h"
 #include "server/common/network_address.h"
@@ -148,7 +149,7 @@ v1::ListJobsResponse SchedulerService::list_jobs(const Principal& who, const v1:
                                  request.id_prefix().substr(0, 64)));
   }
   filter.id_prefix = request.id_prefix();
-  auto [jobs, next] = core_.store().list_jobs(filter, size, before);
+  auto [jobs, next] = core_.store().jobs().list_jobs(filter, size, before);
   v1::ListJobsResponse response;
   for (v1::Job& job : jobs) *response.add_jobs() = std::move(job);
   if (next > 0) response.set_next_page_token(std::to_string(next));
@@ -307,7 +308,7 @@ v1::GetJobLogResponse SchedulerService::job_log(const Principal& who, const v1::
                        : static_cast<int>(std::min<std::uint32_t>(request.page_size(), kMaxLogPage));
   bool more = false;
   v1::GetJobLogResponse response;
-  for (v1::JobLogEntry& e : core_.store().job_log(request.job_id(), request.after(), size, &more)) {
+  for (v1::JobLogEntry& e : core_.store().log().job_log(request.job_id(), request.after(), size, &more)) {
     *response.add_entries() = std::move(e);
   }
   response.set_more(more);

@@ -8,7 +8,7 @@
 #include "proto/farm.grpc.pb.h"
 #include "server/common/access_control.h"
 #include "server/common/client_identity.h"
-#include "server/scheduler/stream_watchdog.h"
+#include "server/scheduler/assets/stream_watchdog.h"
 #include "server/scheduler/scheduler_core.h"
 
 namespace farm {

@@ -6,7 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/service_error.h"
 
 namespace farm {

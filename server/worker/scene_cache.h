@@ -10,9 +10,9 @@
 #include <mutex>
 #include <string>
 
-#include "renderer/prepared_scene.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/model_library.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/loaders/model_library.h"
 
 namespace farm {
 

@@ -15,9 +15,9 @@
 #include <string_view>
 
 #include "renderer/engine.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "server/common/scene_hash.h"
 #include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"

@@ -1,4 +1,4 @@
-// The dae loader (Assimp behind renderer/scene/assimp_loader.cpp and its pre-checks): an input
+// The dae loader (Assimp behind renderer/loaders/assimp_loader.cpp and its pre-checks): an input
 // is one .dae file, loaded as a job's model is.
 #include "tests/fuzz/model_fuzzing.h"
 

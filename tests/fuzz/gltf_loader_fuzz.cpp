@@ -1,4 +1,4 @@
-// The glTF loader (tinygltf behind renderer/scene/gltf_loader.cpp): an input is one file, loaded
+// The glTF loader (tinygltf behind renderer/loaders/gltf_loader.cpp): an input is one file, loaded
 // as a .glb when it starts with the binary container's magic and as a .gltf otherwise, so one
 // corpus covers both forms.
 #include "tests/fuzz/model_fuzzing.h"

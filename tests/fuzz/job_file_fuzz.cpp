@@ -1,11 +1,11 @@
-// The job file parser (renderer/scene/job.cpp over json_reader): an input is a job file's text,
+// The job file parser (renderer/job/job.cpp over json_reader): an input is a job file's text,
 // parsed as if it lay in the repository's jobs/ folder, so that the example jobs' model paths
 // (assets/cornell_box.obj, ...) resolve and the parser reaches the keys after them. Nothing is
 // written there: parse_job only checks that model files exist inside the asset root.
 #include <string>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
+#include "renderer/util/input_error.h"
 #include "tests/fuzz/fuzz_support.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

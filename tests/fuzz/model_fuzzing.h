@@ -7,8 +7,8 @@
 #include <string>
 #include <string_view>
 
-#include "renderer/scene/input_error.h"
 #include "renderer/scene/model.h"
+#include "renderer/util/input_error.h"
 #include "tests/fuzz/fuzz_support.h"
 
 namespace farm::fuzz {

@@ -1,4 +1,4 @@
-// The obj loader (Assimp behind renderer/scene/assimp_loader.cpp and its pre-checks): an input
+// The obj loader (Assimp behind renderer/loaders/assimp_loader.cpp and its pre-checks): an input
 // is one .obj file, loaded as a job's model is.
 #include "tests/fuzz/model_fuzzing.h"
 

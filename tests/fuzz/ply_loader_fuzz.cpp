@@ -1,4 +1,4 @@
-// The ply loader (Assimp behind renderer/scene/assimp_loader.cpp and its pre-checks): an input
+// The ply loader (Assimp behind renderer/loaders/assimp_loader.cpp and its pre-checks): an input
 // is one .ply file, loaded as a job's model is.
 #include "tests/fuzz/model_fuzzing.h"
 

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "proto/farm.pb.h"
-#include "renderer/render_settings.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/job/render_settings.h"
+#include "renderer/util/input_error.h"
 #include "server/common/tile_codec.h"
 #include "server/common/tile_result_check.h"
 #include "tests/fuzz/fuzz_support.h"

@@ -1,4 +1,4 @@
-// The unit-file reader (server/scheduler/tile_results.cpp): the scheduler's finished batches on
+// The unit-file reader (server/scheduler/jobs/tile_results.cpp): the scheduler's finished batches on
 // disk, read back at merge time, perhaps after a crash, a full disk or a disk that flipped bits.
 // An input's first byte says how its rest becomes the file:
 //   0  the rest is the whole file, as found on disk (header and all)
@@ -12,10 +12,10 @@
 #include <string>
 
 #include "proto/farm.pb.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/sha256.h"
 #include "server/common/tile_codec.h"
-#include "server/scheduler/tile_results.h"
+#include "server/scheduler/jobs/tile_results.h"
 #include "tests/fuzz/fuzz_support.h"
 
 namespace {

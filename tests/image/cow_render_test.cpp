@@ -10,11 +10,11 @@
 #include <thread>
 #include <vector>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/geometry/triangle_intersect.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
 
 namespace farm {
 namespace {

@@ -8,12 +8,12 @@
 
 #include <cstdio>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/compare/compare.h"
 #include "renderer/image/exr_io.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

@@ -9,16 +9,16 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/engine.h"
 #include "renderer/image/exr_io.h"
 #include "renderer/image/pass_merge.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
 #include "server/common/tile_codec.h"
-#include "server/scheduler/frame_assembly.h"
-#include "server/scheduler/job_merger.h"
+#include "server/scheduler/jobs/frame_assembly.h"
+#include "server/scheduler/jobs/job_merger.h"
 #include "server/scheduler/store/job_store.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
@@ -118,7 +118,7 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
       ASSERT_EQ(result.job.state(), v1::JOB_STATE_SUCCEEDED) << result.job.failure_reason();
       EXPECT_EQ(result.job.tiles_rendered(), 96u);
       expect_same_pixels(read_exr(result.exr), local, "merged");
-      tiles = farm.core().store().tiles(result.job.job_id());  // the store lives in memory
+      tiles = farm.core().store().units().tiles(result.job.job_id());  // the store lives in memory
     }
     ASSERT_EQ(tiles.size(), 96u);
     std::map<std::uint32_t, std::vector<const TileRecord*>> calls;

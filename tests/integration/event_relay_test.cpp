@@ -6,7 +6,7 @@
 #include <chrono>
 
 #include "server/common/log.h"
-#include "server/scheduler/event_relay.h"
+#include "server/scheduler/events/event_relay.h"
 #include "server/scheduler/store/job_store.h"
 #include "tests/support/postgres_server.h"
 #include "tests/support/store_locations.h"
@@ -75,7 +75,7 @@ TEST(EventRelayTest, OneSchedulersEventsReachTheOthersWatchersWithTheJobAsStored
   test::StoreLocation where(SqlDialect::PostgreSQL);
   ASSERT_TRUE(where.problem().empty()) << where.problem();
   Scheduler a(where.location()), b(where.location());
-  a.store.add_job(test::one_row_job("job1", 2), 1);
+  a.store.jobs().add_job(test::one_row_job("job1", 2), 1);
   auto on_a = std::make_shared<JobEventQueue>();
   auto on_b = std::make_shared<JobEventQueue>();
   a.events.subscribe("job1", on_a);
@@ -93,7 +93,7 @@ TEST(EventRelayTest, OneSchedulersEventsReachTheOthersWatchersWithTheJobAsStored
   EXPECT_FALSE(on_a->pop(got, 1s));
 
   // A state change goes as far as the store has it now.
-  v1::Job cancelled = b.store.cancel_job("job1", 2);
+  v1::Job cancelled = b.store.jobs().cancel_job("job1", 2);
   b.events.publish_state(cancelled, v1::JOB_STATE_QUEUED);
   ASSERT_TRUE(on_a->pop(got, 10s));
   ASSERT_TRUE(got.has_state_changed());
@@ -110,7 +110,7 @@ TEST(EventRelayTest, RelaysCarryOnAfterTheServerWentAwayAndCameBack) {
   test::StoreLocation where(SqlDialect::PostgreSQL);
   ASSERT_TRUE(where.problem().empty()) << where.problem();
   Scheduler a(where.location()), b(where.location());
-  a.store.add_job(test::one_row_job("job1", 2), 1);
+  a.store.jobs().add_job(test::one_row_job("job1", 2), 1);
   auto on_b = std::make_shared<JobEventQueue>();
   b.events.subscribe("job1", on_b);
   ASSERT_TRUE(where.server()->stop()) << where.server()->problem();

@@ -9,8 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "renderer/render_settings.h"
-#include "renderer/scene/job_limits.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/job/render_settings.h"
 #include "tests/support/farm_cli_fixture.h"
 
 namespace farm {

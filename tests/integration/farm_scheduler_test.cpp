@@ -18,21 +18,21 @@
 #include <thread>
 #include <tuple>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/exr_io.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/job_limits.h"
-#include "renderer/scene/scene_builder.h"
 #include "server/common/asset_store.h"
 #include "server/common/sha256.h"
 #include "tests/support/background_process.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
+#include "tests/support/postgres_server.h"
 #include "tests/support/run_command.h"
 #include "tests/support/running_tiles.h"
 #include "tests/support/scheduler_client.h"
-#include "tests/support/postgres_server.h"
 #include "tests/support/store_locations.h"
 #include "tests/support/temp_dir.h"
 

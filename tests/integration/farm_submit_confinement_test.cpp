@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "proto/farm.grpc.pb.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/client/job_submission.h"
 #include "server/client/scheduler_client.h"
 #include "server/common/sha256.h"

@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "proto/farm.grpc.pb.h"
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/engine.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/job_limits.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/job/job.h"
+#include "renderer/job/job_limits.h"
+#include "renderer/job/scene_builder.h"
 #include "server/common/asset_store.h"
 #include "server/common/health_check.h"
 #include "server/common/scene_hash.h"

@@ -44,25 +44,25 @@ TEST(PostgresStoreTest, AServerThatGoesAwayIsStoreUnavailableAndTheStoreCarriesO
   test::StoreLocation where(SqlDialect::PostgreSQL);
   ASSERT_TRUE(where.problem().empty()) << where.problem();
   JobStore store(connect_store(where.location()));
-  store.add_job(one_row_job("a", 3), 1);
-  auto first = store.claim_next_batch("w", 2);
+  store.jobs().add_job(one_row_job("a", 3), 1);
+  auto first = store.units().claim_next_batch("w", 2);
   ASSERT_TRUE(first);
 
   ASSERT_TRUE(where.server()->stop()) << where.server()->problem();
-  EXPECT_THROW(store.batch_done("a", first->first, 1, {}, "w"), StoreUnavailable);
-  EXPECT_THROW(store.claim_next_batch("w", 3), StoreUnavailable);
-  EXPECT_THROW(store.add_job(one_row_job("b", 2), 3), StoreUnavailable);
+  EXPECT_THROW(store.units().batch_done("a", first->first, 1, {}, "w"), StoreUnavailable);
+  EXPECT_THROW(store.units().claim_next_batch("w", 3), StoreUnavailable);
+  EXPECT_THROW(store.jobs().add_job(one_row_job("b", 2), 3), StoreUnavailable);
   ASSERT_TRUE(where.server()->start()) << where.server()->problem();
 
-  const v1::Job a = *store.get_job("a");
+  const v1::Job a = *store.jobs().get_job("a");
   EXPECT_EQ(a.state(), v1::JOB_STATE_RUNNING);
   EXPECT_EQ(a.tiles_done(), 0u);
-  EXPECT_FALSE(store.get_job("b"));  // its transaction never committed
-  EXPECT_TRUE(store.batch_done("a", first->first, 1, {}, "w"));  // still running on w
-  auto second = store.claim_next_batch("w", 4);
+  EXPECT_FALSE(store.jobs().get_job("b"));  // its transaction never committed
+  EXPECT_TRUE(store.units().batch_done("a", first->first, 1, {}, "w"));  // still running on w
+  auto second = store.units().claim_next_batch("w", 4);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->first, 1u);
-  EXPECT_EQ(store.get_job("a")->tiles_done(), 1u);
+  EXPECT_EQ(store.jobs().get_job("a")->tiles_done(), 1u);
 }
 
 // Schedulers of one farm start together: the schema is made once, under a lock, and every one of
@@ -77,7 +77,7 @@ TEST(PostgresStoreTest, SchedulersOpeningOneNewDatabaseAtOnceMakeTheSchemaOnce) 
     threads.emplace_back([&, i] {
       try {
         JobStore store(connect_store(where.location()));
-        store.add_job(one_row_job("job" + std::to_string(i), 1), 1);
+        store.jobs().add_job(one_row_job("job" + std::to_string(i), 1), 1);
       } catch (const std::exception& e) {
         errors[static_cast<std::size_t>(i)] = e.what();
       }
@@ -86,7 +86,7 @@ TEST(PostgresStoreTest, SchedulersOpeningOneNewDatabaseAtOnceMakeTheSchemaOnce) 
   for (std::thread& t : threads) t.join();
   for (const std::string& e : errors) EXPECT_EQ(e, "");
   JobStore store(connect_store(where.location()));
-  EXPECT_EQ(store.list_jobs(JobFilter{}, 10, 0).first.size(), static_cast<std::size_t>(kSchedulers));
+  EXPECT_EQ(store.jobs().list_jobs(JobFilter{}, 10, 0).first.size(), static_cast<std::size_t>(kSchedulers));
   PGconn* c = PQconnectdb(where.location().c_str());
   PGresult* r = PQexec(c, "SELECT COUNT(*) FROM schema_version");
   ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQerrorMessage(c);
@@ -102,10 +102,10 @@ TEST(PostgresStoreTest, AVersion6StoreIsUpgradedInPlace) {
   ASSERT_TRUE(where.problem().empty()) << where.problem();
   {
     JobStore store(connect_store(where.location()));
-    store.add_job(one_row_job("a", 3), 1);
-    ASSERT_TRUE(store.claim_next_batch("w", 2));
-    ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
-    ASSERT_TRUE(store.claim_next_batch("w", 3));  // running when the version went back
+    store.jobs().add_job(one_row_job("a", 3), 1);
+    ASSERT_TRUE(store.units().claim_next_batch("w", 2));
+    ASSERT_TRUE(store.units().batch_done("a", 0, 1, {}, "w"));
+    ASSERT_TRUE(store.units().claim_next_batch("w", 3));  // running when the version went back
   }
   PGconn* c = PQconnectdb(where.location().c_str());
   for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
@@ -120,13 +120,13 @@ TEST(PostgresStoreTest, AVersion6StoreIsUpgradedInPlace) {
   EXPECT_STREQ(PQgetvalue(r, 0, 0), "8");
   PQclear(r);
   PQfinish(c);
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   ASSERT_EQ(tiles.size(), 3u);
   EXPECT_EQ(tiles[0].state, TileState::Done);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
-  store.set_scheduler("s");
-  store.hold_lease(100);
-  EXPECT_EQ(store.claim_next_batch("w", 4)->first, 1u);
+  store.leases().set_scheduler("s");
+  store.leases().hold_lease(100);
+  EXPECT_EQ(store.units().claim_next_batch("w", 4)->first, 1u);
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
-// The grading sandbox (server/review/sandbox.h) against what a student's program might do: open
+// The grading sandbox (server/grade/sandbox.h) against what a student's program might do: open
 // the network, read what is not its own, fork without end, loop, eat memory, fill the disk,
 // print without end; and a well-behaved program, which must simply work. Every hostile one is
 // stopped or refused with the right SandboxEnd, fast, and leaves nothing running.
-#include "server/review/sandbox.h"
+#include "server/grade/sandbox.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "server/review/sandbox_watch.h"
+#include "server/grade/sandbox_watch.h"
 #include "tests/support/run_command.h"
 #include "tests/support/temp_dir.h"
 

@@ -12,7 +12,7 @@
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/store/job_store.h"
-#include "server/scheduler/tile_worker.h"
+#include "server/scheduler/workers/tile_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 
@@ -68,7 +68,7 @@ std::size_t calls_for_job(bool report_cpu) {
     EXPECT_EQ(core.get_job(id)->state(), v1::JOB_STATE_SUCCEEDED);
   }
   std::set<std::uint32_t> parts;
-  for (const TileRecord& t : JobStore(dir / "farm" / "jobs.db").tiles(id)) parts.insert(t.part);
+  for (const TileRecord& t : JobStore(dir / "farm" / "jobs.db").units().tiles(id)) parts.insert(t.part);
   return parts.size();
 }
 

@@ -12,6 +12,11 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/image/exr_io.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
+#include "renderer/render_frame.h"
 #include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
@@ -20,11 +25,6 @@
 #include "tests/support/pixel_diff.h"
 #include "tests/support/run_command.h"
 #include "tests/support/temp_dir.h"
-#include "renderer/image/exr_io.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
 
 namespace farm {
 namespace {
@@ -146,7 +146,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkerCrashesMoreOftenThanMaxAttemptsS
   ASSERT_EQ(job.state(), v1::JOB_STATE_SUCCEEDED) << job.failure_reason();
   EXPECT_EQ(crashing->calls_lost(), kLosses);
   EXPECT_EQ(job.tile_failures(), static_cast<unsigned>(kLosses));  // every lost rendering, still shown
-  const std::vector<TileRecord> tiles = core.store().tiles(id);
+  const std::vector<TileRecord> tiles = core.store().units().tiles(id);
   ASSERT_EQ(tiles.size(), 1u);
   EXPECT_EQ(tiles[0].attempts, 0);  // none counted against --max-attempts
   EXPECT_EQ(tiles[0].lost_attempts, kLosses);
@@ -170,17 +170,17 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkersStopAndAreDroppedMoreOftenThanM
     core.remove_worker(worker_id, "no heartbeat for 3000 ms");
     // Back in the queue, or (were the loss counted as an attempt) failed for good.
     ASSERT_TRUE(eventually([&] {
-      const std::vector<TileRecord> tiles = core.store().tiles(id);
+      const std::vector<TileRecord> tiles = core.store().units().tiles(id);
       return !tiles.empty() && tiles[0].state != TileState::Running;
     })) << "stop " << i;
-    ASSERT_EQ(core.store().tiles(id)[0].state, TileState::Queued)
+    ASSERT_EQ(core.store().units().tiles(id)[0].state, TileState::Queued)
         << "stop " << i << ": " << core.get_job(id)->failure_reason();
   }
   core.add_worker(honest_renderer("honest"));
   ASSERT_TRUE(eventually([&] { return final_job(core, id); }));
   const v1::Job job = *core.get_job(id);
   ASSERT_EQ(job.state(), v1::JOB_STATE_SUCCEEDED) << job.failure_reason();
-  const std::vector<TileRecord> tiles = core.store().tiles(id);
+  const std::vector<TileRecord> tiles = core.store().units().tiles(id);
   ASSERT_EQ(tiles.size(), 1u);
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[0].lost_attempts, kStops);
@@ -205,7 +205,7 @@ TEST_F(SchedulerLostWorkerTest, ATileThatCrashesEveryWorkerFailsItsJobAtTheLostW
   EXPECT_NE(job.failure_reason().find("lost-worker attempts limit"), std::string::npos) << job.failure_reason();
   EXPECT_NE(job.failure_reason().find("UNAVAILABLE: Socket closed"), std::string::npos) << job.failure_reason();
   EXPECT_EQ(first->calls_lost() + second->calls_lost(), 4);  // and no call after the job failed
-  const std::vector<TileRecord> tiles = core.store().tiles(id);
+  const std::vector<TileRecord> tiles = core.store().units().tiles(id);
   ASSERT_EQ(tiles.size(), 1u);
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[0].lost_attempts, 4);

@@ -7,11 +7,12 @@
 #include <cstring>
 #include <thread>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/exr_io.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
+#include "server/common/job_state.h"
 #include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/log.h"
 #include "tests/support/background_process.h"
 #include "tests/support/job_specs.h"

@@ -3,7 +3,7 @@
 // (gtest finds PrintTo by argument-dependent lookup, so these live in namespace farm).
 #include <ostream>
 
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/util/cancel_flag.h"
 
 namespace farm {

@@ -4,9 +4,9 @@
 #include <glm/vec3.hpp>
 #include <memory>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/prepared_scene.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "renderer/scene/scene.h"
 
 namespace farm::test {

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/listen_policy.h"
 #include "server/common/sha256.h"
 #include "server/common/token_table.h"

@@ -1,4 +1,4 @@
-// The asset store's total size (server/scheduler/asset_quota.h): uploads reserve their size, the
+// The asset store's total size (server/scheduler/assets/asset_quota.h): uploads reserve their size, the
 // stored blobs count as they are on disk, and a reservation ends with its upload.
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 
 #include "server/common/asset_store.h"
 #include "server/common/service_error.h"
-#include "server/scheduler/asset_quota.h"
+#include "server/scheduler/assets/asset_quota.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/asset_store.h"
 #include "server/common/sha256.h"
 #include "tests/support/job_specs.h"

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "renderer/accel/mesh_accel.h"
+#include "renderer/accel/model_triangles.h"
 #include "renderer/geometry/bvh.h"
-#include "renderer/geometry/mesh_accel.h"
-#include "renderer/geometry/model_triangles.h"
 #include "renderer/scene/model.h"
 #include "tests/support/ray_fixtures.h"
 

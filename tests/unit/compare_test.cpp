@@ -13,7 +13,7 @@
 #include "renderer/compare/metrics.h"
 #include "renderer/image/png_writer.h"
 #include "renderer/image/rgb8_image.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/image_pairs.h"
 #include "tests/support/temp_dir.h"
 

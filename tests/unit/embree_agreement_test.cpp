@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "renderer/geometry/accel_validation.h"
-#include "renderer/geometry/embree_intersector.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/accel_validation.h"
+#include "renderer/accel/embree_intersector.h"
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/scene/model.h"
 #include "tests/support/scene_fixtures.h"
 

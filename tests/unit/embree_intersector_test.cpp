@@ -14,9 +14,9 @@
 #include <thread>
 #include <vector>
 
-#include "renderer/geometry/embree_intersector.h"
-#include "renderer/geometry/scene_intersector.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/embree_intersector.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/accel/scene_intersector.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {

@@ -3,7 +3,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <utility>
 
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/trace/emitter_facing.h"
 #include "tests/support/scene_fixtures.h"
 

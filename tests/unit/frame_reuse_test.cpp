@@ -1,17 +1,17 @@
-// The frames of one job share what only transforms leave alone (renderer/scene/model_library.h,
-// renderer/geometry/model_geometry.h): each model is loaded once, its triangles flattened once
+// The frames of one job share what only transforms leave alone (renderer/loaders/model_library.h,
+// renderer/accel/model_geometry.h): each model is loaded once, its triangles flattened once
 // and its BVH built once; only the top level is built per frame. And sharing changes no bit.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "renderer/geometry/instance_intersector.h"
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/instance_intersector.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
+#include "renderer/loaders/model_library.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/model_library.h"
-#include "renderer/scene/scene_builder.h"
 #include "tests/support/pixel_diff.h"
 
 namespace farm {

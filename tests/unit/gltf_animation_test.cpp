@@ -17,9 +17,9 @@
 #include <utility>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
 #include "renderer/scene/model.h"
 #include "renderer/scene/model_animation.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

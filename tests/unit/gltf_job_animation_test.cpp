@@ -8,10 +8,10 @@
 #include <glm/vec4.hpp>
 #include <nlohmann/json.hpp>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/model_library.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
+#include "renderer/loaders/model_library.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {

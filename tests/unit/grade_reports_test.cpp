@@ -1,4 +1,4 @@
-// The grading reports (server/review: grades_csv, feedback_pages, gradescope_results,
+// The grading reports (server/grade: grades_csv, feedback_pages, gradescope_results,
 // class_summary, similar_submissions) over one class built by hand: a rubric of two file tasks
 // (one visible, one after_published) and a run task (hidden), five students, two of them with
 // hostile ids (a comma and a quote; <script>), one with <script> in its program's output; for
@@ -20,14 +20,14 @@
 #include <vector>
 
 #include "renderer/compare/image.h"
-#include "server/review/class_summary.h"
-#include "server/review/feedback_pages.h"
-#include "server/review/grade_points.h"
-#include "server/review/gradescope_results.h"
-#include "server/review/grades_csv.h"
-#include "server/review/markup_escape.h"
-#include "server/review/similar_submissions.h"
-#include "server/review/student_folder.h"
+#include "server/common/markup_escape.h"
+#include "server/grade/feedback_pages.h"
+#include "server/grade/grade_points.h"
+#include "server/grade/grades_csv.h"
+#include "server/grade/gradescope_results.h"
+#include "server/grade/similar_submissions.h"
+#include "server/grade/student_folder.h"
+#include "server/grade/class_summary.h"
 #include "tests/support/run_command.h"
 #include "tests/support/temp_dir.h"
 

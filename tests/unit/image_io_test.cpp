@@ -17,7 +17,7 @@
 #include <string>
 
 #include "renderer/image/exr_io.h"
-#include "renderer/image/output_file.h"
+#include "renderer/util/atomic_file.h"
 #include "renderer/image/preview.h"
 #include "tests/support/temp_dir.h"
 

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "renderer/geometry/instance_intersector.h"
+#include "renderer/accel/instance_intersector.h"
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/geometry/triangle_intersect.h"
-#include "renderer/prepared_scene.h"
 #include "renderer/scene/transform.h"
 #include "tests/support/ray_fixtures.h"
 #include "tests/support/scene_fixtures.h"

@@ -1,4 +1,4 @@
-// Frame ranges and keyframes in job files (renderer/scene/job.h): frame k of an animated job is
+// Frame ranges and keyframes in job files (renderer/job/job.h): frame k of an animated job is
 // the still a user would write by hand with the values at k, and bad ranges, paths and keys are
 // InputErrors naming the JSON path.
 #include <gtest/gtest.h>
@@ -8,11 +8,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "renderer/prepared_scene.h"
+#include "renderer/accel/prepared_scene.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/pixel_diff.h"
 #include "tests/support/print_values.h"
 

@@ -42,42 +42,42 @@ NewJob make_job(const std::string& id, int priority, int tiles) {
 TEST_P(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
   {
     JobStore store(connect());
-    const v1::Job job = store.add_job(make_job("a", 0, 3), 1000);
+    const v1::Job job = store.jobs().add_job(make_job("a", 0, 3), 1000);
     EXPECT_EQ(job.state(), v1::JOB_STATE_QUEUED);
     EXPECT_EQ(job.tiles_total(), 3u);
-    auto t0 = store.claim_next_batch("w1", 2000);
-    auto t1 = store.claim_next_batch("w1", 2000);
+    auto t0 = store.units().claim_next_batch("w1", 2000);
+    auto t1 = store.units().claim_next_batch("w1", 2000);
     ASSERT_TRUE(t0 && t1);
     v1::TileStats stats;
     stats.set_samples(7);
-    EXPECT_TRUE(store.batch_done("a", t0->first, 1, stats));
-    EXPECT_FALSE(store.batch_done("a", t0->first, 1, stats));  // not running any more
-    EXPECT_EQ(store.get_job("a")->state(), v1::JOB_STATE_RUNNING);
+    EXPECT_TRUE(store.units().batch_done("a", t0->first, 1, stats));
+    EXPECT_FALSE(store.units().batch_done("a", t0->first, 1, stats));  // not running any more
+    EXPECT_EQ(store.jobs().get_job("a")->state(), v1::JOB_STATE_RUNNING);
   }  // t1 was running when the "scheduler" went away
   JobStore store(connect());
-  const v1::Job job = *store.get_job("a");
+  const v1::Job job = *store.jobs().get_job("a");
   EXPECT_EQ(job.tiles_done(), 1u);
   EXPECT_EQ(job.tiles_rendered(), 1u);
   EXPECT_EQ(job.stats().samples(), 7u);
   EXPECT_EQ(job.submitted_at().seconds(), 1);
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   ASSERT_EQ(tiles.size(), 3u);
   EXPECT_EQ(tiles[0].state, TileState::Done);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
   EXPECT_EQ(tiles[1].attempts, 0);  // a restart is not the tile's fault
-  EXPECT_EQ(store.claim_next_batch("w2", 3000)->first, 1u);
-  EXPECT_EQ(store.claim_next_batch("w2", 3000)->first, 2u);
-  EXPECT_FALSE(store.claim_next_batch("w2", 3000));
-  EXPECT_EQ(store.get_spec("a")->job_json(), "{}");
+  EXPECT_EQ(store.units().claim_next_batch("w2", 3000)->first, 1u);
+  EXPECT_EQ(store.units().claim_next_batch("w2", 3000)->first, 2u);
+  EXPECT_FALSE(store.units().claim_next_batch("w2", 3000));
+  EXPECT_EQ(store.jobs().get_spec("a")->job_json(), "{}");
 }
 
 TEST_P(JobStoreTest, TilesGoOutByPriorityThenSubmissionThenIndex) {
   JobStore store(connect());
-  store.add_job(make_job("first", 0, 2), 1);
-  store.add_job(make_job("second", 0, 1), 2);
-  store.add_job(make_job("urgent", 5, 2), 3);
+  store.jobs().add_job(make_job("first", 0, 2), 1);
+  store.jobs().add_job(make_job("second", 0, 1), 2);
+  store.jobs().add_job(make_job("urgent", 5, 2), 3);
   std::vector<std::string> order;
-  while (auto claim = store.claim_next_batch("w", 4)) {
+  while (auto claim = store.units().claim_next_batch("w", 4)) {
     order.push_back(claim->job_id + ":" + std::to_string(claim->first));
   }
   EXPECT_EQ(order, (std::vector<std::string>{"urgent:0", "urgent:1", "first:0", "first:1",
@@ -86,37 +86,37 @@ TEST_P(JobStoreTest, TilesGoOutByPriorityThenSubmissionThenIndex) {
 
 TEST_P(JobStoreTest, FailedAttemptsRequeueUntilTheLimitThenFailTheJobWithTheReason) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 2), 1);
+  store.jobs().add_job(make_job("a", 0, 2), 1);
   for (int attempt = 1; attempt <= 2; ++attempt) {
-    auto claim = store.claim_next_batch("w", 2);
+    auto claim = store.units().claim_next_batch("w", 2);
     ASSERT_TRUE(claim);
     EXPECT_EQ(claim->first, 0u);
     EXPECT_EQ(claim->attempts, attempt - 1);
-    const TileFailure f = store.batch_failed("a", 0, 1, "worker died", 3, 3);
+    const TileFailure f = store.units().batch_failed("a", 0, 1, "worker died", 3, 3);
     EXPECT_TRUE(f.will_retry);
     EXPECT_EQ(f.job.tile_failures(), static_cast<unsigned>(attempt));
-    EXPECT_EQ(store.tiles("a")[0].last_error, "worker died");
+    EXPECT_EQ(store.units().tiles("a")[0].last_error, "worker died");
   }
-  ASSERT_EQ(store.claim_next_batch("w", 2)->first, 0u);
-  const TileFailure f = store.batch_failed("a", 0, 1, "deadline exceeded", 3, 4);
+  ASSERT_EQ(store.units().claim_next_batch("w", 2)->first, 0u);
+  const TileFailure f = store.units().batch_failed("a", 0, 1, "deadline exceeded", 3, 4);
   EXPECT_FALSE(f.will_retry);
   EXPECT_EQ(f.job.state(), v1::JOB_STATE_FAILED);
   EXPECT_NE(f.job.failure_reason().find("deadline exceeded"), std::string::npos);
   EXPECT_NE(f.job.failure_reason().find("3 times"), std::string::npos);
-  EXPECT_FALSE(store.claim_next_batch("w", 5));  // a failed job hands out nothing
+  EXPECT_FALSE(store.units().claim_next_batch("w", 5));  // a failed job hands out nothing
   // Final states stay final.
-  EXPECT_EQ(store.cancel_job("a", 6).state(), v1::JOB_STATE_FAILED);
+  EXPECT_EQ(store.jobs().cancel_job("a", 6).state(), v1::JOB_STATE_FAILED);
 }
 
 TEST_P(JobStoreTest, CancelledJobHandsOutNoTilesAndIgnoresLateResults) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 3), 1);
-  auto claim = store.claim_next_batch("w", 2);
+  store.jobs().add_job(make_job("a", 0, 3), 1);
+  auto claim = store.units().claim_next_batch("w", 2);
   ASSERT_TRUE(claim);
-  EXPECT_EQ(store.cancel_job("a", 3).state(), v1::JOB_STATE_CANCELLED);
-  EXPECT_FALSE(store.claim_next_batch("w", 4));
-  EXPECT_FALSE(store.batch_done("a", claim->first, 1, {}));
-  EXPECT_EQ(store.get_job("a")->tiles_done(), 0u);
+  EXPECT_EQ(store.jobs().cancel_job("a", 3).state(), v1::JOB_STATE_CANCELLED);
+  EXPECT_FALSE(store.units().claim_next_batch("w", 4));
+  EXPECT_FALSE(store.units().batch_done("a", claim->first, 1, {}));
+  EXPECT_EQ(store.jobs().get_job("a")->tiles_done(), 0u);
 }
 
 // A 4 x 2 grid of 16 px tiles.
@@ -132,67 +132,67 @@ NewJob grid_job(const std::string& id) {
 
 TEST_P(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlone) {
   JobStore store(connect());
-  store.add_job(grid_job("a"), 1);
+  store.jobs().add_job(grid_job("a"), 1);
   int asked_queued = -1;
   const BatchSize three = [&](const std::string& job_id, int queued) {
     EXPECT_EQ(job_id, "a");
     asked_queued = queued;
     return 3;
   };
-  auto b0 = store.claim_next_batch("w", 2, three);
+  auto b0 = store.units().claim_next_batch("w", 2, three);
   ASSERT_TRUE(b0);
   EXPECT_EQ(asked_queued, 8);
   EXPECT_EQ(b0->first, 0u);
   EXPECT_EQ(b0->count, 3u);
   EXPECT_EQ(b0->rect, (Rect{0, 0, 48, 16}));
   // The row ends after one more tile: a batch never wraps to the next row.
-  auto b1 = store.claim_next_batch("w", 2, three);
+  auto b1 = store.units().claim_next_batch("w", 2, three);
   ASSERT_TRUE(b1);
   EXPECT_EQ(asked_queued, 5);
   EXPECT_EQ(b1->first, 3u);
   EXPECT_EQ(b1->count, 1u);
   EXPECT_EQ(b1->rect, (Rect{48, 0, 64, 16}));
   // The first batch fails: its three tiles are queued again with an attempt each.
-  const TileFailure f = store.batch_failed("a", 0, 3, "worker died", 3, 3);
+  const TileFailure f = store.units().batch_failed("a", 0, 3, "worker died", 3, 3);
   EXPECT_TRUE(f.will_retry);
   EXPECT_EQ(f.job.tile_failures(), 3u);
   // ... and now go out one by one, however many the policy allows.
   for (std::uint32_t i = 0; i < 3; ++i) {
-    auto retry = store.claim_next_batch("w", 4, three);
+    auto retry = store.units().claim_next_batch("w", 4, three);
     ASSERT_TRUE(retry);
     EXPECT_EQ(retry->first, i);
     EXPECT_EQ(retry->count, 1u);
     EXPECT_EQ(retry->attempts, 1);
-    EXPECT_TRUE(store.batch_done("a", i, 1, {}));
+    EXPECT_TRUE(store.units().batch_done("a", i, 1, {}));
   }
   // A batch stops before a tile that is not queued.
-  EXPECT_TRUE(store.batch_done("a", 3, 1, {}));
-  auto b2 = store.claim_next_batch("w", 5, [](const std::string&, int) { return 64; });
+  EXPECT_TRUE(store.units().batch_done("a", 3, 1, {}));
+  auto b2 = store.units().claim_next_batch("w", 5, [](const std::string&, int) { return 64; });
   ASSERT_TRUE(b2);
   EXPECT_EQ(b2->first, 4u);
   EXPECT_EQ(b2->count, 4u);
   v1::TileStats stats;
   stats.set_samples(4);
-  EXPECT_FALSE(store.batch_done("a", 4, 5, stats));  // tile 8 does not exist: not all running
-  EXPECT_TRUE(store.batch_done("a", 4, 4, stats));
-  const v1::Job job = *store.get_job("a");
+  EXPECT_FALSE(store.units().batch_done("a", 4, 5, stats));  // tile 8 does not exist: not all running
+  EXPECT_TRUE(store.units().batch_done("a", 4, 4, stats));
+  const v1::Job job = *store.jobs().get_job("a");
   EXPECT_EQ(job.tiles_done(), 8u);
   EXPECT_EQ(job.tiles_rendered(), 8u);
   EXPECT_EQ(job.stats().samples(), 4u);
   // Which result file holds each tile.
   std::vector<std::uint32_t> parts;
-  for (const TileRecord& t : store.tiles("a")) parts.push_back(t.part);
+  for (const TileRecord& t : store.units().tiles("a")) parts.push_back(t.part);
   EXPECT_EQ(parts, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 4, 4, 4}));
 }
 
 TEST_P(JobStoreTest, ARequeuedBatchIsQueuedAgainWithoutAnAttempt) {
   JobStore store(connect());
-  store.add_job(grid_job("a"), 1);
+  store.jobs().add_job(grid_job("a"), 1);
   const BatchSize two = [](const std::string&, int) { return 2; };
-  auto b = store.claim_next_batch("w", 2, two);
+  auto b = store.units().claim_next_batch("w", 2, two);
   ASSERT_TRUE(b);
-  store.batch_requeue("a", b->first, b->count);
-  auto again = store.claim_next_batch("w", 3, two);
+  store.units().batch_requeue("a", b->first, b->count);
+  auto again = store.units().claim_next_batch("w", 3, two);
   ASSERT_TRUE(again);
   EXPECT_EQ(again->first, 0u);
   EXPECT_EQ(again->count, 2u);
@@ -204,10 +204,10 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
-    store.add_job(make_job("a", 0, 3), 1);
-    ASSERT_TRUE(store.claim_next_batch("w", 2));
-    ASSERT_TRUE(store.claim_next_batch("w", 2));
-    ASSERT_TRUE(store.batch_done("a", 1, 1, {}));
+    store.jobs().add_job(make_job("a", 0, 3), 1);
+    ASSERT_TRUE(store.units().claim_next_batch("w", 2));
+    ASSERT_TRUE(store.units().claim_next_batch("w", 2));
+    ASSERT_TRUE(store.units().batch_done("a", 1, 1, {}));
   }
   {
     // Back to what version 1 had: no part column, no owner.
@@ -224,7 +224,7 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
     sqlite3_close(db);
   }
   JobStore store(dir / "jobs.db");
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   ASSERT_EQ(tiles.size(), 3u);
   EXPECT_EQ(tiles[1].state, TileState::Done);
   EXPECT_EQ(tiles[1].part, 1u);  // its own file, as version 1 wrote it
@@ -235,7 +235,7 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
-    store.add_job(make_job("old", 0, 1), 1);
+    store.jobs().add_job(make_job("old", 0, 1), 1);
   }
   {
     // Back to what version 2 had: no owner column, no lost_attempts.
@@ -252,14 +252,14 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     sqlite3_close(db);
   }
   JobStore store(dir / "jobs.db");
-  EXPECT_EQ(store.get_job("old")->owner(), "");
+  EXPECT_EQ(store.jobs().get_job("old")->owner(), "");
   NewJob mine = make_job("mine", 0, 1);
   mine.owner = "alice";
-  store.add_job(mine, 2);
-  EXPECT_EQ(store.get_job("mine")->owner(), "alice");
-  EXPECT_EQ(store.list_jobs(JobFilter{.owner = std::string("alice")}, 10, 0).first.size(), 1u);
-  EXPECT_EQ(store.list_jobs(JobFilter{.owner = std::string("bob")}, 10, 0).first.size(), 0u);
-  EXPECT_EQ(store.list_jobs(JobFilter{}, 10, 0).first.size(), 2u);
+  store.jobs().add_job(mine, 2);
+  EXPECT_EQ(store.jobs().get_job("mine")->owner(), "alice");
+  EXPECT_EQ(store.jobs().list_jobs(JobFilter{.owner = std::string("alice")}, 10, 0).first.size(), 1u);
+  EXPECT_EQ(store.jobs().list_jobs(JobFilter{.owner = std::string("bob")}, 10, 0).first.size(), 0u);
+  EXPECT_EQ(store.jobs().list_jobs(JobFilter{}, 10, 0).first.size(), 2u);
 }
 
 // A store of the scheduler before lost workers were counted apart (schema 3): its tiles keep their
@@ -268,9 +268,9 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
-    store.add_job(make_job("a", 0, 2), 1);
-    ASSERT_TRUE(store.claim_next_batch("w", 2));
-    ASSERT_TRUE(store.batch_failed("a", 0, 1, "worker died", 3, 3).will_retry);
+    store.jobs().add_job(make_job("a", 0, 2), 1);
+    ASSERT_TRUE(store.units().claim_next_batch("w", 2));
+    ASSERT_TRUE(store.units().batch_failed("a", 0, 1, "worker died", 3, 3).will_retry);
   }
   {
     sqlite3* db = nullptr;
@@ -287,13 +287,13 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   }
   {
     JobStore store(dir / "jobs.db");
-    const std::vector<TileRecord> tiles = store.tiles("a");
+    const std::vector<TileRecord> tiles = store.units().tiles("a");
     ASSERT_EQ(tiles.size(), 2u);
     EXPECT_EQ(tiles[0].attempts, 1);
     EXPECT_EQ(tiles[0].lost_attempts, 0);
-    ASSERT_TRUE(store.claim_next_batch("w", 4));
-    EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
-    EXPECT_EQ(store.tiles("a")[0].lost_attempts, 1);
+    ASSERT_TRUE(store.units().claim_next_batch("w", 4));
+    EXPECT_TRUE(store.units().batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
+    EXPECT_EQ(store.units().tiles("a")[0].lost_attempts, 1);
   }
   // Upgraded once: it opens as version 8 from now on.
   sqlite3* db = nullptr;
@@ -312,12 +312,12 @@ TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZ
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
-    store.add_job(make_job("done", 0, 1), 1);
-    store.add_job(make_job("running", 0, 2), 2);
-    ASSERT_TRUE(store.claim_next_batch("w", 3));
-    ASSERT_TRUE(store.batch_done("done", 0, 1, {}));
-    ASSERT_TRUE(store.frame_merged("done", 0));
-    ASSERT_EQ(store.finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
+    store.jobs().add_job(make_job("done", 0, 1), 1);
+    store.jobs().add_job(make_job("running", 0, 2), 2);
+    ASSERT_TRUE(store.units().claim_next_batch("w", 3));
+    ASSERT_TRUE(store.units().batch_done("done", 0, 1, {}));
+    ASSERT_TRUE(store.frames().frame_merged("done", 0));
+    ASSERT_EQ(store.jobs().finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
   }
   {
     sqlite3* db = nullptr;
@@ -332,25 +332,25 @@ TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZ
     sqlite3_close(db);
   }
   JobStore store(dir / "jobs.db");
-  const v1::Job done = *store.get_job("done");
+  const v1::Job done = *store.jobs().get_job("done");
   EXPECT_EQ(done.frames_total(), 1u);
   EXPECT_EQ(done.frames_done(), 1u);
   EXPECT_EQ(done.frame_first(), 0);
-  EXPECT_TRUE(store.is_frame_merged("done", 0));
-  const v1::Job running = *store.get_job("running");
+  EXPECT_TRUE(store.frames().is_frame_merged("done", 0));
+  const v1::Job running = *store.jobs().get_job("running");
   EXPECT_EQ(running.frames_done(), 0u);
-  EXPECT_FALSE(store.is_frame_merged("running", 0));
-  EXPECT_EQ(store.tiles("running")[0].frame, 0);
+  EXPECT_FALSE(store.frames().is_frame_merged("running", 0));
+  EXPECT_EQ(store.units().tiles("running")[0].frame, 0);
   // It goes on as any job: its frame completes, is merged, and the job succeeds.
   for (int i = 0; i < 2; ++i) {
-    auto b = store.claim_next_batch("w", 5);
+    auto b = store.units().claim_next_batch("w", 5);
     ASSERT_TRUE(b);
-    ASSERT_TRUE(store.batch_done("running", b->first, 1, {}));
+    ASSERT_TRUE(store.units().batch_done("running", b->first, 1, {}));
   }
-  EXPECT_EQ(store.complete_frames("running"), std::vector<int>{0});
-  ASSERT_TRUE(store.frame_merged("running", 0));
-  EXPECT_TRUE(store.complete_frames("running").empty());
-  EXPECT_EQ(store.finish_job("running", v1::JOB_STATE_SUCCEEDED, "", "", 6).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(store.frames().complete_frames("running"), std::vector<int>{0});
+  ASSERT_TRUE(store.frames().frame_merged("running", 0));
+  EXPECT_TRUE(store.frames().complete_frames("running").empty());
+  EXPECT_EQ(store.jobs().finish_job("running", v1::JOB_STATE_SUCCEEDED, "", "", 6).state(), v1::JOB_STATE_SUCCEEDED);
 }
 
 // A job of frames: tiles numbered frame after frame, batches never cross a frame, a frame is
@@ -360,34 +360,34 @@ TEST_P(JobStoreTest, FramesCompleteOneByOneAndAPartTakenBackUnmergesItsFrame) {
   NewJob job = make_job("f", 0, 2);  // two tiles a frame, in one row
   job.frames = {10, 12, 14};
   job.frame_step = 2;
-  const v1::Job added = store.add_job(job, 1);
+  const v1::Job added = store.jobs().add_job(job, 1);
   EXPECT_EQ(added.tiles_total(), 6u);
   EXPECT_EQ(added.frames_total(), 3u);
   EXPECT_EQ(added.frame_first(), 10);
   EXPECT_EQ(added.frame_last(), 14);
   EXPECT_EQ(added.frame_step(), 2);
   const BatchSize many = [](const std::string&, int) { return 8; };
-  auto first = store.claim_next_batch("w", 2, many);
+  auto first = store.units().claim_next_batch("w", 2, many);
   ASSERT_TRUE(first);
   EXPECT_EQ(first->frame, 10);
   EXPECT_EQ(first->count, 2u);  // the whole row of frame 10, not into frame 12
-  EXPECT_TRUE(store.complete_frames("f").empty());
-  ASSERT_TRUE(store.batch_done("f", first->first, first->count, {}));
-  EXPECT_EQ(store.complete_frames("f", 10), std::vector<int>{10});
-  EXPECT_TRUE(store.complete_frames("f", 12).empty());
-  EXPECT_EQ(store.frame_parts("f", 10, 1), (std::vector<FramePart>{{0, 0}}));
-  ASSERT_TRUE(store.frame_merged("f", 10));
-  EXPECT_EQ(store.get_job("f")->frames_done(), 1u);
-  EXPECT_TRUE(store.complete_frames("f").empty());
-  auto second = store.claim_next_batch("w", 3, many);
+  EXPECT_TRUE(store.frames().complete_frames("f").empty());
+  ASSERT_TRUE(store.units().batch_done("f", first->first, first->count, {}));
+  EXPECT_EQ(store.frames().complete_frames("f", 10), std::vector<int>{10});
+  EXPECT_TRUE(store.frames().complete_frames("f", 12).empty());
+  EXPECT_EQ(store.frames().frame_parts("f", 10, 1), (std::vector<FramePart>{{0, 0}}));
+  ASSERT_TRUE(store.frames().frame_merged("f", 10));
+  EXPECT_EQ(store.jobs().get_job("f")->frames_done(), 1u);
+  EXPECT_TRUE(store.frames().complete_frames("f").empty());
+  auto second = store.units().claim_next_batch("w", 3, many);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->frame, 12);
   EXPECT_EQ(second->first, 2u);
-  EXPECT_FALSE(store.frame_merged("f", 12));  // its tiles are not done
+  EXPECT_FALSE(store.frames().frame_merged("f", 12));  // its tiles are not done
   // Taking frame 10's part back unmerges it: merged again once rendered again.
-  EXPECT_EQ(store.requeue_parts("f", {0}).size(), 1u);
-  EXPECT_EQ(store.get_job("f")->frames_done(), 0u);
-  EXPECT_FALSE(store.is_frame_merged("f", 10));
+  EXPECT_EQ(store.units().requeue_parts("f", {0}).size(), 1u);
+  EXPECT_EQ(store.jobs().get_job("f")->frames_done(), 0u);
+  EXPECT_FALSE(store.frames().is_frame_merged("f", 10));
 }
 
 // A version 5 store (frames, no passes) is upgraded: its jobs are one pass each, and go on.
@@ -395,7 +395,7 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
-    store.add_job(make_job("running", 0, 2), 1);
+    store.jobs().add_job(make_job("running", 0, 2), 1);
   }
   {
     sqlite3* db = nullptr;
@@ -407,16 +407,16 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
     sqlite3_close(db);
   }
   JobStore store(dir / "jobs.db");
-  EXPECT_EQ(store.get_job("running")->passes(), 1u);
-  EXPECT_EQ(store.tiles("running")[1].pass, 0);
+  EXPECT_EQ(store.jobs().get_job("running")->passes(), 1u);
+  EXPECT_EQ(store.units().tiles("running")[1].pass, 0);
   for (int i = 0; i < 2; ++i) {
-    auto b = store.claim_next_batch("w", 2);
+    auto b = store.units().claim_next_batch("w", 2);
     ASSERT_TRUE(b);
     EXPECT_EQ(b->pass, 0);
-    ASSERT_TRUE(store.batch_done("running", b->first, 1, {}));
+    ASSERT_TRUE(store.units().batch_done("running", b->first, 1, {}));
   }
-  EXPECT_EQ(store.complete_passes("running", 0), 1);
-  EXPECT_EQ(store.complete_frames("running"), std::vector<int>{0});
+  EXPECT_EQ(store.frames().complete_passes("running", 0), 1);
+  EXPECT_EQ(store.frames().complete_frames("running"), std::vector<int>{0});
 }
 
 // A job of sample passes: its units are numbered pass after pass within each frame, so the queue
@@ -428,8 +428,8 @@ TEST(SqliteStoreUpgradeTest, AVersion6StoreIsUpgradedAndItsRunningTilesAreQueued
   test::TempDir dir;
   {
     JobStore store(dir / "jobs.db");
-    store.add_job(make_job("a", 0, 2), 1);
-    ASSERT_TRUE(store.claim_next_batch("w", 2));
+    store.jobs().add_job(make_job("a", 0, 2), 1);
+    ASSERT_TRUE(store.units().claim_next_batch("w", 2));
   }
   {
     sqlite3* db = nullptr;
@@ -441,12 +441,12 @@ TEST(SqliteStoreUpgradeTest, AVersion6StoreIsUpgradedAndItsRunningTilesAreQueued
     sqlite3_close(db);
   }
   JobStore store(dir / "jobs.db");
-  EXPECT_EQ(store.tiles("a")[0].state, TileState::Queued);
-  store.set_scheduler("s");
-  store.hold_lease(10);
-  const auto b = store.claim_next_batch("w", 3);
+  EXPECT_EQ(store.units().tiles("a")[0].state, TileState::Queued);
+  store.leases().set_scheduler("s");
+  store.leases().hold_lease(10);
+  const auto b = store.units().claim_next_batch("w", 3);
   ASSERT_TRUE(b);
-  EXPECT_TRUE(store.batch_done("a", b->first, 1, {}, "w"));
+  EXPECT_TRUE(store.units().batch_done("a", b->first, 1, {}, "w"));
 }
 
 TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
@@ -454,10 +454,10 @@ TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
   NewJob job = make_job("p", 0, 2);  // two tiles a frame, in one row
   job.frames = {1, 2};
   job.passes = 3;
-  const v1::Job added = store.add_job(job, 1);
+  const v1::Job added = store.jobs().add_job(job, 1);
   EXPECT_EQ(added.tiles_total(), 12u);
   EXPECT_EQ(added.passes(), 3u);
-  const std::vector<TileRecord> tiles = store.tiles("p");
+  const std::vector<TileRecord> tiles = store.units().tiles("p");
   ASSERT_EQ(tiles.size(), 12u);
   for (std::uint32_t i = 0; i < 12; ++i) {
     EXPECT_EQ(tiles[i].frame, i < 6 ? 1 : 2) << i;
@@ -467,29 +467,29 @@ TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
   const BatchSize many = [](const std::string&, int) { return 8; };
   std::vector<TileBatch> claimed;
   for (int k = 0; k < 3; ++k) {
-    auto b = store.claim_next_batch("w", 2, many);
+    auto b = store.units().claim_next_batch("w", 2, many);
     ASSERT_TRUE(b);
     EXPECT_EQ(b->frame, 1);
     EXPECT_EQ(b->pass, k);
     EXPECT_EQ(b->count, 2u);  // the row of one pass, not into the next
     claimed.push_back(*b);
   }
-  EXPECT_EQ(store.complete_passes("p", 1), 0);
+  EXPECT_EQ(store.frames().complete_passes("p", 1), 0);
   // Pass 1 done before pass 0: no pass is complete from the first on yet.
-  ASSERT_TRUE(store.batch_done("p", claimed[1].first, claimed[1].count, {}));
-  EXPECT_EQ(store.complete_passes("p", 1), 0);
-  ASSERT_TRUE(store.batch_done("p", claimed[0].first, claimed[0].count, {}));
-  EXPECT_EQ(store.complete_passes("p", 1), 2);
-  EXPECT_TRUE(store.complete_frames("p", 1).empty());
-  EXPECT_EQ(store.frame_parts("p", 1, 2), (std::vector<FramePart>{{0, 0}, {2, 1}}));
-  ASSERT_TRUE(store.batch_done("p", claimed[2].first, claimed[2].count, {}));
-  EXPECT_EQ(store.complete_passes("p", 1), 3);
-  EXPECT_EQ(store.complete_frames("p", 1), std::vector<int>{1});
-  EXPECT_EQ(store.frame_parts("p", 1, 3), (std::vector<FramePart>{{0, 0}, {2, 1}, {4, 2}}));
+  ASSERT_TRUE(store.units().batch_done("p", claimed[1].first, claimed[1].count, {}));
+  EXPECT_EQ(store.frames().complete_passes("p", 1), 0);
+  ASSERT_TRUE(store.units().batch_done("p", claimed[0].first, claimed[0].count, {}));
+  EXPECT_EQ(store.frames().complete_passes("p", 1), 2);
+  EXPECT_TRUE(store.frames().complete_frames("p", 1).empty());
+  EXPECT_EQ(store.frames().frame_parts("p", 1, 2), (std::vector<FramePart>{{0, 0}, {2, 1}}));
+  ASSERT_TRUE(store.units().batch_done("p", claimed[2].first, claimed[2].count, {}));
+  EXPECT_EQ(store.frames().complete_passes("p", 1), 3);
+  EXPECT_EQ(store.frames().complete_frames("p", 1), std::vector<int>{1});
+  EXPECT_EQ(store.frames().frame_parts("p", 1, 3), (std::vector<FramePart>{{0, 0}, {2, 1}, {4, 2}}));
   // Taking pass 0's part back: no pass is complete from the first on again.
-  EXPECT_EQ(store.requeue_parts("p", {0}).size(), 1u);
-  EXPECT_EQ(store.complete_passes("p", 1), 0);
-  auto again = store.claim_next_batch("w", 3, many);
+  EXPECT_EQ(store.units().requeue_parts("p", {0}).size(), 1u);
+  EXPECT_EQ(store.frames().complete_passes("p", 1), 0);
+  auto again = store.units().claim_next_batch("w", 3, many);
   ASSERT_TRUE(again);
   EXPECT_EQ(again->first, 0u);
   EXPECT_EQ(again->pass, 0);
@@ -499,43 +499,43 @@ TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
 // one goes out alone, as a failed one does.
 TEST_P(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLimit) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 3), 1);
+  store.jobs().add_job(make_job("a", 0, 3), 1);
   const BatchSize three = [](const std::string&, int) { return 3; };
-  const auto batch = store.claim_next_batch("w", 2, three);
+  const auto batch = store.units().claim_next_batch("w", 2, three);
   ASSERT_TRUE(batch);
   ASSERT_EQ(batch->count, 3u);
-  EXPECT_TRUE(store.batch_lost("a", 0, 3, "worker w: UNAVAILABLE", 5, 3, "w").will_retry);
+  EXPECT_TRUE(store.units().batch_lost("a", 0, 3, "worker w: UNAVAILABLE", 5, 3, "w").will_retry);
   // Each of the three goes out alone now.
   for (std::uint32_t i = 0; i < 3; ++i) {
-    const auto claim = store.claim_next_batch("w", 3, three);
+    const auto claim = store.units().claim_next_batch("w", 3, three);
     ASSERT_TRUE(claim);
     EXPECT_EQ(claim->first, i);
     EXPECT_EQ(claim->count, 1u);
     EXPECT_EQ(claim->attempts, 0);
     EXPECT_EQ(claim->lost_attempts, 1);
   }
-  ASSERT_TRUE(store.batch_done("a", 1, 1, {}, "w"));
-  ASSERT_TRUE(store.batch_done("a", 2, 1, {}, "w"));
+  ASSERT_TRUE(store.units().batch_done("a", 1, 1, {}, "w"));
+  ASSERT_TRUE(store.units().batch_done("a", 2, 1, {}, "w"));
   // Tile 0 loses its worker again and again: well past max_attempts, and still queued.
-  EXPECT_TRUE(store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 5, 3, "w").will_retry);
+  EXPECT_TRUE(store.units().batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 5, 3, "w").will_retry);
   for (int loss = 3; loss <= 4; ++loss) {
-    const auto claim = store.claim_next_batch("w", 4, three);
+    const auto claim = store.units().claim_next_batch("w", 4, three);
     ASSERT_TRUE(claim);
     EXPECT_EQ(claim->lost_attempts, loss - 1);
-    const TileFailure f = store.batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 5, 4, "w");
+    const TileFailure f = store.units().batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 5, 4, "w");
     EXPECT_TRUE(f.will_retry);
     EXPECT_EQ(f.job.state(), v1::JOB_STATE_RUNNING);
   }
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[0].lost_attempts, 4);
   EXPECT_EQ(tiles[0].last_error, "worker w: UNAVAILABLE");
   // A failure the tile's worker reported counts as ever, against max_attempts.
-  ASSERT_TRUE(store.claim_next_batch("w", 4, three));
-  EXPECT_TRUE(store.batch_failed("a", 0, 1, "worker w: INTERNAL: boom", 2, 4, "w").will_retry);
-  EXPECT_EQ(store.tiles("a")[0].attempts, 1);
-  ASSERT_TRUE(store.claim_next_batch("w", 5, three));
-  const TileFailure last = store.batch_lost("a", 0, 1, "worker w left: no heartbeat", 5, 6, "w");
+  ASSERT_TRUE(store.units().claim_next_batch("w", 4, three));
+  EXPECT_TRUE(store.units().batch_failed("a", 0, 1, "worker w: INTERNAL: boom", 2, 4, "w").will_retry);
+  EXPECT_EQ(store.units().tiles("a")[0].attempts, 1);
+  ASSERT_TRUE(store.units().claim_next_batch("w", 5, three));
+  const TileFailure last = store.units().batch_lost("a", 0, 1, "worker w left: no heartbeat", 5, 6, "w");
   EXPECT_FALSE(last.will_retry);
   EXPECT_EQ(last.job.state(), v1::JOB_STATE_FAILED);
   EXPECT_NE(last.job.failure_reason().find("unit 0 lost 5 workers while rendering"), std::string::npos)
@@ -545,23 +545,23 @@ TEST_P(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLim
   // Every rendering that came to nothing: the batch of 3, tile 0's three losses alone, its failure
   // and its last loss.
   EXPECT_EQ(last.job.tile_failures(), 3u + 3u + 1u + 1u);
-  EXPECT_EQ(store.tiles("a")[0].state, TileState::Failed);
+  EXPECT_EQ(store.units().tiles("a")[0].state, TileState::Failed);
 }
 
 TEST_P(JobStoreTest, ListJobsIsNewestFirstWithPagesAndStateFilter) {
   JobStore store(connect());
-  for (int i = 0; i < 5; ++i) store.add_job(make_job(std::to_string(i), 0, 1), i);
-  store.cancel_job("3", 10);
-  auto [page1, next1] = store.list_jobs(JobFilter{}, 2, 0);
+  for (int i = 0; i < 5; ++i) store.jobs().add_job(make_job(std::to_string(i), 0, 1), i);
+  store.jobs().cancel_job("3", 10);
+  auto [page1, next1] = store.jobs().list_jobs(JobFilter{}, 2, 0);
   ASSERT_EQ(page1.size(), 2u);
   EXPECT_EQ(page1[0].job_id(), "4");
   EXPECT_EQ(page1[1].job_id(), "3");
   ASSERT_NE(next1, 0);
-  auto [page2, next2] = store.list_jobs(JobFilter{}, 10, next1);
+  auto [page2, next2] = store.jobs().list_jobs(JobFilter{}, 10, next1);
   ASSERT_EQ(page2.size(), 3u);
   EXPECT_EQ(page2[0].job_id(), "2");
   EXPECT_EQ(next2, 0);
-  auto [cancelled, none] = store.list_jobs(JobFilter{.states = {v1::JOB_STATE_CANCELLED}}, 10, 0);
+  auto [cancelled, none] = store.jobs().list_jobs(JobFilter{.states = {v1::JOB_STATE_CANCELLED}}, 10, 0);
   ASSERT_EQ(cancelled.size(), 1u);
   EXPECT_EQ(cancelled[0].job_id(), "3");
 }
@@ -577,11 +577,11 @@ TEST_P(JobStoreTest, ListJobsFiltersByNameGlobAndIdPrefix) {
     NewJob j = make_job(id, 0, 1);
     j.name = name;
     j.owner = id == "ab78" ? "bob" : "alice";
-    store.add_job(j, ++seq);
+    store.jobs().add_job(j, ++seq);
   }
   const auto ids = [&](const JobFilter& f, int limit = 10) {
     std::vector<std::string> out;
-    for (const v1::Job& j : store.list_jobs(f, limit, 0).first) out.push_back(j.job_id());
+    for (const v1::Job& j : store.jobs().list_jobs(f, limit, 0).first) out.push_back(j.job_id());
     return out;
   };
   using V = std::vector<std::string>;
@@ -594,12 +594,12 @@ TEST_P(JobStoreTest, ListJobsFiltersByNameGlobAndIdPrefix) {
   EXPECT_EQ(ids({.id_prefix = "ab3"}), (V{"ab34"}));
   EXPECT_EQ(ids({.id_prefix = "a_"}), (V{}));
   EXPECT_EQ(ids({.owner = std::string("alice"), .name = "cow*", .id_prefix = "ab"}), (V{"ab34", "ab12"}));
-  store.cancel_job("ab12", 10);
+  store.jobs().cancel_job("ab12", 10);
   EXPECT_EQ(ids({.states = {v1::JOB_STATE_CANCELLED}, .name = "cow*"}), (V{"ab12"}));
-  auto [first, next] = store.list_jobs({.name = "c*"}, 2, 0);
+  auto [first, next] = store.jobs().list_jobs({.name = "c*"}, 2, 0);
   ASSERT_EQ(first.size(), 2u);
   ASSERT_NE(next, 0);
-  EXPECT_EQ(store.list_jobs({.name = "c*"}, 10, next).first.size(), 3u);  // ab34, cd56, ab12
+  EXPECT_EQ(store.jobs().list_jobs({.name = "c*"}, 10, next).first.size(), 3u);  // ab34, cd56, ab12
 }
 
 }  // namespace
@@ -613,71 +613,71 @@ namespace {
 // workers' tiles are left alone.
 TEST_P(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 4), 1);
-  store.add_job(make_job("done", -1, 1), 1);
+  store.jobs().add_job(make_job("a", 0, 4), 1);
+  store.jobs().add_job(make_job("done", -1, 1), 1);
   v1::TileStats stats;
   stats.set_samples(10);
   stats.set_render_ms(5.0);
   const BatchSize two = [](const std::string&, int) { return 2; };
-  auto liar = store.claim_next_batch("liar", 2, two);      // a: tiles 0 and 1
-  auto honest = store.claim_next_batch("honest", 2);       // a: tile 2
-  auto running = store.claim_next_batch("liar", 2);        // a: tile 3
+  auto liar = store.units().claim_next_batch("liar", 2, two);      // a: tiles 0 and 1
+  auto honest = store.units().claim_next_batch("honest", 2);       // a: tile 2
+  auto running = store.units().claim_next_batch("liar", 2);        // a: tile 3
   ASSERT_TRUE(liar && honest && running);
   ASSERT_EQ(liar->count, 2u);
-  ASSERT_TRUE(store.batch_done("a", liar->first, liar->count, stats, "liar"));
-  ASSERT_TRUE(store.batch_done("a", honest->first, 1, stats, "honest"));
-  auto finished = store.claim_next_batch("liar", 3);
+  ASSERT_TRUE(store.units().batch_done("a", liar->first, liar->count, stats, "liar"));
+  ASSERT_TRUE(store.units().batch_done("a", honest->first, 1, stats, "honest"));
+  auto finished = store.units().claim_next_batch("liar", 3);
   ASSERT_TRUE(finished && finished->job_id == "done");
-  ASSERT_TRUE(store.batch_done("done", 0, 1, stats, "liar"));
-  ASSERT_TRUE(store.frame_merged("done", 0));
-  ASSERT_EQ(store.finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
-  EXPECT_EQ(store.get_job("a")->stats().samples(), 20u);
+  ASSERT_TRUE(store.units().batch_done("done", 0, 1, stats, "liar"));
+  ASSERT_TRUE(store.frames().frame_merged("done", 0));
+  ASSERT_EQ(store.jobs().finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(store.jobs().get_job("a")->stats().samples(), 20u);
 
-  const std::vector<TileBatch> taken = store.quarantine_worker("liar");
+  const std::vector<TileBatch> taken = store.units().quarantine_worker("liar");
   ASSERT_EQ(taken.size(), 1u);
   EXPECT_EQ(taken[0].job_id, "a");
   EXPECT_EQ(taken[0].first, 0u);
   EXPECT_EQ(taken[0].count, 2u);
   EXPECT_EQ(taken[0].rect, (Rect{0, 0, 32, 16}));
-  const v1::Job a = *store.get_job("a");
+  const v1::Job a = *store.jobs().get_job("a");
   EXPECT_EQ(a.tiles_done(), 1u);
   EXPECT_EQ(a.tiles_rendered(), 3u);  // results accepted over the job's life
   EXPECT_EQ(a.stats().samples(), 10u);
   EXPECT_EQ(a.stats().render_ms(), 5.0);
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].state, TileState::Queued);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
   EXPECT_EQ(tiles[2].state, TileState::Done);
   EXPECT_EQ(tiles[3].state, TileState::Queued);  // was running on the liar
   EXPECT_EQ(tiles[3].attempts, 0);
   // Its answer for tile 3, late, is refused; the finished job stays as it was.
-  EXPECT_FALSE(store.batch_done("a", 3, 1, stats, "liar"));
-  EXPECT_EQ(store.get_job("done")->tiles_done(), 1u);
-  EXPECT_TRUE(store.quarantine_worker("liar").empty());
+  EXPECT_FALSE(store.units().batch_done("a", 3, 1, stats, "liar"));
+  EXPECT_EQ(store.jobs().get_job("done")->tiles_done(), 1u);
+  EXPECT_TRUE(store.units().quarantine_worker("liar").empty());
 }
 
 // A late answer from a worker whose tiles were taken back does not touch the worker that has
 // them now; the job succeeds only while every tile is done.
 TEST_P(JobStoreTest, BatchOperationsActOnlyOnTheirWorkersTilesAndSuccessNeedsEveryTileDone) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 2), 1);
-  auto first = store.claim_next_batch("w1", 2);
+  store.jobs().add_job(make_job("a", 0, 2), 1);
+  auto first = store.units().claim_next_batch("w1", 2);
   ASSERT_TRUE(first);
-  store.batch_requeue("a", first->first, 1, "w1");
-  auto again = store.claim_next_batch("w2", 3);
+  store.units().batch_requeue("a", first->first, 1, "w1");
+  auto again = store.units().claim_next_batch("w2", 3);
   ASSERT_TRUE(again && again->first == first->first);
-  store.batch_requeue("a", first->first, 1, "w1");  // w1's, late: w2 keeps the tile
-  EXPECT_FALSE(store.batch_failed("a", first->first, 1, "late", 3, 4, "w1").will_retry);
-  EXPECT_EQ(store.tiles("a")[0].state, TileState::Running);
-  EXPECT_FALSE(store.batch_done("a", first->first, 1, {}, "w1"));
-  EXPECT_TRUE(store.batch_done("a", first->first, 1, {}, "w2"));
-  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_RUNNING);
-  auto last = store.claim_next_batch("w2", 6);
-  ASSERT_TRUE(last && store.batch_done("a", last->first, 1, {}, "w2"));
+  store.units().batch_requeue("a", first->first, 1, "w1");  // w1's, late: w2 keeps the tile
+  EXPECT_FALSE(store.units().batch_failed("a", first->first, 1, "late", 3, 4, "w1").will_retry);
+  EXPECT_EQ(store.units().tiles("a")[0].state, TileState::Running);
+  EXPECT_FALSE(store.units().batch_done("a", first->first, 1, {}, "w1"));
+  EXPECT_TRUE(store.units().batch_done("a", first->first, 1, {}, "w2"));
+  EXPECT_EQ(store.jobs().finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_RUNNING);
+  auto last = store.units().claim_next_batch("w2", 6);
+  ASSERT_TRUE(last && store.units().batch_done("a", last->first, 1, {}, "w2"));
   // Every tile done, but the frame not merged: not yet.
-  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_RUNNING);
-  ASSERT_TRUE(store.frame_merged("a", 0));
-  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(store.jobs().finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_RUNNING);
+  ASSERT_TRUE(store.frames().frame_merged("a", 0));
+  EXPECT_EQ(store.jobs().finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 7).state(), v1::JOB_STATE_SUCCEEDED);
 }
 
 }  // namespace
@@ -691,43 +691,43 @@ namespace {
 // job is left alone.
 TEST_P(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysActive) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 3), 1);
+  store.jobs().add_job(make_job("a", 0, 3), 1);
   v1::TileStats stats;
   stats.set_samples(10);
   const BatchSize two = [](const std::string&, int) { return 2; };
-  auto first = store.claim_next_batch("w", 2, two);  // tiles 0 and 1
-  auto last = store.claim_next_batch("w", 2);        // tile 2
+  auto first = store.units().claim_next_batch("w", 2, two);  // tiles 0 and 1
+  auto last = store.units().claim_next_batch("w", 2);        // tile 2
   ASSERT_TRUE(first && last);
-  ASSERT_TRUE(store.batch_done("a", first->first, first->count, stats, "w"));
-  ASSERT_TRUE(store.batch_done("a", last->first, last->count, stats, "w"));
-  ASSERT_EQ(store.get_job("a")->tiles_done(), 3u);
+  ASSERT_TRUE(store.units().batch_done("a", first->first, first->count, stats, "w"));
+  ASSERT_TRUE(store.units().batch_done("a", last->first, last->count, stats, "w"));
+  ASSERT_EQ(store.jobs().get_job("a")->tiles_done(), 3u);
 
-  const std::vector<TileBatch> taken = store.requeue_parts("a", {0, 99});
+  const std::vector<TileBatch> taken = store.units().requeue_parts("a", {0, 99});
   ASSERT_EQ(taken.size(), 1u);  // part 99 holds no done tiles
   EXPECT_EQ(taken[0].first, 0u);
   EXPECT_EQ(taken[0].count, 2u);
   EXPECT_EQ(taken[0].rect, (Rect{0, 0, 32, 16}));
-  const v1::Job a = *store.get_job("a");
+  const v1::Job a = *store.jobs().get_job("a");
   EXPECT_EQ(a.state(), v1::JOB_STATE_RUNNING);
   EXPECT_EQ(a.tiles_done(), 1u);
   EXPECT_EQ(a.tiles_rendered(), 3u);
   EXPECT_EQ(a.stats().samples(), 10u);
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].state, TileState::Queued);
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
   EXPECT_EQ(tiles[2].state, TileState::Done);
   // Not SUCCEEDED while they are queued; rendered again, the job can finish.
-  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 3).state(), v1::JOB_STATE_RUNNING);
-  auto again = store.claim_next_batch("w", 4, two);
+  EXPECT_EQ(store.jobs().finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 3).state(), v1::JOB_STATE_RUNNING);
+  auto again = store.units().claim_next_batch("w", 4, two);
   ASSERT_TRUE(again);
   EXPECT_EQ(again->first, 0u);
   EXPECT_EQ(again->count, 2u);
-  ASSERT_TRUE(store.batch_done("a", again->first, again->count, stats, "w"));
-  ASSERT_TRUE(store.frame_merged("a", 0));
-  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_SUCCEEDED);
-  EXPECT_TRUE(store.requeue_parts("a", {0}).empty());
-  EXPECT_EQ(store.get_job("a")->tiles_done(), 3u);
+  ASSERT_TRUE(store.units().batch_done("a", again->first, again->count, stats, "w"));
+  ASSERT_TRUE(store.frames().frame_merged("a", 0));
+  EXPECT_EQ(store.jobs().finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 5).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_TRUE(store.units().requeue_parts("a", {0}).empty());
+  EXPECT_EQ(store.jobs().get_job("a")->tiles_done(), 3u);
 }
 
 // Tiles go in 128 rows a statement: a job of 140 (a full statement and a short one) keeps every
@@ -738,10 +738,10 @@ TEST_P(JobStoreTest, AJobOfManyUnitsKeepsEveryTileInUnitOrder) {
   j.frames = {3, 5, 7, 9, 11, 13, 15};
   j.frame_step = 2;
   j.passes = 2;
-  const v1::Job job = store.add_job(j, 1);
+  const v1::Job job = store.jobs().add_job(j, 1);
   EXPECT_EQ(job.tiles_total(), 140u);
   EXPECT_EQ(job.frames_total(), 7u);
-  const std::vector<TileRecord> tiles = store.tiles("many");
+  const std::vector<TileRecord> tiles = store.units().tiles("many");
   ASSERT_EQ(tiles.size(), 140u);
   for (std::uint32_t i = 0; i < tiles.size(); ++i) {
     EXPECT_EQ(tiles[i].index, i);
@@ -763,18 +763,18 @@ TEST_P(JobStoreTest, TextAndBlobsRoundTripWhateverTheyHold) {
   for (int b = 0; b < 256; ++b) bytes += static_cast<char>(b);
   j.spec.set_job_json(bytes.substr(32, 90));  // printable
   j.spec.add_assets()->set_sha256(std::string(64, 'f'));
-  store.add_job(j, 1);
-  const v1::Job job = *store.get_job("q?'1");
+  store.jobs().add_job(j, 1);
+  const v1::Job job = *store.jobs().get_job("q?'1");
   EXPECT_EQ(job.name(), j.name);
   EXPECT_EQ(job.owner(), j.owner);
-  EXPECT_EQ(store.get_spec("q?'1")->SerializeAsString(), j.spec.SerializeAsString());
-  auto b = store.claim_next_batch("w'?", 2);
+  EXPECT_EQ(store.jobs().get_spec("q?'1")->SerializeAsString(), j.spec.SerializeAsString());
+  auto b = store.units().claim_next_batch("w'?", 2);
   ASSERT_TRUE(b);
   v1::TileStats stats;
   stats.set_samples(1ull << 40);  // past 32 bits
-  ASSERT_TRUE(store.batch_done("q?'1", b->first, 1, stats, "w'?"));
-  EXPECT_EQ(store.get_job("q?'1")->stats().samples(), 1ull << 40);
-  EXPECT_EQ(store.tiles("q?'1")[0].worker, "w'?");
+  ASSERT_TRUE(store.units().batch_done("q?'1", b->first, 1, stats, "w'?"));
+  EXPECT_EQ(store.jobs().get_job("q?'1")->stats().samples(), 1ull << 40);
+  EXPECT_EQ(store.units().tiles("q?'1")[0].worker, "w'?");
 }
 
 // A worker's error message is whatever bytes it sent: a NUL, bytes that are not UTF-8. It is
@@ -782,13 +782,13 @@ TEST_P(JobStoreTest, TextAndBlobsRoundTripWhateverTheyHold) {
 // attempt counted: no message can keep a batch running for ever.
 TEST_P(JobStoreTest, AnErrorMessageOfAnyBytesIsRecordedAndItsAttemptCounted) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 1), 1);
-  auto b = store.claim_next_batch("w", 2);
+  store.jobs().add_job(make_job("a", 0, 1), 1);
+  auto b = store.units().claim_next_batch("w", 2);
   ASSERT_TRUE(b);
   const std::string reason("bad \0 bytes \xff\xc0\x80 end", 19);
-  const TileFailure failure = store.batch_failed("a", b->first, 1, reason, 3, 3, "w");
+  const TileFailure failure = store.units().batch_failed("a", b->first, 1, reason, 3, 3, "w");
   EXPECT_TRUE(failure.will_retry);
-  const TileRecord tile = store.tiles("a")[0];
+  const TileRecord tile = store.units().tiles("a")[0];
   EXPECT_EQ(tile.state, TileState::Queued);
   EXPECT_EQ(tile.attempts, 1);
   if (GetParam() == SqlDialect::SQLite) {
@@ -805,7 +805,7 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
   constexpr int kJobs = 3, kTiles = 40;
   {
     JobStore store(connect());
-    for (int j = 0; j < kJobs; ++j) store.add_job(make_job(fmt::format("j{}", j), 0, kTiles), 1);
+    for (int j = 0; j < kJobs; ++j) store.jobs().add_job(make_job(fmt::format("j{}", j), 0, kTiles), 1);
   }
   JobStore a(connect()), b(connect());
   std::mutex mutex;
@@ -814,14 +814,14 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
   const auto claimer = [&](JobStore& store, const std::string& worker) {
     try {
       while (const std::optional<TileBatch> batch =
-                 store.claim_next_batch(worker, 2, [](const std::string&, int) { return 3; })) {
+                 store.units().claim_next_batch(worker, 2, [](const std::string&, int) { return 3; })) {
         {
           std::lock_guard lock(mutex);
           for (std::uint32_t i = 0; i < batch->count; ++i) ++claimed[{batch->job_id, batch->first + i}];
         }
         v1::TileStats stats;
         stats.set_samples(batch->count);
-        if (!store.batch_done(batch->job_id, batch->first, batch->count, stats, worker)) {
+        if (!store.units().batch_done(batch->job_id, batch->first, batch->count, stats, worker)) {
           throw std::runtime_error(worker + ": a batch it claimed was not running on it");
         }
       }
@@ -842,7 +842,7 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
   for (const auto& [tile, claims] : claimed) shared += claims > 1 ? 1 : 0;
   EXPECT_EQ(shared, 0);
   for (int j = 0; j < kJobs; ++j) {
-    const v1::Job job = *a.get_job(fmt::format("j{}", j));
+    const v1::Job job = *a.jobs().get_job(fmt::format("j{}", j));
     EXPECT_EQ(job.tiles_done(), static_cast<std::uint32_t>(kTiles));
     EXPECT_EQ(job.tiles_rendered(), static_cast<std::uint32_t>(kTiles));
     EXPECT_EQ(job.stats().samples(), static_cast<std::uint64_t>(kTiles));
@@ -855,34 +855,34 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
 // still running.
 TEST_P(JobStoreTest, AnExpiredSchedulersTilesComeBackWithoutAnAttemptAndItsLateAnswerIsRefused) {
   JobStore a(connect()), b(connect());
-  a.set_scheduler("a");
-  b.set_scheduler("b");
-  a.add_job(make_job("j", 0, 4), 1);
-  a.hold_lease(1000);
-  b.hold_lease(5000);
-  const auto a1 = a.claim_next_batch("w1", 10);
-  const auto a2 = a.claim_next_batch("w1", 10);
-  const auto b1 = b.claim_next_batch("w1", 10);
+  a.leases().set_scheduler("a");
+  b.leases().set_scheduler("b");
+  a.jobs().add_job(make_job("j", 0, 4), 1);
+  a.leases().hold_lease(1000);
+  b.leases().hold_lease(5000);
+  const auto a1 = a.units().claim_next_batch("w1", 10);
+  const auto a2 = a.units().claim_next_batch("w1", 10);
+  const auto b1 = b.units().claim_next_batch("w1", 10);
   ASSERT_TRUE(a1 && a2 && b1);
-  EXPECT_FALSE(b.batch_done("j", a1->first, 1, {}, "w1"));  // not b's to mark
-  EXPECT_TRUE(b.reap_expired(999).empty());                 // a's lease still runs
-  const std::vector<ReapedScheduler> reaped = b.reap_expired(1001);
+  EXPECT_FALSE(b.units().batch_done("j", a1->first, 1, {}, "w1"));  // not b's to mark
+  EXPECT_TRUE(b.leases().reap_expired(999).empty());                 // a's lease still runs
+  const std::vector<ReapedScheduler> reaped = b.leases().reap_expired(1001);
   ASSERT_EQ(reaped.size(), 1u);
   EXPECT_EQ(reaped[0].id, "a");
   EXPECT_EQ(reaped[0].tiles_queued_again, 2);
-  EXPECT_TRUE(a.reap_expired(1001).empty());  // gone with the first reaping
-  std::vector<TileRecord> tiles = b.tiles("j");
+  EXPECT_TRUE(a.leases().reap_expired(1001).empty());  // gone with the first reaping
+  std::vector<TileRecord> tiles = b.units().tiles("j");
   EXPECT_EQ(tiles[a1->first].state, TileState::Queued);
   EXPECT_EQ(tiles[a2->first].state, TileState::Queued);
   EXPECT_EQ(tiles[a1->first].attempts + tiles[a1->first].lost_attempts, 0);
   EXPECT_EQ(tiles[b1->first].state, TileState::Running);
-  EXPECT_FALSE(a.batch_done("j", a1->first, 1, {}, "w1"));  // the late answer
-  EXPECT_TRUE(b.batch_done("j", b1->first, 1, {}, "w1"));
+  EXPECT_FALSE(a.units().batch_done("j", a1->first, 1, {}, "w1"));  // the late answer
+  EXPECT_TRUE(b.units().batch_done("j", b1->first, 1, {}, "w1"));
   // b renders the rest; a scheduler never reaps itself, whatever its lease says.
-  EXPECT_TRUE(b.reap_expired(999999).empty());
-  while (const auto next = b.claim_next_batch("w1", 20)) ASSERT_TRUE(b.batch_done("j", next->first, 1, {}, "w1"));
-  EXPECT_EQ(b.get_job("j")->tiles_done(), 4u);
-  EXPECT_EQ(b.get_job("j")->tiles_rendered(), 4u);
+  EXPECT_TRUE(b.leases().reap_expired(999999).empty());
+  while (const auto next = b.units().claim_next_batch("w1", 20)) ASSERT_TRUE(b.units().batch_done("j", next->first, 1, {}, "w1"));
+  EXPECT_EQ(b.jobs().get_job("j")->tiles_done(), 4u);
+  EXPECT_EQ(b.jobs().get_job("j")->tiles_rendered(), 4u);
 }
 
 // Two schedulers find the same frame complete, or the same job's frames all merged: one claims
@@ -890,78 +890,78 @@ TEST_P(JobStoreTest, AnExpiredSchedulersTilesComeBackWithoutAnAttemptAndItsLateA
 // when a part of its frame is taken back, and dies with its holder's lease.
 TEST_P(JobStoreTest, OneSchedulerClaimsEachMergeAndEndAndAClaimDiesWithItsLease) {
   JobStore a(connect()), b(connect());
-  a.set_scheduler("a");
-  b.set_scheduler("b");
-  a.hold_lease(1000);
-  b.hold_lease(5000);
-  a.add_job(make_job("j", 0, 2), 1);
-  EXPECT_TRUE(a.claim_frame_merge("j", 0));
-  EXPECT_FALSE(b.claim_frame_merge("j", 0));
-  EXPECT_TRUE(a.claim_frame_merge("j", 0));  // still a's
-  EXPECT_TRUE(b.claim_frame_merge("j", 1));  // another frame, another claim
-  EXPECT_TRUE(b.claim_job_end("j"));
-  EXPECT_FALSE(a.claim_job_end("j"));
-  EXPECT_FALSE(a.claim_frame_merge("nothing", 0));  // no such job: nobody's
+  a.leases().set_scheduler("a");
+  b.leases().set_scheduler("b");
+  a.leases().hold_lease(1000);
+  b.leases().hold_lease(5000);
+  a.jobs().add_job(make_job("j", 0, 2), 1);
+  EXPECT_TRUE(a.leases().claim_frame_merge("j", 0));
+  EXPECT_FALSE(b.leases().claim_frame_merge("j", 0));
+  EXPECT_TRUE(a.leases().claim_frame_merge("j", 0));  // still a's
+  EXPECT_TRUE(b.leases().claim_frame_merge("j", 1));  // another frame, another claim
+  EXPECT_TRUE(b.leases().claim_job_end("j"));
+  EXPECT_FALSE(a.leases().claim_job_end("j"));
+  EXPECT_FALSE(a.leases().claim_frame_merge("nothing", 0));  // no such job: nobody's
 
   // Frame 0's units done by a, then its part taken back: the merge is anybody's again.
-  const auto t0 = a.claim_next_batch("w", 2), t1 = a.claim_next_batch("w", 2);
+  const auto t0 = a.units().claim_next_batch("w", 2), t1 = a.units().claim_next_batch("w", 2);
   ASSERT_TRUE(t0 && t1);
-  ASSERT_TRUE(a.batch_done("j", t0->first, 1, {}, "w"));
-  ASSERT_TRUE(a.batch_done("j", t1->first, 1, {}, "w"));
-  ASSERT_EQ(a.requeue_parts("j", {t0->first}).size(), 1u);
-  EXPECT_TRUE(b.claim_frame_merge("j", 0));
+  ASSERT_TRUE(a.units().batch_done("j", t0->first, 1, {}, "w"));
+  ASSERT_TRUE(a.units().batch_done("j", t1->first, 1, {}, "w"));
+  ASSERT_EQ(a.units().requeue_parts("j", {t0->first}).size(), 1u);
+  EXPECT_TRUE(b.leases().claim_frame_merge("j", 0));
 
   // a's lease runs out: what it held goes with it.
-  EXPECT_TRUE(a.claim_frame_merge("j", 2));
-  EXPECT_FALSE(b.claim_frame_merge("j", 2));
-  ASSERT_EQ(b.reap_expired(2000).size(), 1u);
-  EXPECT_TRUE(b.claim_frame_merge("j", 2));
+  EXPECT_TRUE(a.leases().claim_frame_merge("j", 2));
+  EXPECT_FALSE(b.leases().claim_frame_merge("j", 2));
+  ASSERT_EQ(b.leases().reap_expired(2000).size(), 1u);
+  EXPECT_TRUE(b.leases().claim_frame_merge("j", 2));
 }
 
 // ---- Operator actions (issue #19) ----------------------------------------------------------------
 
 TEST_P(JobStoreTest, APausedJobHandsOutNothingUntilResumedAndPriorityReordersTheQueue) {
   JobStore store(connect());
-  store.add_job(make_job("a", 5, 3), 1);
-  store.add_job(make_job("b", 0, 3), 2);
-  EXPECT_TRUE(store.set_paused("a", true)->paused());
-  EXPECT_TRUE(store.get_job("a")->paused());
-  EXPECT_EQ(store.claim_next_batch("w", 3)->job_id, "b");  // a ranks first, but is paused
-  EXPECT_FALSE(store.set_paused("a", false)->paused());
-  EXPECT_EQ(store.claim_next_batch("w", 4)->job_id, "a");
-  EXPECT_EQ(store.set_priority("b", 9)->priority(), 9);
-  EXPECT_EQ(store.claim_next_batch("w", 5)->job_id, "b");  // now above a
-  EXPECT_FALSE(store.set_paused("none", true));
-  EXPECT_FALSE(store.set_priority("none", 1));
+  store.jobs().add_job(make_job("a", 5, 3), 1);
+  store.jobs().add_job(make_job("b", 0, 3), 2);
+  EXPECT_TRUE(store.jobs().set_paused("a", true)->paused());
+  EXPECT_TRUE(store.jobs().get_job("a")->paused());
+  EXPECT_EQ(store.units().claim_next_batch("w", 3)->job_id, "b");  // a ranks first, but is paused
+  EXPECT_FALSE(store.jobs().set_paused("a", false)->paused());
+  EXPECT_EQ(store.units().claim_next_batch("w", 4)->job_id, "a");
+  EXPECT_EQ(store.jobs().set_priority("b", 9)->priority(), 9);
+  EXPECT_EQ(store.units().claim_next_batch("w", 5)->job_id, "b");  // now above a
+  EXPECT_FALSE(store.jobs().set_paused("none", true));
+  EXPECT_FALSE(store.jobs().set_priority("none", 1));
   // A final job is not paused: nothing would ever resume it.
-  store.cancel_job("b", 6);
-  EXPECT_FALSE(store.set_paused("b", true)->paused());
+  store.jobs().cancel_job("b", 6);
+  EXPECT_FALSE(store.jobs().set_paused("b", true)->paused());
 }
 
 TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 4), 1);
-  const std::optional<TileBatch> first = store.claim_next_batch("w", 2);
+  store.jobs().add_job(make_job("a", 0, 4), 1);
+  const std::optional<TileBatch> first = store.units().claim_next_batch("w", 2);
   ASSERT_TRUE(first);
   EXPECT_EQ(first->first, 0u);
   EXPECT_TRUE(first->started_job);  // the claim that started it says so, and only that one
-  ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
-  const std::optional<TileBatch> second = store.claim_next_batch("w", 3);
+  ASSERT_TRUE(store.units().batch_done("a", 0, 1, {}, "w"));
+  const std::optional<TileBatch> second = store.units().claim_next_batch("w", 3);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->first, 1u);
   EXPECT_FALSE(second->started_job);
-  ASSERT_EQ(store.claim_next_batch("w", 4)->first, 2u);  // running when the job fails
-  const TileFailure f = store.batch_failed("a", 1, 1, "boom", 1, 5, "w");
+  ASSERT_EQ(store.units().claim_next_batch("w", 4)->first, 2u);  // running when the job fails
+  const TileFailure f = store.units().batch_failed("a", 1, 1, "boom", 1, 5, "w");
   ASSERT_EQ(f.job.state(), v1::JOB_STATE_FAILED);
 
-  const std::optional<RetriedJob> r = store.retry_job("a");
+  const std::optional<RetriedJob> r = store.jobs().retry_job("a");
   ASSERT_TRUE(r && r->retried);
   EXPECT_EQ(r->units_queued, 3u);  // the failed one, the running one, the queued one
   EXPECT_EQ(r->job.state(), v1::JOB_STATE_RUNNING);  // a unit is done
   EXPECT_EQ(r->job.failure_reason(), "");
   EXPECT_EQ(r->job.tiles_done(), 1u);
   EXPECT_FALSE(r->job.has_finished_at());
-  const std::vector<TileRecord> tiles = store.tiles("a");
+  const std::vector<TileRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].state, TileState::Done);
   for (int i = 1; i < 4; ++i) {
     EXPECT_EQ(tiles[i].state, TileState::Queued) << i;
@@ -969,86 +969,86 @@ TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes
   }
   // Only those are handed out, and the job can succeed.
   for (std::uint32_t i = 1; i < 4; ++i) {
-    const auto b = store.claim_next_batch("w", 6);
+    const auto b = store.units().claim_next_batch("w", 6);
     ASSERT_TRUE(b);
     EXPECT_EQ(b->first, i);
     EXPECT_FALSE(b->started_job);  // retried with a unit done: running already
-    ASSERT_TRUE(store.batch_done("a", i, 1, {}, "w"));
+    ASSERT_TRUE(store.units().batch_done("a", i, 1, {}, "w"));
   }
-  EXPECT_FALSE(store.claim_next_batch("w", 7));
-  ASSERT_TRUE(store.frame_merged("a", 0));
-  EXPECT_EQ(store.finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 8).state(), v1::JOB_STATE_SUCCEEDED);
-  EXPECT_EQ(store.get_job("a")->tiles_rendered(), 4u);  // none rendered twice
+  EXPECT_FALSE(store.units().claim_next_batch("w", 7));
+  ASSERT_TRUE(store.frames().frame_merged("a", 0));
+  EXPECT_EQ(store.jobs().finish_job("a", v1::JOB_STATE_SUCCEEDED, "", "", 8).state(), v1::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(store.jobs().get_job("a")->tiles_rendered(), 4u);  // none rendered twice
 
   // Only a failed or cancelled job is retried.
-  const std::optional<RetriedJob> again = store.retry_job("a");
+  const std::optional<RetriedJob> again = store.jobs().retry_job("a");
   ASSERT_TRUE(again);
   EXPECT_FALSE(again->retried);
   EXPECT_EQ(again->job.state(), v1::JOB_STATE_SUCCEEDED);
-  store.add_job(make_job("b", 0, 1), 9);
-  EXPECT_FALSE(store.retry_job("b")->retried);
-  EXPECT_FALSE(store.retry_job("none"));
-  store.cancel_job("b", 10);
-  EXPECT_EQ(store.retry_job("b")->job.state(), v1::JOB_STATE_QUEUED);  // nothing done: queued
-  const std::optional<TileBatch> restarted = store.claim_next_batch("w", 11);
+  store.jobs().add_job(make_job("b", 0, 1), 9);
+  EXPECT_FALSE(store.jobs().retry_job("b")->retried);
+  EXPECT_FALSE(store.jobs().retry_job("none"));
+  store.jobs().cancel_job("b", 10);
+  EXPECT_EQ(store.jobs().retry_job("b")->job.state(), v1::JOB_STATE_QUEUED);  // nothing done: queued
+  const std::optional<TileBatch> restarted = store.units().claim_next_batch("w", 11);
   ASSERT_TRUE(restarted);
   EXPECT_EQ(restarted->job_id, "b");
   EXPECT_TRUE(restarted->started_job);
-  EXPECT_EQ(store.get_job("b")->state(), v1::JOB_STATE_RUNNING);
+  EXPECT_EQ(store.jobs().get_job("b")->state(), v1::JOB_STATE_RUNNING);
 }
 
 TEST_P(JobStoreTest, DeleteRemovesAFinalJobWithEveryRowOfItAndRefusesAnActiveOne) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 2), 1);
-  store.add_job(make_job("b", 0, 1), 2);
-  EXPECT_EQ(store.delete_job("a"), std::optional<bool>(false));  // queued: cancel it first
-  ASSERT_TRUE(store.claim_next_batch("w", 3));
-  ASSERT_TRUE(store.batch_done("a", 0, 1, {}, "w"));
+  store.jobs().add_job(make_job("a", 0, 2), 1);
+  store.jobs().add_job(make_job("b", 0, 1), 2);
+  EXPECT_EQ(store.jobs().delete_job("a"), std::optional<bool>(false));  // queued: cancel it first
+  ASSERT_TRUE(store.units().claim_next_batch("w", 3));
+  ASSERT_TRUE(store.units().batch_done("a", 0, 1, {}, "w"));
   v1::JobEvent e;
-  *e.mutable_job() = *store.get_job("a");
+  *e.mutable_job() = *store.jobs().get_job("a");
   e.mutable_updated()->set_change("paused");
-  store.append_log(e, 4, true);
-  store.cancel_job("a", 10);
-  EXPECT_TRUE(store.finished_before(10, 100).empty());
-  EXPECT_EQ(store.finished_before(11, 100), std::vector<std::string>{"a"});
+  store.log().append_log(e, 4, true);
+  store.jobs().cancel_job("a", 10);
+  EXPECT_TRUE(store.jobs().finished_before(10, 100).empty());
+  EXPECT_EQ(store.jobs().finished_before(11, 100), std::vector<std::string>{"a"});
 
-  EXPECT_EQ(store.delete_job("a"), std::optional<bool>(true));
-  EXPECT_FALSE(store.get_job("a"));
-  EXPECT_TRUE(store.tiles("a").empty());
-  EXPECT_TRUE(store.job_log("a", 0, 10).empty());
-  EXPECT_FALSE(store.delete_job("a"));  // gone
-  EXPECT_TRUE(store.finished_before(11, 100).empty());
+  EXPECT_EQ(store.jobs().delete_job("a"), std::optional<bool>(true));
+  EXPECT_FALSE(store.jobs().get_job("a"));
+  EXPECT_TRUE(store.units().tiles("a").empty());
+  EXPECT_TRUE(store.log().job_log("a", 0, 10).empty());
+  EXPECT_FALSE(store.jobs().delete_job("a"));  // gone
+  EXPECT_TRUE(store.jobs().finished_before(11, 100).empty());
   // The other job is untouched, and a new one reuses nothing of the old.
-  EXPECT_EQ(store.claim_next_batch("w", 11)->job_id, "b");
-  store.add_job(make_job("a", 0, 2), 12);
-  EXPECT_EQ(store.get_job("a")->tiles_done(), 0u);
-  EXPECT_TRUE(store.job_log("a", 0, 10).empty());
+  EXPECT_EQ(store.units().claim_next_batch("w", 11)->job_id, "b");
+  store.jobs().add_job(make_job("a", 0, 2), 12);
+  EXPECT_EQ(store.jobs().get_job("a")->tiles_done(), 0u);
+  EXPECT_TRUE(store.log().job_log("a", 0, 10).empty());
 }
 
 TEST_P(JobStoreTest, TheLogKeepsEventsInOrderInPagesAndPastItsLimitOnlyTheEssentialOnes) {
   JobStore store(connect());
-  store.add_job(make_job("a", 0, 1), 1);
+  store.jobs().add_job(make_job("a", 0, 1), 1);
   v1::JobEvent e;
-  *e.mutable_job() = *store.get_job("a");
+  *e.mutable_job() = *store.jobs().get_job("a");
   for (int frame = 0; frame < 4; ++frame) {
     e.mutable_frame_finished()->set_frame(frame);
-    store.append_log(e, 100 + frame, false, 3);  // the fourth is past the limit
+    store.log().append_log(e, 100 + frame, false, 3);  // the fourth is past the limit
   }
   e.mutable_updated()->set_change("resumed");
-  store.append_log(e, 200, true, 3);  // essential: kept all the same
+  store.log().append_log(e, 200, true, 3);  // essential: kept all the same
   v1::JobEvent other = e;
   other.mutable_job()->set_job_id("none");
-  store.append_log(other, 300, true, 3);  // no such job: nothing
+  store.log().append_log(other, 300, true, 3);  // no such job: nothing
 
   bool more = false;
-  const std::vector<v1::JobLogEntry> first = store.job_log("a", 0, 2, &more);
+  const std::vector<v1::JobLogEntry> first = store.log().job_log("a", 0, 2, &more);
   ASSERT_EQ(first.size(), 2u);
   EXPECT_TRUE(more);
   EXPECT_EQ(first[0].number(), 1u);
   EXPECT_EQ(first[0].event().frame_finished().frame(), 0);
   EXPECT_EQ(first[1].event().frame_finished().frame(), 1);
   EXPECT_EQ(first[1].at().seconds() * 1000 + first[1].at().nanos() / 1000000, 101);
-  const std::vector<v1::JobLogEntry> rest = store.job_log("a", first.back().number(), 10, &more);
+  const std::vector<v1::JobLogEntry> rest = store.log().job_log("a", first.back().number(), 10, &more);
   EXPECT_FALSE(more);
   ASSERT_EQ(rest.size(), 2u);
   EXPECT_EQ(rest[0].event().frame_finished().frame(), 2);

@@ -8,7 +8,7 @@
 #include <memory>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/client/job_submission.h"
 #include "server/common/sha256.h"
 #include "tests/support/confinement_fixtures.h"

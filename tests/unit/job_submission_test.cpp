@@ -8,7 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/sha256.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"

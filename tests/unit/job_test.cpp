@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

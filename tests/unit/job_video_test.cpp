@@ -1,4 +1,4 @@
-// output.video in job files (renderer/scene/job.h) and its command-line overrides
+// output.video in job files (renderer/job/job.h) and its command-line overrides
 // (server/client/render_overrides.h): a video needs frames and the previews and a type ffmpeg is
 // asked to make, and each refusal names the JSON path or the option.
 #include <gtest/gtest.h>
@@ -8,9 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/video_format.h"
+#include "renderer/job/job.h"
+#include "renderer/job/video_format.h"
+#include "renderer/util/input_error.h"
 #include "server/client/render_overrides.h"
 
 namespace farm {

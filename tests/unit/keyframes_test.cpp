@@ -1,12 +1,12 @@
-// Keyframe interpolation (renderer/scene/keyframes.h) against values worked out by hand.
+// Keyframe interpolation (renderer/job/keyframes.h) against values worked out by hand.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <optional>
 #include <vector>
 
-#include "renderer/scene/frame_range.h"
-#include "renderer/scene/keyframes.h"
+#include "renderer/job/frame_range.h"
+#include "renderer/job/keyframes.h"
 
 namespace farm {
 namespace {

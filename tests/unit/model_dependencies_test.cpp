@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

@@ -9,10 +9,10 @@
 #include <memory>
 #include <string>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/scene/model.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/confinement_fixtures.h"
 #include "tests/support/temp_dir.h"
 

@@ -13,9 +13,9 @@
 #include <unistd.h>
 #include <utility>
 
-#include "renderer/scene/input_error.h"
 #include "renderer/scene/model.h"
 #include "renderer/trace/bsdf.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

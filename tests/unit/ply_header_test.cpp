@@ -1,5 +1,5 @@
 // PLY headers: element counts are held against the bytes after the header before Assimp reads a
-// PLY file (renderer/scene/ply_header.h), so a tiny file declaring millions of faces is refused
+// PLY file (renderer/loaders/ply_header.h), so a tiny file declaring millions of faces is refused
 // at once; honest ASCII and binary files still load.
 #include <gtest/gtest.h>
 
@@ -7,9 +7,9 @@
 #include <cstring>
 #include <string>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/loaders/ply_header.h"
 #include "renderer/scene/model.h"
-#include "renderer/scene/ply_header.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

@@ -2,7 +2,7 @@
 // a pass done behind a later one announced with it (as the later one), the preview the fold of
 // the passes done from the first on, the last pass left to the merge, and a fold that parts taken
 // back invalidated made again from the files.
-#include "server/scheduler/progressive_previews.h"
+#include "server/scheduler/jobs/progressive_previews.h"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 #include "renderer/image/pass_merge.h"
 #include "renderer/image/png_reader.h"
 #include "renderer/image/preview.h"
-#include "renderer/render_settings.h"
+#include "renderer/job/render_settings.h"
 #include "server/common/tile_codec.h"
 #include "tests/support/temp_dir.h"
 
@@ -63,19 +63,19 @@ class ProgressivePreviewsTest : public ::testing::Test {
     job->render.spp = 3;
     job->render.pass_spp = 1;  // three passes of one sample
     info_.job = job;
-    store_.add_job(three_passes("p"), 1);
+    store_.jobs().add_job(three_passes("p"), 1);
     events_.subscribe("p", queue_);
   }
 
   // Claims the next unit (pass order), keeps its pixels and marks it done.
   TileBatch render_next() {
-    const std::optional<TileBatch> b = store_.claim_next_batch("w", 2);
+    const std::optional<TileBatch> b = store_.units().claim_next_batch("w", 2);
     EXPECT_TRUE(b);
     RenderedTiles tiles = pass_tiles(b->pass);
     files_.add("p", info_.frame(0), {b->first, b->pass}, tiles);
     return *b;
   }
-  void done(const TileBatch& b) { EXPECT_TRUE(store_.batch_done("p", b.first, b.count, {})); }
+  void done(const TileBatch& b) { EXPECT_TRUE(store_.units().batch_done("p", b.first, b.count, {})); }
 
   // The passes announced since the last call.
   std::vector<int> announced() {
@@ -147,10 +147,10 @@ TEST_F(ProgressivePreviewsTest, AFoldWhosePartsWereTakenBackIsMadeAgainFromTheFi
 
   // Pass 0 taken back and rendered again (as another grey: a quarantined worker's pixels were
   // wrong); pass 1 done meanwhile. The preview folds the new pass 0 from its file, not the old.
-  ASSERT_EQ(store_.requeue_parts("p", {p0.first}).size(), 1u);
+  ASSERT_EQ(store_.units().requeue_parts("p", {p0.first}).size(), 1u);
   previews_.parts_taken_back("p");
   done(p1);
-  const std::optional<TileBatch> again = store_.claim_next_batch("w", 3);
+  const std::optional<TileBatch> again = store_.units().claim_next_batch("w", 3);
   ASSERT_TRUE(again);
   ASSERT_EQ(again->pass, 0);
   RenderedTiles redone = pass_tiles(2);  // grey 0.75 this time

@@ -7,9 +7,9 @@
 #include <filesystem>
 #include <string>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {

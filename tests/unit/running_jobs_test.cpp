@@ -1,5 +1,5 @@
 // What the scheduler keeps in memory of a job (RunningJobs) goes when the job ends, and stays gone.
-#include "server/scheduler/running_jobs.h"
+#include "server/scheduler/jobs/running_jobs.h"
 
 #include <gtest/gtest.h>
 
@@ -28,7 +28,7 @@ struct StoredJob {
     job.engine = "raster";
     job.width = job.height = 16;
     job.tiles = {Rect{0, 0, 16, 16}};
-    store.add_job(job, 1000);
+    store.jobs().add_job(job, 1000);
     return job.id;
   }
 };
@@ -47,7 +47,7 @@ TEST(RunningJobsTest, AnActiveJobReadFromTheStoreIsKeptUntilForgotten) {
 TEST(RunningJobsTest, ALateCallAboutAFinalJobDoesNotBringItBackForGood) {
   StoredJob s;
   const std::string id = s.add();
-  s.store.cancel_job(id, 2000);
+  s.store.jobs().cancel_job(id, 2000);
   s.jobs.forget(id);
   // A worker's answer arriving after the cancel still needs the job's settings...
   EXPECT_EQ(s.jobs.get(id)->job->render.height, 16);

@@ -13,7 +13,7 @@
 #include "renderer/engine.h"
 #include "renderer/image/pass_merge.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/pixel_diff.h"
 #include "tests/support/scene_fixtures.h"
 

@@ -1,7 +1,7 @@
-// The bwrap command line of a sandboxed run (server/review/sandbox_command.h): the host's root is
+// The bwrap command line of a sandboxed run (server/grade/sandbox_command.h): the host's root is
 // never mounted, the run's folders are (parents first, read-only unless writable), the
 // environment is built from nothing, and setpriv drops to the run's user before the program.
-#include "server/review/sandbox_command.h"
+#include "server/grade/sandbox_command.h"
 
 #include <gtest/gtest.h>
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
-#include "renderer/scene/scene_builder.h"
+#include "renderer/job/scene_builder.h"
+#include "renderer/util/input_error.h"
 #include "server/common/scene_hash.h"
 #include "server/common/scene_materializer.h"
 #include "tests/support/job_specs.h"

@@ -13,13 +13,13 @@
 #include <thread>
 #include <vector>
 
+#include "renderer/accel/scene_intersector.h"
 #include "renderer/engine.h"
 #include "renderer/geometry/bvh.h"
-#include "renderer/geometry/scene_intersector.h"
 #include "renderer/raster/raster_frame.h"
-#include "renderer/scene/input_error.h"
 #include "renderer/util/cancel_flag.h"
 #include "renderer/util/frame_cache.h"
+#include "renderer/util/input_error.h"
 #include "tests/support/print_values.h"
 #include "tests/support/scene_fixtures.h"
 

@@ -15,7 +15,7 @@
 
 #include "renderer/compare/flip.h"
 #include "renderer/compare/image.h"
-#include "server/review/similar_submissions.h"
+#include "server/grade/similar_submissions.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {

@@ -1,10 +1,10 @@
-// Spot checks (server/scheduler/spot_checks.h): which tiles are chosen, the span of a batch that
+// Spot checks (server/scheduler/dispatch/spot_checks.h): which tiles are chosen, the span of a batch that
 // is rendered again, and what opinions decide.
 #include <gtest/gtest.h>
 
 #include <string>
 
-#include "server/scheduler/spot_checks.h"
+#include "server/scheduler/dispatch/spot_checks.h"
 
 namespace farm {
 namespace {

@@ -1,7 +1,7 @@
-// The scheduler's limits on the work one SubmitJob may start (server/scheduler/submit_limits.h):
+// The scheduler's limits on the work one SubmitJob may start (server/scheduler/options/submit_limits.h):
 // each refuses its bomb with RESOURCE_EXHAUSTED naming the limit's flag, the value and the limit,
 // and the biggest honest job passes them all.
-#include "server/scheduler/submit_limits.h"
+#include "server/scheduler/options/submit_limits.h"
 
 #include <gtest/gtest.h>
 

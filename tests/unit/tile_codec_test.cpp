@@ -4,7 +4,7 @@
 #include <cstring>
 #include <limits>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
 #include "server/common/tile_codec.h"
 
 namespace farm {

@@ -10,7 +10,7 @@
 #include <optional>
 #include <string>
 
-#include "renderer/scene/job.h"
+#include "renderer/job/job.h"
 #include "server/common/asset_store.h"
 #include "server/common/tile_result_check.h"
 #include "server/worker/tile_renderer.h"

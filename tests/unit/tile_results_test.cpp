@@ -1,6 +1,6 @@
 // The scheduler's tile result files: what is written reads back, and a file missing, cut short,
 // grown or with bytes changed is refused with its name, never parsed into pixels.
-#include "server/scheduler/tile_results.h"
+#include "server/scheduler/jobs/tile_results.h"
 
 #include <gtest/gtest.h>
 

@@ -6,9 +6,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "renderer/engine.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/scene/job.h"
-#include "renderer/scene/scene_builder.h"
 #include "renderer/trace/fresnel.h"
 #include "tests/support/scene_fixtures.h"
 

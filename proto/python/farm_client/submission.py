@@ -27,16 +27,16 @@ __all__ = ["JobSubmission", "make_job_submission", "MAX_JOB_FILE_BYTES", "MAX_JO
            "MAX_ASSET_BYTES", "MAX_JOB_ASSET_BYTES"]
 
 # The C++ side's bounds, so that a job the scheduler would refuse is refused before anything is
-# hashed or sent: the job file (renderer/scene/job_limits.h), the number of a job's files
+# hashed or sent: the job file (renderer/job/job_limits.h), the number of a job's files
 # (server/common/scene_materializer.h) and the scheduler's default --max-asset-bytes and
-# --max-job-asset-bytes (server/scheduler/submit_limits.h).
+# --max-job-asset-bytes (server/scheduler/options/submit_limits.h).
 MAX_JOB_FILE_BYTES = 16 << 20
 MAX_JOB_ASSETS = 10000
 MAX_ASSET_BYTES = 2 << 30
 MAX_JOB_ASSET_BYTES = 4 << 30
 
 _READ_BYTES = 1 << 20
-_SHOWN_TEXT = 64  # a user's string inside a job error, as renderer/scene/job.cpp shortens it
+_SHOWN_TEXT = 64  # a user's string inside a job error, as renderer/job/job.cpp shortens it
 
 
 @dataclasses.dataclass
@@ -67,7 +67,7 @@ class JobSubmission:
 
 
 def _read_job_file(path: str) -> bytes:
-    """As renderer/scene/job.cpp's read_job_file: a regular file of at most 16 MiB."""
+    """As renderer/job/job.cpp's read_job_file: a regular file of at most 16 MiB."""
     try:
         st = os.stat(path)
     except FileNotFoundError:

@@ -11,7 +11,8 @@
 #include <memory>
 #include <vector>
 
-#include "renderer/scene/input_error.h"
+#include "renderer/util/input_error.h"
+#include "server/common/job_state.h"
 #include "server/common/hex.h"
 #include "server/common/plain_file_name.h"
 #include "server/common/proto_json.h"
@@ -436,7 +437,7 @@ void DashboardServer::routes() {
   s.Get("/metrics", guarded([this](const httplib::Request& request, httplib::Response& response) {
     const v1::ListWorkersResponse workers = service_.list_workers(caller(request));
     response.set_header("Cache-Control", "no-store");
-    response.set_content(prometheus_text(core_.store().counts(), {workers.workers().begin(), workers.workers().end()},
+    response.set_content(prometheus_text(core_.store().jobs().counts(), {workers.workers().begin(), workers.workers().end()},
                                          core_.unit_metrics()),
                          "text/plain; version=0.0.4");
   }));

@@ -16,7 +16,7 @@ void header(std::string& out, const char* name, const char* type, const char* he
 
 }  // namespace
 
-std::string prometheus_text(const JobStore::Counts& counts, const std::vector<v1::WorkerInfo>& workers,
+std::string prometheus_text(const JobRecords::Counts& counts, const std::vector<v1::WorkerInfo>& workers,
                             const UnitMetrics::Snapshot& units) {
   std::string out;
   header(out, "farm_jobs", "gauge", "Jobs in the store by state.");

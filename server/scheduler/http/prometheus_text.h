@@ -6,12 +6,12 @@
 #include <vector>
 
 #include "proto/farm.pb.h"
+#include "server/scheduler/dispatch/unit_metrics.h"
 #include "server/scheduler/store/job_store.h"
-#include "server/scheduler/unit_metrics.h"
 
 namespace farm {
 
-std::string prometheus_text(const JobStore::Counts& counts, const std::vector<v1::WorkerInfo>& workers,
+std::string prometheus_text(const JobRecords::Counts& counts, const std::vector<v1::WorkerInfo>& workers,
                             const UnitMetrics::Snapshot& units);
 
 }  // namespace farm

@@ -1,0 +1,141 @@
+#include "renderer/accel/instance_intersector.h"
+
+#include <map>
+#include <stdexcept>
+#include <string>
+
+#include "renderer/accel/embree_intersector.h"
+#include "renderer/accel/prepared_scene.h"
+
+namespace farm {
+namespace {
+
+AABB world_bounds(const PreparedObject& object) {
+  const AABB& box = object.triangles->bounds;
+  AABB world;
+  if (box.empty()) return world;
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::vec3 p{(corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
+                      (corner & 4) ? box.max.z : box.min.z};
+    world.grow(glm::vec3(object.model_to_world * glm::vec4(p, 1.0f)));
+  }
+  return world;
+}
+
+// The ray in the object's model space. The direction is deliberately NOT renormalised: then
+// world_to_model(origin + t*d) = origin' + t*d' for the same t, so hit distances compare across
+// objects and stay right under non-uniform scale, with no conversion back.
+Ray to_model(const PreparedObject& object, const Ray& ray, float t_max) {
+  Ray local;
+  local.origin = glm::vec3(object.world_to_model * glm::vec4(ray.origin, 1.0f));
+  local.direction = glm::mat3(object.world_to_model) * ray.direction;
+  local.t_min = ray.t_min;
+  local.t_max = t_max;
+  return local;
+}
+
+}  // namespace
+
+InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind accel,
+                                         const CancelFlag& cancel)
+    : scene_(scene) {
+  if (accel == AccelKind::Embree) {
+    throw std::invalid_argument("InstanceIntersector: use build_embree_intersector for embree");
+  }
+  const std::vector<PreparedObject>& objects = scene.objects();
+  std::map<const ModelTriangles*, const MeshAccel*> accel_of;
+  object_accel_.reserve(objects.size());
+  for (const PreparedObject& object : objects) {
+    const MeshAccel*& shared = accel_of[object.triangles];
+    if (!shared) {
+      mesh_accels_.push_back(scene.geometry().mesh_accel(*object.triangles, accel, cancel));
+      shared = mesh_accels_.back().get();
+    }
+    object_accel_.push_back(shared);
+  }
+  if (accel != AccelKind::Naive) {
+    std::vector<AABB> bounds;
+    bounds.reserve(objects.size());
+    for (const PreparedObject& object : objects) bounds.push_back(world_bounds(object));
+    // One instance per leaf: an instance test is a whole bottom-level traversal.
+    top_ = Bvh::build(bounds, Bvh::Options{BvhSplit::Sah, 1, &cancel});
+  }
+}
+
+bool InstanceIntersector::closest_in_object(std::uint32_t o, const Ray& world_ray, float t_max,
+                                            TriangleHit& hit, TraversalStats* stats) const {
+  return object_accel_[o]->closest_hit(to_model(scene_.objects()[o], world_ray, t_max), hit, stats);
+}
+
+bool InstanceIntersector::any_in_object(std::uint32_t o, const Ray& world_ray,
+                                        TraversalStats* stats) const {
+  return object_accel_[o]->any_hit(to_model(scene_.objects()[o], world_ray, world_ray.t_max), stats);
+}
+
+bool InstanceIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const {
+  TriangleHit nearest;
+  std::uint32_t nearest_object = 0;
+  bool found = false;
+  auto test = [&](std::uint32_t o, float& t_max) {
+    TriangleHit h;
+    if (!closest_in_object(o, ray, t_max, h, stats)) return false;
+    nearest = h;
+    nearest_object = o;
+    t_max = h.t;
+    return true;
+  };
+  if (top_) {
+    found = top_->closest(ray, test, stats);
+  } else {
+    float t_max = ray.t_max;
+    for (std::uint32_t o = 0; o < object_accel_.size(); ++o) found = test(o, t_max) || found;
+  }
+  if (!found) return false;
+  hit = SurfaceHit{};
+  hit.t = nearest.t;
+  hit.object = nearest_object;
+  hit.triangle = nearest.triangle;
+  hit.u = nearest.u;
+  hit.v = nearest.v;
+  complete_surface_hit(scene_, ray, hit);
+  return true;
+}
+
+bool InstanceIntersector::occluded(const Ray& ray, TraversalStats* stats) const {
+  auto test = [&](std::uint32_t o) { return any_in_object(o, ray, stats); };
+  if (top_) return top_->any(ray, test, stats);
+  for (std::uint32_t o = 0; o < object_accel_.size(); ++o) {
+    if (test(o)) return true;
+  }
+  return false;
+}
+
+void InstanceIntersector::visit_bvh_boxes(int max_level,
+                                          const std::function<void(const BvhBox&)>& visit) const {
+  if (!top_) return;
+  top_->visit_levels(max_level, [&](const AABB& bounds, int level) {
+    visit(BvhBox{bounds, glm::mat4(1.0f), level, -1});
+  });
+  for (std::uint32_t o = 0; o < object_accel_.size(); ++o) {
+    const Bvh* bvh = object_accel_[o]->bvh();
+    if (!bvh) continue;
+    const glm::mat4& to_world = scene_.objects()[o].model_to_world;
+    bvh->visit_levels(max_level, [&](const AABB& bounds, int level) {
+      visit(BvhBox{bounds, to_world, level, static_cast<std::int64_t>(o)});
+    });
+  }
+}
+
+std::unique_ptr<InstanceIntersector> build_instance_intersector(const PreparedScene& scene,
+                                                                AccelKind accel,
+                                                                const CancelFlag& cancel) {
+  return std::make_unique<InstanceIntersector>(scene, accel, cancel);
+}
+
+std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel,
+                                                          const CancelFlag& cancel) {
+  if (accel == AccelKind::Embree) return build_embree_intersector(scene, cancel);
+  return build_instance_intersector(scene, accel, cancel);
+}
+
+}  // namespace farm

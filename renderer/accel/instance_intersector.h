@@ -1,0 +1,65 @@
+#pragma once
+// Our SceneIntersector: a top-level BVH over the objects' world-space boxes, whose leaves carry
+// the ray into each object's model space and query the model's MeshAccel. Objects of one model
+// share that MeshAccel (100 cows, one BVH). build_scene_intersector returns one of these for
+// every accel but Embree; build it directly to reach the structures behind it (--show-bvh).
+#include <cstdint>
+#include <functional>
+#include <glm/mat4x4.hpp>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "renderer/accel/mesh_accel.h"
+#include "renderer/accel/scene_intersector.h"
+#include "renderer/geometry/bvh.h"
+
+namespace farm {
+
+// One BVH node box for drawing: its 8 corners in world space are to_world * corner(bounds).
+struct BvhBox {
+  AABB bounds;            // top level: world space; bottom level: the object's model space
+  glm::mat4 to_world{1.0f};  // identity at the top level, the object's model_to_world below
+  int level = 0;          // depth inside its own tree (each tree's root is 0)
+  std::int64_t object = -1;  // the object a bottom-level box belongs to; -1 for the top level
+};
+
+class InstanceIntersector final : public SceneIntersector {
+ public:
+  // `accel` must be Naive, BvhMedian or Bvh; `scene` must outlive the intersector. With Naive
+  // every triangle of every object is tested (no top-level tree either), as the lab's `naive`.
+  // The builds poll `cancel`: throws RenderStopped when it asks.
+  InstanceIntersector(const PreparedScene& scene, AccelKind accel,
+                      const CancelFlag& cancel = CancelFlag::never());
+
+  bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const override;
+  bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const override;
+
+  // Structures built: one MeshAccel per distinct model.
+  std::size_t mesh_accel_count() const { return mesh_accels_.size(); }
+  const MeshAccel& mesh_accel_of(std::uint32_t object) const { return *object_accel_[object]; }
+  const Bvh* top_level() const { return top_ ? &*top_ : nullptr; }  // null for Naive
+
+  // Calls visit for every top-level node of level <= max_level, then, for every object, every
+  // node of its model's BVH of level <= max_level (an object's boxes repeat per instance, each
+  // with that instance's transform). Nothing for Naive.
+  void visit_bvh_boxes(int max_level, const std::function<void(const BvhBox&)>& visit) const;
+
+ private:
+  // Nearest hit over object `o`, the world ray carried into its model space.
+  bool closest_in_object(std::uint32_t o, const Ray& world_ray, float t_max, TriangleHit& hit,
+                         TraversalStats* stats) const;
+  bool any_in_object(std::uint32_t o, const Ray& world_ray, TraversalStats* stats) const;
+
+  const PreparedScene& scene_;
+  // One per distinct ModelTriangles, from the scene's ModelGeometry: built by the first frame
+  // of a job that needs it, shared by the rest.
+  std::vector<std::shared_ptr<const MeshAccel>> mesh_accels_;
+  std::vector<const MeshAccel*> object_accel_;           // per object
+  std::optional<Bvh> top_;
+};
+
+std::unique_ptr<InstanceIntersector> build_instance_intersector(
+    const PreparedScene& scene, AccelKind accel, const CancelFlag& cancel = CancelFlag::never());
+
+}  // namespace farm

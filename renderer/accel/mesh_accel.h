@@ -1,0 +1,36 @@
+#pragma once
+// Ray queries against one model's triangles in model space (a bottom-level structure). One
+// instance serves every object that uses the model. Implementations: every triangle (`naive`),
+// and BVHs split at the median or by the surface area heuristic (bvh.h).
+#include <cstdint>
+#include <memory>
+
+#include "renderer/accel/model_triangles.h"
+#include "renderer/geometry/ray.h"
+#include "renderer/geometry/traversal_stats.h"
+#include "renderer/geometry/triangle_intersect.h"  // TriangleHit
+#include "renderer/geometry/accel_kind.h"
+#include "renderer/util/cancel_flag.h"
+
+namespace farm {
+
+class Bvh;
+
+class MeshAccel {
+ public:
+  virtual ~MeshAccel() = default;
+  // Nearest hit with t in (ray.t_min, ray.t_max); `stats` (optional) counts the work.
+  virtual bool closest_hit(const Ray& ray, TriangleHit& hit, TraversalStats* stats) const = 0;
+  // Whether anything is hit with t in (ray.t_min, ray.t_max).
+  virtual bool any_hit(const Ray& ray, TraversalStats* stats) const = 0;
+  // The BVH behind it, for drawing its boxes; null for `naive`.
+  virtual const Bvh* bvh() const { return nullptr; }
+};
+
+// `accel` must be Naive, BvhMedian or Bvh (Embree works on whole scenes: embree_intersector.h).
+// `triangles` must outlive the result.
+// Polls `cancel` during the build: throws RenderStopped when it asks.
+std::unique_ptr<MeshAccel> build_mesh_accel(const ModelTriangles& triangles, AccelKind accel,
+                                            const CancelFlag& cancel = CancelFlag::never());
+
+}  // namespace farm

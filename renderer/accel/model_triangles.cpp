@@ -1,0 +1,27 @@
+#include "renderer/accel/model_triangles.h"
+
+namespace farm {
+
+ModelTriangles::ModelTriangles(const Model& model) {
+  for (const Mesh& mesh : model.meshes) {
+    const auto base = static_cast<std::uint32_t>(positions.size());
+    positions.insert(positions.end(), mesh.positions.begin(), mesh.positions.end());
+    normals.insert(normals.end(), mesh.normals.begin(), mesh.normals.end());
+    for (const glm::uvec3& t : mesh.triangles) {
+      triangles.push_back(t + glm::uvec3(base));
+      material.push_back(mesh.material);
+    }
+  }
+  for (const glm::vec3& p : positions) bounds.grow(p);
+}
+
+AABB ModelTriangles::triangle_bounds(std::uint32_t t) const {
+  AABB box;
+  const glm::uvec3& tri = triangles[t];
+  box.grow(positions[tri.x]);
+  box.grow(positions[tri.y]);
+  box.grow(positions[tri.z]);
+  return box;
+}
+
+}  // namespace farm

@@ -1,0 +1,19 @@
+#include "renderer/accel/prepared_scene.h"
+
+#include <glm/matrix.hpp>
+
+#include "renderer/scene/transform.h"
+
+namespace farm {
+
+PreparedScene::PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometry)
+    : scene_(std::move(scene)), geometry_(geometry ? std::move(geometry) : std::make_shared<ModelGeometry>()) {
+  objects_.reserve(scene_.objects.size());
+  for (const SceneObject& object : scene_.objects) {
+    const ModelTriangles* triangles = &geometry_->triangles(object.model);
+    objects_.push_back({&object, triangles, object.model_to_world,
+                        glm::inverse(object.model_to_world), normal_matrix(object.model_to_world)});
+  }
+}
+
+}  // namespace farm

@@ -1,0 +1,52 @@
+#pragma once
+// A scene made ready for rendering: everything that depends only on the scene (world matrices,
+// normal matrices, flattened triangles per model) computed once per job per process and shared
+// by all tiles; engines cache their own derived structures (BVHs, frame set-up) in frame_cache().
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+#include <vector>
+
+#include <memory>
+
+#include "renderer/accel/model_geometry.h"
+#include "renderer/accel/model_triangles.h"
+#include "renderer/scene/scene.h"
+#include "renderer/util/frame_cache.h"
+
+namespace farm {
+
+struct PreparedObject {
+  const SceneObject* source = nullptr;
+  const ModelTriangles* triangles = nullptr;  // shared by every object of the same model
+  glm::mat4 model_to_world{1.0f};
+  glm::mat4 world_to_model{1.0f};
+  glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
+};
+
+class PreparedScene {
+ public:
+  // `geometry`: what other frames of the job built already (their models' triangles and
+  // BVHs), shared; null: this scene's own.
+  explicit PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometry = nullptr);
+  PreparedScene(const PreparedScene&) = delete;
+  PreparedScene& operator=(const PreparedScene&) = delete;
+
+  const Scene& scene() const { return scene_; }
+  const std::vector<PreparedObject>& objects() const { return objects_; }
+  std::size_t triangle_count() const { return scene_.triangle_count(); }
+
+  // The models' triangles and bottom-level structures, shared with the job's other frames.
+  ModelGeometry& geometry() const { return *geometry_; }
+  const std::shared_ptr<ModelGeometry>& shared_geometry() const { return geometry_; }
+
+  // Engines keep per-frame set-up here; it is derived data, so a const scene may fill it.
+  FrameCache& frame_cache() const { return frame_cache_; }
+
+ private:
+  Scene scene_;
+  std::vector<PreparedObject> objects_;
+  std::shared_ptr<ModelGeometry> geometry_;
+  mutable FrameCache frame_cache_;
+};
+
+}  // namespace farm

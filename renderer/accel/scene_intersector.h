@@ -1,0 +1,55 @@
+#pragma once
+// Ray queries against a whole prepared scene in world space: what the ray engines call. Ours
+// is a top-level BVH over object instances, each pointing at its model's bottom-level structure
+// (the ray is carried into model space, so an object's BVH is built once per model); the other
+// implementation is Embree, with the same triangle numbering, for validation and as a backend.
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <memory>
+#include <string_view>
+
+#include "renderer/geometry/ray.h"
+#include "renderer/geometry/traversal_stats.h"
+#include "renderer/geometry/accel_kind.h"
+#include "renderer/scene/material.h"
+#include "renderer/util/cancel_flag.h"
+
+namespace farm {
+
+class PreparedScene;
+
+struct SurfaceHit {
+  float t = 0.0f;                // along the world ray, in units of its direction
+  std::uint32_t object = 0;      // index into the scene's objects
+  std::uint32_t triangle = 0;    // index into that object's ModelTriangles
+  float u = 0.0f, v = 0.0f;      // barycentric weights of corners 1 and 2
+  glm::vec3 position{0.0f};      // world space
+  glm::vec3 geometric_normal{0.0f};  // world, unit, as the triangle's winding gives it
+  glm::vec3 shading_normal{0.0f};    // world, unit, interpolated vertex normals
+  const Material* material = nullptr;
+};
+
+class SceneIntersector {
+ public:
+  virtual ~SceneIntersector() = default;
+  // Nearest hit with t in (ray.t_min, ray.t_max), completed into a SurfaceHit.
+  virtual bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const = 0;
+  // Whether anything blocks the ray within (ray.t_min, ray.t_max): shadow rays.
+  virtual bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const = 0;
+};
+
+// Builds the intersector for `accel` (Embree included), polling `cancel` as it goes: throws
+// RenderStopped when it asks.
+std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel,
+                                                          const CancelFlag& cancel = CancelFlag::never());
+
+// The same, built once per prepared scene and accel and then shared by every tile (cached in
+// the scene's frame cache).
+std::shared_ptr<const SceneIntersector> cached_scene_intersector(
+    const PreparedScene& scene, AccelKind accel, const CancelFlag& cancel = CancelFlag::never());
+
+// Fills position, normals and material of a hit given (object, triangle, u, v, t): shared by
+// every implementation so they agree on everything but the hit itself.
+void complete_surface_hit(const PreparedScene& scene, const Ray& ray, SurfaceHit& hit);
+
+}  // namespace farm

@@ -1,0 +1,98 @@
+#pragma once
+// A job file (jobs/README.md, version 1), parsed and strictly validated. Every error is an
+// InputError whose message starts with the file and names the JSON path, for example
+//   jobs/cow.json: scene.objects[2].scale: expected 3 numbers
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "renderer/job/frame_range.h"
+#include "renderer/job/render_settings.h"
+#include "renderer/scene/camera.h"
+#include "renderer/scene/light.h"
+#include "renderer/scene/material.h"
+#include "renderer/scene/transform.h"
+
+namespace farm {
+
+// Which of a glTF model's animations an object plays (jobs/README.md, "animation").
+struct ObjectAnimation {
+  enum class Pick { First, Off, Index, Name } pick = Pick::First;  // First: the model's first, if any
+  std::size_t index = 0;
+  std::string name;
+};
+
+struct JobObject {
+  std::filesystem::path file;   // absolute, canonical, checked to lie inside the asset root
+  std::string file_as_written;  // as it appears in the job, for messages
+  ObjectTransform transform;
+  MaterialOverride material;
+  ObjectAnimation animation;
+};
+
+struct JobScene {
+  std::vector<JobObject> objects;
+  std::optional<Camera> camera;              // absent: the first model camera, else the default
+  std::optional<std::vector<Light>> lights;  // absent: the models' lights
+  glm::vec3 ambient{0.1f};
+  glm::vec3 background{100.0f / 255.0f};
+};
+
+struct JobOutput {
+  std::filesystem::path image;    // EXR; relative paths are relative to the working directory
+  std::filesystem::path preview;  // PNG/JPEG; empty = none
+  // The frames' previews as one video, by ffmpeg (video_format.h); empty = none. Only with
+  // frames, and then the same for every frame (no '#' run).
+  std::filesystem::path video;
+};
+
+struct JobAnimation;  // the job's keyframe tracks and the document they animate (job.cpp)
+
+struct Job {
+  std::filesystem::path path;     // the job file
+  // Absolute, symlinks resolved: every file the job reads, and every file its models name, lies
+  // in here (renderer/util/confined_file.h).
+  std::filesystem::path asset_root;
+  std::string name;
+  JobScene scene;
+  RenderSettings render;          // includes the output AOVs
+  JobOutput output;
+  std::int64_t embree_rays = 0;   // validate.embree_rays
+  // The job's frames; absent: one still (frame 0). A Job is always one frame's still: the values
+  // above, output included, are those of `frame` (the first frame rendered, as parsed; any other
+  // through job_at_frame()). `output_patterns` keeps the names with their '#' runs.
+  std::optional<FrameRange> frames;
+  int frame = 0;
+  double seconds = 0.0;  // the frame's time, (frame - start) / fps: what glTF animations play at
+  JobOutput output_patterns;
+  std::shared_ptr<const JobAnimation> animation;  // null: nothing is keyframed
+};
+
+// The frames the job renders: its range's, or the still's frame 0.
+std::vector<int> job_frames(const Job& job);
+// The job at `frame` (one of job_frames): keyframed values evaluated there, render.frame and
+// `frame` set, the output patterns' '#' runs replaced by the frame number. The result is the job
+// a still with those values written in by hand would be (with a range of that one frame).
+Job job_at_frame(const Job& job, int frame);
+
+struct JobLoadOptions {
+  // Model files must resolve inside this folder; empty = the job file's folder.
+  std::filesystem::path asset_root;
+  // How the person reading a refusal can widen the root, added to a "lies outside the asset root"
+  // message (the commands: "give --asset-root DIR ..."); empty where nobody can (a worker).
+  std::string asset_root_hint;
+};
+
+// Parses and validates `path`. Model files must exist; they are not loaded here.
+Job load_job(const std::filesystem::path& path, const JobLoadOptions& options = {});
+// Same, from JSON text; `path` names the file in messages and anchors relative model paths.
+Job parse_job(const std::string& json_text, const std::filesystem::path& path,
+              const JobLoadOptions& options = {});
+// The text of the job file `path`, read as load_job reads it (a regular file, at most 16 MiB),
+// for callers that send the text on as well as parse it: then the file is read once.
+std::string read_job_file(const std::filesystem::path& path);
+
+}  // namespace farm

@@ -1,0 +1,951 @@
+#include "server/scheduler/dispatch/dispatcher.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <random>
+
+#include "server/common/disk_full.h"
+#include "server/common/job_state.h"
+#include "server/common/network_address.h"
+#include "server/common/read_whole_file.h"
+#include "server/common/service_error.h"
+#include "server/common/tile_codec.h"
+#include "server/common/tile_result_check.h"
+
+namespace farm {
+
+namespace {
+
+v1::TileRect to_proto(const Rect& r) {
+  v1::TileRect t;
+  t.set_x0(r.x0);
+  t.set_y0(r.y0);
+  t.set_x1(r.x1);
+  t.set_y1(r.y1);
+  return t;
+}
+
+std::string describe(const TileBatch& batch) { return describe_units(batch.first, batch.count); }
+std::string describe(const TileSpan& span) { return describe_units(span.first, span.count); }
+
+// Pixels rendered in this process come as a buffer; a spot check compares encoded tiles.
+void encode_pixels(RenderedTiles& result) {
+  if (!result.pixels) return;
+  encode_tile(*result.pixels, *result.response.mutable_tile());
+  result.pixels.reset();
+}
+
+// The scheduler's secret for choosing which tiles are checked (spot_checks.h).
+std::uint64_t random_key() {
+  std::random_device device;
+  return (static_cast<std::uint64_t>(device()) << 32) ^ device();
+}
+
+// How a worker's error answer to RenderTile is accounted (worker_failures.h): a refusal is never
+// the unit's fault; INVALID_ARGUMENT says the unit can never render.
+FailureKind failure_kind(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::INVALID_ARGUMENT: return FailureKind::NeverRenders;
+    case grpc::StatusCode::UNIMPLEMENTED:  // not a worker at all (a scheduler's own address)
+    case grpc::StatusCode::UNAUTHENTICATED:
+    case grpc::StatusCode::PERMISSION_DENIED:
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+    case grpc::StatusCode::FAILED_PRECONDITION:
+    case grpc::StatusCode::NOT_FOUND:
+    case grpc::StatusCode::CANCELLED:
+    case grpc::StatusCode::ABORTED: return FailureKind::Refused;
+    default: return FailureKind::Unit;
+  }
+}
+
+// A batch never holds more tiles than this, whatever the estimate says.
+constexpr int kMaxBatch = 64;
+// How long an idle slot waits before it looks for work again, unless woken earlier.
+constexpr auto kIdleWait = std::chrono::milliseconds(500);
+
+}  // namespace
+
+struct Dispatcher::InFlight {
+  TileBatch batch;
+  std::string worker_id;
+  // Set: the call renders `batch` (part of another worker's batch) for this spot check.
+  std::shared_ptr<SpotCheck> check;
+  std::shared_ptr<TileCancel> cancel = std::make_shared<TileCancel>();
+  CancelReason reason = CancelReason::None;  // under Dispatcher::mutex_, with reason_text
+  std::string reason_text;
+};
+
+// A batch whose reply waits, its tiles still running in the store on its worker, until another
+// worker's rendering of its chosen span agrees. Under Dispatcher::mutex_ while in checks_.
+struct Dispatcher::SpotCheck {
+  TileBatch batch;
+  TileSpan span;
+  RenderedTiles reply;            // the batch's worker's, kept if the check agrees
+  std::vector<Opinion> opinions;  // opinions[0]: the batch's worker's pixels of the span
+  std::set<std::string> asked;    // workers that rendered it or failed to: not asked again
+  bool queued = true;             // waiting for a slot (false: a call renders it)
+
+  const Opinion& own() const { return opinions.front(); }
+};
+
+Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& parts)
+    : options_(options),
+      store_(parts.store),
+      assets_(parts.assets),
+      assembly_(parts.assembly),
+      jobs_(parts.jobs),
+      events_(parts.events),
+      workers_(parts.workers),
+      finisher_(parts.finisher),
+      pause_(parts.pause),
+      outage_(parts.outage),
+      log_(parts.log),
+      chooser_(options.verify_fraction, random_key()),
+      remote_chooser_(std::max(options.verify_fraction, options.remote_verify_fraction), random_key()),
+      failures_(WorkerFailures::Options{options.job_failures_per_worker, options.worker_backoff,
+                                        options.worker_backoff_max}) {}
+
+Dispatcher::~Dispatcher() { stop(); }
+
+template <typename Which>
+void Dispatcher::cancel_calls_locked(Which&& which, CancelReason reason, const std::string& text) {
+  for (const auto& call : in_flight_) {
+    if (!which(*call)) continue;
+    call->reason = reason;
+    call->reason_text = text;
+    call->cancel->cancel();
+  }
+}
+
+void Dispatcher::drop_checks_locked(const std::string& job_id) {
+  checks_.remove_if([&](const std::shared_ptr<SpotCheck>& c) { return c->batch.job_id == job_id; });
+}
+
+bool Dispatcher::holds_check_locked(const std::shared_ptr<SpotCheck>& check) const {
+  return std::find(checks_.begin(), checks_.end(), check) != checks_.end();
+}
+
+void Dispatcher::stop() {
+  std::vector<std::thread> threads;
+  std::list<std::shared_ptr<SpotCheck>> checks;
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+    cancel_calls_locked([](const InFlight&) { return true; }, CancelReason::Stopping);
+    for (auto& [id, t] : threads_) threads.push_back(std::move(t));
+    threads_.clear();
+    for (std::thread& t : exited_) threads.push_back(std::move(t));
+    exited_.clear();
+    checks.swap(checks_);
+  }
+  work_.notify_all();
+  for (std::thread& t : threads) t.join();
+  for (const auto& c : checks) store_.units().batch_requeue(c->batch.job_id, c->batch.first, c->batch.count, c->own().worker_id);
+}
+
+void Dispatcher::start_slots(const std::shared_ptr<WorkerEntry>& w) {
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) return;
+    // Started under the lock: a slot that ends at once finds its handle in threads_.
+    for (int i = 0; i < std::max(1, options_.tiles_per_worker); ++i) {
+      std::thread t([this, w] { slot_main(w); });
+      const std::thread::id id = t.get_id();
+      threads_.emplace(id, std::move(t));
+    }
+  }
+  join_exited();
+}
+
+void Dispatcher::join_exited() {
+  std::vector<std::thread> exited;
+  {
+    std::lock_guard lock(mutex_);
+    exited.swap(exited_);
+  }
+  for (std::thread& t : exited) t.join();
+}
+
+void Dispatcher::work_queued() { work_.notify_all(); }
+
+v1::Job Dispatcher::cancel_job(const std::string& job_id) {
+  // Under the dispatcher's lock, so no slot claims a tile of this job and starts it unseen.
+  std::lock_guard lock(mutex_);
+  v1::Job after = store_.jobs().cancel_job(job_id, unix_ms_now());
+  stop_job_locked(job_id);
+  return after;
+}
+
+std::map<std::string, std::vector<std::string>> Dispatcher::calls_in_flight() const {
+  std::lock_guard lock(mutex_);
+  std::map<std::string, std::vector<std::string>> calls;
+  for (const std::shared_ptr<InFlight>& call : in_flight_) {
+    calls[call->worker_id].push_back(fmt::format("{} {} (frame {}, pass {}){}", call->batch.job_id,
+                                                 describe(call->batch), call->batch.frame, call->batch.pass,
+                                                 call->check ? ", a spot check" : ""));
+  }
+  for (auto& [id, list] : calls) std::sort(list.begin(), list.end());
+  return calls;
+}
+
+void Dispatcher::job_ended_elsewhere(const std::string& job_id) {
+  std::lock_guard lock(mutex_);
+  stop_job_locked(job_id);
+}
+
+void Dispatcher::stop_job_locked(const std::string& job_id) {
+  impossible_.erase(job_id);
+  failures_.forget_job(job_id);
+  cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; }, CancelReason::JobCancelled);
+  drop_checks_locked(job_id);
+}
+
+void Dispatcher::worker_left(const std::string& worker_id, const std::string& reason) {
+  failures_.forget_worker(worker_id);  // its id is never given again
+  {
+    std::lock_guard lock(mutex_);
+    cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },
+                        CancelReason::WorkerLeft, reason);
+  }
+  settle_stranded();
+  work_.notify_all();
+}
+
+void Dispatcher::quarantine(const std::string& worker_id, const std::string& worker, const std::string& reason) {
+  // The registry first: from now on no slot claims for the worker, and every call it has in
+  // flight is in in_flight_, cancelled below.
+  if (!workers_.quarantine(worker_id, reason)) return;
+  {
+    std::lock_guard lock(mutex_);
+    cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },
+                        CancelReason::Quarantined, reason);
+    for (auto it = checks_.begin(); it != checks_.end();) {
+      SpotCheck& c = **it;
+      if (c.own().worker_id == worker_id) {
+        it = checks_.erase(it);  // its batch: the store takes the tiles back below
+        continue;
+      }
+      std::erase_if(c.opinions, [&](const Opinion& o) { return o.worker_id == worker_id; });
+      ++it;
+    }
+  }
+  // Its tiles running (calls, batches held for a check) and its done tiles of running jobs go
+  // back to the queue in one transaction: a result of it that is being kept right now either
+  // finds its tiles no longer running, or is taken back here.
+  for (const TileBatch& b : store_.units().quarantine_worker(worker_id)) {
+    assembly_.discard(b.job_id, b.first);
+    finisher_.parts_taken_back(b.job_id);
+    const std::string why =
+        fmt::format("the result of worker {} is discarded and rendered again: the worker is quarantined ({})",
+                    worker, reason);
+    log_.warn("job {} {}: {}", b.job_id, describe(b), why);
+    announce_failure(b.job_id, b.first, b.count, worker, why, true);
+  }
+  settle_stranded();
+  work_.notify_all();
+}
+
+// ---- Slots ---------------------------------------------------------------------------------------
+
+void Dispatcher::slot_main(const std::shared_ptr<WorkerEntry>& w) {
+  slot_loop(w);
+  std::lock_guard lock(mutex_);
+  // stop() may have taken the handle already, to join it itself.
+  if (auto it = threads_.find(std::this_thread::get_id()); it != threads_.end()) {
+    exited_.push_back(std::move(it->second));
+    threads_.erase(it);
+  }
+}
+
+void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
+  while (workers_.await_up(*w)) {
+    bool store_answered = false;
+    const std::shared_ptr<InFlight> call = claim(*w, store_answered);
+    // Outside claim's lock: the end of an outage looks at every active job (StoreOutage::on_back).
+    if (store_answered) outage_.answered();
+    if (!call) {
+      {
+        std::lock_guard lock(mutex_);
+        if (stopping_) return;
+      }
+      join_exited();  // an idle moment: the slots of workers that left are joined
+      continue;  // no work yet, or the worker went down: await_up says which
+    }
+    RenderedTiles result;
+    // Not the job's fault nor the worker's: the call goes back, a check to the checks' queue
+    // (another worker checks it once dispatch resumes), a batch to the store's queue once the
+    // store takes it (tiles it marked done meanwhile stay done).
+    const auto put_back = [&] {
+      if (call->check) {
+        std::lock_guard lock(mutex_);
+        call->check->queued = true;
+      } else {
+        requeue_when_stored(call->batch, w->id);
+      }
+    };
+    if (call->batch.started_job) announce_started(call->batch.job_id);
+    try {
+      const grpc::Status status = render(*w, *call, result);
+      handle_result(*w, *call, status, result);
+    } catch (const DiskFull& e) {
+      // The scheduler's own disk refused something on the way (the job's scene laid out again, a
+      // mark in the store): the batch waits for room.
+      pause_.report(e);
+      put_back();
+    } catch (const StoreUnavailable& e) {
+      // The store's server went away on the way (a mark, a failed attempt).
+      outage_.report(e);
+      put_back();
+    } catch (const std::exception& e) {
+      // Nothing may end a slot's thread (that would be std::terminate); the batch's tiles stay
+      // as the store has them, queued again by the next scheduler to open it.
+      log_.error("job {} {}: {}", call->batch.job_id, describe(call->batch), e.what());
+    }
+    std::lock_guard lock(mutex_);
+    in_flight_.erase(call);
+  }
+}
+
+void Dispatcher::announce_started(const std::string& job_id) {
+  try {
+    events_.publish_started(job_id);
+  } catch (const std::exception& e) {
+    // The store away or full: watchers see it running from its next event; the batch renders.
+    log_.warn("job {}: its start not announced: {}", job_id, e.what());
+  }
+}
+
+std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bool& store_answered) {
+  std::unique_lock lock(mutex_);
+  // Checked under this lock, with the claim: a worker removed, quarantined (or marked down) after
+  // this point finds the call in flight and cancels it.
+  if (stopping_ || !workers_.available(w)) return nullptr;
+  // A result rendered now could not be kept: nothing goes out until the disk has room again
+  // (the pause's resume wakes the slots).
+  if (pause_.paused()) {
+    work_.wait_for(lock, kIdleWait);
+    return nullptr;
+  }
+  // A batch waiting for a spot check goes first: its job cannot finish before it.
+  for (const std::shared_ptr<SpotCheck>& c : checks_) {
+    if (!c->queued || c->asked.contains(w.id)) continue;
+    c->queued = false;
+    c->asked.insert(w.id);
+    auto call = std::make_shared<InFlight>();
+    call->batch = TileBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
+    call->batch.frame = c->batch.frame;
+    call->batch.pass = c->batch.pass;
+    call->worker_id = w.id;
+    call->check = c;
+    in_flight_.insert(call);
+    return call;
+  }
+  std::optional<TileBatch> batch;
+  try {
+    // batch_size's answer stops changing at 2 x slots x kMaxBatch queued tiles: counted up to that.
+    batch = store_.units().claim_next_batch(
+        w.id, unix_ms_now(), [this](const std::string& job_id, int queued) { return batch_size(job_id, queued); },
+        2 * std::max(1, workers_.slots_up()) * kMaxBatch,
+        [this, &w](const std::string& job_id) { return failures_.blocked(w.id, job_id); });
+    store_answered = true;
+  } catch (const DiskFull& e) {
+    pause_.report(e);  // the store could not mark the claim: nothing was claimed
+  } catch (const StoreUnavailable& e) {
+    outage_.report(e);  // nothing was claimed; the slot asks again after its wait
+  } catch (const std::exception& e) {
+    log_.error("claiming tiles: {}", e.what());
+  }
+  if (!batch) {
+    work_.wait_for(lock, kIdleWait);
+    return nullptr;
+  }
+  auto call = std::make_shared<InFlight>();
+  call->batch = std::move(*batch);
+  call->batch.handed_out = std::chrono::steady_clock::now();
+  call->worker_id = w.id;
+  in_flight_.insert(call);
+  return call;
+}
+
+int Dispatcher::batch_size(const std::string& job_id, int queued_tiles) const {
+  if (options_.batch_target.count() <= 0) return 1;
+  const std::optional<double> ms_per_tile = jobs_.tile_cost(job_id);
+  if (!ms_per_tile) return 1;  // nothing measured yet: the first tiles tell
+  // The tail goes out in small pieces, so that no worker is left with a long batch while the
+  // others have nothing: at most half of each slot's share of what is queued.
+  const int share = queued_tiles / (2 * std::max(1, workers_.slots_up()));
+  const double by_time = static_cast<double>(options_.batch_target.count()) / std::max(*ms_per_tile, 1e-3);
+  return std::clamp(std::min(static_cast<int>(by_time), share), 1, kMaxBatch);
+}
+
+grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTiles& result) {
+  const TileBatch& batch = call.batch;
+  try {
+    const std::shared_ptr<const JobInfo> info = jobs_.get(batch.job_id);
+    const v1::JobSpec& spec = *info->spec;
+    v1::RenderTileRequest request;
+    // The job text (up to --max-job-bytes) travels once per worker and scene, not with every call.
+    if (!w.scenes_sent.contains(info->scene_hash)) *request.mutable_job() = spec;
+    request.set_scene_hash(info->scene_hash);
+    *request.mutable_rect() = to_proto(batch.rect);
+    request.set_job_id(batch.job_id);
+    request.set_tile_index(batch.first);
+    request.set_frame(batch.frame);
+    request.set_pass(batch.pass);
+    request.set_scheduler_id(store_.leases().scheduler());  // a worker of several schedulers fetches assets here
+    // Each tile of the batch has its deadline.
+    const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch.count;
+    grpc::Status status = w.worker->render(request, result, deadline, *call.cancel);
+    if (status.error_code() == grpc::StatusCode::NOT_FOUND && !request.has_job() && !call.cancel->cancelled()) {
+      // The worker no longer holds the scene (evicted, or a new process at the address).
+      *request.mutable_job() = spec;
+      result = RenderedTiles();
+      status = w.worker->render(request, result, deadline, *call.cancel);
+    }
+    if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION && !call.cancel->cancelled()) {
+      // A worker that cannot fetch the job's files (no --scheduler): once more, files inline.
+      for (const v1::AssetRef& ref : spec.assets()) {
+        v1::InlineAsset& asset = *request.add_assets();
+        asset.set_sha256(ref.sha256());
+        asset.set_data(read_whole_file(assets_.path_of(ref.sha256()), "asset"));
+      }
+      result = RenderedTiles();
+      status = w.worker->render(request, result, deadline, *call.cancel);
+    }
+    if (status.ok() && request.has_job()) w.scenes_sent.insert(info->scene_hash);
+    return status;
+  } catch (const DiskFull&) {
+    throw;  // the scheduler's disk (the job's scene laid out again): slot_loop waits for room
+  } catch (const std::exception& e) {
+    return {grpc::StatusCode::INTERNAL, e.what()};
+  }
+}
+
+// ---- Results -------------------------------------------------------------------------------------
+
+void Dispatcher::handle_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
+                               RenderedTiles& result) {
+  // An answer is a sign of life as good as a heartbeat, and sooner: a worker that was stopped
+  // (SIGSTOP, a machine that froze) and has just answered is not dropped a moment later for a
+  // heartbeat still on its way, taking the batch it was handed next with it.
+  if (status.ok()) workers_.heartbeat(w.id);
+  CancelReason reason;
+  std::string reason_text;
+  {
+    std::lock_guard lock(mutex_);
+    reason = call.reason;
+    reason_text = call.reason_text;
+  }
+  if (call.check) {
+    handle_check_result(w, call, status, reason, result);
+    return;
+  }
+  if (reason == CancelReason::JobCancelled) return;  // the job is final; its tiles stay as they were
+  if (status.ok() && reason != CancelReason::Quarantined) {
+    accept(w, call, result);
+  } else if (reason == CancelReason::Stopping || reason == CancelReason::Quarantined) {
+    store_.units().batch_requeue(call.batch.job_id, call.batch.first, call.batch.count, w.id);
+    work_.notify_all();
+  } else {
+    failed(w, call, status, reason, reason_text);
+  }
+}
+
+std::optional<RenderSettings> Dispatcher::settings_of(const TileBatch& batch) {
+  try {
+    RenderSettings settings = jobs_.get(batch.job_id)->job->render;
+    settings.pass = batch.pass;  // what a reply for the batch renders (its samples)
+    return settings;
+  } catch (const std::exception& e) {
+    log_.error("job {} {}: {}", batch.job_id, describe(batch), e.what());
+    return std::nullopt;
+  }
+}
+
+void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result) {
+  const TileBatch& batch = call.batch;
+  const std::string worker = w.worker->describe();
+  const std::optional<RenderSettings> settings = settings_of(batch);
+  if (!settings) {
+    store_.units().batch_requeue(batch.job_id, batch.first, batch.count, w.id);
+    return;
+  }
+  // Pixels from this process were rendered here; a reply from anywhere else is checked before
+  // anything of it is kept.
+  if (!result.pixels) {
+    if (const std::string problem = check_tile_reply(result.response, *settings, batch.rect); !problem.empty()) {
+      impossible_result(w, batch, problem);
+      return;
+    }
+  }
+  // Spot checks by default for workers on other hosts (their replies crossed a network).
+  const SpotCheckChooser& chooser = on_this_host(worker) ? chooser_ : remote_chooser_;
+  if (chooser.enabled()) {
+    std::optional<TileSpan> span;
+    if (const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id)) {
+      span = chooser.span(batch, job->tiles_total(), *settings);
+    }
+    // With no other worker to ask, there is nobody to check against: kept as it is.
+    if (span && workers_.any_available_except({w.id})) {
+      auto check = std::make_shared<SpotCheck>();
+      check->batch = batch;
+      check->span = *span;
+      encode_pixels(result);
+      check->opinions.push_back({w.id, worker, crop_tile(result.response.tile(), span->rect)});
+      check->reply = std::move(result);
+      check->asked.insert(w.id);
+      {
+        std::lock_guard lock(mutex_);
+        if (stopping_) {
+          store_.units().batch_requeue(batch.job_id, batch.first, batch.count, w.id);
+          return;
+        }
+        checks_.push_back(check);
+      }
+      log_.debug("job {} {}: held for a spot check of {}", batch.job_id, describe(batch), describe(*span));
+      settle_stranded();
+      work_.notify_all();
+      return;
+    }
+  }
+  keep(w.id, worker, batch, result);
+}
+
+namespace {
+
+// The kind of impossible value a result check found: its plane ("rgba plane", "depth plane",
+// "stats"), without the pixel and the value: what two workers' results must share to agree.
+// Empty for a reply malformed in its shape (rect, plane sizes), which only a worker gets wrong.
+std::string value_problem_kind(const std::string& problem) {
+  std::string_view rest = problem;
+  if (rest.rfind("pixel (", 0) == 0) {
+    const std::size_t colon = rest.find("): ");
+    if (colon == std::string_view::npos) return {};
+    rest.remove_prefix(colon + 3);
+  } else if (rest.rfind("stats: ", 0) != 0) {
+    return {};
+  }
+  return std::string(rest.substr(0, rest.find(':')));
+}
+
+}  // namespace
+
+void Dispatcher::impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem) {
+  const std::string worker = w.worker->describe();
+  const std::string kind = value_problem_kind(problem);
+  std::optional<ImpossibleResult> earlier;
+  if (!kind.empty()) {
+    std::lock_guard lock(mutex_);
+    const auto it = impossible_.find(batch.job_id);
+    if (it == impossible_.end()) {
+      impossible_.emplace(batch.job_id, ImpossibleResult{w.id, worker, kind});
+    } else if (it->second.worker_id != w.id && it->second.kind == kind) {
+      earlier = it->second;
+    }
+  }
+  if (earlier) {
+    // Two workers rendered the job to the same impossible values: a property of the job (an engine
+    // bug it meets), not of either worker. The job ends saying so; the farm goes on, and the
+    // worker quarantined for it first is released.
+    const std::string why = fmt::format(
+        "workers {} and {} both rendered this job to values no engine should make ({}: {}); it is the job's own, "
+        "not the workers': no worker is quarantined for it (report it with the job file)",
+        earlier->worker, worker, describe(batch), problem);
+    fail_batch(w.id, worker, batch, why, 1);
+    if (workers_.release_quarantine(earlier->worker_id, fmt::format("worker {} rendered job {} the same way",
+                                                                     worker, batch.job_id))) {
+      log_.warn("worker {} is back: its result for job {} was the job's own ({})", earlier->worker, batch.job_id,
+                kind);
+    }
+    return;
+  }
+  const std::string why = fmt::format("worker {} sent a result no engine makes: {}", worker, problem);
+  fail_batch(w.id, worker, batch, why + "; the worker is quarantined", options_.max_attempts);
+  quarantine(w.id, worker, why);
+}
+
+void Dispatcher::handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
+                                     CancelReason reason, RenderedTiles& result) {
+  const std::shared_ptr<SpotCheck>& check = call.check;
+  if (reason == CancelReason::JobCancelled || reason == CancelReason::Stopping) return;  // dropped already
+  const std::string worker = w.worker->describe();
+  const TileBatch& batch = check->batch;
+  std::string problem;
+  const bool answered = status.ok() && reason != CancelReason::Quarantined;
+  if (answered && !result.pixels) {
+    const std::optional<RenderSettings> settings = settings_of(batch);
+    if (!settings) return;
+    problem = check_tile_reply(result.response, *settings, check->span.rect);
+  }
+  if (!answered || !problem.empty()) {
+    // No opinion from this worker: the check waits for another.
+    if (!problem.empty()) {
+      quarantine(w.id, worker, fmt::format("worker {} sent a result no engine makes: {}", worker, problem));
+    } else if (reason == CancelReason::None) {
+      log_.warn("job {} {}: checking it on worker {} failed: {}: {}", batch.job_id, describe(check->span), worker,
+                status_code_name(status.error_code()), status.error_message());
+      if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) workers_.mark_down(w, std::chrono::milliseconds(0));
+      if (status.error_code() == grpc::StatusCode::UNAVAILABLE) workers_.mark_down(w, options_.probe_interval);
+    }
+    {
+      std::lock_guard lock(mutex_);
+      check->queued = true;
+    }
+    settle_stranded();
+    work_.notify_all();
+    return;
+  }
+  encode_pixels(result);
+  Opinion opinion{w.id, worker, std::move(*result.response.mutable_tile())};
+  Judgement j;
+  std::string own_worker;
+  {
+    std::lock_guard lock(mutex_);
+    if (!holds_check_locked(check)) return;  // its batch's worker was quarantined, or its job ended
+    j = judge(check->opinions, opinion);
+    own_worker = check->own().worker;
+    if (j.outcome == Judgement::Outcome::NeedAnother) {
+      check->queued = true;  // back in the queue: from here on others may touch it
+    } else {
+      checks_.remove(check);  // out of checks_, it is this thread's alone
+    }
+  }
+  switch (j.outcome) {
+    case Judgement::Outcome::NeedAnother:
+      log_.warn("job {} {}: workers {} and {} rendered it differently; a third worker decides", batch.job_id,
+                describe(check->span), own_worker, worker);
+      settle_stranded();
+      work_.notify_all();
+      return;
+    case Judgement::Outcome::NoAgreement: {
+      std::string names;
+      for (const Opinion& o : check->opinions) names += (names.empty() ? "" : ", ") + o.worker;
+      fail_batch(check->own().worker_id, check->own().worker, batch,
+                 fmt::format("spot check of {}: workers {} rendered it three different ways", describe(check->span), names),
+                 options_.max_attempts);
+      return;
+    }
+    case Judgement::Outcome::Agreed:
+      settle(*check, j, opinion);
+      return;
+  }
+}
+
+void Dispatcher::settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing) {
+  const TileBatch& batch = check.batch;
+  const Opinion& agreed = check.opinions[j.agreed_with];
+  if (j.agreed_with == 0) {
+    log_.debug("job {} {}: spot check passed ({} and {} agree)", batch.job_id, describe(check.span), agreed.worker,
+               agreeing.worker);
+    keep(check.own().worker_id, check.own().worker, batch, check.reply);
+  }
+  for (std::size_t k : j.wrong) {
+    const Opinion& o = check.opinions[k];
+    const std::string why = fmt::format("spot check of {} of job {}: its pixels differ from the ones workers {} and {} rendered",
+                                        describe(check.span), batch.job_id, agreed.worker, agreeing.worker);
+    if (k == 0) {
+      // The batch's own worker: the batch is rendered again.
+      fail_batch(o.worker_id, o.worker, batch, fmt::format("worker {}: {}; the worker is quarantined", o.worker, why),
+                 options_.max_attempts);
+    } else {
+      const std::string kept = fmt::format("worker {}: {}; the worker is quarantined, the tiles are kept as {} rendered them",
+                                           o.worker, why, check.own().worker);
+      log_.warn("job {} {}: {}", batch.job_id, describe(check.span), kept);
+      announce_failure(batch.job_id, check.span.first, check.span.count, o.worker, kept, false);
+    }
+    quarantine(o.worker_id, o.worker, fmt::format("worker {}: {}", o.worker, why));
+  }
+}
+
+void Dispatcher::settle_stranded() {
+  std::vector<std::shared_ptr<SpotCheck>> stranded;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = checks_.begin(); it != checks_.end();) {
+      if ((*it)->queued && !workers_.any_available_except((*it)->asked)) {
+        stranded.push_back(*it);
+        it = checks_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  for (const std::shared_ptr<SpotCheck>& c : stranded) {
+    if (c->opinions.size() == 1) {
+      log_.warn("job {} {}: kept unchecked: no worker but {} is there to check it on", c->batch.job_id,
+                describe(c->batch), c->own().worker);
+      keep(c->own().worker_id, c->own().worker, c->batch, c->reply);
+    } else {
+      std::string names;
+      for (const Opinion& o : c->opinions) names += (names.empty() ? "" : " and ") + o.worker;
+      fail_batch(c->own().worker_id, c->own().worker, c->batch,
+                 fmt::format("spot check of {}: workers {} rendered it differently and no other worker is there "
+                             "to decide",
+                             describe(c->span), names),
+                 options_.max_attempts);
+    }
+  }
+}
+
+void Dispatcher::keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                      RenderedTiles& result) {
+  const v1::TileStats stats = result.response.stats();
+  try {
+    // The data first, then the mark: a done tile always has its data.
+    assembly_.add(batch.job_id, jobs_.get(batch.job_id)->frame(batch.frame), {batch.first, batch.pass}, result);
+    // Kept on disk, the result waits for a store that went away rather than being rendered again.
+    const std::optional<bool> marked = outage_.when_answered(
+        [&] { return store_.units().batch_done(batch.job_id, batch.first, batch.count, stats, worker_id); },
+        [this](std::chrono::milliseconds wait) { return wait_unless_stopping(wait); });
+    if (!marked) return;  // stopping: its tiles stay running, queued again by the next scheduler
+    if (!*marked) {
+      // The job ended, or the tiles were taken back (the worker quarantined meanwhile).
+      assembly_.discard(batch.job_id, batch.first);
+      work_.notify_all();
+      return;
+    }
+    measured(batch, stats);
+    failures_.succeeded(worker_id);
+    workers_.count_units(worker_id, batch.count, 0);
+    metrics_.kept(batch.count, batch.handed_out);
+    events_.publish(batch.job_id, [&](v1::JobEvent& event) {
+      v1::TileFinished& f = *event.mutable_tile_finished();
+      f.set_tile_index(batch.first);
+      f.set_tile_count(batch.count);
+      *f.mutable_rect() = to_proto(batch.rect);
+      f.set_worker(worker);
+      *f.mutable_stats() = stats;
+      f.set_frame(batch.frame);
+      f.set_pass(batch.pass);
+    });
+    pause_.written();
+    {
+      std::lock_guard lock(mutex_);
+      worker_disk_full_.erase(worker_id);  // its disk had room for this one
+    }
+    finisher_.finish_if_complete(batch.job_id, batch.frame);
+  } catch (const DiskFull& e) {
+    // No room to keep it: rendered again once there is, with no attempt counted against the job
+    // or the worker. Logged by the pause, once a minute at most, not once a batch.
+    log_.debug("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
+    pause_.report(e);
+    requeue_when_stored(batch, worker_id);
+  } catch (const StoreUnavailable& e) {
+    outage_.report(e);  // after its mark (an event, the merge): looked at again when the store answers
+    requeue_when_stored(batch, worker_id);
+  } catch (const std::exception& e) {
+    log_.error("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
+    store_.units().batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
+    work_.notify_all();
+  }
+}
+
+bool Dispatcher::wait_unless_stopping(std::chrono::milliseconds wait) {
+  std::unique_lock lock(mutex_);
+  work_.wait_for(lock, wait, [this] { return stopping_; });
+  return stopping_;
+}
+
+void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& worker_id) {
+  while (true) {
+    try {
+      // A store whose server is away is asked again every second (StoreOutage::when_answered).
+      const std::optional<bool> requeued = outage_.when_answered(
+          [&] {
+            store_.units().batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
+            return true;
+          },
+          [this](std::chrono::milliseconds wait) { return wait_unless_stopping(wait); });
+      if (requeued) work_.notify_all();
+      return;  // queued again, or stopping
+    } catch (const DiskFull& e) {
+      pause_.report(e);  // the store itself is full
+    }
+    std::unique_lock lock(mutex_);
+    // Until the pause's prober finds room again (its resume wakes this), or the scheduler stops.
+    while (!stopping_ && pause_.paused()) work_.wait_for(lock, kIdleWait);
+    if (stopping_) return;
+  }
+}
+
+void Dispatcher::worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status) {
+  std::chrono::milliseconds wait{0};
+  bool log = false;
+  int skipped = 0;
+  {
+    std::lock_guard lock(mutex_);
+    RetryBackoff& backoff =
+        worker_disk_full_.try_emplace(w.id, options_.disk_full_backoff, options_.disk_full_backoff_max).first->second;
+    wait = backoff.next();
+    log = backoff.log_now(skipped);
+  }
+  if (log) {
+    log_.warn("worker {}: {}; its batches go back to the queue (no attempt counted) and it gets none for {} ms{}",
+              w.worker->describe(), status.error_message(), wait.count(),
+              skipped > 0 ? fmt::format(" ({} more such answers since the last report)", skipped) : "");
+  }
+  workers_.mark_down(w, wait);
+  requeue_when_stored(batch, w.id);
+  settle_stranded();
+}
+
+void Dispatcher::measured(const TileBatch& batch, const v1::TileStats& stats) {
+  // What a tile costs a worker running at full speed: its threads' CPU time shared by them. The
+  // call's wall time would also count the time its threads waited for a core (two workers on
+  // one machine, or two calls in flight on one worker), and halve the batches for nothing.
+  const double per_call = stats.cpu_ms() > 0 && stats.threads() > 0 ? stats.cpu_ms() / stats.threads()
+                                                                      : stats.render_ms();
+  jobs_.add_tile_cost(batch.job_id, per_call / std::max<std::uint32_t>(1, batch.count));
+}
+
+void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
+                        CancelReason reason, const std::string& reason_text) {
+  const TileBatch& batch = call.batch;
+  const std::string worker = w.worker->describe();
+  std::string why;
+  bool went_down = false;
+  // The worker, not the tile: its process died or it stopped answering.
+  bool worker_lost = false;
+  if (reason == CancelReason::WorkerLeft) {
+    why = fmt::format("worker {} left: {}", worker, reason_text);
+    worker_lost = true;
+  } else if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
+    why = fmt::format("worker {}: no result within the tile deadline of {} ms{}", worker,
+                      options_.tile_deadline.count(),
+                      batch.count > 1 ? fmt::format(" (x {} units)", batch.count) : std::string());
+    // Slow or hung? It gets no more tiles until it answers a health check: a hung one would
+    // otherwise take tile after tile to its deadline.
+    workers_.mark_down(w, std::chrono::milliseconds(0));
+    went_down = true;
+  } else if (is_disk_full(status)) {
+    worker_disk_full(w, batch, status);  // the worker's disk, not the job: no attempt counted
+    return;
+  } else {
+    // Every failure says why, even a worker's that said nothing (a server that is no worker).
+    why = fmt::format("worker {}: {}: {}", worker, status_code_name(status.error_code()),
+                      status.error_message().empty() ? "(it gave no reason)" : status.error_message());
+    if (status.error_code() != grpc::StatusCode::UNAVAILABLE) {
+      charge_failure(w, batch, why, failure_kind(status.error_code()));
+      return;
+    }
+    workers_.mark_down(w, options_.probe_interval);
+    went_down = true;
+    worker_lost = true;
+  }
+  if (worker_lost) {
+    lose_batch(w.id, worker, batch, why);
+  } else {
+    fail_batch(w.id, worker, batch, why, options_.max_attempts);
+  }
+  if (went_down) settle_stranded();  // a check that only this worker could have taken
+}
+
+void Dispatcher::charge_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind) {
+  const std::string worker = w.worker->describe();
+  const FailureCharge charge = failures_.failed(w.id, batch.job_id, kind);
+  if (charge.blocked_now) {
+    log_.warn("job {}: worker {} is kept off it from now on: {}", batch.job_id, worker,
+              kind == FailureKind::NeverRenders ? "it says its units can never render"
+                                                : fmt::format("it failed {} of its units", options_.job_failures_per_worker));
+  }
+  if (charge.back_off.count() > 0) {
+    log_.warn("worker {} is backed off for {} ms: it {} ({})", worker, charge.back_off.count(),
+              kind == FailureKind::Refused ? "refused a call" : "fails units of several jobs in a row", why);
+    workers_.back_off(w, charge.back_off, why);
+  }
+  // Nobody left to render it: the job ends here rather than waiting for ever.
+  const bool nobody_left = charge.blocked_now && every_worker_blocked(batch.job_id);
+  if (charge.charge_unit || nobody_left) {
+    // Two workers that each say a unit can never render agree: no need for a third.
+    const int max_attempts = nobody_left                         ? 1
+                             : kind == FailureKind::NeverRenders ? std::min(2, options_.max_attempts)
+                                                                 : options_.max_attempts;
+    fail_batch(w.id, worker, batch, nobody_left ? why + "; every worker of the farm is kept off the job" : why,
+               max_attempts);
+  } else {
+    uncharged_failure(w, batch, why);
+  }
+  if (charge.back_off.count() > 0) settle_stranded();  // a check that only this worker could have taken
+}
+
+void Dispatcher::announce_failure(const std::string& job_id, std::uint32_t first, std::uint32_t count,
+                                  const std::string& worker, const std::string& why, bool will_retry) {
+  events_.publish(job_id, [&](v1::JobEvent& event) {
+    v1::TileFailed& f = *event.mutable_tile_failed();
+    f.set_tile_index(first);
+    f.set_tile_count(count);
+    f.set_worker(worker);
+    f.set_reason(why);
+    f.set_will_retry(will_retry);
+  });
+}
+
+void Dispatcher::uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why) {
+  const std::string worker = w.worker->describe();
+  // Not the unit's own failure (the worker's: it fails other jobs too, or failed this one
+  // before): queued again with no attempt counted, and said.
+  log_.warn("job {} {}: {} (no attempt counted: the worker's failure, not the unit's)", batch.job_id, describe(batch),
+            why);
+  workers_.count_units(w.id, 0, batch.count);
+  metrics_.failed(batch.count);
+  announce_failure(batch.job_id, batch.first, batch.count, worker, why, true);
+  requeue_when_stored(batch, w.id);
+  work_.notify_all();
+}
+
+bool Dispatcher::every_worker_blocked(const std::string& job_id) const {
+  bool any = false;
+  for (const WorkerStatus& s : workers_.workers()) {
+    if (s.quarantined) continue;
+    if (!failures_.blocked(s.id, job_id)) return false;
+    any = true;
+  }
+  return any;
+}
+
+void Dispatcher::fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                            const std::string& why, int max_attempts) {
+  log_.warn("job {} {}: {}", batch.job_id, describe(batch), why);
+  workers_.count_units(worker_id, 0, batch.count);
+  metrics_.failed(batch.count);
+  const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id);
+  if (!job) return;
+  const v1::JobState before = job->state();
+  const TileFailure failure =
+      store_.units().batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now(), worker_id);
+  after_failure(worker, batch, why, before, failure);
+}
+
+void Dispatcher::lose_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                            const std::string& why) {
+  log_.warn("job {} {}: {} (its worker was lost: no attempt counted)", batch.job_id, describe(batch), why);
+  workers_.count_units(worker_id, 0, batch.count);
+  metrics_.failed(batch.count);
+  const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id);
+  if (!job) return;
+  const v1::JobState before = job->state();
+  const TileFailure failure = store_.units().batch_lost(batch.job_id, batch.first, batch.count, why,
+                                                options_.max_lost_worker_attempts, unix_ms_now(), worker_id);
+  after_failure(worker, batch, why, before, failure);
+}
+
+void Dispatcher::after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
+                               v1::JobState before, const TileFailure& failure) {
+  announce_failure(batch.job_id, batch.first, batch.count, worker, why, failure.will_retry);
+  if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
+    log_.error("job {} failed: {}", batch.job_id, failure.job.failure_reason());
+    {
+      // Its other tiles in flight, and its batches waiting for a check, are of no use now.
+      std::lock_guard lock(mutex_);
+      stop_job_locked(batch.job_id);
+    }
+    events_.publish_state(failure.job, before);
+    finisher_.release(batch.job_id, true);  // a retry renders its failed units only
+  }
+  work_.notify_all();
+}
+
+}  // namespace farm

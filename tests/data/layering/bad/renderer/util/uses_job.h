@@ -1,0 +1,3 @@
+#pragma once
+// A fixture for the layering check: util sits below the job format.
+#include "renderer/job/job.h"
