@@ -1,3 +1,5 @@
+// Over 500 lines on purpose: the job file's whole format is checked here, key by key, so that a
+// reader sees every rule and its error message side by side with jobs/README.md.
 #include "renderer/job/job.h"
 
 #include <fmt/format.h>

@@ -10,6 +10,7 @@
 #include "renderer/trace/bsdf.h"
 #include "renderer/trace/emitters.h"
 #include "renderer/trace/ray_offset.h"
+#include "renderer/trace/ray_tile.h"
 #include "renderer/trace/sampler.h"
 
 namespace farm::path {
@@ -67,8 +68,8 @@ class SampleVariance {
 class PathTracer {
  public:
   PathTracer(const PreparedScene& scene, const RenderSettings& settings,
-             const SceneIntersector& intersector, const Emitters& emitters, CancelPoll& poll)
-      : scene_(scene), settings_(settings), intersector_(intersector), emitters_(emitters),
+             const SceneIntersector& intersector, std::shared_ptr<const Emitters> emitters, CancelPoll& poll)
+      : scene_(scene), settings_(settings), intersector_(intersector), emitters_(std::move(emitters)),
         poll_(poll), next_event_estimation_(settings.light_sampling == LightSampling::NeeMis) {}
 
   struct Result {
@@ -80,6 +81,8 @@ class PathTracer {
 
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
+  // Whether the poll said stop: what was traced since is cut short.
+  bool stopped() const { return poll_.stopped(); }
 
   // Ends the path early, its value meaningless, once poll_ says stop (the caller checks
   // poll_.stopped() and drops the tile).
@@ -118,7 +121,7 @@ class PathTracer {
           const glm::vec3 d = hit.position - previous_position;
           const float cos_light = std::fabs(glm::dot(hit.geometric_normal, glm::normalize(d)));
           const float light_pdf = cos_light > 0.0f
-                                      ? emitters_.pdf_area(hit.object, hit.triangle) * glm::dot(d, d) / cos_light
+                                      ? emitters_->pdf_area(hit.object, hit.triangle) * glm::dot(d, d) / cos_light
                                       : 0.0f;
           weight = power_heuristic(previous_pdf, light_pdf);
         }
@@ -170,8 +173,8 @@ class PathTracer {
     glm::vec3 sum(0.0f);
     // One point on the area lights, weighted against BSDF sampling.
     const float u_pick = next(), u1 = next(), u2 = next();
-    if (!emitters_.empty()) {
-      const EmitterSample light = emitters_.sample(u_pick, u1, u2);
+    if (!emitters_->empty()) {
+      const EmitterSample light = emitters_->sample(u_pick, u1, u2);
       const glm::vec3 d = light.position - hit.position;
       const float dist2 = glm::dot(d, d);
       const glm::vec3 wi_world = d / std::sqrt(dist2);
@@ -219,7 +222,7 @@ class PathTracer {
   const PreparedScene& scene_;
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
-  const Emitters& emitters_;
+  std::shared_ptr<const Emitters> emitters_;  // the frame cache's, kept alive while this traces
   CancelPoll& poll_;  // counts path segments; the caller's, so that it sees a stop too
   bool next_event_estimation_;
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
@@ -229,64 +232,56 @@ class PathTracer {
 
 StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                        TileBuffer& out, const CancelFlag& cancel) {
-  out.reset(tile, settings.aovs);
-  if (tile.empty()) return StopReason::None;
-  const auto intersector = cached_scene_intersector(scene, settings.accel, cancel);
-  const auto emitters = scene.frame_cache().get_or_build<Emitters>(
-      "emitters", cancel, [&] { return std::make_shared<const Emitters>(scene); });
-  CancelPoll poll(cancel, kSegmentsPerPoll);
-  const PathTracer tracer(scene, settings, *intersector, *emitters, poll);
   const Camera& camera = scene.scene().camera;
   // This call's samples of each pixel: a pass's, or all spp. Indices are global within the pixel
   // (pass 1 starts at pass_spp), so the sampler never repeats a sample between passes.
   const SampleRange range = samples_to_render(settings);
   const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
-
-  for (int y = tile.y0; y < tile.y1; ++y) {
-    for (int x = tile.x0; x < tile.x1; ++x) {
-      glm::vec3 sum(0.0f);
-      float coverage = 0.0f;
-      SampleVariance variance;
-      const std::uint64_t pixel = static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
-                                  static_cast<std::uint64_t>(x);
-      for (int s = range.begin; s < range.end; ++s) {
-        const SampleKey key{seed, pixel, static_cast<std::uint32_t>(s)};
-        // Box filter: the sample lands uniformly anywhere in the pixel.
-        const Ray ray = camera.primary_ray(static_cast<float>(x) + sample_uniform(key, 0),
-                                           static_cast<float>(y) + sample_uniform(key, 1),
-                                           settings.width, settings.height);
-        const PathTracer::Result r = tracer.trace(ray, key);
-        if (poll.stopped()) {  // r is a path cut short: the tile is dropped, never half-written
-          out.stats().rays += tracer.rays_traced();
-          out.discard_pixels();
-          return cancel.reason();
+  return trace_tile(
+      scene, settings, tile, out, cancel, kSegmentsPerPoll,
+      [&](const SceneIntersector& intersector, CancelPoll& poll) {
+        return PathTracer(scene, settings, intersector,
+                          scene.frame_cache().get_or_build<Emitters>(
+                              "emitters", cancel, [&] { return std::make_shared<const Emitters>(scene); }),
+                          poll);
+      },
+      [&](const PathTracer& tracer, int x, int y) {
+        glm::vec3 sum(0.0f);
+        float coverage = 0.0f;
+        SampleVariance variance;
+        const std::uint64_t pixel = pixel_index(settings, x, y);
+        for (int s = range.begin; s < range.end; ++s) {
+          const SampleKey key{seed, pixel, static_cast<std::uint32_t>(s)};
+          // Box filter: the sample lands uniformly anywhere in the pixel.
+          const Ray ray = camera.primary_ray(static_cast<float>(x) + sample_uniform(key, 0),
+                                             static_cast<float>(y) + sample_uniform(key, 1),
+                                             settings.width, settings.height);
+          const PathTracer::Result r = tracer.trace(ray, key);
+          if (tracer.stopped()) return false;  // r is a path cut short
+          ++out.stats().samples;
+          // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
+          // counts it as a 0 too.
+          const bool valid = finite(r.radiance);
+          // A finite sample is held to the one radiance bound of every engine (radiance_limit.h),
+          // so that the sums below stay finite.
+          const glm::vec3 radiance = valid ? limit_radiance(r.radiance) : glm::vec3(0.0f);
+          if (!valid) ++out.stats().invalid_samples;  // counted, and never allowed into the pixel
+          sum += radiance;
+          if (out.aovs().variance) variance.add(radiance);
+          coverage += r.hit ? 1.0f : 0.0f;
+          // The first-hit AOVs are those of the buffer's first sample: global sample 0 in pass 0
+          // (what the merged frame keeps), and each later pass's own first so that a pass's
+          // buffer is a complete image by itself.
+          if (s != range.begin || !r.hit) continue;
+          if (out.aovs().depth) out.depth(x, y) = r.first.t;
+          if (out.aovs().normal) out.normal(x, y) = r.first_normal;
+          if (out.aovs().albedo) out.albedo(x, y) = r.first.material->diffuse;
         }
-        ++out.stats().samples;
-        // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
-        // counts it as a 0 too.
-        const bool valid = finite(r.radiance);
-        // A finite sample is held to the one radiance bound of every engine (radiance_limit.h),
-        // so that the sums below stay finite.
-        const glm::vec3 radiance = valid ? limit_radiance(r.radiance) : glm::vec3(0.0f);
-        if (!valid) ++out.stats().invalid_samples;  // counted, and never allowed into the pixel
-        sum += radiance;
-        if (out.aovs().variance) variance.add(radiance);
-        coverage += r.hit ? 1.0f : 0.0f;
-        // The first-hit AOVs are those of the buffer's first sample: global sample 0 in pass 0
-        // (what the merged frame keeps), and each later pass's own first so that a pass's
-        // buffer is a complete image by itself.
-        if (s != range.begin || !r.hit) continue;
-        if (out.aovs().depth) out.depth(x, y) = r.first.t;
-        if (out.aovs().normal) out.normal(x, y) = r.first_normal;
-        if (out.aovs().albedo) out.albedo(x, y) = r.first.material->diffuse;
-      }
-      const float inv = 1.0f / static_cast<float>(range.count());
-      out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);
-      if (out.aovs().variance) out.variance(x, y) = variance.of_mean();
-    }
-  }
-  out.stats().rays += tracer.rays_traced();
-  return StopReason::None;
+        const float inv = 1.0f / static_cast<float>(range.count());
+        out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);
+        if (out.aovs().variance) out.variance(x, y) = variance.of_mean();
+        return true;
+      });
 }
 
 }  // namespace farm::path

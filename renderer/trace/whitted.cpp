@@ -9,6 +9,7 @@
 #include "renderer/scene/radiance_limit.h"
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ray_offset.h"
+#include "renderer/trace/ray_tile.h"
 #include "renderer/trace/sampler.h"
 
 namespace farm::whitted {
@@ -33,6 +34,8 @@ class WhittedTracer {
 
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
+  // Whether the poll said stop: what was traced since is cut short.
+  bool stopped() const { return poll_.stopped(); }
 
   // The first hit is returned too, for the AOVs. Once poll_ says stop, the rays not yet traced
   // are skipped and the colour is meaningless (the caller checks poll_.stopped(), drops the tile).
@@ -133,47 +136,39 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   // The variance AOV stays at the zeros reset() writes: a Whitted pixel is no Monte Carlo
   // estimate of the light reaching it (its extra samples only antialias), so there is no noise
   // in it to report.
-  out.reset(tile, settings.aovs);
-  if (tile.empty()) return StopReason::None;
-  const auto intersector = cached_scene_intersector(scene, settings.accel, cancel);
-  CancelPoll poll(cancel, kRaysPerPoll);
-  const WhittedTracer tracer(scene, settings, *intersector, poll);
   const Camera& camera = scene.scene().camera;
   const int samples = std::max(1, settings.spp);
-
-  for (int y = tile.y0; y < tile.y1; ++y) {
-    for (int x = tile.x0; x < tile.x1; ++x) {
-      glm::vec4 sum(0.0f);
-      const SampleKey key{frame_seed(settings.seed, settings.frame), static_cast<std::uint64_t>(y) * static_cast<std::uint64_t>(settings.width) +
-                                             static_cast<std::uint64_t>(x), 0};
-      for (int s = 0; s < samples; ++s) {
-        // Sample 0 is the pixel centre; further samples are jittered within the pixel.
-        SampleKey k = key;
-        k.sample = static_cast<std::uint32_t>(s);
-        const float ox = s == 0 ? 0.5f : sample_uniform(k, 0), oy = s == 0 ? 0.5f : sample_uniform(k, 1);
-        const Ray ray = camera.primary_ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy,
-                                           settings.width, settings.height);
-        TraversalStats stats;
-        const WhittedTracer::Primary p = tracer.trace_primary(ray, s == 0 ? &stats : nullptr);
-        if (poll.stopped()) {  // the tile is dropped, never half-written
-          out.stats().rays += tracer.rays_traced();
-          out.discard_pixels();
-          return cancel.reason();
+  const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
+  return trace_tile(
+      scene, settings, tile, out, cancel, kRaysPerPoll,
+      [&](const SceneIntersector& intersector, CancelPoll& poll) {
+        return WhittedTracer(scene, settings, intersector, poll);
+      },
+      [&](const WhittedTracer& tracer, int x, int y) {
+        glm::vec4 sum(0.0f);
+        const SampleKey key{seed, pixel_index(settings, x, y), 0};
+        for (int s = 0; s < samples; ++s) {
+          // Sample 0 is the pixel centre; further samples are jittered within the pixel.
+          SampleKey k = key;
+          k.sample = static_cast<std::uint32_t>(s);
+          const float ox = s == 0 ? 0.5f : sample_uniform(k, 0), oy = s == 0 ? 0.5f : sample_uniform(k, 1);
+          const Ray ray = camera.primary_ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy,
+                                             settings.width, settings.height);
+          TraversalStats stats;
+          const WhittedTracer::Primary p = tracer.trace_primary(ray, s == 0 ? &stats : nullptr);
+          if (tracer.stopped()) return false;
+          sum += glm::vec4(limit_radiance(p.color), p.hit ? 1.0f : 0.0f);
+          if (s != 0) continue;
+          if (out.aovs().bvh_cost) out.bvh_cost(x, y) = static_cast<float>(stats.cost());
+          if (!p.hit) continue;
+          // primary_ray's direction has unit length along the viewing axis, so t is the depth.
+          if (out.aovs().depth) out.depth(x, y) = p.surface.t;
+          if (out.aovs().normal) out.normal(x, y) = p.facing_normal;
+          if (out.aovs().albedo) out.albedo(x, y) = p.surface.material->diffuse;
         }
-        sum += glm::vec4(limit_radiance(p.color), p.hit ? 1.0f : 0.0f);
-        if (s != 0) continue;
-        if (out.aovs().bvh_cost) out.bvh_cost(x, y) = static_cast<float>(stats.cost());
-        if (!p.hit) continue;
-        // primary_ray's direction has unit length along the viewing axis, so t is the depth.
-        if (out.aovs().depth) out.depth(x, y) = p.surface.t;
-        if (out.aovs().normal) out.normal(x, y) = p.facing_normal;
-        if (out.aovs().albedo) out.albedo(x, y) = p.surface.material->diffuse;
-      }
-      out.rgba(x, y) = sum / static_cast<float>(samples);
-    }
-  }
-  out.stats().rays += tracer.rays_traced();
-  return StopReason::None;
+        out.rgba(x, y) = sum / static_cast<float>(samples);
+        return true;
+      });
 }
 
 }  // namespace farm::whitted

@@ -98,7 +98,7 @@ void print_job(const v1::Job& job) {
   fmt::print("  submitted {}{}, started {}, finished {}\n", local_time(job.submitted_at()),
              job.owner().empty() ? "" : " by " + job.owner(), local_time(job.started_at()),
              local_time(job.finished_at()));
-  if (job.tile_failures() > 0) fmt::print("  tile retries: {}\n", job.tile_failures());
+  if (job.tile_failures() > 0) fmt::print("  unit retries: {}\n", job.tile_failures());
   if (!job.failure_reason().empty()) fmt::print("  failure: {}\n", job.failure_reason());
   const v1::TileStats& s = job.stats();
   if (s.samples() > 0) fmt::print("  samples: {} traced, {} NaN/inf dropped\n", s.samples(), s.invalid_samples());

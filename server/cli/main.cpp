@@ -50,8 +50,8 @@ constexpr const char* kOverview =
     "  farm bench path   path tracer throughput (and Mitsuba's, side by side)\n"
     "  farm bench farm   the farm's overhead over loopback, jobs per second\n"
     "  farm bench render the whole farm render command against the bare engine frame\n"
-    "  farm scheduler    serve jobs over gRPC: tiles to workers, merged EXR out\n"
-    "  farm worker       serve tiles to a scheduler over gRPC\n"
+    "  farm scheduler    serve jobs over gRPC: units to workers, merged EXR out\n"
+    "  farm worker       render units for a scheduler over gRPC\n"
     "  farm submit JOB   send a job to a scheduler (status, watch, cancel, fetch follow it)";
 
 }  // namespace

@@ -114,7 +114,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
 
   print_security_warnings(security);
   fmt::print("scheduler listening on {}:{}\n", host_of(o.listen), port);
-  fmt::print("  data dir {}, job store {}, {} static worker(s), tile deadline {} s, {} attempts a tile\n",
+  fmt::print("  data dir {}, job store {}, {} static worker(s), unit deadline {} s, {} attempts a unit\n",
              o.data_dir.string(), core.store().describe(), o.workers.size(), o.tile_deadline_s, o.max_attempts);
   if (core.store().is_shared()) fmt::print("  scheduler {}, lease {} s\n", core.scheduler_id(), o.lease_s);
   if (!o.keep_finished.empty()) fmt::print("  finished jobs kept {} after they end, then deleted\n", o.keep_finished);
@@ -153,7 +153,7 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
 void add_scheduler_command(CLI::App& app, CommandTable& commands) {
   auto o = std::make_shared<SchedulerCommandOptions>();
   CLI::App* s = app.add_subcommand(
-      "scheduler", "Serve farm.v1.Scheduler: jobs in, tiles to workers, merged EXR + PNG out");
+      "scheduler", "Serve farm.v1.Scheduler: jobs in, units to workers, merged EXR + PNG out");
   s->add_option("--listen", o->listen,
                 "Address to serve on, HOST:PORT (port 0 picks a free port; the address is printed "
                 "as 'scheduler listening on HOST:PORT'); the clients' default is localhost:50051. "
@@ -176,15 +176,15 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->check(CLI::Range(1.0, 3600.0))
       ->capture_default_str();
   s->add_option("--worker", o->workers,
-                "A `farm worker` HOST:PORT to send tiles to (repeat for more); workers may also "
+                "A `farm worker` HOST:PORT to send units to (repeat for more); workers may also "
                 "register themselves (farm worker --scheduler)");
   s->add_option("--tile-deadline", o->tile_deadline_s,
-                "Seconds a worker gets per tile of a call before the call's tiles are given to "
-                "another; a worker that misses it gets no more tiles until it answers a health check")
+                "Seconds a worker gets per unit of a call before the call's units are given to "
+                "another; a worker that misses it gets no more units until it answers a health check")
       ->check(CLI::Range(0.05, 86400.0))
       ->capture_default_str();
   s->add_option("--max-attempts", o->max_attempts,
-                "Failed attempts of one tile (deadline, error, bad result) before its job fails; a "
+                "Failed attempts of one unit (deadline, error, bad result) before its job fails; a "
                 "worker lost while rendering it counts under --max-lost-worker-attempts instead")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
@@ -210,14 +210,14 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
                 "queued jobs are never deleted. Default: keep every job")
       ->envname("FARM_KEEP_FINISHED");
   s->add_option("--max-lost-worker-attempts", o->max_lost_worker_attempts,
-                "Workers one tile may lose while rendering it (the call ended UNAVAILABLE: its process "
+                "Workers one unit may lose while rendering it (the call ended UNAVAILABLE: its process "
                 "died; or it missed its heartbeats) before its job fails: counted apart from "
-                "--max-attempts, and bounded so that a tile that crashes every worker it is sent to "
+                "--max-attempts, and bounded so that a unit that crashes every worker it is sent to "
                 "still ends its job")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   s->add_option("--tiles-per-worker", o->tiles_per_worker,
-                "Calls in flight per worker, so that none idles between calls")
+                "Calls in flight per worker (its slots), so that none idles between calls")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   s->add_option("--batch-ms", o->batch_ms,
@@ -262,7 +262,8 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{kMaxRequestBytes} - (1 << 20)))
       ->capture_default_str();
   s->add_option("--max-tiles-per-job", o->limits.max_tiles_per_job,
-                "Most work units (tiles) of one job: ceil(width/tile_size) x ceil(height/tile_size)")
+                "Most units of one job: frames x sample passes x the tiles of a frame's grid "
+                "(ceil(width/tile_size) x ceil(height/tile_size))")
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 28))
       ->capture_default_str();
   s->add_option("--max-work", o->limits.max_work,

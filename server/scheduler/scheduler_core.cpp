@@ -68,7 +68,8 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
       events_(store_),
       pause_(*log_, options_.disk_full_backoff, options_.disk_full_backoff_max),
       outage_(*log_),
-      finisher_(options_, store_, *assembly_, jobs_, events_, pause_, outage_, *log_),
+      results_(options_.data_dir, store_, *assembly_, jobs_),
+      finisher_(options_, store_, *assembly_, jobs_, results_, events_, pause_, outage_, *log_),
       workers_(
           options_, *log_, [this](const std::string& id, const std::string& reason) { remove_worker(id, reason); },
           [this](const std::shared_ptr<WorkerEntry>& w) { dispatcher_.start_slots(w); }),
@@ -354,19 +355,19 @@ std::size_t SchedulerCore::remove_finished_before(std::int64_t before_ms) {
 
 std::optional<fs::path> SchedulerCore::result_file(const std::string& job_id, bool preview,
                                                    std::optional<int> frame) const {
-  return finisher_.result_file(job_id, preview, frame);
+  return results_.result_file(job_id, preview, frame);
 }
 
 std::optional<fs::path> SchedulerCore::progressive_result(const std::string& job_id, int frame) const {
-  return finisher_.progressive_result(job_id, frame);
+  return results_.progressive_result(job_id, frame);
 }
 
 std::optional<fs::path> SchedulerCore::live_preview(const std::string& job_id, int frame) {
-  return finisher_.live_preview(job_id, frame);
+  return results_.live_preview(job_id, frame);
 }
 
 std::optional<fs::path> SchedulerCore::video_file(const std::string& job_id) const {
-  return finisher_.video_file(job_id);
+  return results_.video_file(job_id);
 }
 
 // ---- Events --------------------------------------------------------------------------------------

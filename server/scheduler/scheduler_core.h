@@ -136,7 +136,7 @@ class SchedulerCore {
   // job); nullopt otherwise.
   std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
                                                    std::optional<int> frame = std::nullopt) const;
-  // The newest progressive preview of a frame of sample passes (Finisher::progressive_result).
+  // The newest progressive preview of a frame of sample passes (ResultFiles::progressive_result).
   std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
   // The video of a SUCCEEDED job that asked for one (output.video), kept under results/; nullopt
   // otherwise.
@@ -147,7 +147,7 @@ class SchedulerCore {
   std::shared_ptr<JobEventQueue> watch(const std::string& job_id, std::size_t capacity = SIZE_MAX);
   // Every event this scheduler publishes from now on, in order (JobEvents::listen: must not block).
   void listen(std::function<void(const v1::JobEvent&)> listener) { events_.listen(std::move(listener)); }
-  // The dashboard's live image of a frame (Finisher::live_preview).
+  // The dashboard's live image of a frame (ResultFiles::live_preview).
   std::optional<std::filesystem::path> live_preview(const std::string& job_id, int frame);
   // Units kept and failed, their rate and latency (the dashboard's /metrics).
   UnitMetrics::Snapshot unit_metrics() const { return dispatcher_.metrics().snapshot(); }
@@ -190,6 +190,7 @@ class SchedulerCore {
   JobEvents events_;
   DiskFullPause pause_;
   StoreOutage outage_;
+  ResultFiles results_;
   Finisher finisher_;
   WorkerRegistry workers_;
   Dispatcher dispatcher_;

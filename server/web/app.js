@@ -54,7 +54,7 @@ const farm = (() => {
     const elapsed = Date.now() / 1000 - start;
     return elapsed > 0 ? shortDuration(Math.ceil((elapsed / done) * (total - done))) : '-';
   }
-  const tiles = (first, count) => (count > 1 ? `units ${first}-${first + count - 1}` : `unit ${first}`);
+  const unitRange = (first, count) => (count > 1 ? `units ${first}-${first + count - 1}` : `unit ${first}`);
 
   // One line for an event, as `farm log` prints it.
   function describe(event) {
@@ -68,12 +68,12 @@ const farm = (() => {
     }
     if (event.tile_failed) {
       const f = event.tile_failed;
-      return `${tiles(f.tile_index, Math.max(1, f.tile_count))} failed on ${f.worker || 'the scheduler'}: ${f.reason}` +
+      return `${unitRange(f.tile_index, Math.max(1, f.tile_count))} failed on ${f.worker || 'the scheduler'}: ${f.reason}` +
         (f.will_retry ? ' (will retry)' : '');
     }
     if (event.tile_finished) {
       const f = event.tile_finished;
-      return `${tiles(f.tile_index, Math.max(1, f.tile_count))} of frame ${f.frame} done on ${f.worker}`;
+      return `${unitRange(f.tile_index, Math.max(1, f.tile_count))} of frame ${f.frame} done on ${f.worker}`;
     }
     if (event.frame_finished) return `frame ${event.frame_finished.frame} merged (${progressText(job)})`;
     if (event.pass_finished) {

@@ -414,7 +414,7 @@ TEST_F(FarmSchedulerOnPostgresTest, AStoreThatGoesAwayMidJobAndComesBackLosesNot
   ASSERT_FALSE(done(*before)) << "the job finished before the store went away";
 
   ASSERT_TRUE(where_.server()->stop()) << where_.server()->problem();
-  EXPECT_TRUE(scheduler->process().wait_for_line("no tile is claimed or marked until it answers", 30s))
+  EXPECT_TRUE(scheduler->process().wait_for_line("no unit is claimed or marked until it answers", 30s))
       << scheduler->process().output();
   // Away for longer than a silent worker is kept (3 heartbeats of 0.2 s): it must still be there.
   std::this_thread::sleep_for(3s);
@@ -980,10 +980,10 @@ TEST_F(FarmSchedulerTest, WorkBombsAreRefusedAtSubmitAndTheFarmKeepsServing) {
   };
 
   expect_refused(cornell("raster", 16384, 16384, 1, 1), grpc::StatusCode::RESOURCE_EXHAUSTED,
-                 {"cornell.json", "render.tile_size", "268435456 tiles", "at most 65536",
+                 {"cornell.json", "render.tile_size", "268435456 units", "at most 65536",
                   "--max-tiles-per-job"});
   expect_refused(cornell("raster", 4096, 4096, 1, 1), grpc::StatusCode::RESOURCE_EXHAUSTED,
-                 {"16777216 tiles", "--max-tiles-per-job"});
+                 {"16777216 units", "--max-tiles-per-job"});
   expect_refused(cornell("path", 16384, 16384, kMaxSpp, 128), grpc::StatusCode::RESOURCE_EXHAUSTED,
                  {"render", "1048576 spp", "--max-work"});
   expect_refused(with([](nlohmann::json& j) { j["validate"]["embree_rays"] = 50'000'000; }),
@@ -1149,7 +1149,7 @@ TEST_F(FarmSchedulerTest, SchedulerFlagsSetTheSubmitLimits) {
     EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
     return status.error_message();
   };
-  EXPECT_NE(refusal(cornell("raster", 64, 64, 1, 16)).find("16 tiles; the scheduler takes at most 4 "),
+  EXPECT_NE(refusal(cornell("raster", 64, 64, 1, 16)).find("16 units; the scheduler takes at most 4 "),
             std::string::npos);
   EXPECT_NE(refusal(cornell("raster", 64, 64, 2, 32)).find("at most 5e+03 a job (--max-work)"),
             std::string::npos);

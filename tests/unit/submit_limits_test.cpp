@@ -80,12 +80,12 @@ TEST(SubmitLimits, TheBiggestHonestJobPassesEveryDefault) {
 TEST(SubmitLimits, TooManyTilesIsRefusedNamingTheCountTheLimitAndATileSizeThatFits) {
   const v1::JobSpec spec = spec_of();
   expect_refused([&] { check_job_limits(job_of(EngineKind::Raster, 16384, 16384, 1, 5, 1), spec, {}); },
-                 {"big.json", "render.tile_size", "268435456 tiles", "at most 65536",
+                 {"big.json", "render.tile_size", "268435456 units", "at most 65536",
                   "--max-tiles-per-job", "at least 64"});
   expect_refused([&] { check_job_limits(job_of(EngineKind::Raster, 4096, 4096, 1, 5, 1), spec, {}); },
-                 {"16777216 tiles", "at least 16"});
+                 {"16777216 units", "at least 16"});
   expect_refused([&] { check_job_limits(job_of(EngineKind::Raster, 8193, 8192, 1, 5, 32), spec, {}); },
-                 {"65792 tiles", "at least 33"});
+                 {"65792 units", "at least 33"});
 }
 
 TEST(SubmitLimits, WorkAboveTheBudgetIsRefusedNamingSamplesDepthAndTheLimit) {
@@ -143,7 +143,7 @@ TEST(SubmitLimits, EachLimitIsTheOperatorsToSet) {
   EXPECT_NO_THROW(check_job_limits(job, spec_of(), tight));
   expect_refused([&] { check_spec_limits(spec_of(std::string(11, ' ')), tight); }, {"at most 10"});
   job.render.tile_size = 16;
-  expect_refused([&] { check_job_limits(job, spec_of(), tight); }, {"16 tiles", "at most 4 "});
+  expect_refused([&] { check_job_limits(job, spec_of(), tight); }, {"16 units", "at most 4 "});
   job.render.tile_size = 32;
   job.render.spp = 1000;
   expect_refused([&] { check_job_limits(job, spec_of(), tight); }, {"--max-work"});

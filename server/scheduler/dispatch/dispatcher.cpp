@@ -1,3 +1,7 @@
+// Over 500 lines on purpose: the slots, the calls in flight and the batches waiting for a spot
+// check share one lock (Dispatcher::mutex_) and one invariant (a slot claims a batch or a check, and
+// cancel_job / quarantine / stop see every call it started); their code stays together so that the
+// lock's reader sees every place it is taken. What becomes of a failed batch is unit_failures.cpp's.
 #include "server/scheduler/dispatch/dispatcher.h"
 
 #include <fmt/format.h>
@@ -44,22 +48,6 @@ std::uint64_t random_key() {
   return (static_cast<std::uint64_t>(device()) << 32) ^ device();
 }
 
-// How a worker's error answer to RenderTile is accounted (worker_failures.h): a refusal is never
-// the unit's fault; INVALID_ARGUMENT says the unit can never render.
-FailureKind failure_kind(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::INVALID_ARGUMENT: return FailureKind::NeverRenders;
-    case grpc::StatusCode::UNIMPLEMENTED:  // not a worker at all (a scheduler's own address)
-    case grpc::StatusCode::UNAUTHENTICATED:
-    case grpc::StatusCode::PERMISSION_DENIED:
-    case grpc::StatusCode::RESOURCE_EXHAUSTED:
-    case grpc::StatusCode::FAILED_PRECONDITION:
-    case grpc::StatusCode::NOT_FOUND:
-    case grpc::StatusCode::CANCELLED:
-    case grpc::StatusCode::ABORTED: return FailureKind::Refused;
-    default: return FailureKind::Unit;
-  }
-}
 
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
@@ -102,11 +90,12 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       finisher_(parts.finisher),
       pause_(parts.pause),
       outage_(parts.outage),
+      setbacks_(parts.pause, parts.outage),
       log_(parts.log),
       chooser_(options.verify_fraction, random_key()),
       remote_chooser_(std::max(options.verify_fraction, options.remote_verify_fraction), random_key()),
-      failures_(WorkerFailures::Options{options.job_failures_per_worker, options.worker_backoff,
-                                        options.worker_backoff_max}) {}
+      unit_failures_(UnitFailures::Parts{options, parts.store, parts.events, parts.workers, parts.finisher, metrics_,
+                                         parts.log, *this}) {}
 
 Dispatcher::~Dispatcher() { stop(); }
 
@@ -191,20 +180,21 @@ std::map<std::string, std::vector<std::string>> Dispatcher::calls_in_flight() co
   return calls;
 }
 
-void Dispatcher::job_ended_elsewhere(const std::string& job_id) {
+void Dispatcher::job_ended_elsewhere(const std::string& job_id) { stop_job(job_id); }
+
+void Dispatcher::stop_job(const std::string& job_id) {
   std::lock_guard lock(mutex_);
   stop_job_locked(job_id);
 }
 
 void Dispatcher::stop_job_locked(const std::string& job_id) {
-  impossible_.erase(job_id);
-  failures_.forget_job(job_id);
+  unit_failures_.forget_job(job_id);
   cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; }, CancelReason::JobCancelled);
   drop_checks_locked(job_id);
 }
 
 void Dispatcher::worker_left(const std::string& worker_id, const std::string& reason) {
-  failures_.forget_worker(worker_id);  // its id is never given again
+  unit_failures_.forget_worker(worker_id);  // its id is never given again
   {
     std::lock_guard lock(mutex_);
     cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },
@@ -242,7 +232,7 @@ void Dispatcher::quarantine(const std::string& worker_id, const std::string& wor
         fmt::format("the result of worker {} is discarded and rendered again: the worker is quarantined ({})",
                     worker, reason);
     log_.warn("job {} {}: {}", b.job_id, describe(b), why);
-    announce_failure(b.job_id, b.first, b.count, worker, why, true);
+    unit_failures_.announce(b.job_id, b.first, b.count, worker, why, true);
   }
   settle_stranded();
   work_.notify_all();
@@ -290,19 +280,16 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
     try {
       const grpc::Status status = render(*w, *call, result);
       handle_result(*w, *call, status, result);
-    } catch (const DiskFull& e) {
-      // The scheduler's own disk refused something on the way (the job's scene laid out again, a
-      // mark in the store): the batch waits for room.
-      pause_.report(e);
-      put_back();
-    } catch (const StoreUnavailable& e) {
-      // The store's server went away on the way (a mark, a failed attempt).
-      outage_.report(e);
-      put_back();
     } catch (const std::exception& e) {
-      // Nothing may end a slot's thread (that would be std::terminate); the batch's tiles stay
-      // as the store has them, queued again by the next scheduler to open it.
-      log_.error("job {} {}: {}", call->batch.job_id, describe(call->batch), e.what());
+      if (setbacks_.report_current()) {
+        // The scheduler's own disk refused something on the way (the job's scene laid out again,
+        // a mark in the store), or the store's server went away: the batch waits for them.
+        put_back();
+      } else {
+        // Nothing may end a slot's thread (that would be std::terminate); the batch's units stay
+        // as the store has them, queued again by the next scheduler to open it.
+        log_.error("job {} {}: {}", call->batch.job_id, describe(call->batch), e.what());
+      }
     }
     std::lock_guard lock(mutex_);
     in_flight_.erase(call);
@@ -349,14 +336,11 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
     batch = store_.units().claim_next_batch(
         w.id, unix_ms_now(), [this](const std::string& job_id, int queued) { return batch_size(job_id, queued); },
         2 * std::max(1, workers_.slots_up()) * kMaxBatch,
-        [this, &w](const std::string& job_id) { return failures_.blocked(w.id, job_id); });
+        [this, &w](const std::string& job_id) { return unit_failures_.blocked(w.id, job_id); });
     store_answered = true;
-  } catch (const DiskFull& e) {
-    pause_.report(e);  // the store could not mark the claim: nothing was claimed
-  } catch (const StoreUnavailable& e) {
-    outage_.report(e);  // nothing was claimed; the slot asks again after its wait
   } catch (const std::exception& e) {
-    log_.error("claiming tiles: {}", e.what());
+    // A setback (the store full or away): nothing was claimed; the slot asks again after its wait.
+    if (!setbacks_.report_current()) log_.error("claiming units: {}", e.what());
   }
   if (!batch) {
     work_.wait_for(lock, kIdleWait);
@@ -477,7 +461,7 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
   // anything of it is kept.
   if (!result.pixels) {
     if (const std::string problem = check_tile_reply(result.response, *settings, batch.rect); !problem.empty()) {
-      impossible_result(w, batch, problem);
+      unit_failures_.impossible_result(w, batch, problem);
       return;
     }
   }
@@ -514,58 +498,7 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
   keep(w.id, worker, batch, result);
 }
 
-namespace {
 
-// The kind of impossible value a result check found: its plane ("rgba plane", "depth plane",
-// "stats"), without the pixel and the value: what two workers' results must share to agree.
-// Empty for a reply malformed in its shape (rect, plane sizes), which only a worker gets wrong.
-std::string value_problem_kind(const std::string& problem) {
-  std::string_view rest = problem;
-  if (rest.rfind("pixel (", 0) == 0) {
-    const std::size_t colon = rest.find("): ");
-    if (colon == std::string_view::npos) return {};
-    rest.remove_prefix(colon + 3);
-  } else if (rest.rfind("stats: ", 0) != 0) {
-    return {};
-  }
-  return std::string(rest.substr(0, rest.find(':')));
-}
-
-}  // namespace
-
-void Dispatcher::impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem) {
-  const std::string worker = w.worker->describe();
-  const std::string kind = value_problem_kind(problem);
-  std::optional<ImpossibleResult> earlier;
-  if (!kind.empty()) {
-    std::lock_guard lock(mutex_);
-    const auto it = impossible_.find(batch.job_id);
-    if (it == impossible_.end()) {
-      impossible_.emplace(batch.job_id, ImpossibleResult{w.id, worker, kind});
-    } else if (it->second.worker_id != w.id && it->second.kind == kind) {
-      earlier = it->second;
-    }
-  }
-  if (earlier) {
-    // Two workers rendered the job to the same impossible values: a property of the job (an engine
-    // bug it meets), not of either worker. The job ends saying so; the farm goes on, and the
-    // worker quarantined for it first is released.
-    const std::string why = fmt::format(
-        "workers {} and {} both rendered this job to values no engine should make ({}: {}); it is the job's own, "
-        "not the workers': no worker is quarantined for it (report it with the job file)",
-        earlier->worker, worker, describe(batch), problem);
-    fail_batch(w.id, worker, batch, why, 1);
-    if (workers_.release_quarantine(earlier->worker_id, fmt::format("worker {} rendered job {} the same way",
-                                                                     worker, batch.job_id))) {
-      log_.warn("worker {} is back: its result for job {} was the job's own ({})", earlier->worker, batch.job_id,
-                kind);
-    }
-    return;
-  }
-  const std::string why = fmt::format("worker {} sent a result no engine makes: {}", worker, problem);
-  fail_batch(w.id, worker, batch, why + "; the worker is quarantined", options_.max_attempts);
-  quarantine(w.id, worker, why);
-}
 
 void Dispatcher::handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
                                      CancelReason reason, RenderedTiles& result) {
@@ -623,7 +556,7 @@ void Dispatcher::handle_check_result(WorkerEntry& w, const InFlight& call, const
     case Judgement::Outcome::NoAgreement: {
       std::string names;
       for (const Opinion& o : check->opinions) names += (names.empty() ? "" : ", ") + o.worker;
-      fail_batch(check->own().worker_id, check->own().worker, batch,
+      unit_failures_.fail(check->own().worker_id, check->own().worker, batch,
                  fmt::format("spot check of {}: workers {} rendered it three different ways", describe(check->span), names),
                  options_.max_attempts);
       return;
@@ -648,13 +581,13 @@ void Dispatcher::settle(SpotCheck& check, const Judgement& j, const Opinion& agr
                                         describe(check.span), batch.job_id, agreed.worker, agreeing.worker);
     if (k == 0) {
       // The batch's own worker: the batch is rendered again.
-      fail_batch(o.worker_id, o.worker, batch, fmt::format("worker {}: {}; the worker is quarantined", o.worker, why),
+      unit_failures_.fail(o.worker_id, o.worker, batch, fmt::format("worker {}: {}; the worker is quarantined", o.worker, why),
                  options_.max_attempts);
     } else {
       const std::string kept = fmt::format("worker {}: {}; the worker is quarantined, the tiles are kept as {} rendered them",
                                            o.worker, why, check.own().worker);
       log_.warn("job {} {}: {}", batch.job_id, describe(check.span), kept);
-      announce_failure(batch.job_id, check.span.first, check.span.count, o.worker, kept, false);
+      unit_failures_.announce(batch.job_id, check.span.first, check.span.count, o.worker, kept, false);
     }
     quarantine(o.worker_id, o.worker, fmt::format("worker {}: {}", o.worker, why));
   }
@@ -681,7 +614,7 @@ void Dispatcher::settle_stranded() {
     } else {
       std::string names;
       for (const Opinion& o : c->opinions) names += (names.empty() ? "" : " and ") + o.worker;
-      fail_batch(c->own().worker_id, c->own().worker, c->batch,
+      unit_failures_.fail(c->own().worker_id, c->own().worker, c->batch,
                  fmt::format("spot check of {}: workers {} rendered it differently and no other worker is there "
                              "to decide",
                              describe(c->span), names),
@@ -708,7 +641,7 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       return;
     }
     measured(batch, stats);
-    failures_.succeeded(worker_id);
+    unit_failures_.kept(worker_id);
     workers_.count_units(worker_id, batch.count, 0);
     metrics_.kept(batch.count, batch.handed_out);
     events_.publish(batch.job_id, [&](v1::JobEvent& event) {
@@ -722,21 +655,15 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
       f.set_pass(batch.pass);
     });
     pause_.written();
-    {
-      std::lock_guard lock(mutex_);
-      worker_disk_full_.erase(worker_id);  // its disk had room for this one
-    }
     finisher_.finish_if_complete(batch.job_id, batch.frame);
-  } catch (const DiskFull& e) {
-    // No room to keep it: rendered again once there is, with no attempt counted against the job
-    // or the worker. Logged by the pause, once a minute at most, not once a batch.
-    log_.debug("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
-    pause_.report(e);
-    requeue_when_stored(batch, worker_id);
-  } catch (const StoreUnavailable& e) {
-    outage_.report(e);  // after its mark (an event, the merge): looked at again when the store answers
-    requeue_when_stored(batch, worker_id);
   } catch (const std::exception& e) {
+    if (setbacks_.report_current()) {
+      // No room to keep it, or the store away after its mark (an event, the merge): rendered
+      // again once the setback clears, with no attempt counted against the job or the worker.
+      // Logged by the pause or the outage, once a minute at most, not once a batch.
+      requeue_when_stored(batch, worker_id);
+      return;
+    }
     log_.error("job {} {}: keeping the result: {}", batch.job_id, describe(batch), e.what());
     store_.units().batch_requeue(batch.job_id, batch.first, batch.count, worker_id);
     work_.notify_all();
@@ -771,26 +698,6 @@ void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& 
   }
 }
 
-void Dispatcher::worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status) {
-  std::chrono::milliseconds wait{0};
-  bool log = false;
-  int skipped = 0;
-  {
-    std::lock_guard lock(mutex_);
-    RetryBackoff& backoff =
-        worker_disk_full_.try_emplace(w.id, options_.disk_full_backoff, options_.disk_full_backoff_max).first->second;
-    wait = backoff.next();
-    log = backoff.log_now(skipped);
-  }
-  if (log) {
-    log_.warn("worker {}: {}; its batches go back to the queue (no attempt counted) and it gets none for {} ms{}",
-              w.worker->describe(), status.error_message(), wait.count(),
-              skipped > 0 ? fmt::format(" ({} more such answers since the last report)", skipped) : "");
-  }
-  workers_.mark_down(w, wait);
-  requeue_when_stored(batch, w.id);
-  settle_stranded();
-}
 
 void Dispatcher::measured(const TileBatch& batch, const v1::TileStats& stats) {
   // What a tile costs a worker running at full speed: its threads' CPU time shared by them. The
@@ -803,149 +710,15 @@ void Dispatcher::measured(const TileBatch& batch, const v1::TileStats& stats) {
 
 void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
                         CancelReason reason, const std::string& reason_text) {
-  const TileBatch& batch = call.batch;
-  const std::string worker = w.worker->describe();
-  std::string why;
-  bool went_down = false;
-  // The worker, not the tile: its process died or it stopped answering.
-  bool worker_lost = false;
-  if (reason == CancelReason::WorkerLeft) {
-    why = fmt::format("worker {} left: {}", worker, reason_text);
-    worker_lost = true;
-  } else if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) {
-    why = fmt::format("worker {}: no result within the tile deadline of {} ms{}", worker,
-                      options_.tile_deadline.count(),
-                      batch.count > 1 ? fmt::format(" (x {} units)", batch.count) : std::string());
-    // Slow or hung? It gets no more tiles until it answers a health check: a hung one would
-    // otherwise take tile after tile to its deadline.
-    workers_.mark_down(w, std::chrono::milliseconds(0));
-    went_down = true;
-  } else if (is_disk_full(status)) {
-    worker_disk_full(w, batch, status);  // the worker's disk, not the job: no attempt counted
-    return;
-  } else {
-    // Every failure says why, even a worker's that said nothing (a server that is no worker).
-    why = fmt::format("worker {}: {}: {}", worker, status_code_name(status.error_code()),
-                      status.error_message().empty() ? "(it gave no reason)" : status.error_message());
-    if (status.error_code() != grpc::StatusCode::UNAVAILABLE) {
-      charge_failure(w, batch, why, failure_kind(status.error_code()));
-      return;
-    }
-    workers_.mark_down(w, options_.probe_interval);
-    went_down = true;
-    worker_lost = true;
-  }
-  if (worker_lost) {
-    lose_batch(w.id, worker, batch, why);
-  } else {
-    fail_batch(w.id, worker, batch, why, options_.max_attempts);
-  }
-  if (went_down) settle_stranded();  // a check that only this worker could have taken
+  unit_failures_.call_failed(w, call.batch, status,
+                             reason == CancelReason::WorkerLeft ? std::optional(reason_text) : std::nullopt);
 }
 
-void Dispatcher::charge_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind) {
-  const std::string worker = w.worker->describe();
-  const FailureCharge charge = failures_.failed(w.id, batch.job_id, kind);
-  if (charge.blocked_now) {
-    log_.warn("job {}: worker {} is kept off it from now on: {}", batch.job_id, worker,
-              kind == FailureKind::NeverRenders ? "it says its units can never render"
-                                                : fmt::format("it failed {} of its units", options_.job_failures_per_worker));
-  }
-  if (charge.back_off.count() > 0) {
-    log_.warn("worker {} is backed off for {} ms: it {} ({})", worker, charge.back_off.count(),
-              kind == FailureKind::Refused ? "refused a call" : "fails units of several jobs in a row", why);
-    workers_.back_off(w, charge.back_off, why);
-  }
-  // Nobody left to render it: the job ends here rather than waiting for ever.
-  const bool nobody_left = charge.blocked_now && every_worker_blocked(batch.job_id);
-  if (charge.charge_unit || nobody_left) {
-    // Two workers that each say a unit can never render agree: no need for a third.
-    const int max_attempts = nobody_left                         ? 1
-                             : kind == FailureKind::NeverRenders ? std::min(2, options_.max_attempts)
-                                                                 : options_.max_attempts;
-    fail_batch(w.id, worker, batch, nobody_left ? why + "; every worker of the farm is kept off the job" : why,
-               max_attempts);
-  } else {
-    uncharged_failure(w, batch, why);
-  }
-  if (charge.back_off.count() > 0) settle_stranded();  // a check that only this worker could have taken
-}
 
-void Dispatcher::announce_failure(const std::string& job_id, std::uint32_t first, std::uint32_t count,
-                                  const std::string& worker, const std::string& why, bool will_retry) {
-  events_.publish(job_id, [&](v1::JobEvent& event) {
-    v1::TileFailed& f = *event.mutable_tile_failed();
-    f.set_tile_index(first);
-    f.set_tile_count(count);
-    f.set_worker(worker);
-    f.set_reason(why);
-    f.set_will_retry(will_retry);
-  });
-}
 
-void Dispatcher::uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why) {
-  const std::string worker = w.worker->describe();
-  // Not the unit's own failure (the worker's: it fails other jobs too, or failed this one
-  // before): queued again with no attempt counted, and said.
-  log_.warn("job {} {}: {} (no attempt counted: the worker's failure, not the unit's)", batch.job_id, describe(batch),
-            why);
-  workers_.count_units(w.id, 0, batch.count);
-  metrics_.failed(batch.count);
-  announce_failure(batch.job_id, batch.first, batch.count, worker, why, true);
-  requeue_when_stored(batch, w.id);
-  work_.notify_all();
-}
 
-bool Dispatcher::every_worker_blocked(const std::string& job_id) const {
-  bool any = false;
-  for (const WorkerStatus& s : workers_.workers()) {
-    if (s.quarantined) continue;
-    if (!failures_.blocked(s.id, job_id)) return false;
-    any = true;
-  }
-  return any;
-}
 
-void Dispatcher::fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
-                            const std::string& why, int max_attempts) {
-  log_.warn("job {} {}: {}", batch.job_id, describe(batch), why);
-  workers_.count_units(worker_id, 0, batch.count);
-  metrics_.failed(batch.count);
-  const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id);
-  if (!job) return;
-  const v1::JobState before = job->state();
-  const TileFailure failure =
-      store_.units().batch_failed(batch.job_id, batch.first, batch.count, why, max_attempts, unix_ms_now(), worker_id);
-  after_failure(worker, batch, why, before, failure);
-}
 
-void Dispatcher::lose_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
-                            const std::string& why) {
-  log_.warn("job {} {}: {} (its worker was lost: no attempt counted)", batch.job_id, describe(batch), why);
-  workers_.count_units(worker_id, 0, batch.count);
-  metrics_.failed(batch.count);
-  const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id);
-  if (!job) return;
-  const v1::JobState before = job->state();
-  const TileFailure failure = store_.units().batch_lost(batch.job_id, batch.first, batch.count, why,
-                                                options_.max_lost_worker_attempts, unix_ms_now(), worker_id);
-  after_failure(worker, batch, why, before, failure);
-}
 
-void Dispatcher::after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
-                               v1::JobState before, const TileFailure& failure) {
-  announce_failure(batch.job_id, batch.first, batch.count, worker, why, failure.will_retry);
-  if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {
-    log_.error("job {} failed: {}", batch.job_id, failure.job.failure_reason());
-    {
-      // Its other tiles in flight, and its batches waiting for a check, are of no use now.
-      std::lock_guard lock(mutex_);
-      stop_job_locked(batch.job_id);
-    }
-    events_.publish_state(failure.job, before);
-    finisher_.release(batch.job_id, true);  // a retry renders its failed units only
-  }
-  work_.notify_all();
-}
 
 }  // namespace farm

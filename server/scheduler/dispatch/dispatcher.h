@@ -61,13 +61,14 @@
 #include "proto/farm.pb.h"
 #include "server/common/asset_store.h"
 #include "server/scheduler/dispatch/spot_checks.h"
+#include "server/scheduler/dispatch/unit_failures.h"
 #include "server/scheduler/dispatch/unit_metrics.h"
-#include "server/scheduler/dispatch/worker_failures.h"
 #include "server/scheduler/events/job_events.h"
 #include "server/scheduler/jobs/disk_full_pause.h"
 #include "server/scheduler/jobs/finisher.h"
 #include "server/scheduler/jobs/frame_assembly.h"
 #include "server/scheduler/jobs/running_jobs.h"
+#include "server/scheduler/jobs/setbacks.h"
 #include "server/scheduler/options/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/store/store_outage.h"
@@ -90,7 +91,7 @@ struct DispatcherParts {
   spdlog::logger& log;
 };
 
-class Dispatcher {
+class Dispatcher : private DispatchControl {
  public:
   Dispatcher(const SchedulerOptions& options, const DispatcherParts& parts);
   ~Dispatcher();  // stop()
@@ -109,10 +110,12 @@ class Dispatcher {
   void job_ended_elsewhere(const std::string& job_id);
   // Units kept and failed, their rate and latency (the dashboard's /metrics).
   const UnitMetrics& metrics() const { return metrics_; }
-  // The calls in flight now, by worker id: "JOB_ID tiles A-B (frame F, pass P)" (farm workers).
+  // The calls in flight now, by worker id: "JOB_ID units A-B (frame F, pass P)" (farm workers).
   std::map<std::string, std::vector<std::string>> calls_in_flight() const;
   // The jobs the worker is kept off for failing their units (worker_failures.h).
-  std::vector<std::string> blocked_jobs(const std::string& worker_id) const { return failures_.blocked_jobs(worker_id); }
+  std::vector<std::string> blocked_jobs(const std::string& worker_id) const {
+    return unit_failures_.blocked_jobs(worker_id);
+  }
   // Cancels the worker's calls in flight: their tiles are retried on others (a lost-worker attempt
   // counted, not a failed one).
   void worker_left(const std::string& worker_id, const std::string& reason);
@@ -120,7 +123,7 @@ class Dispatcher {
   // their tiles queued again, and its results for jobs still running are thrown away and rendered
   // again. Logged, and announced to each such job as TileFailed. Nothing when it is quarantined
   // already or unknown.
-  void quarantine(const std::string& worker_id, const std::string& worker, const std::string& reason);
+  void quarantine(const std::string& worker_id, const std::string& worker, const std::string& reason) override;
   // Cancels every call in flight, their tiles queued again without an attempt counted (and the
   // batches waiting for a spot check), and joins the slots. Idempotent.
   void stop();
@@ -146,10 +149,6 @@ class Dispatcher {
   grpc::Status render(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   void handle_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
                      RenderedTiles& result);
-  // A reply that failed the result check (`problem`): the worker is quarantined, unless another
-  // worker already rendered the job to the same kind of impossible value, which makes it the
-  // job's own: then the job fails saying so, and that worker is released.
-  void impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem);
   // An OK reply to a batch: checked, then kept or held for a spot check.
   void accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   // The reply of a call that checks another worker's batch.
@@ -159,44 +158,19 @@ class Dispatcher {
   void settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing);
   // Settles the checks that no available worker is left to take: kept unchecked with one opinion,
   // failed with two that differ.
-  void settle_stranded();
+  void settle_stranded() override;
   void keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
             RenderedTiles& result);
   void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
-  // A failure of `kind` on `w` accounted as WorkerFailures says: an attempt charged to the batch
-  // (fail_batch) or the batch queued again uncharged, the worker kept off the job or backed off;
-  // the job fails when every worker of the farm is kept off it.
-  void charge_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind);
-  // Tells the job's watchers (and its log) that units first .. first + count - 1 failed on `worker`.
-  void announce_failure(const std::string& job_id, std::uint32_t first, std::uint32_t count, const std::string& worker,
-                        const std::string& why, bool will_retry);
-  // Not the unit's own failure (the worker's): the batch queued again with no attempt counted,
-  // the failure logged and announced as TileFailed.
-  void uncharged_failure(WorkerEntry& w, const TileBatch& batch, const std::string& why);
-  // Whether every worker not quarantined is kept off the job (and there is one).
-  bool every_worker_blocked(const std::string& job_id) const;
   // The batch (running on worker_id) back in the queue with no attempt counted, once the store
   // takes it: while the store itself is full, tried again each time dispatch resumes, while its
   // server is away every second (or dropped at stop(), when a restarted store queues running
   // tiles itself).
-  void requeue_when_stored(const TileBatch& batch, const std::string& worker_id);
-  // The worker said its disk is full: its batch queued again (no attempt counted) and the worker
-  // left alone for its backoff.
-  void worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status);
-  // Counts a failed attempt on the batch (running on worker_id) with `why`, tells the job's
-  // watchers, and fails the job at max_attempts.
-  void fail_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
-                  const std::string& why, int max_attempts);
-  // The batch's worker was lost while it rendered: a lost-worker attempt counted instead of a
-  // failed one (max_lost_worker_attempts), otherwise as fail_batch.
-  void lose_batch(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
-                  const std::string& why);
-  // What fail_batch and lose_batch do once the store has counted: the watchers told, and a job
-  // that failed by it ended here.
-  void after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
-                     v1::JobState before, const TileFailure& failure);
+  void requeue_when_stored(const TileBatch& batch, const std::string& worker_id) override;
+  void stop_job(const std::string& job_id) override;  // under mutex_: stop_job_locked
+  void wake() override { work_.notify_all(); }
   // The settings of the batch's job; nullopt (logged) when the job is gone.
   std::optional<RenderSettings> settings_of(const TileBatch& batch);
   // Cancels the calls in flight that `which` picks, for `reason`.
@@ -217,6 +191,7 @@ class Dispatcher {
   Finisher& finisher_;
   DiskFullPause& pause_;
   StoreOutage& outage_;
+  Setbacks setbacks_;
   spdlog::logger& log_;
   SpotCheckChooser chooser_;         // workers on this host
   SpotCheckChooser remote_chooser_;  // workers on other hosts
@@ -228,13 +203,7 @@ class Dispatcher {
   std::vector<std::thread> exited_;                 // slots that ended, not joined yet
   std::set<std::shared_ptr<InFlight>> in_flight_;
   std::list<std::shared_ptr<SpotCheck>> checks_;    // batches waiting for a spot check
-  std::map<std::string, RetryBackoff> worker_disk_full_;  // by worker id, while its disk is full
-  WorkerFailures failures_;  // its own lock (a leaf)
-  // The first impossible result of each active job (impossible_result): who, and its kind.
-  struct ImpossibleResult {
-    std::string worker_id, worker, kind;
-  };
-  std::map<std::string, ImpossibleResult> impossible_;
+  UnitFailures unit_failures_;  // its own lock (a leaf)
 };
 
 }  // namespace farm

@@ -16,6 +16,7 @@
 #include "renderer/job/video_format.h"
 #include "server/common/free_memory.h"
 #include "server/common/job_state.h"
+#include "server/scheduler/jobs/setbacks.h"
 #include "server/common/remove_tree.h"
 #include "server/common/video_encoder.h"
 
@@ -102,12 +103,7 @@ void Finisher::retry_refused() {
 
 void Finisher::release(const std::string& job_id, bool keep_units) {
   if (!keep_units || options_.in_memory) assembly_.remove_job(job_id);
-  {
-    std::lock_guard lock(live_mutex_);
-    live_.erase(live_.lower_bound({job_id, INT_MIN}), live_.lower_bound({job_id + '\0', INT_MIN}));
-  }
-  std::error_code ignored;
-  fs::remove_all(results_dir(job_id) / "live", ignored);  // its merged frames show instead
+  results_.forget_live(job_id);  // its merged frames show instead
   previews_.forget_job(job_id);
   const std::size_t still_running = jobs_.forget(job_id);
   // What the job's submission, tiles and merge freed is held by the allocator's arenas (the
@@ -148,7 +144,7 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
     const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
     const std::vector<FramePart> parts = store_.frames().frame_parts(job_id, frame, info->passes());
     TileBuffer film = assembly_.assemble(job_id, info->frame(frame), parts);
-    write_merged(film, files_of(job_id, *info, frame), options_.exr_type);
+    write_merged(film, results_.files_of(job_id, *info, frame), options_.exr_type);
     if (!store_.frames().frame_merged(job_id, frame)) {
       // A worker was quarantined while the frame was merged, and some of its tiles taken back:
       // they are being rendered again, and the frame is merged once they are done.
@@ -159,18 +155,15 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
     assembly_.frame_merged(job_id, frame);
     previews_.frame_merged(job_id, *info, frame);
     std::error_code ignored;
-    fs::remove(progressive_file(job_id, frame), ignored);  // its preview is the merged one now
+    fs::remove(results_.progressive_file(job_id, frame), ignored);  // its preview is the merged one now
     events_.publish(job_id, [&](v1::JobEvent& event) { event.mutable_frame_finished()->set_frame(frame); });
     log_.debug("job {}: frame {} merged from {} calls", job_id, frame, parts.size());
     return true;
   } catch (const DamagedParts& e) {
     render_again(job_id, e);  // or the job is final meanwhile (cancelled): nothing to render again
     return false;
-  } catch (const DiskFull&) {
-    throw;  // not the job's fault: merged again once there is room (finish_if_complete)
-  } catch (const StoreUnavailable&) {
-    throw;  // nor this: merged again once the store answers
   } catch (const std::exception& e) {
+    rethrow_if_setback();  // not the job's fault: done again once it clears (setbacks.h)
     fail(job_id, fmt::format("merging the tiles of frame {}: {}", frame, e.what()));
     return false;
   }
@@ -180,11 +173,8 @@ void Finisher::finish(const std::string& job_id) {
   std::shared_ptr<const JobInfo> info;
   try {
     info = jobs_.get(job_id);
-  } catch (const DiskFull&) {
-    throw;
-  } catch (const StoreUnavailable&) {
-    throw;
   } catch (const std::exception& e) {
+    rethrow_if_setback();  // not the job's fault: done again once it clears (setbacks.h)
     fail(job_id, fmt::format("finishing the job: {}", e.what()));
     return;
   }
@@ -222,11 +212,8 @@ void Finisher::end_job(const std::string& job_id) {
   try {
     info = jobs_.get(job_id);
     validation = check_against_embree(*info);
-  } catch (const DiskFull&) {
-    throw;
-  } catch (const StoreUnavailable&) {
-    throw;
   } catch (const std::exception& e) {
+    rethrow_if_setback();  // not the job's fault: done again once it clears (setbacks.h)
     fail(job_id, fmt::format("checking against Embree: {}", e.what()));
     return;
   }
@@ -243,11 +230,8 @@ void Finisher::end_job(const std::string& job_id) {
   }
   try {
     after = store_.jobs().finish_job(job_id, v1::JOB_STATE_SUCCEEDED, "", validation, unix_ms_now());
-  } catch (const DiskFull&) {
-    throw;
-  } catch (const StoreUnavailable&) {
-    throw;
   } catch (const std::exception& e) {
+    rethrow_if_setback();  // not the job's fault: done again once it clears (setbacks.h)
     fail(job_id, fmt::format("finishing the job: {}", e.what()));
     return;
   }
@@ -273,48 +257,19 @@ void Finisher::fail(const std::string& job_id, const std::string& reason) {
 void Finisher::refine_preview(const std::string& job_id, int frame) {
   try {
     const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
-    const fs::path file = progressive_file(job_id, frame);
+    const fs::path file = results_.progressive_file(job_id, frame);
     fs::create_directories(file.parent_path());
     previews_.update(job_id, *info, frame, file);
   } catch (const DamagedParts& e) {
     render_again(job_id, e);
-  } catch (const DiskFull&) {
-    throw;  // made again once there is room, with the merge
-  } catch (const StoreUnavailable&) {
-    throw;
   } catch (const std::exception& e) {
+    rethrow_if_setback();  // not the job's fault: done again once it clears (setbacks.h)
     // A preview is no part of the result: the job goes on, and the next pass tries again.
     log_.warn("job {}: progressive preview of frame {}: {}", job_id, frame, e.what());
   }
 }
 
 void Finisher::parts_taken_back(const std::string& job_id) { previews_.parts_taken_back(job_id); }
-
-std::optional<fs::path> Finisher::live_preview(const std::string& job_id, int frame) {
-  if (store_.frames().is_frame_merged(job_id, frame)) return result_file(job_id, true, frame);
-  if (!assembly_.reads_parts_back()) return std::nullopt;
-  // A job that has ended shows its merged frames only: nothing of it is kept in memory any more,
-  // and a viewer must not bring it back.
-  const std::optional<v1::Job> job = store_.jobs().get_job(job_id);
-  if (!job || is_final(job->state())) return std::nullopt;
-  const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
-  if (info->passes() > 1) return progressive_result(job_id, frame);
-  const std::vector<FramePart> parts = store_.frames().frame_parts(job_id, frame, 1);
-  if (parts.empty()) return std::nullopt;
-  const fs::path file = results_dir(job_id) / "live" / fmt::format("{}.png", frame);
-  std::lock_guard lock(live_mutex_);
-  LivePreview& live = live_[{job_id, frame}];
-  const auto now = std::chrono::steady_clock::now();
-  std::error_code ec;
-  // Made again only when more units are done, and not more often than kPartialEvery: however
-  // many viewers ask, the merge reads each frame's parts a few times a second at most.
-  if (live.parts != parts.size() && (now - live.made >= kPartialEvery || !fs::exists(file, ec))) {
-    fs::create_directories(file.parent_path());
-    write_preview(assembly_.assemble_partial(job_id, info->frame(frame), parts), file);
-    live = {parts.size(), now};
-  }
-  return file;
-}
 
 bool Finisher::make_room() {
   std::optional<v1::Job> youngest;
@@ -376,88 +331,19 @@ void Finisher::publish_requeued(const std::string& job_id, const std::vector<Til
   }
 }
 
-MergedFiles Finisher::files_of(const std::string& job_id, const JobInfo& info, int frame) const {
-  const bool framed = info.job->frames.has_value();
-  const auto numbered = [&](const fs::path& pattern) {
-    return framed && !pattern.empty() ? fs::path(frame_file_name(pattern.string(), frame)) : pattern;
-  };
-  if (!info.files.exr.empty()) return {numbered(info.files.exr), numbered(info.files.preview)};
-  std::string stem = numbered(info.job->output_patterns.image.filename()).stem().string();
-  if (stem.empty() || stem.starts_with(".")) stem = "image";
-  const fs::path dir = results_dir(job_id) / std::to_string(frame);
-  return {dir / (stem + ".exr"), dir / (stem + ".png")};
-}
-
-fs::path Finisher::video_path(const std::string& job_id, const JobInfo& info) const {
-  if (!info.video.empty()) return info.video;
-  // Kept as results/<job id>/<the video's file name>, beside the frames' folders.
-  const fs::path& asked = info.job->output.video;
-  std::string name = asked.filename().string();
-  if (name.empty() || name.starts_with(".")) name = "video" + asked.extension().string();
-  return results_dir(job_id) / name;
-}
-
 void Finisher::make_video(const std::string& job_id, const JobInfo& info) const {
   VideoRequest request;
-  for (int f : job_frames(*info.job)) request.frames.push_back(files_of(job_id, info, f).preview);
+  for (int f : job_frames(*info.job)) request.frames.push_back(results_.files_of(job_id, info, f).preview);
   request.fps = info.job->frames ? info.job->frames->fps : 24.0;
-  request.output = video_path(job_id, info);
+  request.output = results_.video_path(job_id, info);
   request.stop_requested = [this] { return endings_.stop_requested(); };
   encode_video(request);
   log_.info("job {}: video of {} frames written to {}", job_id, request.frames.size(), request.output.string());
 }
 
-std::optional<fs::path> Finisher::video_file(const std::string& job_id) const {
-  const std::optional<v1::Job> job = store_.jobs().get_job(job_id);
-  if (!job || job->state() != v1::JOB_STATE_SUCCEEDED) return std::nullopt;
-  std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(results_dir(job_id), ec)) {
-    if (e.path().filename().string().starts_with(".") || !e.is_regular_file(ec)) continue;
-    if (video_format_of(e.path())) return e.path();
-  }
-  return std::nullopt;
-}
-
 std::uintmax_t Finisher::remove_files(const std::string& job_id) {
   previews_.forget_job(job_id);
-  return assembly_.remove_job(job_id) + remove_tree(results_dir(job_id));
-}
-
-fs::path Finisher::results_dir(const std::string& job_id) const {
-  return options_.data_dir / "results" / job_id;
-}
-
-fs::path Finisher::progressive_file(const std::string& job_id, int frame) const {
-  return results_dir(job_id) / "progress" / fmt::format("{}.png", frame);
-}
-
-std::optional<fs::path> Finisher::progressive_result(const std::string& job_id, int frame) const {
-  if (store_.frames().is_frame_merged(job_id, frame)) return result_file(job_id, true, frame);
-  const fs::path file = progressive_file(job_id, frame);
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec)) return std::nullopt;
-  return file;
-}
-
-std::optional<fs::path> Finisher::result_file(const std::string& job_id, bool preview, std::optional<int> frame) const {
-  const std::optional<v1::Job> job = store_.jobs().get_job(job_id);
-  if (!job) return std::nullopt;
-  const int f = frame.value_or(job->frame_first());
-  // Without a frame, the job's first once it succeeded; a frame named, as soon as it is merged.
-  if (frame ? !store_.frames().is_frame_merged(job_id, f) : job->state() != v1::JOB_STATE_SUCCEEDED) return std::nullopt;
-  const auto find_in = [&](const fs::path& dir) -> std::optional<fs::path> {
-    std::error_code ec;
-    for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
-      const std::string name = e.path().filename().string();
-      if (name.starts_with(".") || !e.is_regular_file(ec)) continue;
-      if (e.path().extension() == (preview ? ".png" : ".exr")) return e.path();
-    }
-    return std::nullopt;
-  };
-  if (auto file = find_in(results_dir(job_id) / std::to_string(f))) return file;
-  // A store from before frames kept a still's files in the job's folder itself.
-  if (f == 0) return find_in(results_dir(job_id));
-  return std::nullopt;
+  return assembly_.remove_job(job_id) + remove_tree(results_.dir(job_id));
 }
 
 }  // namespace farm

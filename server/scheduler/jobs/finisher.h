@@ -39,6 +39,7 @@
 #include "server/scheduler/jobs/frame_assembly.h"
 #include "server/scheduler/jobs/job_endings.h"
 #include "server/scheduler/jobs/progressive_previews.h"
+#include "server/scheduler/jobs/result_files.h"
 #include "server/scheduler/jobs/running_jobs.h"
 #include "server/scheduler/options/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
@@ -48,10 +49,10 @@ namespace farm {
 
 class Finisher {
  public:
-  Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly,
-           RunningJobs& jobs, JobEvents& events, DiskFullPause& pause, StoreOutage& outage, spdlog::logger& log)
-      : options_(options), store_(store), assembly_(assembly), jobs_(jobs), events_(events), pause_(pause),
-        outage_(outage), log_(log), previews_(store, assembly, events) {}
+  Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly, RunningJobs& jobs,
+           ResultFiles& results, JobEvents& events, DiskFullPause& pause, StoreOutage& outage, spdlog::logger& log)
+      : options_(options), store_(store), assembly_(assembly), jobs_(jobs), results_(results), events_(events),
+        pause_(pause), outage_(outage), log_(log), previews_(store, assembly, events) {}
 
   // Merges `frame` of the job if its tiles are all done (no frame: every complete frame), and ends
   // the job once all are merged. A frame of sample passes not yet complete gets its progressive
@@ -72,22 +73,8 @@ class Finisher {
   // gives them back, their files removed and their tiles queued again (no attempt counted), so
   // that older jobs can finish and merge. False when fewer than two jobs hold done tiles.
   bool make_room();
-  // The merged EXR or PNG under results/ of the job's `frame` once it is merged; without a frame,
-  // the first frame of a SUCCEEDED job. nullopt otherwise.
-  std::optional<std::filesystem::path> result_file(const std::string& job_id, bool preview,
-                                                   std::optional<int> frame = std::nullopt) const;
-  // The newest progressive preview (PNG) of the job's frame of sample passes, until it is merged;
-  // then its preview. nullopt before its first pass is done.
-  std::optional<std::filesystem::path> progressive_result(const std::string& job_id, int frame) const;
-  // The dashboard's live image of a frame being rendered: its merged preview once merged, its
-  // progressive preview for a frame of sample passes, else a PNG of the units done so far (made
-  // again when more are done, at most every kPartialEvery). nullopt when there is none yet, or for
-  // the embedded farm.
-  std::optional<std::filesystem::path> live_preview(const std::string& job_id, int frame);
   // Done parts of the job were taken back (the dispatcher quarantined their worker).
   void parts_taken_back(const std::string& job_id);
-  // The video under results/ of a SUCCEEDED job that asked for one; nullopt otherwise.
-  std::optional<std::filesystem::path> video_file(const std::string& job_id) const;
   // Ends the thread of the jobs' long ends: one ending now gives up (its video stops), and they
   // stay RUNNING with their frames merged, for the next scheduler to end. Idempotent.
   void stop() { endings_.stop(); }
@@ -116,28 +103,16 @@ class Finisher {
   bool render_again(const std::string& job_id, const DamagedParts& damaged);
   // Tells the job's watchers that `taken` was queued again for `reason` (no attempt counted).
   void publish_requeued(const std::string& job_id, const std::vector<TileBatch>& taken, const std::string& reason);
-  // Where the job's frame goes: where its submitter said (the frame's number in its '#' run), or
-  // results/<job id>/<frame>/<stem>.exr and .png.
-  MergedFiles files_of(const std::string& job_id, const JobInfo& info, int frame) const;
-  std::filesystem::path results_dir(const std::string& job_id) const;
-  // results/<job id>/progress/<frame>.png
-  std::filesystem::path progressive_file(const std::string& job_id, int frame) const;
   // The job's output.video, once every frame is merged (video_encoder.h): where its submitter
   // said, or results/<job id>/<its file name>. std::exception when ffmpeg cannot make it.
   void make_video(const std::string& job_id, const JobInfo& info) const;
-  std::filesystem::path video_path(const std::string& job_id, const JobInfo& info) const;
 
-  // The units of a frame each live preview shows, and when it was made.
-  struct LivePreview {
-    std::size_t parts = 0;
-    std::chrono::steady_clock::time_point made;
-  };
-  static constexpr auto kPartialEvery = std::chrono::milliseconds(250);
 
   const SchedulerOptions& options_;
   JobStore& store_;
   FrameAssembly& assembly_;
   RunningJobs& jobs_;
+  ResultFiles& results_;
   JobEvents& events_;
   DiskFullPause& pause_;
   StoreOutage& outage_;
@@ -150,10 +125,6 @@ class Finisher {
   };
   std::map<std::string, Merging> merging_;  // jobs being merged
   std::set<std::string> refused_;  // merges the disk refused, tried again by retry_refused()
-  // Live previews made (live_preview), by job and frame; under live_mutex_, a leaf, held while
-  // one is made so that two viewers of a frame make it once.
-  std::mutex live_mutex_;
-  std::map<std::pair<std::string, int>, LivePreview> live_;
   std::function<void()> on_requeued_;  // set once, before any merge
   ProgressivePreviews previews_;
   static constexpr unsigned kTrimEvery = 16;

@@ -86,7 +86,7 @@ void check_job_limits(const Job& job, const v1::JobSpec& spec, const SubmitLimit
   const std::string of_passes = passes > 1 ? fmt::format(" x {} sample passes", passes) : "";
   if (const std::int64_t tiles = job_tiles(r) * frames * passes; tiles > limits.max_tiles_per_job) {
     const int fits = smallest_tile_size(r.width, r.height, limits.max_tiles_per_job / (frames * passes));
-    refuse(fmt::format("{}: render.tile_size: {}x{} at tile_size {}{}{} is {} tiles; the scheduler "
+    refuse(fmt::format("{}: render.tile_size: {}x{} at tile_size {}{}{} is {} units; the scheduler "
                        "takes at most {} a job (--max-tiles-per-job){}",
                        file, r.width, r.height, r.tile_size, of_frames, of_passes, tiles, limits.max_tiles_per_job,
                        fits > 0 ? fmt::format(": use a tile_size of at least {}", fits)

@@ -16,8 +16,9 @@ namespace farm {
 struct SubmitLimits {
   // JobSpec.job_json, checked before parsing: what `farm submit` and `farm render` read at most.
   std::uint64_t max_job_bytes = kMaxJobFileBytes;  // 16 MiB
-  // Work units: ceil(width / tile_size) x ceil(height / tile_size). 65,536 is 8192x8192 at the
-  // default tile_size 32, or 16384x16384 at tile_size 64.
+  // Units: frames x sample passes x the tiles of a frame's grid, ceil(width / tile_size) x
+  // ceil(height / tile_size). 65,536 is one 8192x8192 frame in one pass at the default tile_size
+  // 32, or 16384x16384 at tile_size 64.
   std::int64_t max_tiles_per_job = 65536;
   // width x height x spp x path length (job_work below): 1e13. 4096x4096 at 4096 spp with
   // max_depth 16 is 1.2e12 and passes; 16384x16384 at 2^20 spp is refused whatever the depth.

@@ -8,7 +8,7 @@ void StoreOutage::report(const StoreUnavailable& e) {
   ++failed_calls_;
   int skipped = 0;
   if (!log_backoff_.log_now(skipped)) return;
-  log_.warn("{}; no tile is claimed or marked until it answers ({} store call{} failed so far)", e.what(),
+  log_.warn("{}; no unit is claimed or marked until it answers ({} store call{} failed so far)", e.what(),
             failed_calls_, failed_calls_ == 1 ? "" : "s");
 }
 
