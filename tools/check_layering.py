@@ -9,7 +9,7 @@ The components and their DAG (docs/architecture.md, "Components"; an arrow never
     server:    renderer <- common <- {worker, scheduler, client} <- embedded <- {regress, grade}
                <- bench <- cli
     scheduler: options <- store <- events;  assets <- workers;  {events, workers} <- jobs
-               <- dispatch <- scheduler (core, service, lease) <- http
+               <- dispatch <- scheduler (core, front door, service, lease) <- http
 
 A component may include its own headers and those of every component it depends on, directly or
 through others. Usage:

@@ -16,6 +16,7 @@
 #include "server/common/listen_policy.h"
 #include "server/common/network_address.h"
 #include "server/common/server_shutdown.h"
+#include "server/scheduler/front_door.h"
 #include "server/scheduler/http/dashboard_server.h"
 #include "server/scheduler/http/webhook_notifier.h"
 #include "server/scheduler/scheduler_core.h"
@@ -72,8 +73,9 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
     core.listen([notifier](const v1::JobEvent& event) { notifier->enqueue(event); });
   }
 
-  SchedulerAccess access{security.access, security.outgoing, o.max_priority};
-  SchedulerService service(core, std::move(access));
+  // One front door, its checks inside; gRPC and the dashboard are adapters over it.
+  SchedulerFrontDoor front_door(core, SchedulerAccess{security.access, security.outgoing, o.max_priority});
+  SchedulerService service(front_door);
   std::unique_ptr<DashboardServer> dashboard;
   if (!o.http.empty()) {
     // The gRPC port's rules: beyond loopback only with tokens (or --insecure); HTTPS when the
@@ -88,9 +90,9 @@ int run_scheduler_command(const SchedulerCommandOptions& o) {
       security.warnings.push_back(warning);
     }
     dashboard = std::make_unique<DashboardServer>(
-        service, core,
-        DashboardOptions{.listen = o.http, .access = security.access, .tls_cert = o.security.tls.cert,
-                         .tls_key = o.security.tls.key, .host_names = o.http_hosts},
+        front_door,
+        DashboardOptions{.listen = o.http, .tls_cert = o.security.tls.cert, .tls_key = o.security.tls.key,
+                         .host_names = o.http_hosts},
         core.log());
   }
   grpc::ServerBuilder builder;

@@ -1,10 +1,11 @@
 #pragma once
 // The scheduler without its gRPC plumbing: jobs in (validated), tiles out to workers, tiles back,
-// frames merged. `farm scheduler` serves it over gRPC (SchedulerService); `farm render` runs it
-// in-process with one InProcessTileWorker (EmbeddedFarm). One pipeline, two front ends.
+// frames merged. `farm scheduler` serves it to its callers through its authorised front door
+// (SchedulerFrontDoor, front_door.h), over gRPC and HTTP; `farm render` runs it in-process with one
+// InProcessTileWorker (EmbeddedFarm), its only caller the process itself. One pipeline, two front
+// ends. The core checks no roles: who may call it is the front door's to decide.
 //
-// SchedulerCore is the front door: it validates and queues jobs itself and hands the rest to its
-// parts, one concept each:
+// SchedulerCore validates and queues jobs itself and hands the rest to its parts, one concept each:
 //   JobEvents       WatchJob subscriptions, events published in the store's order (job_events.h)
 //   RunningJobs     each running job parsed once, and its measured tile cost (running_jobs.h)
 //   WorkerRegistry  the workers, up or down or quarantined, probes and heartbeats (worker_registry.h)

@@ -1,6 +1,7 @@
-// The scheduler's request handlers (server/scheduler/scheduler_service.cpp over SchedulerCore):
-// one real SchedulerService with a data dir in the scratch folder, served in process, called
-// through the generated stub as a client on the network would call it.
+// The scheduler's request handlers (server/scheduler/scheduler_service.cpp over the front door,
+// front_door.cpp, over SchedulerCore): one real SchedulerService with a data dir in the scratch
+// folder, served in process, called through the generated stub as a client on the network would
+// call it.
 //
 // An input is one call: its first byte picks the RPC (mod 11, in proto/farm.proto's order), and
 // the rest is the serialized request. UploadAsset, a client stream, takes the rest as messages
@@ -55,7 +56,7 @@ farm::SchedulerOptions scheduler_options() {
 
 class InProcessScheduler {
  public:
-  InProcessScheduler() : core_(scheduler_options()), service_(core_) {
+  InProcessScheduler() : core_(scheduler_options()), front_door_(core_), service_(front_door_) {
     grpc::ServerBuilder builder;
     builder.RegisterService(&service_);
     server_ = builder.BuildAndStart();
@@ -98,6 +99,7 @@ class InProcessScheduler {
   }
 
   farm::SchedulerCore core_;
+  farm::SchedulerFrontDoor front_door_;
   farm::SchedulerService service_;
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<v1::Scheduler::Stub> stub_;

@@ -34,9 +34,6 @@ constexpr std::size_t kFileChunk = 1 << 20;
 // A whole job id as the routes take it (the pages hold whole ids): lowercase hex, 1 to 64 digits.
 constexpr const char* kJobRoute = "/api/v1/jobs/([0-9a-f]{1,64})";
 
-const Roles kReaders = Role::submit | Role::read | Role::admin;
-const Roles kAllJobReaders = Role::read | Role::admin;
-
 int http_status(grpc::StatusCode code) {
   switch (code) {
     case grpc::StatusCode::INVALID_ARGUMENT: return 400;
@@ -162,9 +159,8 @@ std::string download_name(const fs::path& file) { return plain_file_name(file.fi
 
 }  // namespace
 
-DashboardServer::DashboardServer(SchedulerService& service, SchedulerCore& core, DashboardOptions options,
-                                 spdlog::logger& log)
-    : service_(service), core_(core), options_(std::move(options)), log_(log) {
+DashboardServer::DashboardServer(SchedulerFrontDoor& front_door, DashboardOptions options, spdlog::logger& log)
+    : front_door_(front_door), options_(std::move(options)), log_(log) {
   if (!options_.tls_cert.empty()) {
     auto ssl = std::make_unique<httplib::SSLServer>(options_.tls_cert.c_str(), options_.tls_key.c_str());
     if (!ssl->is_valid()) {
@@ -228,9 +224,9 @@ Principal DashboardServer::caller(const httplib::Request& request) const {
     if (authorization.size() <= kBearer.size() || authorization.compare(0, kBearer.size(), kBearer) != 0) {
       throw ServiceError(grpc::StatusCode::UNAUTHENTICATED, "Authorization: give 'Bearer <token>'");
     }
-    return options_.access.authenticate_token(std::string_view(authorization).substr(kBearer.size()));
+    return front_door_.access().authenticate_token(std::string_view(authorization).substr(kBearer.size()));
   }
-  if (!options_.access.requires_tokens()) return options_.access.authenticate_token({});
+  if (!front_door_.access().requires_tokens()) return front_door_.access().authenticate_token({});
   const std::string session = cookie_value(request, kSessionCookie);
   if (!session.empty()) {
     if (std::optional<Principal> who = sessions_.find(session)) return std::move(*who);
@@ -275,42 +271,38 @@ void DashboardServer::serve_file(const fs::path& file, const std::string& type, 
 
 void DashboardServer::serve_events(const httplib::Request& request, httplib::Response& response) {
   const Principal who = caller(request);
-  AccessControl::check(who, kReaders, "WatchJob");
   const std::string job = request.has_param("job") ? request.get_param_value("job") : std::string();
-  if (!job.empty()) {
-    service_.watchable_job(who, job);
-  }
-  // Every job's events are everyone's to see only with read or admin; a submitter sees its own.
-  const bool own_only = job.empty() && !who.roles.any_of(kAllJobReaders);
+  // Held by the stream's callback: unsubscribed once the response that holds it is gone.
+  const std::shared_ptr<JobWatch> watch =
+      job.empty() ? front_door_.watch_every_job(who, kEventQueue) : front_door_.watch_job(who, job, kEventQueue);
   if (++streams_ > options_.max_event_streams) {
     --streams_;
     throw ServiceError(grpc::StatusCode::UNAVAILABLE, "too many event streams open: try again later");
   }
-  const std::string watched = job.empty() ? std::string(JobEvents::kEveryJob) : job;
-  const std::shared_ptr<JobEventQueue> queue = core_.watch(watched, kEventQueue);
   response.set_header("Cache-Control", "no-store");
   response.set_header("X-Accel-Buffering", "no");
   auto number = std::make_shared<std::uint64_t>(0);
   response.set_chunked_content_provider(
       "text/event-stream",
-      [this, queue, number, own_only, name = who.name](std::size_t, httplib::DataSink& sink) {
+      [this, watch, number](std::size_t, httplib::DataSink& sink) {
         if (stopping_) return false;
         std::string out;
-        if (queue->dropped()) out += "event: resync\ndata: {}\n\n";  // the page reloads the jobs
+        if (watch->dropped()) out += "event: resync\ndata: {}\n\n";  // the page reloads the jobs
         v1::JobEvent event;
-        if (queue->pop(event, kEventWait)) {
-          if (!own_only || event.job().owner() == name) {
-            out += fmt::format("id: {}\nevent: job\ndata: {}\n\n", ++*number, json_of(event));
-          }
+        bool heard = false;
+        try {
+          heard = watch->next(event, kEventWait);
+        } catch (const std::exception&) {
+          return false;  // the job could not be read again: the stream ends, the page reconnects
+        }
+        if (heard) {
+          out += fmt::format("id: {}\nevent: job\ndata: {}\n\n", ++*number, json_of(event));
         } else {
           out += ": still here\n\n";  // finds a reader that went away
         }
-        return out.empty() || sink.write(out.data(), out.size());
+        return sink.write(out.data(), out.size());
       },
-      [this, queue, watched](bool) {
-        core_.unwatch(watched, queue);
-        --streams_;
-      });
+      [this](bool) { --streams_; });
 }
 
 void DashboardServer::routes() {
@@ -334,7 +326,7 @@ void DashboardServer::routes() {
   s.Get("/api/v1/whoami", guarded([this](const httplib::Request& request, httplib::Response& response) {
     const Principal who = caller(request);
     reply_json(response, fmt::format("{{\"name\": {}, \"roles\": {}, \"tokens_required\": {}}}", json_string(who.name),
-                                     json_string(to_string(who.roles)), options_.access.requires_tokens()));
+                                     json_string(to_string(who.roles)), front_door_.access().requires_tokens()));
   }));
   s.Post("/api/v1/login", guarded([this](const httplib::Request& request, httplib::Response& response) {
     check_post(request);
@@ -349,8 +341,8 @@ void DashboardServer::routes() {
       }
       token = it->second.string_value();
     }
-    if (!options_.access.requires_tokens()) throw InputError("login: this scheduler asks for no tokens");
-    const Principal who = options_.access.authenticate_token(token);
+    if (!front_door_.access().requires_tokens()) throw InputError("login: this scheduler asks for no tokens");
+    const Principal who = front_door_.access().authenticate_token(token);
     const std::string session = sessions_.open(who);
     response.set_header("Set-Cookie", fmt::format("{}={}; Path=/; HttpOnly; SameSite=Strict; Max-Age={}{}",
                                                   kSessionCookie, session,
@@ -379,16 +371,16 @@ void DashboardServer::routes() {
     list.set_id_prefix(request.get_param_value("id_prefix"));
     list.set_page_size(int_param(request, "page_size", 0));
     list.set_page_token(request.get_param_value("page_token"));
-    reply_message(response, service_.list_jobs(caller(request), list));
+    reply_message(response, front_door_.list_jobs(caller(request), list));
   }));
   s.Get(kJobRoute, guarded([this](const httplib::Request& request, httplib::Response& response) {
-    reply_message(response, service_.get_job(caller(request), request.matches[1]));
+    reply_message(response, front_door_.get_job(caller(request), request.matches[1]));
   }));
   s.Get(std::string(kJobRoute) + "/log", guarded([this](const httplib::Request& request, httplib::Response& response) {
     v1::GetJobLogRequest log;
     log.set_job_id(request.matches[1]);
     log.set_after(static_cast<std::uint32_t>(std::max(0, int_param(request, "after", 0))));
-    reply_message(response, service_.job_log(caller(request), log));
+    reply_message(response, front_door_.job_log(caller(request), log));
   }));
   s.Post(std::string(kJobRoute) + "/(cancel|pause|resume|retry|delete|priority)",
          guarded([this](const httplib::Request& request, httplib::Response& response) {
@@ -396,50 +388,45 @@ void DashboardServer::routes() {
            const Principal who = caller(request);
            const std::string id = request.matches[1], action = request.matches[2];
            if (action == "cancel") {
-             reply_message(response, service_.cancel_job(who, id));
+             reply_message(response, front_door_.cancel_job(who, id));
            } else if (action == "pause" || action == "resume") {
-             reply_message(response, service_.pause_job(who, id, action == "pause"));
+             reply_message(response, front_door_.pause_job(who, id, action == "pause"));
            } else if (action == "retry") {
-             reply_message(response, service_.retry_job(who, id));
+             reply_message(response, front_door_.retry_job(who, id));
            } else if (action == "delete") {
-             reply_message(response, service_.delete_job(who, id));
+             reply_message(response, front_door_.delete_job(who, id));
            } else {
              v1::SetPriorityRequest priority;
              parse_json(request.body, priority, "priority");
-             reply_message(response, service_.set_priority(who, id, priority.priority()));
+             reply_message(response, front_door_.set_priority(who, id, priority.priority()));
            }
          }));
   s.Get(std::string(kJobRoute) + "/live", guarded([this](const httplib::Request& request, httplib::Response& response) {
-    const std::string id = request.matches[1];
-    const v1::Job job = service_.get_job(caller(request), id);
-    const int frame = int_param(request, "frame", job.frame_first());
-    const std::optional<fs::path> file = core_.live_preview(id, frame);
-    if (!file) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("frame {} has nothing rendered yet", frame));
-    serve_file(*file, "image/png", false, response);
+    std::optional<int> frame;
+    if (request.has_param("frame")) frame = int_param(request, "frame", 0);
+    serve_file(front_door_.live_preview(caller(request), request.matches[1], frame), "image/png", false, response);
   }));
   s.Get(std::string(kJobRoute) + "/file", guarded([this](const httplib::Request& request, httplib::Response& response) {
     v1::GetResultRequest result;
     result.set_job_id(request.matches[1]);
     result.set_kind(kind_param(request.get_param_value("kind")));
     if (request.has_param("frame")) result.set_frame(int_param(request, "frame", 0));
-    const fs::path file = service_.result_file(caller(request), result);
+    const fs::path file = front_door_.result_file(caller(request), result);
     serve_file(file, content_type_of(file), result.kind() != v1::RESULT_KIND_PREVIEW &&
                                                 result.kind() != v1::RESULT_KIND_PROGRESSIVE, response);
   }));
 
   // ---- Workers, events, metrics ------------------------------------------------------------------
   s.Get("/api/v1/workers", guarded([this](const httplib::Request& request, httplib::Response& response) {
-    reply_message(response, service_.list_workers(caller(request)));
+    reply_message(response, front_door_.list_workers(caller(request)));
   }));
   s.Get("/api/v1/events", guarded([this](const httplib::Request& request, httplib::Response& response) {
     serve_events(request, response);
   }));
   s.Get("/metrics", guarded([this](const httplib::Request& request, httplib::Response& response) {
-    const v1::ListWorkersResponse workers = service_.list_workers(caller(request));
+    const SchedulerMetrics metrics = front_door_.metrics(caller(request));
     response.set_header("Cache-Control", "no-store");
-    response.set_content(prometheus_text(core_.store().jobs().counts(), {workers.workers().begin(), workers.workers().end()},
-                                         core_.unit_metrics()),
-                         "text/plain; version=0.0.4");
+    response.set_content(prometheus_text(metrics), "text/plain; version=0.0.4");
   }));
 }
 

@@ -5,8 +5,9 @@
 // (Debian's libcpp-httplib-dev), over HTTPS with the scheduler's own certificate when it has one.
 //
 // The API is the RPCs' messages as JSON (protobuf's JSON mapping, proto field names), and every
-// call goes through SchedulerService's operations for an authenticated caller, so the dashboard
-// checks the same roles and ownership as gRPC, in the same code:
+// call, /metrics and the event streams included, goes through the scheduler's front door
+// (front_door.h) for an authenticated caller, so the dashboard checks the same roles and ownership
+// as gRPC, in the same code; it holds no other way to the scheduler:
 //   GET  /api/v1/jobs?state=running,failed&name=GLOB&id_prefix=HEX&page_size=N&page_token=T
 //                                          ListJobsResponse
 //   GET  /api/v1/jobs/ID                   Job
@@ -19,7 +20,8 @@
 //   GET  /api/v1/events[?job=ID]           text/event-stream: `job` events (JobEvent JSON) in order,
 //                                          `resync` when the reader fell behind and events were lost
 //   GET  /api/v1/whoami, POST /api/v1/login {"token": T}, POST /api/v1/logout
-//   GET  /metrics                          Prometheus text (prometheus_text.h)
+//   GET  /metrics                          Prometheus text (prometheus_text.h); read or admin, since
+//                                          it names the workers (as ListWorkers)
 //
 // Who calls: a scheduler with --tokens wants a token, as an `Authorization: Bearer` header or
 // through a login, which sets an HttpOnly, SameSite=Strict session cookie (dashboard_sessions.h).
@@ -38,10 +40,9 @@
 #include <spdlog/logger.h>
 
 #include "server/common/access_control.h"
+#include "server/scheduler/front_door.h"
 #include "server/scheduler/http/dashboard_sessions.h"
 #include "server/scheduler/http/host_allowlist.h"
-#include "server/scheduler/scheduler_core.h"
-#include "server/scheduler/scheduler_service.h"
 
 namespace httplib {
 class Server;
@@ -53,7 +54,6 @@ namespace farm {
 
 struct DashboardOptions {
   std::string listen;                // HOST:PORT; port 0 picks a free one
-  AccessControl access;              // the scheduler's (its --tokens)
   std::filesystem::path tls_cert;    // with tls_key: HTTPS
   std::filesystem::path tls_key;
   int max_event_streams = 32;        // open at once; more are answered 503
@@ -65,7 +65,8 @@ struct DashboardOptions {
 class DashboardServer {
  public:
   // Binds and starts serving on a thread of its own. InputError when the address cannot be bound.
-  DashboardServer(SchedulerService& service, SchedulerCore& core, DashboardOptions options, spdlog::logger& log);
+  // Callers are authenticated with the front door's tokens (its access()).
+  DashboardServer(SchedulerFrontDoor& front_door, DashboardOptions options, spdlog::logger& log);
   ~DashboardServer();  // stop()
   DashboardServer(const DashboardServer&) = delete;
   DashboardServer& operator=(const DashboardServer&) = delete;
@@ -85,8 +86,7 @@ class DashboardServer {
   void serve_file(const std::filesystem::path& file, const std::string& type, bool download,
                   httplib::Response& response) const;
 
-  SchedulerService& service_;
-  SchedulerCore& core_;
+  SchedulerFrontDoor& front_door_;
   const DashboardOptions options_;
   spdlog::logger& log_;
   DashboardSessions sessions_;

@@ -16,8 +16,10 @@ void header(std::string& out, const char* name, const char* type, const char* he
 
 }  // namespace
 
-std::string prometheus_text(const JobRecords::Counts& counts, const std::vector<v1::WorkerInfo>& workers,
-                            const UnitMetrics::Snapshot& units) {
+std::string prometheus_text(const SchedulerMetrics& metrics) {
+  const JobRecords::Counts& counts = metrics.jobs;
+  const std::vector<v1::WorkerInfo>& workers = metrics.workers;
+  const UnitMetrics::Snapshot& units = metrics.units;
   std::string out;
   header(out, "farm_jobs", "gauge", "Jobs in the store by state.");
   for (v1::JobState s : {v1::JOB_STATE_QUEUED, v1::JOB_STATE_RUNNING, v1::JOB_STATE_SUCCEEDED, v1::JOB_STATE_FAILED,

@@ -3,15 +3,11 @@
 // the queue's depth, workers by state, units done and failed, units a second over the last
 // minute, and how long a batch takes from being handed out to being kept.
 #include <string>
-#include <vector>
 
-#include "proto/farm.pb.h"
-#include "server/scheduler/dispatch/unit_metrics.h"
-#include "server/scheduler/store/job_store.h"
+#include "server/scheduler/front_door.h"
 
 namespace farm {
 
-std::string prometheus_text(const JobRecords::Counts& counts, const std::vector<v1::WorkerInfo>& workers,
-                            const UnitMetrics::Snapshot& units);
+std::string prometheus_text(const SchedulerMetrics& metrics);
 
 }  // namespace farm

@@ -1,0 +1,199 @@
+#pragma once
+// The scheduler's one authorised front door: every operation a client may perform, for a caller
+// already authenticated (a Principal), with the role and ownership checks inside. The transports
+// are thin adapters over it and never reach around it: SchedulerService (farm.v1.Scheduler over
+// gRPC, scheduler_service.h) and DashboardServer (the JSON API and /metrics over HTTP,
+// http/dashboard_server.h). Each adapter turns its request into a Principal (AccessControl, whose
+// tokens access() holds) and keeps only what is its own: streaming, pages, sessions.
+//
+// Who may do what (the roles of server/common/access_roles.h):
+//   submit, upload_asset, has_assets           submit, admin
+//   get_job, watch_job, result_file,           submit (own jobs), read, admin
+//   live_preview, job_log
+//   list_jobs, watch_every_job                 submit (lists and hears only its own jobs), read, admin
+//   cancel_job, pause_job, set_priority,       submit (own jobs), admin
+//   retry_job, delete_job
+//   list_workers, metrics                      read, admin
+//   register_worker, heartbeat                 worker (only for the workers it registered), admin
+//   asset_file                                 worker (assets of the calls it has been given), admin
+// A priority above max_priority needs admin (submit, set_priority).
+// Refusals are ServiceError PERMISSION_DENIED naming the caller and what it asked (access_control.h);
+// an unknown job is NOT_FOUND, a bad argument InputError.
+//
+// Lock: mutex_ guards the registered workers and who registered them; a leaf, held only while
+// they are read or written (the core is called with it released).
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "proto/farm.pb.h"
+#include "server/common/access_control.h"
+#include "server/common/asset_store.h"
+#include "server/common/client_identity.h"
+#include "server/scheduler/assets/asset_quota.h"
+#include "server/scheduler/dispatch/unit_metrics.h"
+#include "server/scheduler/store/job_records.h"
+
+namespace farm {
+
+class SchedulerCore;
+class JobEventQueue;
+
+inline constexpr int kDefaultMaxPriority = 100;
+
+// Who may call the scheduler, and how it calls the workers that register with it.
+struct SchedulerAccess {
+  AccessControl access;             // default: every caller holds every role
+  ClientIdentity worker_identity;   // token and TLS for calls to registered workers
+  int max_priority = kDefaultMaxPriority;
+};
+
+// What /metrics shows (http/prometheus_text.h).
+struct SchedulerMetrics {
+  JobRecords::Counts jobs;              // jobs by state, paused, units queued
+  std::vector<v1::WorkerInfo> workers;  // as list_workers answers
+  UnitMetrics::Snapshot units;          // units kept and failed, their rate and latency
+};
+
+// A caller's subscription to job events, from the moment it was made until it is destroyed.
+class JobWatch {
+ public:
+  ~JobWatch();  // unsubscribed
+  JobWatch(const JobWatch&) = delete;
+  JobWatch& operator=(const JobWatch&) = delete;
+
+  // A watch of one job: the job as it was once the watch had begun (no event falls between the
+  // two). Empty for a watch of every job.
+  const v1::Job& snapshot() const { return snapshot_; }
+  // The next event the caller may see, waiting at most `wait`; false when none came. A watch of
+  // one job on a store other schedulers share hears their events through the relay, which may
+  // miss some: after a quiet while the job is read again, and a change of state comes as a
+  // state_changed event all the same.
+  bool next(v1::JobEvent& event, std::chrono::milliseconds wait);
+  // Whether events were dropped since the last call (a bounded watch whose reader fell behind).
+  bool dropped();
+
+ private:
+  friend class SchedulerFrontDoor;
+  using Clock = std::chrono::steady_clock;
+  JobWatch(SchedulerCore& core, std::string job_id, std::size_t capacity, std::optional<std::string> only_owner);
+  // The job read again after a quiet while, as a state_changed event when its state changed.
+  bool read_again(v1::JobEvent& event);
+
+  SchedulerCore& core_;
+  const std::string job_id_;                     // JobEvents::kEveryJob for every job
+  const std::optional<std::string> only_owner_;  // a submitter watching every job hears its own
+  std::shared_ptr<JobEventQueue> queue_;
+  v1::Job snapshot_;
+  v1::JobState last_ = v1::JOB_STATE_UNSPECIFIED;  // the state the watcher was last told
+  Clock::time_point heard_ = Clock::now();
+};
+
+// One asset uploaded by a caller the front door let upload (upload_asset): its header checked, its
+// size reserved against the asset quota in the caller's name, its bytes written and hashed. The
+// adapter reads the stream; an upload not committed leaves nothing behind.
+class AssetUpload {
+ public:
+  // The upload's header. False when the store holds the asset already: nothing is written.
+  // InputError for a sha256 that is not 64 lowercase hex digits; ServiceError RESOURCE_EXHAUSTED
+  // past --max-asset-bytes or the quota (asset_quota.h).
+  bool begin(const v1::AssetHeader& header);
+  // InputError past the size the header announced; DiskFull when the disk has no room.
+  void append(std::string_view bytes);
+  // Publishes the blob. InputError when the bytes do not hash to the header's sha256.
+  void commit();
+
+ private:
+  friend class SchedulerFrontDoor;
+  AssetUpload(SchedulerCore& core, std::string owner) : core_(&core), owner_(std::move(owner)) {}
+
+  SchedulerCore* core_;
+  std::string owner_;
+  std::uint64_t size_ = 0;  // as the header announced
+  // In this order, so that the blob's temporary file goes before its reservation is freed.
+  std::optional<AssetQuota::Reservation> reserved_;
+  std::optional<AssetStore::Writer> writer_;
+};
+
+class SchedulerFrontDoor {
+ public:
+  explicit SchedulerFrontDoor(SchedulerCore& core, SchedulerAccess access = {});
+  SchedulerFrontDoor(const SchedulerFrontDoor&) = delete;
+  SchedulerFrontDoor& operator=(const SchedulerFrontDoor&) = delete;
+
+  // The tokens the adapters authenticate their callers with.
+  const AccessControl& access() const { return access_.access; }
+  // How long an upload stream may stay silent before its adapter ends it (--upload-idle-timeout).
+  std::chrono::milliseconds upload_idle_timeout() const;
+
+  // ---- Jobs ------------------------------------------------------------------------------------
+  // SchedulerCore::submit, the job recorded as the caller's.
+  v1::Job submit(const Principal& who, const v1::JobSpec& spec, int priority);
+  v1::Job get_job(const Principal& who, const std::string& job_id) const;
+  v1::ListJobsResponse list_jobs(const Principal& who, const v1::ListJobsRequest& request) const;
+  // The job's events from now on (snapshot() is the job as it is now); `capacity` bounds the
+  // events kept for a reader that falls behind (dropped()).
+  std::unique_ptr<JobWatch> watch_job(const Principal& who, const std::string& job_id,
+                                      std::size_t capacity = SIZE_MAX);
+  // Every job's events from now on: a submitter hears only its own jobs'.
+  std::unique_ptr<JobWatch> watch_every_job(const Principal& who, std::size_t capacity = SIZE_MAX);
+  v1::Job cancel_job(const Principal& who, const std::string& job_id);
+  v1::Job pause_job(const Principal& who, const std::string& job_id, bool paused);
+  v1::Job set_priority(const Principal& who, const std::string& job_id, int priority);
+  v1::RetryJobResponse retry_job(const Principal& who, const std::string& job_id);
+  v1::DeleteJobResponse delete_job(const Principal& who, const std::string& job_id);
+  v1::GetJobLogResponse job_log(const Principal& who, const v1::GetJobLogRequest& request) const;
+  // The file GetResult streams: a merged frame, a preview, a progressive preview or the video.
+  std::filesystem::path result_file(const Principal& who, const v1::GetResultRequest& request) const;
+  // The image of a frame as rendered so far (the job's first frame when none is given).
+  // ServiceError NOT_FOUND when nothing of it is rendered yet.
+  std::filesystem::path live_preview(const Principal& who, const std::string& job_id, std::optional<int> frame);
+
+  // ---- Workers and metrics -----------------------------------------------------------------------
+  v1::ListWorkersResponse list_workers(const Principal& who) const;
+  // The figures of /metrics. They name the workers, so they ask what list_workers does.
+  SchedulerMetrics metrics(const Principal& who) const;
+  // A worker at the request's address added as the caller's; one registered there before (a
+  // restart) is removed with its calls. PERMISSION_DENIED when another caller registered it.
+  v1::RegisterWorkerResponse register_worker(const Principal& who, const v1::RegisterWorkerRequest& request);
+  // Only for a worker this caller registered: a worker token cannot keep another's worker alive.
+  v1::HeartbeatResponse heartbeat(const Principal& who, const v1::HeartbeatRequest& request);
+
+  // ---- Assets ------------------------------------------------------------------------------------
+  // An upload the caller may make (the header comes next: AssetUpload::begin).
+  AssetUpload upload_asset(const Principal& who);
+  v1::HasAssetsResponse has_assets(const Principal& who, const v1::HasAssetsRequest& request) const;
+  // The blob GetAsset streams. ServiceError NOT_FOUND when the store does not hold it.
+  std::filesystem::path asset_file(const Principal& who, const std::string& sha256) const;
+
+ private:
+  // The job `job_id` if `who` may see it: its owner, or a caller holding `any_job` roles.
+  // ServiceError NOT_FOUND or PERMISSION_DENIED.
+  v1::Job visible_job(const Principal& who, const std::string& job_id, Roles any_job, const char* action) const;
+  // Refuses a caller without admin a priority above max_priority (`what`: the action, for the message).
+  void check_priority(const Principal& who, int priority, const char* what) const;
+
+  struct Registered {
+    std::string worker_id;
+    std::string principal;  // the name of the caller that registered it
+  };
+
+  SchedulerCore& core_;
+  const SchedulerAccess access_;
+  std::mutex mutex_;
+  std::map<std::string, Registered> registered_;  // by worker address
+  // Who registered each worker id now in registered_: a heartbeat, every second from every
+  // worker, finds its registrant in one look-up.
+  std::map<std::string, std::string> registrant_of_;
+};
+
+}  // namespace farm
