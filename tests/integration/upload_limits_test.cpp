@@ -90,6 +90,19 @@ TEST(UploadLimitsTest, AnIdleUploadIsEndedAndOneOwnerHoldsAQuarterOfTheQuotaAtMo
   const grpc::Status ended = idle.writer->Finish();
   EXPECT_FALSE(ended.ok());
   EXPECT_NE(ended.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << "the client's own deadline ended it, not the scheduler";
+  // Its reservation is freed as its handler unwinds, just after the client hears the end: seen,
+  // not guessed, as above (the in-flight bytes a refusal names drop from 900).
+  // (The probe names bytes no one stored: Bob's are, and would be answered at once.)
+  const std::string unstored(901, 'p');
+  bool freed = false;
+  for (int tries = 0; tries < 6000 && !freed; ++tries) {
+    OpenUpload probe(*bob, unstored, 4001);
+    const grpc::Status p = probe.finish();
+    ASSERT_EQ(p.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << p.error_message();
+    freed = p.error_message().find("(900 more being uploaded)") == std::string::npos;
+    if (!freed) std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(freed) << "the ended upload's reservation was never freed";
   OpenUpload again(*alice, c, c.size());
   const grpc::Status s = again.finish(c);
   EXPECT_TRUE(s.ok()) << s.error_message();
