@@ -11,13 +11,9 @@ namespace farm {
 std::vector<int> FrameRecords::complete_frames(const std::string& job_id, std::optional<int> frame) const {
   std::lock_guard lock(mutex_);
   std::vector<int> out;
-  std::int64_t seq = 0;
-  {
-    Query s(db_->prepared(fmt::format("SELECT seq FROM jobs WHERE id = ? AND state IN {}", kActiveSql)));
-    s.bind(1, job_id);
-    if (!s.step()) return out;
-    seq = s.i64(0);
-  }
+  const std::optional<std::int64_t> active = active_seq_locked(job_id);
+  if (!active) return out;
+  const std::int64_t seq = *active;
   if (frame) {
     // After each batch: one frame, unless it is merged, by seeks in tiles_by_frame (a count of its
     // tiles would read every one of them after every batch).

@@ -157,4 +157,11 @@ void StorePart::take_back_part_locked(std::int64_t seq, std::uint32_t part, std:
       .bind(1, count).bind_blob(2, sum.SerializeAsString()).bind(3, seq).run();
 }
 
+std::optional<std::int64_t> StorePart::active_seq_locked(const std::string& job_id) const {
+  Query s(db_->prepared(fmt::format("SELECT seq FROM jobs WHERE id = ? AND state IN {}", kActiveSql)));
+  s.bind(1, job_id);
+  if (!s.step()) return std::nullopt;
+  return s.i64(0);
+}
+
 }  // namespace farm

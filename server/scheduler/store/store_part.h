@@ -49,6 +49,8 @@ class StorePart {
 
   v1::Job load_job_locked(const std::string& id) const;
   std::optional<v1::Job> find_job_locked(const std::string& id) const;
+  // The job's seq when it is active (QUEUED or RUNNING); nullopt otherwise.
+  std::optional<std::int64_t> active_seq_locked(const std::string& job_id) const;
   // Several schedulers on one PostgreSQL store: the job's row locked for the rest of the
   // transaction, so that what the transaction reads of the job and its tiles (the first queued
   // tile, the stats it adds to) no other scheduler changes before it commits. Every transaction

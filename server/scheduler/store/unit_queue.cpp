@@ -257,13 +257,9 @@ std::vector<TileBatch> UnitQueue::requeue_parts(const std::string& job_id, const
   SqlTransaction t(*db_);
   lock_job_locked(job_id);
   std::vector<TileBatch> taken;
-  std::int64_t seq = 0;
-  {
-    Query s(db_->prepared(fmt::format("SELECT seq FROM jobs WHERE id = ? AND state IN {}", kActiveSql)));
-    s.bind(1, job_id);
-    if (!s.step()) return taken;
-    seq = s.i64(0);
-  }
+  const std::optional<std::int64_t> active = active_seq_locked(job_id);
+  if (!active) return taken;
+  const std::int64_t seq = *active;
   for (std::uint32_t part : parts) {
     TileBatch b;
     b.job_id = job_id;
