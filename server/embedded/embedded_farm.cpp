@@ -91,7 +91,7 @@ EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Pr
     result.scene = v.scene;
   }
   const auto queue = std::make_shared<JobEventQueue>();
-  result.job = wait(core_->submit_validated(std::move(v), 0, queue), queue, progress);
+  result.job = wait(core_->submit(std::move(v), 0, queue), queue, progress);
   if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
     result.exr = job.output.image;
     if (options.write_preview) result.preview = job.output.preview;
@@ -104,7 +104,7 @@ EmbeddedResult EmbeddedFarm::run(const v1::JobSpec& spec, const Progress& progre
   // Subscribed before the job is queued: every event reaches `progress`, the last one final.
   const auto queue = std::make_shared<JobEventQueue>();
   EmbeddedResult result;
-  result.job = wait(core_->submit(spec, 0, queue), queue, progress);
+  result.job = wait(core_->submit(core_->check(spec), 0, queue), queue, progress);
   if (result.job.state() == v1::JOB_STATE_SUCCEEDED) {
     result.exr = core_->result_file(result.job.job_id(), false).value_or(fs::path());
     result.preview = core_->result_file(result.job.job_id(), true).value_or(fs::path());

@@ -143,7 +143,7 @@ void SchedulerFrontDoor::check_priority(const Principal& who, int priority, cons
 v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::JobSpec& spec, int priority) {
   AccessControl::check(who, kJobSubmitters, "SubmitJob");
   check_priority(who, priority, "submit");
-  return core_.submit(spec, priority, nullptr, who.name);
+  return core_.submit(core_.check(spec), priority, nullptr, who.name);
 }
 
 v1::Job SchedulerFrontDoor::get_job(const Principal& who, const std::string& job_id) const {

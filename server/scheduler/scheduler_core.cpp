@@ -9,15 +9,9 @@
 #include <mutex>
 #include <random>
 
-#include "renderer/accel/prepared_scene.h"
-#include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
-#include "renderer/util/input_error.h"
 #include "server/common/job_state.h"
-#include "server/common/scene_hash.h"
-#include "server/common/scene_materializer.h"
 #include "server/common/service_error.h"
-#include "server/common/video_encoder.h"
 
 namespace farm {
 
@@ -56,14 +50,7 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                                                     : options_.store)),
       log_(make_logger("scheduler", options_.log_level)),
       assembly_(make_assembly(options_)),
-      scene_checker_(options_.scene_check_program.empty()
-                         ? nullptr
-                         : std::make_unique<SceneChecker>(
-                               options_.scene_check_program,
-                               SceneBudget{options_.limits.max_scene_memory,
-                                           std::chrono::milliseconds(static_cast<std::int64_t>(
-                                               options_.limits.max_scene_seconds * 1000.0)),
-                                           options_.limits.max_scene_checks})),
+      specs_(options_, assets_),
       jobs_(store_, assets_, options_.data_dir),
       events_(store_),
       pause_(*log_, options_.disk_full_backoff, options_.disk_full_backoff_max),
@@ -157,68 +144,17 @@ void SchedulerCore::stop() {
 
 // ---- Jobs ----------------------------------------------------------------------------------------
 
-v1::Job SchedulerCore::submit(const v1::JobSpec& spec, int priority,
-                              const std::shared_ptr<JobEventQueue>& watcher, const std::string& owner) {
-  // What a request may start is checked before it starts anything: the text before it is
-  // parsed, the tiles, samples and rays before a model is loaded or a tile stored.
-  check_spec_limits(spec, options_.limits);
-  validate_asset_refs(spec);
-  if (auto missing = missing_assets(spec, assets_); !missing.empty()) {
-    throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
-                       fmt::format("{} on the scheduler (upload with UploadAsset first)",
-                                   MissingAssetsError(missing).what()));
-  }
-  const std::string hash = scene_hash(spec);
-  MaterializedScene m = materialize_scene(spec, hash, assets_, options_.data_dir);
-  check_job_limits(m.job, spec, options_.limits);
-  if (!m.job.output.video.empty()) {
-    // Refused now rather than failed after every frame is rendered.
-    if (const FfmpegLookup ffmpeg = find_ffmpeg(); !ffmpeg) {
-      throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
-                         fmt::format("{}: output.video: this scheduler cannot make videos: {}",
-                                     spec.file_name().empty() ? m.job.name : spec.file_name(), ffmpeg.problem));
-    }
-  }
+v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::shared_ptr<JobEventQueue>& watcher,
+                              const std::string& owner) {
+  if (!validated.job) throw std::invalid_argument("SchedulerCore::submit: no job");
   auto info = std::make_shared<JobInfo>();
-  try {
-    // What `farm render` does before rendering: models load, the scene builds. A server does it in
-    // a child process under a budget; the merge's Embree check then loads the scene when it runs.
-    if (scene_checker_) {
-      scene_checker_->check(hash, m.job_file, m.dir, spec.file_name().empty() ? m.job.name : spec.file_name());
-    } else {
-      auto models = std::make_shared<ModelLibrary>(m.job.asset_root);
-      Scene scene = build_scene(m.job, *models);
-      if (options_.validated_scene) {
-        options_.validated_scene(hash, m.job, std::move(scene), std::move(models));
-      } else if (m.job.embree_rays > 0) {
-        info->scene = std::make_shared<const PreparedScene>(std::move(scene));  // for the merge's check
-      }
-    }
-  } catch (const InputError& e) {
-    throw InputError(without_scene_folder(e.what(), m.dir));
-  }
-  info->spec = std::make_shared<const v1::JobSpec>(spec);
-  info->scene_hash = hash;
-  info->job = std::make_shared<const Job>(std::move(m.job));
-  return queue_job(priority, watcher, std::move(info), owner);
-}
-
-v1::Job SchedulerCore::submit_validated(ValidatedJob job, int priority,
-                                        const std::shared_ptr<JobEventQueue>& watcher) {
-  if (!job.job || job.exr.empty()) throw std::invalid_argument("submit_validated: no job or no EXR path");
-  auto info = std::make_shared<JobInfo>();
-  info->spec = std::make_shared<const v1::JobSpec>(std::move(job.spec));
-  info->scene_hash = std::move(job.scene_hash);
-  info->job = std::move(job.job);
-  info->scene = std::move(job.scene);
-  info->files = {std::move(job.exr), std::move(job.preview)};
-  info->video = std::move(job.video);
-  info->merged = std::move(job.merged);
-  return queue_job(priority, watcher, std::move(info));
-}
-
-v1::Job SchedulerCore::queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
-                                 std::shared_ptr<JobInfo> info, const std::string& owner) {
+  info->spec = std::make_shared<const v1::JobSpec>(std::move(validated.spec));
+  info->scene_hash = std::move(validated.scene_hash);
+  info->job = std::move(validated.job);
+  info->scene = std::move(validated.scene);
+  info->files = {std::move(validated.exr), std::move(validated.preview)};
+  info->video = std::move(validated.video);
+  info->merged = std::move(validated.merged);
   const RenderSettings& r = info->job->render;
   NewJob job;
   job.id = new_job_id();

@@ -5,7 +5,8 @@
 // InProcessTileWorker (EmbeddedFarm), its only caller the process itself. One pipeline, two front
 // ends. The core checks no roles: who may call it is the front door's to decide.
 //
-// SchedulerCore validates and queues jobs itself and hands the rest to its parts, one concept each:
+// SchedulerCore queues jobs itself and hands the rest to its parts, one concept each:
+//   SpecCheck       a spec from outside checked and its scene built, made a ValidatedJob (spec_check.h)
 //   JobEvents       WatchJob subscriptions, events published in the store's order (job_events.h)
 //   RunningJobs     each running job parsed once, and its measured tile cost (running_jobs.h)
 //   WorkerRegistry  the workers, up or down or quarantined, probes and heartbeats (worker_registry.h)
@@ -54,7 +55,7 @@
 #include "server/scheduler/jobs/frame_assembly.h"
 #include "server/scheduler/jobs/retention.h"
 #include "server/scheduler/jobs/running_jobs.h"
-#include "server/scheduler/jobs/scene_check.h"
+#include "server/scheduler/jobs/spec_check.h"
 #include "server/scheduler/options/scheduler_options.h"
 #include "server/scheduler/scheduler_lease.h"
 #include "server/scheduler/store/job_store.h"
@@ -63,21 +64,6 @@
 #include "server/scheduler/workers/worker_registry.h"
 
 namespace farm {
-
-// A job submitted from this process, validated by its caller: parsed once, its scene built once
-// (the embedded farm hands the same scene to its worker), its frame written where the caller
-// says rather than under results/.
-struct ValidatedJob {
-  v1::JobSpec spec;                             // what the store records and workers are sent
-  std::string scene_hash;                       // scene_hash(spec)
-  std::shared_ptr<const Job> job;               // the spec's job, parsed
-  std::shared_ptr<const PreparedScene> scene;   // reused by the merge's Embree check
-  // Preview empty: none. A job with frames gives patterns (a '#' run for the frame number).
-  std::filesystem::path exr, preview;
-  std::filesystem::path video;  // the job's output.video, when it asks for one
-  // Given each merged frame after its files are written (`farm render --show-bvh` draws on it).
-  std::function<void(int frame, TileBuffer&&)> merged;
-};
 
 // A new scheduler id, "HOST:PID:RANDOM": unique among the schedulers of one store, and says which
 // machine and process in the store and the logs.
@@ -106,17 +92,15 @@ class SchedulerCore {
   spdlog::logger& log() const { return *log_; }
   const SchedulerOptions& options() const { return options_; }
 
-  // Validates like `farm render` (asset refs, parse_job, loading the models) and queues the job.
-  // ServiceError FAILED_PRECONDITION naming a missing asset; InputError for a bad job (the
-  // message names the job file and the JSON path); DiskFull when the data dir has no room for
-  // its scene or the store for the job (nothing of it is kept). A `watcher` is subscribed to the job before
-  // it is queued, so it sees every event of the job (pass it to unwatch() when done).
-  // `owner` is recorded with the job: the name of the caller's token.
-  v1::Job submit(const v1::JobSpec& spec, int priority = 0,
-                 const std::shared_ptr<JobEventQueue>& watcher = nullptr, const std::string& owner = {});
-  // Queues a job its caller has validated (no asset check, no parse, no scene build here).
-  v1::Job submit_validated(ValidatedJob job, int priority = 0,
-                           const std::shared_ptr<JobEventQueue>& watcher = nullptr);
+  // A spec from outside checked as `farm render` checks a job, and made ready to queue
+  // (SpecCheck::check: the limits, the assets, the job parsed, its scene built). Throws as it says.
+  ValidatedJob check(const v1::JobSpec& spec) const { return specs_.check(spec); }
+  // Queues a job: the only way in, whoever checked it. DiskFull when the store has no room for it
+  // (nothing of it is kept). A `watcher` is subscribed to the job before it is queued, so it sees
+  // every event of the job (pass it to unwatch() when done). `owner` is recorded with the job:
+  // the name of the caller's token.
+  v1::Job submit(ValidatedJob job, int priority = 0, const std::shared_ptr<JobEventQueue>& watcher = nullptr,
+                 const std::string& owner = {});
   std::optional<v1::Job> get_job(const std::string& job_id) const;
   // Drops the job's queued tiles and cancels its calls in flight. ServiceError NOT_FOUND.
   // `by`: who asked (the caller's token name), said in the job's log and its watchers' events.
@@ -174,9 +158,6 @@ class SchedulerCore {
   void finish_active_jobs();
   // An operator's action on the job logged and announced to its watchers (JobUpdated).
   void announce(const std::string& job_id, const std::string& change, const std::string& by);
-  // Adds a validated job to the store and the dispatch.
-  v1::Job queue_job(int priority, const std::shared_ptr<JobEventQueue>& watcher,
-                    std::shared_ptr<JobInfo> info, const std::string& owner = {});
 
   // Declared in the order they are built: each part is given the ones above it.
   SchedulerOptions options_;
@@ -186,7 +167,7 @@ class SchedulerCore {
   JobStore store_;
   std::shared_ptr<spdlog::logger> log_;
   std::unique_ptr<FrameAssembly> assembly_;
-  std::unique_ptr<SceneChecker> scene_checker_;  // when options_.scene_check_program is set
+  SpecCheck specs_;
   RunningJobs jobs_;
   JobEvents events_;
   DiskFullPause pause_;

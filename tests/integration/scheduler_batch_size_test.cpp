@@ -60,7 +60,7 @@ std::size_t calls_for_job(bool report_cpu) {
     r.cache_dir = dir / "worker";
     r.threads = 2;
     core.add_worker(std::make_shared<CrowdedWorker>(r, report_cpu));
-    id = core.submit(spec).job_id();
+    id = core.submit(core.check(spec)).job_id();
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (core.get_job(id)->state() != v1::JOB_STATE_SUCCEEDED && std::chrono::steady_clock::now() < give_up) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));

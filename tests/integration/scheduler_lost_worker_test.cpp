@@ -139,7 +139,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkerCrashesMoreOftenThanMaxAttemptsS
   auto crashing = std::make_shared<CrashingWorker>(honest_renderer("w"), kLosses, "crashing");
   core.add_worker(crashing);
   const v1::JobSpec spec = one_tile_job();
-  const std::string id = core.submit(spec).job_id();
+  const std::string id = core.submit(core.check(spec)).job_id();
 
   ASSERT_TRUE(eventually([&] { return final_job(core, id); }));
   const v1::Job job = *core.get_job(id);
@@ -159,7 +159,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkerCrashesMoreOftenThanMaxAttemptsS
 TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkersStopAndAreDroppedMoreOftenThanMaxAttemptsStillSucceeds) {
   SchedulerCore core(options());
   add_assets(core);
-  const std::string id = core.submit(one_tile_job()).job_id();
+  const std::string id = core.submit(core.check(one_tile_job())).job_id();
   // Four workers in turn take the tile and stop answering; each is dropped as the heartbeat
   // monitor drops a silent one, which cancels its call.
   constexpr int kStops = 4;
@@ -195,7 +195,7 @@ TEST_F(SchedulerLostWorkerTest, ATileThatCrashesEveryWorkerFailsItsJobAtTheLostW
   auto second = std::make_shared<CrashingWorker>(honest_renderer("b"), -1, "crashing-b");
   core.add_worker(first);
   core.add_worker(second);
-  const std::string id = core.submit(one_tile_job()).job_id();
+  const std::string id = core.submit(core.check(one_tile_job())).job_id();
 
   ASSERT_TRUE(eventually([&] { return final_job(core, id); }));
   const v1::Job job = *core.get_job(id);

@@ -72,7 +72,7 @@ TEST(SchedulerQuarantineTest, AWorkerWhoseRepliesBreakTheRulesIsQuarantinedAndIt
   r.threads = 1;
   r.log_level = LogLevel::off;
   const std::string liar = core.add_worker(std::make_shared<LyingWorker>(r, test::Lie::MissingPlane));
-  const std::string id = core.submit(spec).job_id();
+  const std::string id = core.submit(core.check(spec)).job_id();
 
   const auto state_of = [&](const std::string& worker) {
     for (const WorkerStatus& w : core.workers()) {
