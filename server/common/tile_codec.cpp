@@ -49,13 +49,21 @@ void unpack(const Rect& r, int components, const std::string& plane, Get&& get) 
 
 }  // namespace
 
+v1::TileRect to_proto(const Rect& r) {
+  v1::TileRect t;
+  t.set_x0(r.x0);
+  t.set_y0(r.y0);
+  t.set_x1(r.x1);
+  t.set_y1(r.y1);
+  return t;
+}
+
+Rect rect_of(const v1::TileRect& r) { return {r.x0(), r.y0(), r.x1(), r.y1()}; }
+
 void encode_tile(const TileBuffer& t, v1::TileData& out) {
   const Rect& r = t.rect();
   out.Clear();
-  out.mutable_rect()->set_x0(r.x0);
-  out.mutable_rect()->set_y0(r.y0);
-  out.mutable_rect()->set_x1(r.x1);
-  out.mutable_rect()->set_y1(r.y1);
+  *out.mutable_rect() = to_proto(r);
   out.set_width(r.width());
   out.set_height(r.height());
   out.set_rgba(pack(r, 4, [&](int x, int y) { return t.rgba(x, y); }));
@@ -75,7 +83,7 @@ void encode_stats(const RenderStats& s, v1::TileStats& out) {
 }
 
 TileBuffer decode_tile(const v1::TileData& d) {
-  const Rect r{d.rect().x0(), d.rect().y0(), d.rect().x1(), d.rect().y1()};
+  const Rect r = rect_of(d.rect());
   // In 64 bits: the corners come off the wire, and x1 - x0 of two int32 can overflow an int.
   const std::int64_t width = std::int64_t{r.x1} - r.x0;
   const std::int64_t height = std::int64_t{r.y1} - r.y0;

@@ -7,6 +7,10 @@
 
 namespace farm {
 
+// A rect on the wire and back; the proto's fields are the same four corners.
+v1::TileRect to_proto(const Rect& r);
+Rect rect_of(const v1::TileRect& r);
+
 void encode_tile(const TileBuffer& tile, v1::TileData& out);
 void encode_stats(const RenderStats& stats, v1::TileStats& out);
 

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <optional>
 
+#include "server/common/tile_codec.h"
+
 namespace farm {
 
 namespace {
@@ -16,7 +18,6 @@ namespace {
 // float); anything further off was not made by normalizing a vector.
 constexpr float kUnitTolerance = 1e-3f;
 
-Rect rect_of(const v1::TileRect& r) { return {r.x0(), r.y0(), r.x1(), r.y1()}; }
 
 std::string describe(const Rect& r) { return fmt::format("[{}, {}) x [{}, {})", r.x0, r.x1, r.y0, r.y1); }
 
@@ -208,10 +209,7 @@ bool same_tile_bits(const v1::TileData& a, const v1::TileData& b) {
 v1::TileData crop_tile(const v1::TileData& tile, const Rect& rect) {
   const Rect from = rect_of(tile.rect());
   v1::TileData out;
-  out.mutable_rect()->set_x0(rect.x0);
-  out.mutable_rect()->set_y0(rect.y0);
-  out.mutable_rect()->set_x1(rect.x1);
-  out.mutable_rect()->set_y1(rect.y1);
+  *out.mutable_rect() = to_proto(rect);
   out.set_width(rect.width());
   out.set_height(rect.height());
   const auto crop = [&](const std::string& plane, std::string* to) {

@@ -10,8 +10,8 @@
 //   JobEvents       WatchJob subscriptions, events published in the store's order (job_events.h)
 //   RunningJobs     each running job parsed once, and its measured tile cost (running_jobs.h)
 //   WorkerRegistry  the workers, up or down or quarantined, probes and heartbeats (worker_registry.h)
-//   Dispatcher      slots, claiming and sizing batches, calls in flight, results checked and
-//                   spot-checked, quarantines (dispatcher.h)
+//   Dispatcher      slots, claiming and sizing batches, calls in flight, results checked,
+//                   quarantines (dispatcher.h); its spot checks' rounds are SpotCheckRounds'
 //   Finisher        merging, writing and checking a finished job's frame (finisher.h)
 //   DiskFullPause   dispatch paused while the disk refuses writes, resumed when it has room
 //                   (disk_full_pause.h)
@@ -30,6 +30,7 @@
 //   JobEvents -> {JobStore, JobEventQueue, EventRelay,        publishing an event in store order
 //                 its listeners (WebhookNotifier)}            (and logging it in the store)
 //   Dispatcher -> DiskFullPause                               claiming (is dispatch paused?)
+//   Dispatcher -> SpotCheckRounds -> WorkerRegistry          claiming or dropping a spot check
 // The others (Finisher, RunningJobs, WorkerRegistry, JobStore, DiskFullPause, StoreOutage, the queues) are
 // leaves: nothing is taken under them (StoreOutage's on_back runs with no lock held). The arrows make no cycle, so no two threads can deadlock on them.
 #include <filesystem>

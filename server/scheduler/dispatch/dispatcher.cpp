@@ -1,7 +1,5 @@
-// Over 500 lines on purpose: the slots, the calls in flight and the batches waiting for a spot
-// check share one lock (Dispatcher::mutex_) and one invariant (a slot claims a batch or a check, and
-// cancel_job / quarantine / stop see every call it started); their code stays together so that the
-// lock's reader sees every place it is taken. What becomes of a failed batch is unit_failures.cpp's.
+// The slots, the calls in flight and their results (dispatcher.h). The spot checks' rounds are
+// spot_check_rounds.cpp's, what becomes of a failed batch unit_failures.cpp's.
 #include "server/scheduler/dispatch/dispatcher.h"
 
 #include <fmt/format.h>
@@ -14,40 +12,17 @@
 #include "server/common/disk_full.h"
 #include "server/common/job_state.h"
 #include "server/common/network_address.h"
-#include "server/common/read_whole_file.h"
 #include "server/common/service_error.h"
 #include "server/common/tile_codec.h"
+#include "server/scheduler/dispatch/unit_call.h"
 #include "server/common/tile_result_check.h"
 
 namespace farm {
 
 namespace {
 
-v1::TileRect to_proto(const Rect& r) {
-  v1::TileRect t;
-  t.set_x0(r.x0);
-  t.set_y0(r.y0);
-  t.set_x1(r.x1);
-  t.set_y1(r.y1);
-  return t;
-}
 
 std::string describe(const TileBatch& batch) { return describe_units(batch.first, batch.count); }
-std::string describe(const TileSpan& span) { return describe_units(span.first, span.count); }
-
-// Pixels rendered in this process come as a buffer; a spot check compares encoded tiles.
-void encode_pixels(RenderedTiles& result) {
-  if (!result.pixels) return;
-  encode_tile(*result.pixels, *result.response.mutable_tile());
-  result.pixels.reset();
-}
-
-// The scheduler's secret for choosing which tiles are checked (spot_checks.h).
-std::uint64_t random_key() {
-  std::random_device device;
-  return (static_cast<std::uint64_t>(device()) << 32) ^ device();
-}
-
 
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
@@ -66,19 +41,6 @@ struct Dispatcher::InFlight {
   std::string reason_text;
 };
 
-// A batch whose reply waits, its tiles still running in the store on its worker, until another
-// worker's rendering of its chosen span agrees. Under Dispatcher::mutex_ while in checks_.
-struct Dispatcher::SpotCheck {
-  TileBatch batch;
-  TileSpan span;
-  RenderedTiles reply;            // the batch's worker's, kept if the check agrees
-  std::vector<Opinion> opinions;  // opinions[0]: the batch's worker's pixels of the span
-  std::set<std::string> asked;    // workers that rendered it or failed to: not asked again
-  bool queued = true;             // waiting for a slot (false: a call renders it)
-
-  const Opinion& own() const { return opinions.front(); }
-};
-
 Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& parts)
     : options_(options),
       store_(parts.store),
@@ -92,10 +54,9 @@ Dispatcher::Dispatcher(const SchedulerOptions& options, const DispatcherParts& p
       outage_(parts.outage),
       setbacks_(parts.pause, parts.outage),
       log_(parts.log),
-      chooser_(options.verify_fraction, random_key()),
-      remote_chooser_(std::max(options.verify_fraction, options.remote_verify_fraction), random_key()),
       unit_failures_(UnitFailures::Parts{options, parts.store, parts.events, parts.workers, parts.finisher, metrics_,
-                                         parts.log, *this}) {}
+                                         parts.log, *this}),
+      spot_checks_(SpotCheckRounds::Parts{options, parts.store, parts.workers, unit_failures_, *this, parts.log}) {}
 
 Dispatcher::~Dispatcher() { stop(); }
 
@@ -109,17 +70,9 @@ void Dispatcher::cancel_calls_locked(Which&& which, CancelReason reason, const s
   }
 }
 
-void Dispatcher::drop_checks_locked(const std::string& job_id) {
-  checks_.remove_if([&](const std::shared_ptr<SpotCheck>& c) { return c->batch.job_id == job_id; });
-}
-
-bool Dispatcher::holds_check_locked(const std::shared_ptr<SpotCheck>& check) const {
-  return std::find(checks_.begin(), checks_.end(), check) != checks_.end();
-}
-
 void Dispatcher::stop() {
   std::vector<std::thread> threads;
-  std::list<std::shared_ptr<SpotCheck>> checks;
+  std::vector<std::shared_ptr<SpotCheck>> checks;
   {
     std::lock_guard lock(mutex_);
     stopping_ = true;
@@ -128,7 +81,7 @@ void Dispatcher::stop() {
     threads_.clear();
     for (std::thread& t : exited_) threads.push_back(std::move(t));
     exited_.clear();
-    checks.swap(checks_);
+    checks = spot_checks_.stop();
   }
   work_.notify_all();
   for (std::thread& t : threads) t.join();
@@ -190,7 +143,7 @@ void Dispatcher::stop_job(const std::string& job_id) {
 void Dispatcher::stop_job_locked(const std::string& job_id) {
   unit_failures_.forget_job(job_id);
   cancel_calls_locked([&](const InFlight& call) { return call.batch.job_id == job_id; }, CancelReason::JobCancelled);
-  drop_checks_locked(job_id);
+  spot_checks_.drop_job(job_id);
 }
 
 void Dispatcher::worker_left(const std::string& worker_id, const std::string& reason) {
@@ -212,15 +165,7 @@ void Dispatcher::quarantine(const std::string& worker_id, const std::string& wor
     std::lock_guard lock(mutex_);
     cancel_calls_locked([&](const InFlight& call) { return call.worker_id == worker_id; },
                         CancelReason::Quarantined, reason);
-    for (auto it = checks_.begin(); it != checks_.end();) {
-      SpotCheck& c = **it;
-      if (c.own().worker_id == worker_id) {
-        it = checks_.erase(it);  // its batch: the store takes the tiles back below
-        continue;
-      }
-      std::erase_if(c.opinions, [&](const Opinion& o) { return o.worker_id == worker_id; });
-      ++it;
-    }
+    spot_checks_.drop_worker(worker_id);  // its own batches: the store takes their units back below
   }
   // Its tiles running (calls, batches held for a check) and its done tiles of running jobs go
   // back to the queue in one transaction: a result of it that is being kept right now either
@@ -270,8 +215,7 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
     // store takes it (tiles it marked done meanwhile stay done).
     const auto put_back = [&] {
       if (call->check) {
-        std::lock_guard lock(mutex_);
-        call->check->queued = true;
+        spot_checks_.put_back(call->check);
       } else {
         requeue_when_stored(call->batch, w->id);
       }
@@ -317,10 +261,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
     return nullptr;
   }
   // A batch waiting for a spot check goes first: its job cannot finish before it.
-  for (const std::shared_ptr<SpotCheck>& c : checks_) {
-    if (!c->queued || c->asked.contains(w.id)) continue;
-    c->queued = false;
-    c->asked.insert(w.id);
+  if (std::shared_ptr<SpotCheck> c = spot_checks_.next_for(w.id)) {
     auto call = std::make_shared<InFlight>();
     call->batch = TileBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
     call->batch.frame = c->batch.frame;
@@ -366,41 +307,10 @@ int Dispatcher::batch_size(const std::string& job_id, int queued_tiles) const {
 }
 
 grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTiles& result) {
-  const TileBatch& batch = call.batch;
   try {
-    const std::shared_ptr<const JobInfo> info = jobs_.get(batch.job_id);
-    const v1::JobSpec& spec = *info->spec;
-    v1::RenderTileRequest request;
-    // The job text (up to --max-job-bytes) travels once per worker and scene, not with every call.
-    if (!w.scenes_sent.contains(info->scene_hash)) *request.mutable_job() = spec;
-    request.set_scene_hash(info->scene_hash);
-    *request.mutable_rect() = to_proto(batch.rect);
-    request.set_job_id(batch.job_id);
-    request.set_tile_index(batch.first);
-    request.set_frame(batch.frame);
-    request.set_pass(batch.pass);
-    request.set_scheduler_id(store_.leases().scheduler());  // a worker of several schedulers fetches assets here
-    // Each tile of the batch has its deadline.
-    const auto deadline = std::chrono::system_clock::now() + options_.tile_deadline * batch.count;
-    grpc::Status status = w.worker->render(request, result, deadline, *call.cancel);
-    if (status.error_code() == grpc::StatusCode::NOT_FOUND && !request.has_job() && !call.cancel->cancelled()) {
-      // The worker no longer holds the scene (evicted, or a new process at the address).
-      *request.mutable_job() = spec;
-      result = RenderedTiles();
-      status = w.worker->render(request, result, deadline, *call.cancel);
-    }
-    if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION && !call.cancel->cancelled()) {
-      // A worker that cannot fetch the job's files (no --scheduler): once more, files inline.
-      for (const v1::AssetRef& ref : spec.assets()) {
-        v1::InlineAsset& asset = *request.add_assets();
-        asset.set_sha256(ref.sha256());
-        asset.set_data(read_whole_file(assets_.path_of(ref.sha256()), "asset"));
-      }
-      result = RenderedTiles();
-      status = w.worker->render(request, result, deadline, *call.cancel);
-    }
-    if (status.ok() && request.has_job()) w.scenes_sent.insert(info->scene_hash);
-    return status;
+    const std::shared_ptr<const JobInfo> info = jobs_.get(call.batch.job_id);
+    return render_units(w, {call.batch, *info, store_.leases().scheduler(), options_.tile_deadline, *call.cancel},
+                        assets_, result);
   } catch (const DiskFull&) {
     throw;  // the scheduler's disk (the job's scene laid out again): slot_loop waits for room
   } catch (const std::exception& e) {
@@ -424,7 +334,7 @@ void Dispatcher::handle_result(WorkerEntry& w, const InFlight& call, const grpc:
     reason_text = call.reason_text;
   }
   if (call.check) {
-    handle_check_result(w, call, status, reason, result);
+    spot_checks_.on_reply(w, call.check, status, reason, result);
     return;
   }
   if (reason == CancelReason::JobCancelled) return;  // the job is final; its tiles stay as they were
@@ -465,164 +375,9 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
       return;
     }
   }
-  // Spot checks by default for workers on other hosts (their replies crossed a network).
-  const SpotCheckChooser& chooser = on_this_host(worker) ? chooser_ : remote_chooser_;
-  if (chooser.enabled()) {
-    std::optional<TileSpan> span;
-    if (const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id)) {
-      span = chooser.span(batch, job->tiles_total(), *settings);
-    }
-    // With no other worker to ask, there is nobody to check against: kept as it is.
-    if (span && workers_.any_available_except({w.id})) {
-      auto check = std::make_shared<SpotCheck>();
-      check->batch = batch;
-      check->span = *span;
-      encode_pixels(result);
-      check->opinions.push_back({w.id, worker, crop_tile(result.response.tile(), span->rect)});
-      check->reply = std::move(result);
-      check->asked.insert(w.id);
-      {
-        std::lock_guard lock(mutex_);
-        if (stopping_) {
-          store_.units().batch_requeue(batch.job_id, batch.first, batch.count, w.id);
-          return;
-        }
-        checks_.push_back(check);
-      }
-      log_.debug("job {} {}: held for a spot check of {}", batch.job_id, describe(batch), describe(*span));
-      settle_stranded();
-      work_.notify_all();
-      return;
-    }
-  }
+  if (spot_checks_.hold(w, batch, *settings, result)) return;
   keep(w.id, worker, batch, result);
 }
-
-
-
-void Dispatcher::handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
-                                     CancelReason reason, RenderedTiles& result) {
-  const std::shared_ptr<SpotCheck>& check = call.check;
-  if (reason == CancelReason::JobCancelled || reason == CancelReason::Stopping) return;  // dropped already
-  const std::string worker = w.worker->describe();
-  const TileBatch& batch = check->batch;
-  std::string problem;
-  const bool answered = status.ok() && reason != CancelReason::Quarantined;
-  if (answered && !result.pixels) {
-    const std::optional<RenderSettings> settings = settings_of(batch);
-    if (!settings) return;
-    problem = check_tile_reply(result.response, *settings, check->span.rect);
-  }
-  if (!answered || !problem.empty()) {
-    // No opinion from this worker: the check waits for another.
-    if (!problem.empty()) {
-      quarantine(w.id, worker, fmt::format("worker {} sent a result no engine makes: {}", worker, problem));
-    } else if (reason == CancelReason::None) {
-      log_.warn("job {} {}: checking it on worker {} failed: {}: {}", batch.job_id, describe(check->span), worker,
-                status_code_name(status.error_code()), status.error_message());
-      if (status.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED) workers_.mark_down(w, std::chrono::milliseconds(0));
-      if (status.error_code() == grpc::StatusCode::UNAVAILABLE) workers_.mark_down(w, options_.probe_interval);
-    }
-    {
-      std::lock_guard lock(mutex_);
-      check->queued = true;
-    }
-    settle_stranded();
-    work_.notify_all();
-    return;
-  }
-  encode_pixels(result);
-  Opinion opinion{w.id, worker, std::move(*result.response.mutable_tile())};
-  Judgement j;
-  std::string own_worker;
-  {
-    std::lock_guard lock(mutex_);
-    if (!holds_check_locked(check)) return;  // its batch's worker was quarantined, or its job ended
-    j = judge(check->opinions, opinion);
-    own_worker = check->own().worker;
-    if (j.outcome == Judgement::Outcome::NeedAnother) {
-      check->queued = true;  // back in the queue: from here on others may touch it
-    } else {
-      checks_.remove(check);  // out of checks_, it is this thread's alone
-    }
-  }
-  switch (j.outcome) {
-    case Judgement::Outcome::NeedAnother:
-      log_.warn("job {} {}: workers {} and {} rendered it differently; a third worker decides", batch.job_id,
-                describe(check->span), own_worker, worker);
-      settle_stranded();
-      work_.notify_all();
-      return;
-    case Judgement::Outcome::NoAgreement: {
-      std::string names;
-      for (const Opinion& o : check->opinions) names += (names.empty() ? "" : ", ") + o.worker;
-      unit_failures_.fail(check->own().worker_id, check->own().worker, batch,
-                 fmt::format("spot check of {}: workers {} rendered it three different ways", describe(check->span), names),
-                 options_.max_attempts);
-      return;
-    }
-    case Judgement::Outcome::Agreed:
-      settle(*check, j, opinion);
-      return;
-  }
-}
-
-void Dispatcher::settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing) {
-  const TileBatch& batch = check.batch;
-  const Opinion& agreed = check.opinions[j.agreed_with];
-  if (j.agreed_with == 0) {
-    log_.debug("job {} {}: spot check passed ({} and {} agree)", batch.job_id, describe(check.span), agreed.worker,
-               agreeing.worker);
-    keep(check.own().worker_id, check.own().worker, batch, check.reply);
-  }
-  for (std::size_t k : j.wrong) {
-    const Opinion& o = check.opinions[k];
-    const std::string why = fmt::format("spot check of {} of job {}: its pixels differ from the ones workers {} and {} rendered",
-                                        describe(check.span), batch.job_id, agreed.worker, agreeing.worker);
-    if (k == 0) {
-      // The batch's own worker: the batch is rendered again.
-      unit_failures_.fail(o.worker_id, o.worker, batch, fmt::format("worker {}: {}; the worker is quarantined", o.worker, why),
-                 options_.max_attempts);
-    } else {
-      const std::string kept = fmt::format("worker {}: {}; the worker is quarantined, the tiles are kept as {} rendered them",
-                                           o.worker, why, check.own().worker);
-      log_.warn("job {} {}: {}", batch.job_id, describe(check.span), kept);
-      unit_failures_.announce(batch.job_id, check.span.first, check.span.count, o.worker, kept, false);
-    }
-    quarantine(o.worker_id, o.worker, fmt::format("worker {}: {}", o.worker, why));
-  }
-}
-
-void Dispatcher::settle_stranded() {
-  std::vector<std::shared_ptr<SpotCheck>> stranded;
-  {
-    std::lock_guard lock(mutex_);
-    for (auto it = checks_.begin(); it != checks_.end();) {
-      if ((*it)->queued && !workers_.any_available_except((*it)->asked)) {
-        stranded.push_back(*it);
-        it = checks_.erase(it);
-      } else {
-        ++it;
-      }
-    }
-  }
-  for (const std::shared_ptr<SpotCheck>& c : stranded) {
-    if (c->opinions.size() == 1) {
-      log_.warn("job {} {}: kept unchecked: no worker but {} is there to check it on", c->batch.job_id,
-                describe(c->batch), c->own().worker);
-      keep(c->own().worker_id, c->own().worker, c->batch, c->reply);
-    } else {
-      std::string names;
-      for (const Opinion& o : c->opinions) names += (names.empty() ? "" : " and ") + o.worker;
-      unit_failures_.fail(c->own().worker_id, c->own().worker, c->batch,
-                 fmt::format("spot check of {}: workers {} rendered it differently and no other worker is there "
-                             "to decide",
-                             describe(c->span), names),
-                 options_.max_attempts);
-    }
-  }
-}
-
 void Dispatcher::keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
                       RenderedTiles& result) {
   const v1::TileStats stats = result.response.stats();

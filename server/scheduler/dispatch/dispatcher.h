@@ -37,15 +37,16 @@
 // it is removed or quarantined; a slot that ended is joined by the next slot started, by an idle
 // slot, or by stop(), so workers coming and going leave no threads behind.
 //
-// Lock: Dispatcher::mutex_ guards stopping_, the slot threads, the calls in flight (each one's
-// cancel reason), the batches waiting for a spot check and the workers' disk-full backoffs. A
-// batch is claimed, and a job
-// cancelled in the store, under it, so that cancel_job(), worker_left(), quarantine() and stop()
-// see every call a slot has started, and no slot claims for a worker the registry has removed or
-// quarantined. Taken under it: the job store's lock and, within that (the store asking for a
-// batch size), the worker registry's and RunningJobs'; the registry's also directly (is the
-// worker available?), the DiskFullPause's (is dispatch paused?), and each call's TileCancel. None of those is held while it is taken;
-// results are handled, workers quarantined, events published and jobs finished without it.
+// Lock: Dispatcher::mutex_ guards stopping_, the slot threads and the calls in flight (each one's
+// cancel reason). A batch or a spot check is claimed, and a job cancelled in the store, under it,
+// so that cancel_job(), worker_left(), quarantine() and stop() see every call a slot has started,
+// and no slot claims for a worker the registry has removed or quarantined. Taken under it: the
+// job store's lock and, within that (the store asking for a batch size), the worker registry's
+// and RunningJobs'; the spot checks' (SpotCheckRounds, and the registry's within it); the
+// registry's also directly (is the worker available?), the DiskFullPause's (is dispatch
+// paused?), and each call's TileCancel. None of those is held while it is taken; results are
+// handled, workers quarantined, events published and jobs finished without it. The spot checks'
+// rounds are spot_check_rounds.h's; what becomes of a failed batch is unit_failures.h's.
 #include <condition_variable>
 #include <list>
 #include <map>
@@ -60,7 +61,8 @@
 
 #include "proto/farm.pb.h"
 #include "server/common/asset_store.h"
-#include "server/scheduler/dispatch/spot_checks.h"
+#include "server/scheduler/dispatch/cancel_reason.h"
+#include "server/scheduler/dispatch/spot_check_rounds.h"
 #include "server/scheduler/dispatch/unit_failures.h"
 #include "server/scheduler/dispatch/unit_metrics.h"
 #include "server/scheduler/events/job_events.h"
@@ -129,10 +131,7 @@ class Dispatcher : private DispatchControl {
   void stop();
 
  private:
-  // Why a call in flight was cancelled by the scheduler, which decides what becomes of its tiles.
-  enum class CancelReason { None, JobCancelled, WorkerLeft, Quarantined, Stopping };
   struct InFlight;
-  struct SpotCheck;
   // Waits `wait` (less when woken); true when the scheduler is stopping.
   bool wait_unless_stopping(std::chrono::milliseconds wait);
 
@@ -151,16 +150,9 @@ class Dispatcher : private DispatchControl {
                      RenderedTiles& result);
   // An OK reply to a batch: checked, then kept or held for a spot check.
   void accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
-  // The reply of a call that checks another worker's batch.
-  void handle_check_result(WorkerEntry& w, const InFlight& call, const grpc::Status& status,
-                           CancelReason reason, RenderedTiles& result);
-  // What `j` (an agreement) decides about `check`, which is no longer in checks_.
-  void settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing);
-  // Settles the checks that no available worker is left to take: kept unchecked with one opinion,
-  // failed with two that differ.
-  void settle_stranded() override;
+  void settle_stranded() override { spot_checks_.settle_stranded(); }
   void keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
-            RenderedTiles& result);
+            RenderedTiles& result) override;
   void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
@@ -171,15 +163,12 @@ class Dispatcher : private DispatchControl {
   void requeue_when_stored(const TileBatch& batch, const std::string& worker_id) override;
   void stop_job(const std::string& job_id) override;  // under mutex_: stop_job_locked
   void wake() override { work_.notify_all(); }
-  // The settings of the batch's job; nullopt (logged) when the job is gone.
-  std::optional<RenderSettings> settings_of(const TileBatch& batch);
+  std::optional<RenderSettings> settings_of(const TileBatch& batch) override;
   // Cancels the calls in flight that `which` picks, for `reason`.
   template <typename Which>
   void cancel_calls_locked(Which&& which, CancelReason reason, const std::string& text = {});
-  void drop_checks_locked(const std::string& job_id);
   // A final job's calls in flight cancelled and its batches waiting for a check dropped.
   void stop_job_locked(const std::string& job_id);
-  bool holds_check_locked(const std::shared_ptr<SpotCheck>& check) const;
 
   const SchedulerOptions& options_;
   JobStore& store_;
@@ -193,8 +182,6 @@ class Dispatcher : private DispatchControl {
   StoreOutage& outage_;
   Setbacks setbacks_;
   spdlog::logger& log_;
-  SpotCheckChooser chooser_;         // workers on this host
-  SpotCheckChooser remote_chooser_;  // workers on other hosts
   UnitMetrics metrics_;
   mutable std::mutex mutex_;
   std::condition_variable work_;  // a job queued, a batch back in the queue, stopping
@@ -202,8 +189,8 @@ class Dispatcher : private DispatchControl {
   std::map<std::thread::id, std::thread> threads_;  // slots running
   std::vector<std::thread> exited_;                 // slots that ended, not joined yet
   std::set<std::shared_ptr<InFlight>> in_flight_;
-  std::list<std::shared_ptr<SpotCheck>> checks_;    // batches waiting for a spot check
-  UnitFailures unit_failures_;  // its own lock (a leaf)
+  UnitFailures unit_failures_;    // its own lock (a leaf)
+  SpotCheckRounds spot_checks_;   // its own lock, taken under mutex_ (spot_check_rounds.h)
 };
 
 }  // namespace farm

@@ -25,11 +25,12 @@
 #include "server/scheduler/jobs/finisher.h"
 #include "server/scheduler/options/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
+#include "server/scheduler/workers/tile_worker.h"
 #include "server/scheduler/workers/worker_registry.h"
 
 namespace farm {
 
-// What the failure accounting asks of the dispatcher that owns it.
+// What the failure accounting and the spot checks ask of the dispatcher that owns them.
 class DispatchControl {
  public:
   // The batch (running on worker_id) back in the queue with no attempt counted, once the store
@@ -43,6 +44,11 @@ class DispatchControl {
   virtual void quarantine(const std::string& worker_id, const std::string& worker, const std::string& reason) = 0;
   // Wakes the slots: units are back in the queue.
   virtual void wake() = 0;
+  // The batch's result kept: its pixels to the frame, its units marked done (Dispatcher::keep).
+  virtual void keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+                    RenderedTiles& result) = 0;
+  // The settings of the batch's job at its pass; nullopt (logged) when the job is gone.
+  virtual std::optional<RenderSettings> settings_of(const TileBatch& batch) = 0;
 
  protected:
   ~DispatchControl() = default;
