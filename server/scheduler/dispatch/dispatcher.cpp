@@ -225,7 +225,7 @@ void Dispatcher::slot_loop(const std::shared_ptr<WorkerEntry>& w) {
       const grpc::Status status = render(*w, *call, result);
       handle_result(*w, *call, status, result);
     } catch (const std::exception& e) {
-      if (setbacks_.report_current()) {
+      if (setbacks_.report_current() != Setback::none) {
         // The scheduler's own disk refused something on the way (the job's scene laid out again,
         // a mark in the store), or the store's server went away: the batch waits for them.
         put_back();
@@ -281,7 +281,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
     store_answered = true;
   } catch (const std::exception& e) {
     // A setback (the store full or away): nothing was claimed; the slot asks again after its wait.
-    if (!setbacks_.report_current()) log_.error("claiming units: {}", e.what());
+    if (setbacks_.report_current() == Setback::none) log_.error("claiming units: {}", e.what());
   }
   if (!batch) {
     work_.wait_for(lock, kIdleWait);
@@ -412,7 +412,7 @@ void Dispatcher::keep(const std::string& worker_id, const std::string& worker, c
     pause_.written();
     finisher_.finish_if_complete(batch.job_id, batch.frame);
   } catch (const std::exception& e) {
-    if (setbacks_.report_current()) {
+    if (setbacks_.report_current() != Setback::none) {
       // No room to keep it, or the store away after its mark (an event, the merge): rendered
       // again once the setback clears, with no attempt counted against the job or the worker.
       // Logged by the pause or the outage, once a minute at most, not once a batch.

@@ -67,16 +67,14 @@ void Finisher::finish_if_complete(const std::string& job_id, std::optional<int> 
     bool refused = false;
     try {
       merge_complete(job_id, frames, every_frame);
-      outage_.answered();
-    } catch (const StoreUnavailable& e) {
-      outage_.report(e);  // looked at again when the store answers (StoreOutage::on_back)
-    } catch (const DiskFull& e) {
-      // The job stays as it is, its tiles done, until there is room for its frame.
-      log_.debug("job {}: merge refused: {}", job_id, e.what());
-      pause_.report(e);
-      refused = true;
+      setbacks_.store_answered();
     } catch (const std::exception& e) {
-      log_.error("job {}: merging: {}", job_id, e.what());
+      // The store away: looked at again when it answers (StoreOutage::on_back). The disk full:
+      // the job stays as it is, its units done, until there is room for its frame.
+      const Setback setback = setbacks_.report_current();
+      if (setback == Setback::disk_full) log_.debug("job {}: merge refused: {}", job_id, e.what());
+      if (setback == Setback::none) log_.error("job {}: merging: {}", job_id, e.what());
+      refused = setback == Setback::disk_full;
     }
     std::lock_guard lock(mutex_);
     const auto it = merging_.find(job_id);
@@ -188,18 +186,18 @@ void Finisher::finish(const std::string& job_id) {
 void Finisher::end_in_background(const std::string& job_id) {
   try {
     end_job(job_id);
-  } catch (const DiskFull& e) {
-    // As a merge the disk refused: the job stays running, ended once there is room.
-    log_.debug("job {}: end refused: {}", job_id, e.what());
-    pause_.report(e);
-    std::lock_guard lock(mutex_);
-    refused_.insert(job_id);
   } catch (const VideoStopped&) {
     log_.info("job {}: its video is made by the next scheduler (this one is stopping)", job_id);
-  } catch (const StoreUnavailable& e) {
-    outage_.report(e);  // ended when the store answers again (StoreOutage::on_back)
   } catch (const std::exception& e) {
-    log_.error("job {}: ending: {}", job_id, e.what());
+    // The store away: ended when it answers again (StoreOutage::on_back). The disk full: as a
+    // merge the disk refused, the job stays running, ended once there is room.
+    const Setback setback = setbacks_.report_current();
+    if (setback == Setback::none) log_.error("job {}: ending: {}", job_id, e.what());
+    if (setback == Setback::disk_full) {
+      log_.debug("job {}: end refused: {}", job_id, e.what());
+      std::lock_guard lock(mutex_);
+      refused_.insert(job_id);
+    }
   }
 }
 

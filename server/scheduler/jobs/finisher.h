@@ -41,6 +41,7 @@
 #include "server/scheduler/jobs/progressive_previews.h"
 #include "server/scheduler/jobs/result_files.h"
 #include "server/scheduler/jobs/running_jobs.h"
+#include "server/scheduler/jobs/setbacks.h"
 #include "server/scheduler/options/scheduler_options.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/store/store_outage.h"
@@ -52,7 +53,7 @@ class Finisher {
   Finisher(const SchedulerOptions& options, JobStore& store, FrameAssembly& assembly, RunningJobs& jobs,
            ResultFiles& results, JobEvents& events, DiskFullPause& pause, StoreOutage& outage, spdlog::logger& log)
       : options_(options), store_(store), assembly_(assembly), jobs_(jobs), results_(results), events_(events),
-        pause_(pause), outage_(outage), log_(log), previews_(store, assembly, events) {}
+        setbacks_(pause, outage), log_(log), previews_(store, assembly, events) {}
 
   // Merges `frame` of the job if its tiles are all done (no frame: every complete frame), and ends
   // the job once all are merged. A frame of sample passes not yet complete gets its progressive
@@ -114,8 +115,7 @@ class Finisher {
   RunningJobs& jobs_;
   ResultFiles& results_;
   JobEvents& events_;
-  DiskFullPause& pause_;
-  StoreOutage& outage_;
+  Setbacks setbacks_;  // a full disk or the store away told from other failures
   spdlog::logger& log_;
   std::mutex mutex_;
   struct Merging {

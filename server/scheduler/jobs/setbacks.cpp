@@ -15,17 +15,17 @@ void rethrow_if_setback() {
   }
 }
 
-bool Setbacks::report_current() {
+Setback Setbacks::report_current() {
   try {
     throw;
   } catch (const DiskFull& e) {
     pause_.report(e);
-    return true;
+    return Setback::disk_full;
   } catch (const StoreUnavailable& e) {
     outage_.report(e);
-    return true;
+    return Setback::store_away;
   } catch (...) {
-    return false;
+    return Setback::none;
   }
 }
 

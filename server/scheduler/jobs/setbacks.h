@@ -13,13 +13,15 @@ namespace farm {
 // which fails its job for anything else lets a setback through to the caller that retries it.
 void rethrow_if_setback();
 
+enum class Setback { none, disk_full, store_away };
+
 class Setbacks {
  public:
   Setbacks(DiskFullPause& pause, StoreOutage& outage) : pause_(pause), outage_(outage) {}
 
-  // Inside a catch block: true when the exception being handled is a setback, which is then
-  // reported to its watcher (the pause, or the outage); false for any other.
-  bool report_current();
+  // Inside a catch block: which setback the exception being handled is, reported to its watcher
+  // (the pause, or the outage); Setback::none for any other exception.
+  Setback report_current();
   // A store call answered: ends an outage, if there was one.
   void store_answered() { outage_.answered(); }
 
