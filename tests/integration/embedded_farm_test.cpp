@@ -105,7 +105,7 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
   for (const int batch_ms : {0, 200}) {
     SCOPED_TRACE(batch_ms);
     test::TempDir dir;
-    std::vector<TileRecord> tiles;
+    std::vector<UnitRecord> tiles;
     {
       EmbeddedFarmOptions options;
       options.data_dir = dir / "farm";
@@ -121,8 +121,8 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
       tiles = farm.core().store().units().tiles(result.job.job_id());  // the store lives in memory
     }
     ASSERT_EQ(tiles.size(), 96u);
-    std::map<std::uint32_t, std::vector<const TileRecord*>> calls;
-    for (const TileRecord& t : tiles) calls[t.part].push_back(&t);
+    std::map<std::uint32_t, std::vector<const UnitRecord*>> calls;
+    for (const UnitRecord& t : tiles) calls[t.part].push_back(&t);
     for (const auto& [part, members] : calls) {
       // A batch: consecutive tiles from its first on, all in one row of the grid.
       for (std::size_t i = 0; i < members.size(); ++i) {

@@ -120,7 +120,7 @@ TEST(PostgresStoreTest, AVersion6StoreIsUpgradedInPlace) {
   EXPECT_STREQ(PQgetvalue(r, 0, 0), "8");
   PQclear(r);
   PQfinish(c);
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   ASSERT_EQ(tiles.size(), 3u);
   EXPECT_EQ(tiles[0].state, TileState::Done);
   EXPECT_EQ(tiles[1].state, TileState::Queued);

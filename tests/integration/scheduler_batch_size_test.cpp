@@ -68,7 +68,7 @@ std::size_t calls_for_job(bool report_cpu) {
     EXPECT_EQ(core.get_job(id)->state(), v1::JOB_STATE_SUCCEEDED);
   }
   std::set<std::uint32_t> parts;
-  for (const TileRecord& t : JobStore(dir / "farm" / "jobs.db").units().tiles(id)) parts.insert(t.part);
+  for (const UnitRecord& t : JobStore(dir / "farm" / "jobs.db").units().tiles(id)) parts.insert(t.part);
   return parts.size();
 }
 

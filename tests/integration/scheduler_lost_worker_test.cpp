@@ -146,7 +146,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkerCrashesMoreOftenThanMaxAttemptsS
   ASSERT_EQ(job.state(), v1::JOB_STATE_SUCCEEDED) << job.failure_reason();
   EXPECT_EQ(crashing->calls_lost(), kLosses);
   EXPECT_EQ(job.tile_failures(), static_cast<unsigned>(kLosses));  // every lost rendering, still shown
-  const std::vector<TileRecord> tiles = core.store().units().tiles(id);
+  const std::vector<UnitRecord> tiles = core.store().units().tiles(id);
   ASSERT_EQ(tiles.size(), 1u);
   EXPECT_EQ(tiles[0].attempts, 0);  // none counted against --max-attempts
   EXPECT_EQ(tiles[0].lost_attempts, kLosses);
@@ -170,7 +170,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkersStopAndAreDroppedMoreOftenThanM
     core.remove_worker(worker_id, "no heartbeat for 3000 ms");
     // Back in the queue, or (were the loss counted as an attempt) failed for good.
     ASSERT_TRUE(eventually([&] {
-      const std::vector<TileRecord> tiles = core.store().units().tiles(id);
+      const std::vector<UnitRecord> tiles = core.store().units().tiles(id);
       return !tiles.empty() && tiles[0].state != TileState::Running;
     })) << "stop " << i;
     ASSERT_EQ(core.store().units().tiles(id)[0].state, TileState::Queued)
@@ -180,7 +180,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkersStopAndAreDroppedMoreOftenThanM
   ASSERT_TRUE(eventually([&] { return final_job(core, id); }));
   const v1::Job job = *core.get_job(id);
   ASSERT_EQ(job.state(), v1::JOB_STATE_SUCCEEDED) << job.failure_reason();
-  const std::vector<TileRecord> tiles = core.store().units().tiles(id);
+  const std::vector<UnitRecord> tiles = core.store().units().tiles(id);
   ASSERT_EQ(tiles.size(), 1u);
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[0].lost_attempts, kStops);
@@ -205,7 +205,7 @@ TEST_F(SchedulerLostWorkerTest, ATileThatCrashesEveryWorkerFailsItsJobAtTheLostW
   EXPECT_NE(job.failure_reason().find("lost-worker attempts limit"), std::string::npos) << job.failure_reason();
   EXPECT_NE(job.failure_reason().find("UNAVAILABLE: Socket closed"), std::string::npos) << job.failure_reason();
   EXPECT_EQ(first->calls_lost() + second->calls_lost(), 4);  // and no call after the job failed
-  const std::vector<TileRecord> tiles = core.store().units().tiles(id);
+  const std::vector<UnitRecord> tiles = core.store().units().tiles(id);
   ASSERT_EQ(tiles.size(), 1u);
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[0].lost_attempts, 4);

@@ -60,7 +60,7 @@ TEST_P(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
   EXPECT_EQ(job.tiles_rendered(), 1u);
   EXPECT_EQ(job.stats().samples(), 7u);
   EXPECT_EQ(job.submitted_at().seconds(), 1);
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   ASSERT_EQ(tiles.size(), 3u);
   EXPECT_EQ(tiles[0].state, TileState::Done);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
@@ -181,7 +181,7 @@ TEST_P(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlo
   EXPECT_EQ(job.stats().samples(), 4u);
   // Which result file holds each tile.
   std::vector<std::uint32_t> parts;
-  for (const TileRecord& t : store.units().tiles("a")) parts.push_back(t.part);
+  for (const UnitRecord& t : store.units().tiles("a")) parts.push_back(t.part);
   EXPECT_EQ(parts, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 4, 4, 4}));
 }
 
@@ -224,7 +224,7 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
     sqlite3_close(db);
   }
   JobStore store(dir / "jobs.db");
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   ASSERT_EQ(tiles.size(), 3u);
   EXPECT_EQ(tiles[1].state, TileState::Done);
   EXPECT_EQ(tiles[1].part, 1u);  // its own file, as version 1 wrote it
@@ -287,7 +287,7 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   }
   {
     JobStore store(dir / "jobs.db");
-    const std::vector<TileRecord> tiles = store.units().tiles("a");
+    const std::vector<UnitRecord> tiles = store.units().tiles("a");
     ASSERT_EQ(tiles.size(), 2u);
     EXPECT_EQ(tiles[0].attempts, 1);
     EXPECT_EQ(tiles[0].lost_attempts, 0);
@@ -457,7 +457,7 @@ TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
   const v1::Job added = store.jobs().add_job(job, 1);
   EXPECT_EQ(added.tiles_total(), 12u);
   EXPECT_EQ(added.passes(), 3u);
-  const std::vector<TileRecord> tiles = store.units().tiles("p");
+  const std::vector<UnitRecord> tiles = store.units().tiles("p");
   ASSERT_EQ(tiles.size(), 12u);
   for (std::uint32_t i = 0; i < 12; ++i) {
     EXPECT_EQ(tiles[i].frame, i < 6 ? 1 : 2) << i;
@@ -465,7 +465,7 @@ TEST_P(JobStoreTest, PassesAreUnitsHandedOutInPassOrderAndAFrameNeedsThemAll) {
     EXPECT_EQ(tiles[i].rect, tiles[i % 2].rect) << i;  // every pass has the frame's grid
   }
   const BatchSize many = [](const std::string&, int) { return 8; };
-  std::vector<TileBatch> claimed;
+  std::vector<UnitBatch> claimed;
   for (int k = 0; k < 3; ++k) {
     auto b = store.units().claim_next_batch("w", 2, many);
     ASSERT_TRUE(b);
@@ -526,7 +526,7 @@ TEST_P(JobStoreTest, LostWorkersCountApartFromAttemptsAndFailTheJobAtTheirOwnLim
     EXPECT_TRUE(f.will_retry);
     EXPECT_EQ(f.job.state(), v1::JOB_STATE_RUNNING);
   }
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[0].lost_attempts, 4);
   EXPECT_EQ(tiles[0].last_error, "worker w: UNAVAILABLE");
@@ -633,7 +633,7 @@ TEST_P(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
   ASSERT_EQ(store.jobs().finish_job("done", v1::JOB_STATE_SUCCEEDED, "", "", 4).state(), v1::JOB_STATE_SUCCEEDED);
   EXPECT_EQ(store.jobs().get_job("a")->stats().samples(), 20u);
 
-  const std::vector<TileBatch> taken = store.units().quarantine_worker("liar");
+  const std::vector<UnitBatch> taken = store.units().quarantine_worker("liar");
   ASSERT_EQ(taken.size(), 1u);
   EXPECT_EQ(taken[0].job_id, "a");
   EXPECT_EQ(taken[0].first, 0u);
@@ -644,7 +644,7 @@ TEST_P(JobStoreTest, QuarantiningAWorkerTakesBackWhatItRenderedForRunningJobs) {
   EXPECT_EQ(a.tiles_rendered(), 3u);  // results accepted over the job's life
   EXPECT_EQ(a.stats().samples(), 10u);
   EXPECT_EQ(a.stats().render_ms(), 5.0);
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].state, TileState::Queued);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
   EXPECT_EQ(tiles[2].state, TileState::Done);
@@ -702,7 +702,7 @@ TEST_P(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysAc
   ASSERT_TRUE(store.units().batch_done("a", last->first, last->count, stats, "w"));
   ASSERT_EQ(store.jobs().get_job("a")->tiles_done(), 3u);
 
-  const std::vector<TileBatch> taken = store.units().requeue_parts("a", {0, 99});
+  const std::vector<UnitBatch> taken = store.units().requeue_parts("a", {0, 99});
   ASSERT_EQ(taken.size(), 1u);  // part 99 holds no done tiles
   EXPECT_EQ(taken[0].first, 0u);
   EXPECT_EQ(taken[0].count, 2u);
@@ -712,7 +712,7 @@ TEST_P(JobStoreTest, RequeuedPartsAreQueuedAgainWithoutAnAttemptAndTheJobStaysAc
   EXPECT_EQ(a.tiles_done(), 1u);
   EXPECT_EQ(a.tiles_rendered(), 3u);
   EXPECT_EQ(a.stats().samples(), 10u);
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].state, TileState::Queued);
   EXPECT_EQ(tiles[0].attempts, 0);
   EXPECT_EQ(tiles[1].state, TileState::Queued);
@@ -741,7 +741,7 @@ TEST_P(JobStoreTest, AJobOfManyUnitsKeepsEveryTileInUnitOrder) {
   const v1::Job job = store.jobs().add_job(j, 1);
   EXPECT_EQ(job.tiles_total(), 140u);
   EXPECT_EQ(job.frames_total(), 7u);
-  const std::vector<TileRecord> tiles = store.units().tiles("many");
+  const std::vector<UnitRecord> tiles = store.units().tiles("many");
   ASSERT_EQ(tiles.size(), 140u);
   for (std::uint32_t i = 0; i < tiles.size(); ++i) {
     EXPECT_EQ(tiles[i].index, i);
@@ -788,7 +788,7 @@ TEST_P(JobStoreTest, AnErrorMessageOfAnyBytesIsRecordedAndItsAttemptCounted) {
   const std::string reason("bad \0 bytes \xff\xc0\x80 end", 19);
   const TileFailure failure = store.units().batch_failed("a", b->first, 1, reason, 3, 3, "w");
   EXPECT_TRUE(failure.will_retry);
-  const TileRecord tile = store.units().tiles("a")[0];
+  const UnitRecord tile = store.units().tiles("a")[0];
   EXPECT_EQ(tile.state, TileState::Queued);
   EXPECT_EQ(tile.attempts, 1);
   if (GetParam() == SqlDialect::SQLite) {
@@ -813,7 +813,7 @@ TEST_P(JobStoreTest, ClaimersOnSeveralConnectionsNeverShareATileAndLoseNoCount) 
   std::vector<std::string> errors;
   const auto claimer = [&](JobStore& store, const std::string& worker) {
     try {
-      while (const std::optional<TileBatch> batch =
+      while (const std::optional<UnitBatch> batch =
                  store.units().claim_next_batch(worker, 2, [](const std::string&, int) { return 3; })) {
         {
           std::lock_guard lock(mutex);
@@ -871,7 +871,7 @@ TEST_P(JobStoreTest, AnExpiredSchedulersTilesComeBackWithoutAnAttemptAndItsLateA
   EXPECT_EQ(reaped[0].id, "a");
   EXPECT_EQ(reaped[0].tiles_queued_again, 2);
   EXPECT_TRUE(a.leases().reap_expired(1001).empty());  // gone with the first reaping
-  std::vector<TileRecord> tiles = b.units().tiles("j");
+  std::vector<UnitRecord> tiles = b.units().tiles("j");
   EXPECT_EQ(tiles[a1->first].state, TileState::Queued);
   EXPECT_EQ(tiles[a2->first].state, TileState::Queued);
   EXPECT_EQ(tiles[a1->first].attempts + tiles[a1->first].lost_attempts, 0);
@@ -941,12 +941,12 @@ TEST_P(JobStoreTest, APausedJobHandsOutNothingUntilResumedAndPriorityReordersThe
 TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes) {
   JobStore store(connect());
   store.jobs().add_job(make_job("a", 0, 4), 1);
-  const std::optional<TileBatch> first = store.units().claim_next_batch("w", 2);
+  const std::optional<UnitBatch> first = store.units().claim_next_batch("w", 2);
   ASSERT_TRUE(first);
   EXPECT_EQ(first->first, 0u);
   EXPECT_TRUE(first->started_job);  // the claim that started it says so, and only that one
   ASSERT_TRUE(store.units().batch_done("a", 0, 1, {}, "w"));
-  const std::optional<TileBatch> second = store.units().claim_next_batch("w", 3);
+  const std::optional<UnitBatch> second = store.units().claim_next_batch("w", 3);
   ASSERT_TRUE(second);
   EXPECT_EQ(second->first, 1u);
   EXPECT_FALSE(second->started_job);
@@ -961,7 +961,7 @@ TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes
   EXPECT_EQ(r->job.failure_reason(), "");
   EXPECT_EQ(r->job.tiles_done(), 1u);
   EXPECT_FALSE(r->job.has_finished_at());
-  const std::vector<TileRecord> tiles = store.units().tiles("a");
+  const std::vector<UnitRecord> tiles = store.units().tiles("a");
   EXPECT_EQ(tiles[0].state, TileState::Done);
   for (int i = 1; i < 4; ++i) {
     EXPECT_EQ(tiles[i].state, TileState::Queued) << i;
@@ -990,7 +990,7 @@ TEST_P(JobStoreTest, RetryQueuesTheUnitsNotDoneWithNoAttemptsAndKeepsTheDoneOnes
   EXPECT_FALSE(store.jobs().retry_job("none"));
   store.jobs().cancel_job("b", 10);
   EXPECT_EQ(store.jobs().retry_job("b")->job.state(), v1::JOB_STATE_QUEUED);  // nothing done: queued
-  const std::optional<TileBatch> restarted = store.units().claim_next_batch("w", 11);
+  const std::optional<UnitBatch> restarted = store.units().claim_next_batch("w", 11);
   ASSERT_TRUE(restarted);
   EXPECT_EQ(restarted->job_id, "b");
   EXPECT_TRUE(restarted->started_job);

@@ -68,14 +68,14 @@ class ProgressivePreviewsTest : public ::testing::Test {
   }
 
   // Claims the next unit (pass order), keeps its pixels and marks it done.
-  TileBatch render_next() {
-    const std::optional<TileBatch> b = store_.units().claim_next_batch("w", 2);
+  UnitBatch render_next() {
+    const std::optional<UnitBatch> b = store_.units().claim_next_batch("w", 2);
     EXPECT_TRUE(b);
     RenderedTiles tiles = pass_tiles(b->pass);
     files_.add("p", info_.frame(0), {b->first, b->pass}, tiles);
     return *b;
   }
-  void done(const TileBatch& b) { EXPECT_TRUE(store_.units().batch_done("p", b.first, b.count, {})); }
+  void done(const UnitBatch& b) { EXPECT_TRUE(store_.units().batch_done("p", b.first, b.count, {})); }
 
   // The passes announced since the last call.
   std::vector<int> announced() {
@@ -109,7 +109,7 @@ class ProgressivePreviewsTest : public ::testing::Test {
 };
 
 TEST_F(ProgressivePreviewsTest, PassesAreAnnouncedInOrderAndALatePassWithTheOneAfterIt) {
-  const TileBatch p0 = render_next(), p1 = render_next(), p2 = render_next();
+  const UnitBatch p0 = render_next(), p1 = render_next(), p2 = render_next();
   ASSERT_EQ(p0.pass, 0);
   ASSERT_EQ(p2.pass, 2);
 
@@ -138,9 +138,9 @@ TEST_F(ProgressivePreviewsTest, PassesAreAnnouncedInOrderAndALatePassWithTheOneA
 }
 
 TEST_F(ProgressivePreviewsTest, AFoldWhosePartsWereTakenBackIsMadeAgainFromTheFiles) {
-  const TileBatch p0 = render_next();
+  const UnitBatch p0 = render_next();
   done(p0);
-  const TileBatch p1 = render_next();
+  const UnitBatch p1 = render_next();
   previews_.update("p", info_, 0, file_);
   EXPECT_EQ(announced(), std::vector<int>{0});
   EXPECT_EQ(read_preview_pixel(), static_cast<int>(to_srgb8(0.25f)));
@@ -150,7 +150,7 @@ TEST_F(ProgressivePreviewsTest, AFoldWhosePartsWereTakenBackIsMadeAgainFromTheFi
   ASSERT_EQ(store_.units().requeue_parts("p", {p0.first}).size(), 1u);
   previews_.parts_taken_back("p");
   done(p1);
-  const std::optional<TileBatch> again = store_.units().claim_next_batch("w", 3);
+  const std::optional<UnitBatch> again = store_.units().claim_next_batch("w", 3);
   ASSERT_TRUE(again);
   ASSERT_EQ(again->pass, 0);
   RenderedTiles redone = pass_tiles(2);  // grey 0.75 this time

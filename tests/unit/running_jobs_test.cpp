@@ -38,10 +38,10 @@ TEST(RunningJobsTest, AnActiveJobReadFromTheStoreIsKeptUntilForgotten) {
   const std::string id = s.add();
   EXPECT_EQ(s.jobs.get(id)->job->render.width, 16);
   EXPECT_EQ(s.jobs.count(), 1u);
-  s.jobs.add_tile_cost(id, 2.0);
+  s.jobs.add_unit_cost(id, 2.0);
   EXPECT_EQ(s.jobs.forget(id), 0u);
   EXPECT_EQ(s.jobs.count(), 0u);
-  EXPECT_FALSE(s.jobs.tile_cost(id));
+  EXPECT_FALSE(s.jobs.unit_cost(id));
 }
 
 TEST(RunningJobsTest, ALateCallAboutAFinalJobDoesNotBringItBackForGood) {

@@ -46,8 +46,8 @@ TEST(SpotCheckChooser, ASpanRunsFromTheFirstChosenTileOfABatchToItsLast) {
   r.height = 40;
   r.tile_size = 32;
   const SpotCheckChooser all(1.0, 7), none(0.0, 7);
-  const TileBatch batch{"job", 5, 3, Rect{32, 32, 100, 40}, 0};  // tiles 5, 6, 7 of row 1
-  const std::optional<TileSpan> span = all.span(batch, 8, r);
+  const UnitBatch batch{"job", 5, 3, Rect{32, 32, 100, 40}, 0};  // tiles 5, 6, 7 of row 1
+  const std::optional<UnitSpan> span = all.span(batch, 8, r);
   ASSERT_TRUE(span);
   EXPECT_EQ(span->first, 5u);
   EXPECT_EQ(span->count, 3u);
@@ -57,7 +57,7 @@ TEST(SpotCheckChooser, ASpanRunsFromTheFirstChosenTileOfABatchToItsLast) {
   const SpotCheckChooser one(1e-12, 7);
   int spans = 0;
   for (std::uint32_t first = 0; first < 8; ++first) {
-    const TileBatch single{"job", first, 1, Rect{}, 0};
+    const UnitBatch single{"job", first, 1, Rect{}, 0};
     if (const auto s = one.span(single, 8, r)) {
       ++spans;
       EXPECT_EQ(s->count, 1u);

@@ -22,7 +22,7 @@ namespace farm {
 namespace {
 
 
-std::string describe(const TileBatch& batch) { return describe_units(batch.first, batch.count); }
+std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
 
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
@@ -32,7 +32,7 @@ constexpr auto kIdleWait = std::chrono::milliseconds(500);
 }  // namespace
 
 struct Dispatcher::InFlight {
-  TileBatch batch;
+  UnitBatch batch;
   std::string worker_id;
   // Set: the call renders `batch` (part of another worker's batch) for this spot check.
   std::shared_ptr<SpotCheck> check;
@@ -170,7 +170,7 @@ void Dispatcher::quarantine(const std::string& worker_id, const std::string& wor
   // Its tiles running (calls, batches held for a check) and its done tiles of running jobs go
   // back to the queue in one transaction: a result of it that is being kept right now either
   // finds its tiles no longer running, or is taken back here.
-  for (const TileBatch& b : store_.units().quarantine_worker(worker_id)) {
+  for (const UnitBatch& b : store_.units().quarantine_worker(worker_id)) {
     assembly_.discard(b.job_id, b.first);
     finisher_.parts_taken_back(b.job_id);
     const std::string why =
@@ -263,7 +263,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
   // A batch waiting for a spot check goes first: its job cannot finish before it.
   if (std::shared_ptr<SpotCheck> c = spot_checks_.next_for(w.id)) {
     auto call = std::make_shared<InFlight>();
-    call->batch = TileBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
+    call->batch = UnitBatch{c->batch.job_id, c->span.first, c->span.count, c->span.rect, 0};
     call->batch.frame = c->batch.frame;
     call->batch.pass = c->batch.pass;
     call->worker_id = w.id;
@@ -271,7 +271,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
     in_flight_.insert(call);
     return call;
   }
-  std::optional<TileBatch> batch;
+  std::optional<UnitBatch> batch;
   try {
     // batch_size's answer stops changing at 2 x slots x kMaxBatch queued tiles: counted up to that.
     batch = store_.units().claim_next_batch(
@@ -297,12 +297,12 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
 
 int Dispatcher::batch_size(const std::string& job_id, int queued_tiles) const {
   if (options_.batch_target.count() <= 0) return 1;
-  const std::optional<double> ms_per_tile = jobs_.tile_cost(job_id);
-  if (!ms_per_tile) return 1;  // nothing measured yet: the first tiles tell
+  const std::optional<double> ms_per_unit = jobs_.unit_cost(job_id);
+  if (!ms_per_unit) return 1;  // nothing measured yet: the first tiles tell
   // The tail goes out in small pieces, so that no worker is left with a long batch while the
   // others have nothing: at most half of each slot's share of what is queued.
   const int share = queued_tiles / (2 * std::max(1, workers_.slots_up()));
-  const double by_time = static_cast<double>(options_.batch_target.count()) / std::max(*ms_per_tile, 1e-3);
+  const double by_time = static_cast<double>(options_.batch_target.count()) / std::max(*ms_per_unit, 1e-3);
   return std::clamp(std::min(static_cast<int>(by_time), share), 1, kMaxBatch);
 }
 
@@ -348,7 +348,7 @@ void Dispatcher::handle_result(WorkerEntry& w, const InFlight& call, const grpc:
   }
 }
 
-std::optional<RenderSettings> Dispatcher::settings_of(const TileBatch& batch) {
+std::optional<RenderSettings> Dispatcher::settings_of(const UnitBatch& batch) {
   try {
     RenderSettings settings = jobs_.get(batch.job_id)->job->render;
     settings.pass = batch.pass;  // what a reply for the batch renders (its samples)
@@ -360,7 +360,7 @@ std::optional<RenderSettings> Dispatcher::settings_of(const TileBatch& batch) {
 }
 
 void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result) {
-  const TileBatch& batch = call.batch;
+  const UnitBatch& batch = call.batch;
   const std::string worker = w.worker->describe();
   const std::optional<RenderSettings> settings = settings_of(batch);
   if (!settings) {
@@ -378,7 +378,7 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
   if (spot_checks_.hold(w, batch, *settings, result)) return;
   keep(w.id, worker, batch, result);
 }
-void Dispatcher::keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+void Dispatcher::keep(const std::string& worker_id, const std::string& worker, const UnitBatch& batch,
                       RenderedTiles& result) {
   const v1::TileStats stats = result.response.stats();
   try {
@@ -431,7 +431,7 @@ bool Dispatcher::wait_unless_stopping(std::chrono::milliseconds wait) {
   return stopping_;
 }
 
-void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& worker_id) {
+void Dispatcher::requeue_when_stored(const UnitBatch& batch, const std::string& worker_id) {
   while (true) {
     try {
       // A store whose server is away is asked again every second (StoreOutage::when_answered).
@@ -454,13 +454,13 @@ void Dispatcher::requeue_when_stored(const TileBatch& batch, const std::string& 
 }
 
 
-void Dispatcher::measured(const TileBatch& batch, const v1::TileStats& stats) {
+void Dispatcher::measured(const UnitBatch& batch, const v1::TileStats& stats) {
   // What a tile costs a worker running at full speed: its threads' CPU time shared by them. The
   // call's wall time would also count the time its threads waited for a core (two workers on
   // one machine, or two calls in flight on one worker), and halve the batches for nothing.
   const double per_call = stats.cpu_ms() > 0 && stats.threads() > 0 ? stats.cpu_ms() / stats.threads()
                                                                       : stats.render_ms();
-  jobs_.add_tile_cost(batch.job_id, per_call / std::max<std::uint32_t>(1, batch.count));
+  jobs_.add_unit_cost(batch.job_id, per_call / std::max<std::uint32_t>(1, batch.count));
 }
 
 void Dispatcher::failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status,

@@ -151,19 +151,19 @@ class Dispatcher : private DispatchControl {
   // An OK reply to a batch: checked, then kept or held for a spot check.
   void accept(WorkerEntry& w, const InFlight& call, RenderedTiles& result);
   void settle_stranded() override { spot_checks_.settle_stranded(); }
-  void keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+  void keep(const std::string& worker_id, const std::string& worker, const UnitBatch& batch,
             RenderedTiles& result) override;
-  void measured(const TileBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
+  void measured(const UnitBatch& batch, const v1::TileStats& stats);  // a batch's cost per tile
   void failed(WorkerEntry& w, const InFlight& call, const grpc::Status& status, CancelReason reason,
               const std::string& reason_text);
   // The batch (running on worker_id) back in the queue with no attempt counted, once the store
   // takes it: while the store itself is full, tried again each time dispatch resumes, while its
   // server is away every second (or dropped at stop(), when a restarted store queues running
   // tiles itself).
-  void requeue_when_stored(const TileBatch& batch, const std::string& worker_id) override;
+  void requeue_when_stored(const UnitBatch& batch, const std::string& worker_id) override;
   void stop_job(const std::string& job_id) override;  // under mutex_: stop_job_locked
   void wake() override { work_.notify_all(); }
-  std::optional<RenderSettings> settings_of(const TileBatch& batch) override;
+  std::optional<RenderSettings> settings_of(const UnitBatch& batch) override;
   // Cancels the calls in flight that `which` picks, for `reason`.
   template <typename Which>
   void cancel_calls_locked(Which&& which, CancelReason reason, const std::string& text = {});

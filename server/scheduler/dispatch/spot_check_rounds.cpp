@@ -15,8 +15,8 @@ namespace farm {
 
 namespace {
 
-std::string describe(const TileBatch& batch) { return describe_units(batch.first, batch.count); }
-std::string describe(const TileSpan& span) { return describe_units(span.first, span.count); }
+std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
+std::string describe(const UnitSpan& span) { return describe_units(span.first, span.count); }
 
 // Pixels rendered in this process come as a buffer; a spot check compares encoded tiles.
 void encode_pixels(RenderedTiles& result) {
@@ -47,13 +47,13 @@ bool SpotCheckRounds::holds_locked(const std::shared_ptr<SpotCheck>& check) cons
   return std::find(checks_.begin(), checks_.end(), check) != checks_.end();
 }
 
-bool SpotCheckRounds::hold(const WorkerEntry& w, const TileBatch& batch, const RenderSettings& settings,
+bool SpotCheckRounds::hold(const WorkerEntry& w, const UnitBatch& batch, const RenderSettings& settings,
                            RenderedTiles& result) {
   const std::string worker = w.worker->describe();
   // Spot checks by default for workers on other hosts (their replies crossed a network).
   const SpotCheckChooser& chooser = on_this_host(worker) ? chooser_ : remote_chooser_;
   if (!chooser.enabled()) return false;
-  std::optional<TileSpan> span;
+  std::optional<UnitSpan> span;
   if (const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id)) {
     span = chooser.span(batch, job->tiles_total(), settings);
   }
@@ -102,7 +102,7 @@ void SpotCheckRounds::on_reply(WorkerEntry& w, const std::shared_ptr<SpotCheck>&
                                CancelReason reason, RenderedTiles& result) {
   if (reason == CancelReason::JobCancelled || reason == CancelReason::Stopping) return;  // dropped already
   const std::string worker = w.worker->describe();
-  const TileBatch& batch = check->batch;
+  const UnitBatch& batch = check->batch;
   std::string problem;
   const bool answered = status.ok() && reason != CancelReason::Quarantined;
   if (answered && !result.pixels) {
@@ -163,7 +163,7 @@ void SpotCheckRounds::on_reply(WorkerEntry& w, const std::shared_ptr<SpotCheck>&
 }
 
 void SpotCheckRounds::settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing) {
-  const TileBatch& batch = check.batch;
+  const UnitBatch& batch = check.batch;
   const Opinion& agreed = check.opinions[j.agreed_with];
   if (j.agreed_with == 0) {
     log_.debug("job {} {}: spot check passed ({} and {} agree)", batch.job_id, describe(check.span), agreed.worker,

@@ -36,8 +36,8 @@ namespace farm {
 // A batch whose reply waits, its units still running in the store on its worker, until another
 // worker's rendering of its chosen span agrees. Under SpotCheckRounds::mutex_ while held there.
 struct SpotCheck {
-  TileBatch batch;
-  TileSpan span;
+  UnitBatch batch;
+  UnitSpan span;
   RenderedTiles reply;            // the batch's worker's, kept if the check agrees
   std::vector<Opinion> opinions;  // opinions[0]: the batch's worker's pixels of the span
   std::set<std::string> asked;    // workers that rendered it or failed to: not asked again
@@ -62,7 +62,7 @@ class SpotCheckRounds {
   // A checked, OK reply to `batch` from worker `w`: held for a check of its chosen span, or
   // queued again when the rounds are stopped (true: taken care of, the reply taken); false when
   // nothing of it is chosen or no other worker is there to check it on: keep it now.
-  bool hold(const WorkerEntry& w, const TileBatch& batch, const RenderSettings& settings, RenderedTiles& result);
+  bool hold(const WorkerEntry& w, const UnitBatch& batch, const RenderSettings& settings, RenderedTiles& result);
   // A held check for worker `worker_id` to render (one it has not rendered or failed), now taken;
   // null when there is none. The batch to render is the check's span.
   std::shared_ptr<SpotCheck> next_for(const std::string& worker_id);

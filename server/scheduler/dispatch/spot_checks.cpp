@@ -36,7 +36,7 @@ bool SpotCheckChooser::chosen(const std::string& job_id, std::uint32_t index, st
   return u < fraction_;
 }
 
-std::optional<TileSpan> SpotCheckChooser::span(const TileBatch& batch, std::uint32_t tiles,
+std::optional<UnitSpan> SpotCheckChooser::span(const UnitBatch& batch, std::uint32_t tiles,
                                                const RenderSettings& settings) const {
   std::optional<std::uint32_t> first, last;
   for (std::uint32_t i = batch.first; i < batch.first + batch.count; ++i) {
@@ -55,7 +55,7 @@ std::optional<TileSpan> SpotCheckChooser::span(const TileBatch& batch, std::uint
     return Rect{x, y, std::min(x + size, settings.width), std::min(y + size, settings.height)};
   };
   const Rect a = rect_of(*first), b = rect_of(*last);
-  return TileSpan{*first, *last - *first + 1, Rect{a.x0, a.y0, b.x1, b.y1}};
+  return UnitSpan{*first, *last - *first + 1, Rect{a.x0, a.y0, b.x1, b.y1}};
 }
 
 Judgement judge(std::vector<Opinion>& opinions, Opinion next) {

@@ -27,7 +27,7 @@
 namespace farm {
 
 // Tiles first .. first + count - 1 of a job's grid, one row segment, `rect` their union.
-struct TileSpan {
+struct UnitSpan {
   std::uint32_t first = 0;
   std::uint32_t count = 0;
   Rect rect;
@@ -43,7 +43,7 @@ class SpotCheckChooser {
   bool chosen(const std::string& job_id, std::uint32_t index, std::uint32_t tiles) const;
   // The part of `batch` to render again: its first chosen tile to its last; nullopt when it holds
   // none. `settings` lay out the job's grid (split_into_tiles).
-  std::optional<TileSpan> span(const TileBatch& batch, std::uint32_t tiles, const RenderSettings& settings) const;
+  std::optional<UnitSpan> span(const UnitBatch& batch, std::uint32_t tiles, const RenderSettings& settings) const;
 
  private:
   double fraction_;

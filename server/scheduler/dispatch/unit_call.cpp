@@ -6,7 +6,7 @@
 namespace farm {
 
 grpc::Status render_units(WorkerEntry& w, const UnitCall& call, const AssetStore& assets, RenderedTiles& result) {
-  const TileBatch& batch = call.batch;
+  const UnitBatch& batch = call.batch;
   const v1::JobSpec& spec = *call.job.spec;
   v1::RenderTileRequest request;
   // The job text (up to --max-job-bytes) travels once per worker and scene, not with every call.

@@ -18,7 +18,7 @@
 namespace farm {
 
 struct UnitCall {
-  const TileBatch& batch;
+  const UnitBatch& batch;
   const JobInfo& job;
   const std::string& scheduler_id;  // a worker of several schedulers fetches the job's files here
   std::chrono::milliseconds deadline_per_unit;

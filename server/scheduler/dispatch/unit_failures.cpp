@@ -12,7 +12,7 @@ namespace farm {
 
 namespace {
 
-std::string describe(const TileBatch& batch) { return describe_units(batch.first, batch.count); }
+std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
 
 // How a worker's error answer to RenderTile is accounted (worker_failures.h): a refusal is never
 // the unit's fault; INVALID_ARGUMENT says the unit can never render.
@@ -60,7 +60,7 @@ UnitFailures::UnitFailures(const Parts& parts)
       failures_(WorkerFailures::Options{parts.options.job_failures_per_worker, parts.options.worker_backoff,
                                         parts.options.worker_backoff_max}) {}
 
-void UnitFailures::call_failed(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status,
+void UnitFailures::call_failed(WorkerEntry& w, const UnitBatch& batch, const grpc::Status& status,
                                const std::optional<std::string>& left) {
   const std::string worker = w.worker->describe();
   std::string why;
@@ -101,7 +101,7 @@ void UnitFailures::call_failed(WorkerEntry& w, const TileBatch& batch, const grp
   if (went_down) control_.settle_stranded();  // a check that only this worker could have taken
 }
 
-void UnitFailures::impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem) {
+void UnitFailures::impossible_result(WorkerEntry& w, const UnitBatch& batch, const std::string& problem) {
   const std::string worker = w.worker->describe();
   const std::string kind = value_problem_kind(problem);
   std::optional<ImpossibleResult> earlier;
@@ -135,7 +135,7 @@ void UnitFailures::impossible_result(WorkerEntry& w, const TileBatch& batch, con
   control_.quarantine(w.id, worker, why);
 }
 
-void UnitFailures::worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status) {
+void UnitFailures::worker_disk_full(WorkerEntry& w, const UnitBatch& batch, const grpc::Status& status) {
   std::chrono::milliseconds wait{0};
   bool log = false;
   int skipped = 0;
@@ -156,7 +156,7 @@ void UnitFailures::worker_disk_full(WorkerEntry& w, const TileBatch& batch, cons
   control_.settle_stranded();
 }
 
-void UnitFailures::charge(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind) {
+void UnitFailures::charge(WorkerEntry& w, const UnitBatch& batch, const std::string& why, FailureKind kind) {
   const std::string worker = w.worker->describe();
   const FailureCharge charge = failures_.failed(w.id, batch.job_id, kind);
   if (charge.blocked_now) {
@@ -184,7 +184,7 @@ void UnitFailures::charge(WorkerEntry& w, const TileBatch& batch, const std::str
   if (charge.back_off.count() > 0) control_.settle_stranded();  // a check that only this worker could have taken
 }
 
-void UnitFailures::uncharged(WorkerEntry& w, const TileBatch& batch, const std::string& why) {
+void UnitFailures::uncharged(WorkerEntry& w, const UnitBatch& batch, const std::string& why) {
   const std::string worker = w.worker->describe();
   // Not the unit's own failure (the worker's: it fails other jobs too, or failed this one
   // before): queued again with no attempt counted, and said.
@@ -207,7 +207,7 @@ bool UnitFailures::every_worker_blocked(const std::string& job_id) const {
   return any;
 }
 
-void UnitFailures::fail(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+void UnitFailures::fail(const std::string& worker_id, const std::string& worker, const UnitBatch& batch,
                             const std::string& why, int max_attempts) {
   log_.warn("job {} {}: {}", batch.job_id, describe(batch), why);
   workers_.count_units(worker_id, 0, batch.count);
@@ -220,7 +220,7 @@ void UnitFailures::fail(const std::string& worker_id, const std::string& worker,
   after_failure(worker, batch, why, before, failure);
 }
 
-void UnitFailures::lose(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+void UnitFailures::lose(const std::string& worker_id, const std::string& worker, const UnitBatch& batch,
                             const std::string& why) {
   log_.warn("job {} {}: {} (its worker was lost: no attempt counted)", batch.job_id, describe(batch), why);
   workers_.count_units(worker_id, 0, batch.count);
@@ -233,7 +233,7 @@ void UnitFailures::lose(const std::string& worker_id, const std::string& worker,
   after_failure(worker, batch, why, before, failure);
 }
 
-void UnitFailures::after_failure(const std::string& worker, const TileBatch& batch, const std::string& why,
+void UnitFailures::after_failure(const std::string& worker, const UnitBatch& batch, const std::string& why,
                                v1::JobState before, const TileFailure& failure) {
   announce(batch.job_id, batch.first, batch.count, worker, why, failure.will_retry);
   if (failure.job.state() == v1::JOB_STATE_FAILED && before != v1::JOB_STATE_FAILED) {

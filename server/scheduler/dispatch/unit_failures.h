@@ -35,7 +35,7 @@ class DispatchControl {
  public:
   // The batch (running on worker_id) back in the queue with no attempt counted, once the store
   // takes it.
-  virtual void requeue_when_stored(const TileBatch& batch, const std::string& worker_id) = 0;
+  virtual void requeue_when_stored(const UnitBatch& batch, const std::string& worker_id) = 0;
   // Settles the spot checks no available worker is left to take.
   virtual void settle_stranded() = 0;
   // A failed job's calls in flight cancelled and its batches waiting for a check dropped.
@@ -45,10 +45,10 @@ class DispatchControl {
   // Wakes the slots: units are back in the queue.
   virtual void wake() = 0;
   // The batch's result kept: its pixels to the frame, its units marked done (Dispatcher::keep).
-  virtual void keep(const std::string& worker_id, const std::string& worker, const TileBatch& batch,
+  virtual void keep(const std::string& worker_id, const std::string& worker, const UnitBatch& batch,
                     RenderedTiles& result) = 0;
   // The settings of the batch's job at its pass; nullopt (logged) when the job is gone.
-  virtual std::optional<RenderSettings> settings_of(const TileBatch& batch) = 0;
+  virtual std::optional<RenderSettings> settings_of(const UnitBatch& batch) = 0;
 
  protected:
   ~DispatchControl() = default;
@@ -72,15 +72,15 @@ class UnitFailures {
   // A call of `w` for `batch` ended without a result: `left` (the reason) when the registry
   // dropped the worker meanwhile, else as `status` says (deadline, disk full, unreachable, or an
   // error of the worker's or the unit's).
-  void call_failed(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status,
+  void call_failed(WorkerEntry& w, const UnitBatch& batch, const grpc::Status& status,
                    const std::optional<std::string>& left);
   // A reply that failed the result check (`problem`): the worker is quarantined, unless another
   // worker already rendered the job to the same kind of impossible value, which makes it the
   // job's own: then the job fails saying so, and that worker is released.
-  void impossible_result(WorkerEntry& w, const TileBatch& batch, const std::string& problem);
+  void impossible_result(WorkerEntry& w, const UnitBatch& batch, const std::string& problem);
   // Counts a failed attempt on the batch (running on worker_id) with `why`, tells the job's
   // watchers, and fails the job at max_attempts.
-  void fail(const std::string& worker_id, const std::string& worker, const TileBatch& batch, const std::string& why,
+  void fail(const std::string& worker_id, const std::string& worker, const UnitBatch& batch, const std::string& why,
             int max_attempts);
   // Tells the job's watchers (and its log) that units first .. first + count - 1 failed on `worker`.
   void announce(const std::string& job_id, std::uint32_t first, std::uint32_t count, const std::string& worker,
@@ -99,20 +99,20 @@ class UnitFailures {
   // A failure of `kind` on `w` accounted as WorkerFailures says: an attempt charged to the batch
   // (fail) or the batch queued again uncharged, the worker kept off the job or backed off; the
   // job fails when every worker of the farm is kept off it.
-  void charge(WorkerEntry& w, const TileBatch& batch, const std::string& why, FailureKind kind);
+  void charge(WorkerEntry& w, const UnitBatch& batch, const std::string& why, FailureKind kind);
   // Not the unit's own failure (the worker's): the batch queued again with no attempt counted,
   // the failure logged and announced as TileFailed.
-  void uncharged(WorkerEntry& w, const TileBatch& batch, const std::string& why);
+  void uncharged(WorkerEntry& w, const UnitBatch& batch, const std::string& why);
   // The batch's worker was lost while it rendered: a lost-worker attempt counted instead of a
   // failed one (max_lost_worker_attempts), otherwise as fail.
-  void lose(const std::string& worker_id, const std::string& worker, const TileBatch& batch, const std::string& why);
+  void lose(const std::string& worker_id, const std::string& worker, const UnitBatch& batch, const std::string& why);
   // What fail and lose do once the store has counted: the watchers told, and a job that failed
   // by it ended here.
-  void after_failure(const std::string& worker, const TileBatch& batch, const std::string& why, v1::JobState before,
+  void after_failure(const std::string& worker, const UnitBatch& batch, const std::string& why, v1::JobState before,
                      const TileFailure& failure);
   // The worker said its disk is full: its batch queued again (no attempt counted) and the worker
   // left alone for its backoff.
-  void worker_disk_full(WorkerEntry& w, const TileBatch& batch, const grpc::Status& status);
+  void worker_disk_full(WorkerEntry& w, const UnitBatch& batch, const grpc::Status& status);
   // Whether every worker not quarantined is kept off the job (and there is one).
   bool every_worker_blocked(const std::string& job_id) const;
 

@@ -282,7 +282,7 @@ bool Finisher::make_room() {
   if (holding < 2) return false;
   const std::string& id = youngest->job_id();
   std::set<std::uint32_t> done;
-  for (const TileRecord& t : store_.units().tiles(id)) {
+  for (const UnitRecord& t : store_.units().tiles(id)) {
     if (t.state == TileState::Done) done.insert(t.part);
   }
   if (done.empty()) return false;
@@ -291,10 +291,10 @@ bool Finisher::make_room() {
   // still, the tiles stay done without their files, and the merge renders them again
   // (DamagedParts), as after a crash.
   assembly_.free_parts(id, parts);
-  const std::vector<TileBatch> taken = store_.units().requeue_parts(id, parts);
+  const std::vector<UnitBatch> taken = store_.units().requeue_parts(id, parts);
   previews_.parts_taken_back(id);
   std::uint32_t tiles = 0;
-  for (const TileBatch& b : taken) tiles += b.count;
+  for (const UnitBatch& b : taken) tiles += b.count;
   log_.warn("the disk is full: the {} done tiles of job {} (the youngest of {} running jobs holding tiles) are "
             "thrown away to make room for the older ones, and rendered again later",
             tiles, id, holding);
@@ -305,7 +305,7 @@ bool Finisher::make_room() {
 bool Finisher::render_again(const std::string& job_id, const DamagedParts& damaged) {
   std::vector<std::uint32_t> parts;
   for (const DamagedParts::Part& p : damaged.parts()) parts.push_back(p.part);
-  const std::vector<TileBatch> taken = store_.units().requeue_parts(job_id, parts);
+  const std::vector<UnitBatch> taken = store_.units().requeue_parts(job_id, parts);
   if (taken.empty()) return false;
   previews_.parts_taken_back(job_id);
   for (const DamagedParts::Part& p : damaged.parts()) {
@@ -316,9 +316,9 @@ bool Finisher::render_again(const std::string& job_id, const DamagedParts& damag
   return true;
 }
 
-void Finisher::publish_requeued(const std::string& job_id, const std::vector<TileBatch>& taken,
+void Finisher::publish_requeued(const std::string& job_id, const std::vector<UnitBatch>& taken,
                                 const std::string& reason) {
-  for (const TileBatch& b : taken) {
+  for (const UnitBatch& b : taken) {
     events_.publish(job_id, [&](v1::JobEvent& event) {
       v1::TileFailed& f = *event.mutable_tile_failed();
       f.set_tile_index(b.first);

@@ -103,7 +103,7 @@ class Finisher {
   // Queues the damaged parts' tiles again; false when the job had none done any more (final).
   bool render_again(const std::string& job_id, const DamagedParts& damaged);
   // Tells the job's watchers that `taken` was queued again for `reason` (no attempt counted).
-  void publish_requeued(const std::string& job_id, const std::vector<TileBatch>& taken, const std::string& reason);
+  void publish_requeued(const std::string& job_id, const std::vector<UnitBatch>& taken, const std::string& reason);
   // The job's output.video, once every frame is merged (video_encoder.h): where its submitter
   // said, or results/<job id>/<its file name>. std::exception when ffmpeg cannot make it.
   void make_video(const std::string& job_id, const JobInfo& info) const;

@@ -40,13 +40,13 @@ std::shared_ptr<const JobInfo> RunningJobs::add(const std::string& job_id,
   return jobs_.emplace(job_id, std::move(info)).first->second;
 }
 
-void RunningJobs::add_tile_cost(const std::string& job_id, double ms) {
+void RunningJobs::add_unit_cost(const std::string& job_id, double ms) {
   std::lock_guard lock(mutex_);
   auto [it, added] = ms_per_tile_.emplace(job_id, ms);
   if (!added) it->second = 0.5 * (it->second + ms);  // tiles differ: follow the recent ones
 }
 
-std::optional<double> RunningJobs::tile_cost(const std::string& job_id) const {
+std::optional<double> RunningJobs::unit_cost(const std::string& job_id) const {
   std::lock_guard lock(mutex_);
   const auto it = ms_per_tile_.find(job_id);
   if (it == ms_per_tile_.end()) return std::nullopt;

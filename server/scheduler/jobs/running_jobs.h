@@ -56,8 +56,8 @@ class RunningJobs {
 
   // What one of the job's tiles took to render, as a batch measured it: the estimate follows the
   // recent batches (tiles differ across a frame).
-  void add_tile_cost(const std::string& job_id, double ms);
-  std::optional<double> tile_cost(const std::string& job_id) const;  // nullopt: none measured yet
+  void add_unit_cost(const std::string& job_id, double ms);
+  std::optional<double> unit_cost(const std::string& job_id) const;  // nullopt: none measured yet
 
   // The job is final: its memory goes. Returns how many jobs are still kept.
   std::size_t forget(const std::string& job_id);

@@ -30,7 +30,7 @@ struct NewJob {
   std::vector<Rect> tiles;     // one frame's grid: every frame has these tiles
 };
 
-struct TileRecord {
+struct UnitRecord {
   std::string job_id;
   std::uint32_t index = 0;
   Rect rect;
@@ -53,7 +53,7 @@ struct FramePart {
 
 // Tiles first .. first + count - 1 of a job, handed to a worker by claim_next_batch (now
 // `running`): one row segment of the job's grid, `rect` their union.
-struct TileBatch {
+struct UnitBatch {
   std::string job_id;
   std::uint32_t first = 0;
   std::uint32_t count = 1;

@@ -8,15 +8,15 @@
 
 namespace farm {
 
-std::vector<TileRecord> UnitQueue::tiles(const std::string& id) const {
+std::vector<UnitRecord> UnitQueue::tiles(const std::string& id) const {
   std::lock_guard lock(mutex_);
   Query s(db_->prepared("SELECT t.idx, t.x0, t.y0, t.x1, t.y1, t.state, t.attempts, t.last_error, t.worker, t.part, "
                        "t.lost_attempts, t.frame, t.pass "
                        "FROM tiles t JOIN jobs j ON t.job_seq = j.seq WHERE j.id = ? ORDER BY t.idx"));
   s.bind(1, id);
-  std::vector<TileRecord> out;
+  std::vector<UnitRecord> out;
   while (s.step()) {
-    TileRecord t;
+    UnitRecord t;
     t.job_id = id;
     t.index = static_cast<std::uint32_t>(s.i64(0));
     t.rect = {s.i32(1), s.i32(2), s.i32(3), s.i32(4)};
@@ -33,12 +33,12 @@ std::vector<TileRecord> UnitQueue::tiles(const std::string& id) const {
   return out;
 }
 
-std::optional<TileBatch> UnitQueue::claim_next_batch(const std::string& worker, std::int64_t now_ms,
+std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                                     const BatchSize& batch_size, int count_up_to,
                                                     const std::function<bool(const std::string&)>& skip_job) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_, kRedoable);
-  TileBatch batch;
+  UnitBatch batch;
   std::int64_t seq = 0;
   {
     // The active jobs in queue order, each asked for its first queued tile through tiles_by_state
@@ -212,12 +212,12 @@ void UnitQueue::batch_requeue(const std::string& job_id, std::uint32_t first, st
       .bind(5, worker).bind(6, scheduler_).run();
 }
 
-std::vector<TileBatch> UnitQueue::quarantine_worker(const std::string& worker) {
+std::vector<UnitBatch> UnitQueue::quarantine_worker(const std::string& worker) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
   lock_jobs_of_tiles_locked("worker = ? AND state IN (1, 2)", worker);  // every job it touches
   // The done batches first (a batch is the tiles of one part), with what they added to the job.
-  std::vector<TileBatch> discarded;
+  std::vector<UnitBatch> discarded;
   std::vector<std::int64_t> seqs;
   {
     Query s(db_->prepared(fmt::format(
@@ -227,7 +227,7 @@ std::vector<TileBatch> UnitQueue::quarantine_worker(const std::string& worker) {
                     kActiveSql)));
     s.bind(1, worker);
     while (s.step()) {
-      TileBatch b;
+      UnitBatch b;
       b.job_id = s.text(1);
       b.first = static_cast<std::uint32_t>(s.i64(2));
       b.count = static_cast<std::uint32_t>(s.i64(3));
@@ -238,7 +238,7 @@ std::vector<TileBatch> UnitQueue::quarantine_worker(const std::string& worker) {
   }
   for (std::size_t i = 0; i < discarded.size(); ++i) {
     const std::int64_t seq = seqs[i];
-    const TileBatch& b = discarded[i];
+    const UnitBatch& b = discarded[i];
     Query(db_->prepared("UPDATE tiles SET state = 0, worker = '' WHERE job_seq = ? AND part = ? AND state = 2 AND worker = ?"))
         .bind(1, seq).bind(2, b.first).bind(3, worker).run();
     take_back_part_locked(seq, b.first, b.count);
@@ -252,16 +252,16 @@ std::vector<TileBatch> UnitQueue::quarantine_worker(const std::string& worker) {
   return discarded;
 }
 
-std::vector<TileBatch> UnitQueue::requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) {
+std::vector<UnitBatch> UnitQueue::requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
   lock_job_locked(job_id);
-  std::vector<TileBatch> taken;
+  std::vector<UnitBatch> taken;
   const std::optional<std::int64_t> active = active_seq_locked(job_id);
   if (!active) return taken;
   const std::int64_t seq = *active;
   for (std::uint32_t part : parts) {
-    TileBatch b;
+    UnitBatch b;
     b.job_id = job_id;
     b.first = part;
     {

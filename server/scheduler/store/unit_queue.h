@@ -20,7 +20,7 @@ class UnitQueue : public StorePart {
   explicit UnitQueue(StoreSession& session) : StorePart(session) {}
 
   // A job's units, in index order (its tiles of every frame and pass).
-  std::vector<TileRecord> tiles(const std::string& id) const;
+  std::vector<UnitRecord> tiles(const std::string& id) const;
 
   // The next queued tile of an active job (highest priority, then earliest submission, then tile
   // index) and, when `batch_size` allows more than one, the queued tiles that follow it in the
@@ -30,7 +30,7 @@ class UnitQueue : public StorePart {
   // Queued tiles are counted for `batch_size` up to `count_up_to` (a count past what changes its
   // answer costs every claim as much as the queue is long).
   // Jobs for which `skip_job(job_id)` is true are passed over (the worker is kept off them).
-  std::optional<TileBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
+  std::optional<UnitBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                             const BatchSize& batch_size = {}, int count_up_to = 1024,
                                             const std::function<bool(const std::string&)>& skip_job = {});
 
@@ -65,13 +65,13 @@ class UnitQueue : public StorePart {
   // Nothing `worker` rendered for a job still running is kept: its done tiles of active jobs are
   // queued again (their stats taken out of their jobs'; tiles_rendered keeps counting them) and
   // so are the tiles running on it. One transaction. Returns the done batches it took back.
-  std::vector<TileBatch> quarantine_worker(const std::string& worker);
+  std::vector<UnitBatch> quarantine_worker(const std::string& worker);
 
   // The done batches (by part) of an active job whose kept data turned out damaged at the merge:
   // their tiles are queued again without counting an attempt, their stats taken out of the job's
   // (tiles_rendered keeps counting them); the job stays active. One transaction. Returns the
   // batches it took back (none when the job is final, or a part has no done tiles).
-  std::vector<TileBatch> requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts);
+  std::vector<UnitBatch> requeue_parts(const std::string& job_id, const std::vector<std::uint32_t>& parts);
 
  private:
   enum class AttemptKind { Failed, WorkerLost };
