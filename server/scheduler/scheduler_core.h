@@ -62,6 +62,7 @@
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/store/store_outage.h"
 #include "server/scheduler/workers/tile_worker.h"
+#include "server/scheduler/workers/worker_infos.h"
 #include "server/scheduler/workers/worker_registry.h"
 
 namespace farm {
