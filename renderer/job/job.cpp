@@ -1,24 +1,22 @@
-// Over 500 lines on purpose: the job file's whole format is checked here, key by key, so that a
-// reader sees every rule and its error message side by side with jobs/README.md.
+// The job file's whole format is checked here, key by key, so that a reader sees every rule and
+// its error message side by side with jobs/README.md; the rules a keyframed value meets at a frame
+// too are in job_checks.h.
 #include "renderer/job/job.h"
 
 #include <fmt/format.h>
 
 #include <cerrno>
-#include <cmath>
 #include <fstream>
-#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 #include <iterator>
 #include <limits>
-#include <map>
 #include <memory>
 #include <system_error>
 
 #include "renderer/job/job_animation.h"
+#include "renderer/job/job_checks.h"
 #include "renderer/job/job_limits.h"
 #include "renderer/job/video_format.h"
-#include "renderer/scene/radiance_limit.h"
 #include "renderer/util/confined_file.h"
 #include "renderer/util/input_error.h"
 #include "renderer/util/json_reader.h"
@@ -31,24 +29,16 @@ namespace {
 
 constexpr std::size_t kMaxShownText = 64;
 
-const NumberRange kNonNegative = NumberRange::at_least(0.0);
-const NumberRange kPositive = NumberRange::above(0.0);
-// Light and colour: what renders to finite pixels (radiance_limit.h).
-const NumberRange kRadiometric = NumberRange::between(0.0, kRadianceBound);
-
 struct Context {
   fs::path job_dir;     // absolute
   fs::path job_file;    // in job_dir with its symlinks resolved: what model paths are relative to
   fs::path asset_root;  // absolute, symlinks resolved
-  // Model paths resolved so far, by the text written: an animated job's scene is read once per
-  // frame, and its files (which no keyframe can change) are resolved once.
-  std::shared_ptr<std::map<std::string, fs::path>> resolved = std::make_shared<std::map<std::string, fs::path>>();
-  std::shared_ptr<const std::string> asset_root_hint = std::make_shared<const std::string>();  // JobLoadOptions'
+  std::string asset_root_hint;  // JobLoadOptions'
 };
 
-// An animated job's scene is read once per frame when it is loaded, so that no frame fails
-// halfway through a render: at most this many objects and lights over all its frames.
-constexpr std::size_t kMaxAnimatedSceneReads = 2'000'000;
+// An animated job's values are checked at every frame when it is loaded, so that no frame fails
+// halfway through a render: at most this many keyframed values over all its frames.
+constexpr std::size_t kMaxAnimatedValueChecks = 10'000'000;
 
 // A user's string inside a message: shortened so a hostile value cannot flood logs.
 std::string shown(const std::string& s) {
@@ -59,28 +49,17 @@ std::string shown(const std::string& s) {
 fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
   const std::string written = v.string();
   if (written.empty()) v.fail("expected a file path, got an empty string");
-  if (const auto it = ctx.resolved->find(written); it != ctx.resolved->end()) return it->second;
   // A person writes a job on their own machine: an absolute path is fine if it lies in the root
   // (a submission rewrites it relative to the root before it travels).
   const ConfinedFile file =
       confine_file(ctx.asset_root, ctx.job_file, written, ReferenceForm::relative_or_absolute);
   if (file.verdict == Confinement::missing) v.fail(fmt::format("no such file '{}'", shown(written)));
   if (!file.allowed()) {
-    v.fail(file.verdict == Confinement::outside && !ctx.asset_root_hint->empty()
-               ? fmt::format("{}; {}", file.reason, *ctx.asset_root_hint)
+    v.fail(file.verdict == Confinement::outside && !ctx.asset_root_hint.empty()
+               ? fmt::format("{}; {}", file.reason, ctx.asset_root_hint)
                : file.reason);
   }
-  ctx.resolved->emplace(written, file.resolved);
   return file.resolved;
-}
-
-// Unit axis, computed in double so tiny but non-zero float axes still normalise.
-glm::vec3 parse_axis(const JsonValue& v) {
-  const glm::vec3 axis = v.vec3();
-  const glm::dvec3 d(axis);
-  const double len = std::sqrt(glm::dot(d, d));
-  if (!(len > 0.0)) v.fail("expected a non-zero axis, got (0, 0, 0)");
-  return glm::vec3(d / len);
 }
 
 MaterialOverride parse_material(const JsonValue& v) {
@@ -92,9 +71,9 @@ MaterialOverride parse_material(const JsonValue& v) {
   if (auto x = obj.get("diffuse")) m.diffuse = x->vec3(kRadiometric);
   if (auto x = obj.get("specular")) m.specular = x->vec3(kRadiometric);
   if (auto x = obj.get("emission")) m.emission = x->vec3(kRadiometric);
-  if (auto x = obj.get("shininess")) m.shininess = x->real(kNonNegative);
-  if (auto x = obj.get("ior")) m.ior = x->real(kPositive);
-  if (auto x = obj.get("transmission")) m.transmission = x->real(NumberRange::between(0.0, 1.0));
+  if (auto x = obj.get("shininess")) m.shininess = x->real(kShininessRange);
+  if (auto x = obj.get("ior")) m.ior = x->real(kIorRange);
+  if (auto x = obj.get("transmission")) m.transmission = x->real(kTransmissionRange);
   if (auto x = obj.get("emission_sides")) {
     const std::string s = x->string();
     const auto sides = emission_sides_from_string(s);
@@ -113,18 +92,12 @@ JobObject parse_object(const JsonValue& v, const Context& ctx) {
   if (auto x = obj.get("translate")) o.transform.translate = x->vec3();
   if (auto x = obj.get("rotate")) {
     const JsonObject rot = x->object({"axis", "degrees"});
-    if (auto axis = rot.get("axis")) o.transform.rotate_axis = parse_axis(*axis);
+    if (auto axis = rot.get("axis")) o.transform.rotate_axis = unit_axis(axis->vec3(), axis->place());
     if (auto deg = rot.get("degrees")) o.transform.rotate_degrees = deg->real();
   }
   if (auto x = obj.get("scale")) {
     o.transform.scale = x->vec3();
-    for (std::size_t i = 0; i < 3; ++i) {
-      // A zero factor flattens the object and makes the normal matrix singular.
-      if (o.transform.scale[static_cast<glm::length_t>(i)] == 0.0f) {
-        JsonValue(x->raw()[i], json_path_index(x->path(), i), x->file())
-            .fail("expected a non-zero scale factor, got 0");
-      }
-    }
+    check_scale(o.transform.scale, x->place());
   }
   if (auto x = obj.get("material")) o.material = parse_material(*x);
   if (auto x = obj.get("animation")) {
@@ -145,8 +118,6 @@ JobObject parse_object(const JsonValue& v, const Context& ctx) {
   return o;
 }
 
-std::string vec_text(const glm::vec3& p) { return fmt::format("({}, {}, {})", p.x, p.y, p.z); }
-
 Camera parse_camera(const JsonValue& v) {
   const JsonObject obj =
       v.object({"position", "target", "up", "fov_y", "near", "far", "aspect"});
@@ -155,47 +126,13 @@ Camera parse_camera(const JsonValue& v) {
   if (auto x = obj.get("target")) cam.target = x->vec3();
   const auto up = obj.get("up");
   if (up) cam.up = up->vec3();
-  if (auto x = obj.get("fov_y")) cam.fov_y_degrees = x->real(NumberRange::open(0.0, 180.0));
+  if (auto x = obj.get("fov_y")) cam.fov_y_degrees = x->real(kFovYRange);
   const auto near = obj.get("near");
-  if (near) cam.near = near->real(kPositive);
+  if (near) cam.near = near->real(kCameraPositive);
   const auto far = obj.get("far");
-  if (far) cam.far = far->real(kPositive);
-  if (auto x = obj.get("aspect")) cam.aspect = x->real(kPositive);
-
-  if (!(cam.far > cam.near)) {
-    if (far || !near) {
-      const JsonValue& at = far ? *far : v;
-      at.fail(fmt::format("expected far > near ({}), got {}", cam.near, cam.far));
-    }
-    near->fail(fmt::format("expected near < far ({}, the default), got {}", cam.far, cam.near));
-  }
-
-  // The view basis is built in float (glm::lookAt); refuse what would make it degenerate.
-  const glm::vec3 view = cam.target - cam.position;
-  const float view_len2 = glm::dot(view, view);
-  if (view == glm::vec3(0.0f)) {
-    v.fail(fmt::format("position and target are the same point {}", vec_text(cam.position)));
-  }
-  if (!std::isfinite(view_len2) || view_len2 < std::numeric_limits<float>::min()) {
-    v.fail(fmt::format("position {} and target {} are too close or too far apart to aim the camera",
-                       vec_text(cam.position), vec_text(cam.target)));
-  }
-  const std::string up_path = up ? up->path() : json_path_key(v.path(), "up");
-  auto fail_up = [&](const std::string& what) -> void {
-    throw InputError(fmt::format("{}: {}: {}", v.file(), up_path, what));
-  };
-  if (cam.up == glm::vec3(0.0f)) fail_up("expected a non-zero up vector, got (0, 0, 0)");
-  const glm::dvec3 f = glm::normalize(glm::dvec3(view));
-  const glm::dvec3 u = glm::normalize(glm::dvec3(cam.up));
-  if (glm::length(glm::cross(f, u)) < 1e-6) {
-    fail_up(fmt::format("{}up {} is parallel to the viewing direction (target - position)",
-                        up ? "" : "the default ", vec_text(cam.up)));
-  }
-  const glm::vec3 side = glm::cross(glm::normalize(view), cam.up);
-  const float side_len2 = glm::dot(side, side);
-  if (!std::isfinite(side_len2) || side_len2 < std::numeric_limits<float>::min()) {
-    fail_up(fmt::format("up {} is too short or too long to orient the camera", vec_text(cam.up)));
-  }
+  if (far) cam.far = far->real(kCameraPositive);
+  if (auto x = obj.get("aspect")) cam.aspect = x->real(kCameraPositive);
+  check_camera(cam, {near.has_value(), far.has_value(), up.has_value()}, v.place());
   return cam;
 }
 
@@ -391,29 +328,9 @@ std::string default_name(const fs::path& job_path) {
 
 }  // namespace
 
-struct JobAnimation {
-  nlohmann::json document;
-  std::vector<AnimatedValue> values;
-  Context ctx;
-};
-
-namespace {
-
-// The scene of `job` at `frame`, from its animated document.
-JobScene animated_scene(const JobAnimation& a, const std::string& file, int frame) {
-  const nlohmann::json doc = animated_document(a.document, a.values, frame);
-  try {
-    return parse_scene(JsonValue(doc.at("scene"), "scene", file), a.ctx);
-  } catch (const InputError& e) {
-    throw InputError(fmt::format("{} (at frame {}, with the animated values)", e.what(), frame));
-  }
-}
-
-}  // namespace
-
 Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadOptions& options) {
   const std::string file = path.string();
-  nlohmann::json doc = parse_json_strict(json_text, file);
+  const nlohmann::json doc = parse_json_strict(json_text, file);
   const JsonObject top(JsonValue(doc, "", file),
                        {"version", "name", "frames", "animate", "scene", "render", "output", "validate"});
 
@@ -434,7 +351,7 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
     const fs::path job_dir = fs::weakly_canonical(ctx.job_dir, ec);
     if (ec) throw InputError(fmt::format("{}: cannot resolve its folder: {}", file, ec.message()));
     ctx.job_file = job_dir / (path.empty() ? fs::path("job.json") : path.filename());
-    ctx.asset_root_hint = std::make_shared<const std::string>(options.asset_root_hint);
+    ctx.asset_root_hint = options.asset_root_hint;
   }
 
   Job job;
@@ -455,22 +372,19 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
   }
   if (auto x = top.get("animate")) {
     if (!job.frames) x->fail("keyframes need a frame range: give \"frames\": {\"start\": 1, \"end\": 48}");
-    auto animation = std::make_shared<JobAnimation>();
-    animation->values = parse_animate(*x, doc);
-    if (!animation->values.empty()) {
-      const std::size_t reads = (job.scene.objects.size() + (job.scene.lights ? job.scene.lights->size() : 0) + 1) *
-                                job.frames->frames().size();
-      if (reads > kMaxAnimatedSceneReads) {
-        x->fail(fmt::format("{} frames of a scene of {} objects and lights are too many to check: at most {} "
-                            "objects and lights over all frames",
-                            job.frames->frames().size(), reads / job.frames->frames().size() - 1,
-                            kMaxAnimatedSceneReads));
+    auto animation = std::make_shared<JobAnimation>(parse_animate(*x, doc));
+    const std::size_t frames = job.frames->frames().size();
+    if (!animation->tracks.empty()) {
+      if (animation->tracks.size() * frames > kMaxAnimatedValueChecks) {
+        x->fail(fmt::format("{} frames of {} keyframed values are too many to check: at most {} values over all "
+                            "frames",
+                            frames, animation->tracks.size(), kMaxAnimatedValueChecks));
       }
-      animation->ctx = ctx;
-      animation->document = std::move(doc);
-      // Every frame is read once here, so that no value an animation reaches (a negative
-      // intensity where a smooth curve overshoots, a camera on its target) fails a job halfway.
-      for (int f : job.frames->frames()) animated_scene(*animation, file, f);
+      // Every frame is checked here, so that no value an animation reaches (a negative intensity
+      // where a smooth curve overshoots, a camera on its target) fails a job halfway. Each frame
+      // writes every keyframed field, so one scene serves them all.
+      JobScene scene = job.scene;
+      for (int f : job.frames->frames()) animate_scene(*animation, scene, f, file);
       job.animation = std::move(animation);
     }
   }
@@ -486,7 +400,7 @@ Job job_at_frame(const Job& job, int frame) {
   out.render.frame = frame;
   if (!job.frames) return out;
   out.seconds = job.frames->seconds_at(frame);
-  if (job.animation) out.scene = animated_scene(*job.animation, job.path.string(), frame);
+  if (job.animation) animate_scene(*job.animation, out.scene, frame, job.path.string());
   out.output.image = frame_file_name(job.output_patterns.image.string(), frame);
   out.output.preview = frame_file_name(job.output_patterns.preview.string(), frame);
   return out;

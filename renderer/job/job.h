@@ -49,7 +49,7 @@ struct JobOutput {
   std::filesystem::path video;
 };
 
-struct JobAnimation;  // the job's keyframe tracks and the document they animate (job.cpp)
+struct JobAnimation;  // the job's keyframe tracks, bound to the fields they write (job_animation.h)
 
 struct Job {
   std::filesystem::path path;     // the job file

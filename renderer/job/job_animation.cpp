@@ -2,10 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
-#include <cmath>
-#include <limits>
+#include <map>
 #include <set>
+#include <tuple>
 
 #include "renderer/util/input_error.h"
 
@@ -56,8 +57,8 @@ std::optional<std::vector<JsonPathStep>> parse_path(const std::string& path) {
 }
 
 // What a path finds in the document: the value there, or none. `settable` says whether a missing
-// value could be added: every step from the first missing one on is a key (an object and its
-// keys are added as needed), while an array's missing element names nothing.
+// value could be written: every step from the first missing one on is a key (a frame writes the
+// field as if the job wrote those keys), while an array's missing element names nothing.
 struct Found {
   const Json* value = nullptr;
   bool settable = false;
@@ -118,9 +119,24 @@ Interpolation parse_interpolation(const JsonValue& v) {
   v.fail(fmt::format("unknown interpolation '{}' (expected step, linear or smooth)", s.substr(0, 64)));
 }
 
-AnimatedValue parse_track(const JsonValue& v, const Json& document) {
+std::string shapes_text(const std::vector<std::size_t>& shapes) {
+  std::vector<std::string> texts;
+  for (std::size_t shape : shapes) texts.push_back(shape_text(shape));
+  return texts.size() == 1 ? texts[0] : fmt::format("{} or {}", texts[0], texts[1]);
+}
+
+struct ParsedTrack {
+  KeyframeTrack track;
+  std::vector<JsonPathStep> steps;  // track.path, parsed
+  Binding binding;
+  bool scalar = true;  // keys of one number
+  // The numbers of the field the track writes, as the document holds them (a component's vector).
+  std::vector<double> written;
+};
+
+ParsedTrack parse_track(const JsonValue& v, const Json& document) {
   const JsonObject obj = v.object({"value", "interpolation", "keys"});
-  AnimatedValue out;
+  ParsedTrack out;
   const JsonValue value = obj.require("value");
   out.track.path = value.string();
   const auto steps = parse_path(out.track.path);
@@ -143,7 +159,14 @@ AnimatedValue parse_track(const JsonValue& v, const Json& document) {
   } else if (!found.settable) {
     value.fail(fmt::format("'{}' names nothing in the job", out.track.path));
   }
-  // Keys not written are added at each frame; reading the job then says whether such keys exist.
+  // Keys not written are added at each frame: the job format must have them.
+  out.binding = resolve_binding(out.steps, out.track.path, value);
+  const Json* field = out.binding.component
+                          ? find(document, {out.steps.begin(), out.steps.end() - 1}).value
+                          : target;
+  if (field && field->is_array()) {
+    for (const Json& x : *field) out.written.push_back(x.get<double>());
+  }
 
   if (auto x = obj.get("interpolation")) out.track.interpolation = parse_interpolation(*x);
   const JsonValue keys = obj.require("keys");
@@ -162,7 +185,15 @@ AnimatedValue parse_track(const JsonValue& v, const Json& document) {
     const JsonValue kv = key.require("value");
     k.value = key_value(kv);
     const std::size_t this_shape = kv.raw().is_number() ? 0 : k.value.size();
-    if (!shape) shape = this_shape;
+    if (!shape) {
+      // A value the job does not write: the first key says which of the shapes it may have.
+      const std::vector<std::size_t> shapes = key_shapes(out.binding);
+      if (std::find(shapes.begin(), shapes.end(), this_shape) == shapes.end()) {
+        kv.fail(fmt::format("expected {} for {}, got {}", shapes_text(shapes), out.binding.field_path,
+                            shape_text(this_shape)));
+      }
+      shape = this_shape;
+    }
     if (this_shape != *shape) {
       kv.fail(fmt::format("expected {} like {}, got {}", shape_text(*shape),
                           target ? out.track.path : json_path_index(keys.path(), 0) + ".value",
@@ -174,51 +205,91 @@ AnimatedValue parse_track(const JsonValue& v, const Json& document) {
   return out;
 }
 
-// The container of the path's last step, objects on the way added where keys are missing
-// (parse_animate checked that only keys are).
-Json* find_mutable(Json& doc, const std::vector<JsonPathStep>& steps) {
-  Json* node = &doc;
-  for (std::size_t s = 0; s + 1 < steps.size(); ++s) {
-    node = steps[s].key.empty() ? &(*node)[steps[s].index] : &(*node)[steps[s].key];
-    if (node->is_null()) *node = Json::object();
-  }
-  return node;
+// Fields in the order parse_job reads them: the objects', the camera's, the lights', the scene's.
+auto read_order(const AnimatedField& f) {
+  const int part = f.field < SceneField::CameraPosition ? 0
+                   : is_camera_field(f.field)           ? 1
+                   : f.field <= SceneField::LightIntensity ? 2
+                                                           : 3;
+  return std::tuple{part, f.owner, f.field};
 }
 
 }  // namespace
 
-std::vector<AnimatedValue> parse_animate(const JsonValue& animate, const nlohmann::json& document) {
-  std::vector<AnimatedValue> out;
+JobAnimation parse_animate(const JsonValue& animate, const nlohmann::json& document) {
+  JobAnimation out;
   std::set<std::string> seen;
+  std::map<std::pair<SceneField, std::size_t>, std::size_t> field_index;  // by field and owner
   for (const JsonValue& item : animate.array()) {
-    AnimatedValue v = parse_track(item, document);
+    ParsedTrack t = parse_track(item, document);
     // Paths are compared as parsed: scene.ambient and scene["ambient"] would be one value.
     std::string canonical;
-    for (const JsonPathStep& s : v.steps) canonical += s.key.empty() ? fmt::format("[{}]", s.index) : "." + s.key;
+    for (const JsonPathStep& s : t.steps) canonical += s.key.empty() ? fmt::format("[{}]", s.index) : "." + s.key;
     if (!seen.insert(canonical).second) {
       JsonValue(item.raw()["value"], json_path_key(item.path(), "value"), item.file())
-          .fail(fmt::format("'{}' is animated twice", v.track.path));
+          .fail(fmt::format("'{}' is animated twice", t.track.path));
     }
-    out.push_back(std::move(v));
+    const Binding& b = t.binding;
+    const auto [at, added] = field_index.try_emplace({b.field, b.owner}, out.fields.size());
+    if (added) {
+      AnimatedField f;
+      f.field = b.field;
+      f.owner = b.owner;
+      f.path = b.field_path;
+      f.scalar = !b.component && t.scalar;
+      std::copy_n(t.written.begin(), std::min<std::size_t>(t.written.size(), 3), f.written);
+      out.fields.push_back(std::move(f));
+    }
+    // A field's writers in the job's order: a whole vector, then one of its components, is the
+    // vector with that component replaced (and the other way round, the whole vector).
+    out.fields[at->second].writers.push_back({out.tracks.size(), b.component});
+    out.tracks.push_back(std::move(t.track));
+  }
+  std::sort(out.fields.begin(), out.fields.end(),
+            [](const AnimatedField& a, const AnimatedField& b) { return read_order(a) < read_order(b); });
+
+  const auto scene = document.find("scene");
+  if (scene != document.end() && scene->is_object()) {
+    if (const auto camera = scene->find("camera"); camera != scene->end() && camera->is_object()) {
+      out.camera_keys = {camera->contains("near"), camera->contains("far"), camera->contains("up")};
+    }
+  }
+  for (const AnimatedField& f : out.fields) {
+    if (f.field == SceneField::CameraNear) out.camera_keys.near = true;
+    if (f.field == SceneField::CameraFar) out.camera_keys.far = true;
+    if (f.field == SceneField::CameraUp) out.camera_keys.up = true;
   }
   return out;
 }
 
-nlohmann::json animated_document(const nlohmann::json& document, const std::vector<AnimatedValue>& values,
-                                 double frame) {
-  Json doc = document;
-  for (const AnimatedValue& v : values) {
-    const std::vector<double> x = v.track.at(frame);
-    Json& parent = *find_mutable(doc, v.steps);
-    const JsonPathStep& last = v.steps.back();
-    Json value = v.scalar ? Json(x[0]) : Json(x);
-    if (last.key.empty()) {
-      parent[last.index] = std::move(value);
-    } else {
-      parent[last.key] = std::move(value);
+void animate_scene(const JobAnimation& animation, JobScene& scene, int frame, const std::string& file) {
+  try {
+    std::vector<std::vector<double>> values;
+    values.reserve(animation.tracks.size());
+    for (const KeyframeTrack& t : animation.tracks) values.push_back(t.at(frame));
+    bool camera_written = false;
+    for (const AnimatedField& f : animation.fields) {
+      // The camera is checked whole once its fields are written, before the lights are read.
+      if (camera_written && !is_camera_field(f.field)) {
+        check_camera(*scene.camera, animation.camera_keys, JsonPlace{file, "scene.camera"});
+        camera_written = false;
+      }
+      double x[3] = {f.written[0], f.written[1], f.written[2]};
+      for (const AnimatedField::Writer& w : f.writers) {
+        const std::vector<double>& v = values[w.track];
+        if (w.component) {
+          x[*w.component] = v[0];
+        } else {
+          std::copy_n(v.begin(), std::min<std::size_t>(v.size(), 3), x);
+        }
+      }
+      write_field(f, x, scene, file);
+      camera_written = camera_written || is_camera_field(f.field);
     }
+    if (camera_written) check_camera(*scene.camera, animation.camera_keys, JsonPlace{file, "scene.camera"});
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{} (at frame {}, with the animated values)", e.what(), frame));
   }
-  return doc;
 }
 
 }  // namespace farm

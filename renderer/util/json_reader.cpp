@@ -174,6 +174,22 @@ std::string describe_range_violation(const NumberRange& range, double v, bool* v
   return {};
 }
 
+// JsonValue::real's checks of `v`, failing at `at` (a JsonValue or a JsonPlace); `shown` is the
+// number as the message shows it.
+template <typename Place>
+float real_at(const Place& at, double v, const Json& shown, const NumberRange& range) {
+  if (!std::isfinite(v)) at.fail(fmt::format("expected a finite number, got {}", describe_json(shown)));
+  if (std::fabs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+    at.fail(fmt::format("number {} is out of range for a 32-bit float", shown.dump()));
+  }
+  const auto f = static_cast<float>(v);
+  // Checked after rounding, so 1e-50 cannot pass "> 0" and then be stored as 0.
+  bool violated = false;
+  const std::string bound = describe_range_violation(range, static_cast<double>(f), &violated);
+  if (violated) at.fail(fmt::format("expected a number {}, got {}", bound, shown.dump()));
+  return f;
+}
+
 }  // namespace
 
 Json parse_json_strict(const std::string& text, const std::string& file) {
@@ -223,23 +239,23 @@ std::string describe_json(const Json& value) {
 
 void JsonValue::fail(std::string_view what) const { throw_at(*file_, path_, what); }
 
+void JsonPlace::fail(std::string_view what) const { throw_at(file, path, what); }
+
+float JsonPlace::real(double v, const NumberRange& range) const { return real_at(*this, v, Json(v), range); }
+
+glm::vec3 JsonPlace::vec3(const double (&v)[3], const NumberRange& range) const {
+  glm::vec3 out;
+  for (std::size_t i = 0; i < 3; ++i) out[static_cast<glm::length_t>(i)] = index(i).real(v[i], range);
+  return out;
+}
+
 void JsonValue::fail_expected(std::string_view expected) const {
   fail(fmt::format("expected {}, got {}", expected, describe_json(*value_)));
 }
 
 float JsonValue::real(const NumberRange& range) const {
   if (!value_->is_number()) fail_expected("a number");
-  const double v = value_->get<double>();
-  if (!std::isfinite(v)) fail_expected("a finite number");
-  if (std::fabs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
-    fail(fmt::format("number {} is out of range for a 32-bit float", value_->dump()));
-  }
-  const auto f = static_cast<float>(v);
-  // Checked after rounding, so 1e-50 cannot pass "> 0" and then be stored as 0.
-  bool violated = false;
-  const std::string bound = describe_range_violation(range, static_cast<double>(f), &violated);
-  if (violated) fail(fmt::format("expected a number {}, got {}", bound, value_->dump()));
-  return f;
+  return real_at(*this, value_->get<double>(), *value_, range);
 }
 
 std::int64_t JsonValue::integer(std::int64_t min, std::int64_t max) const {

@@ -42,6 +42,21 @@ struct NumberRange {
 
 class JsonObject;
 
+// A place in a document, for a value checked there that was not read from it (a keyframed value
+// at a frame, jobs/README.md): its checks and messages are JsonValue's, the number shown as JSON
+// writes a double.
+struct JsonPlace {
+  std::string file;
+  std::string path;
+
+  JsonPlace key(std::string_view k) const { return {file, json_path_key(path, k)}; }
+  JsonPlace index(std::size_t i) const { return {file, json_path_index(path, i)}; }
+  [[noreturn]] void fail(std::string_view what) const;
+  // JsonValue::real and vec3 of the number(s) `v`.
+  float real(double v, const NumberRange& range = {}) const;
+  glm::vec3 vec3(const double (&v)[3], const NumberRange& range = {}) const;
+};
+
 // A value inside a parsed document, together with its path for messages.
 class JsonValue {
  public:
@@ -51,6 +66,7 @@ class JsonValue {
   const nlohmann::json& raw() const { return *value_; }
   const std::string& path() const { return path_; }
   const std::string& file() const { return *file_; }
+  JsonPlace place() const { return {*file_, path_}; }
 
   [[noreturn]] void fail(std::string_view what) const;
   [[noreturn]] void fail_expected(std::string_view expected) const;  // "expected X, got Y"

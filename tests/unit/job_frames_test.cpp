@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "renderer/accel/prepared_scene.h"
@@ -221,10 +222,24 @@ TEST(JobFrames, BadAnimatePathsAndKeysNameTheirPlace) {
 TEST(JobFrames, CheckingEveryFrameOfAnAnimationIsBounded) {
   Json doc = animated("raster");
   doc["frames"] = {{"start", 1}, {"end", 10000}};
-  for (int i = 0; i < 300; ++i) doc["scene"]["objects"].push_back({{"file", "assets/cornell_box.obj"}});
+  // 7 tracks and 4 on each object added: over 1000, at 10000 frames.
+  for (int i = 1; i <= 249; ++i) {
+    doc["scene"]["objects"].push_back({{"file", "assets/cornell_box.obj"}});
+    for (const char* value : {"translate", "scale", "rotate.degrees", "material.diffuse"}) {
+      const bool vector = std::string(value) != "rotate.degrees";
+      const Json key = vector ? Json{1, 1, 1} : Json(1);
+      doc["animate"].push_back({{"value", fmt::format("scene.objects[{}].{}", i, value)},
+                                {"keys", {{{"frame", 1}, {"value", key}}}}});
+    }
+  }
   const std::string e = error_of(doc);
-  EXPECT_NE(e.find("animate: 10000 frames of a scene of 302 objects and lights are too many to check"), std::string::npos)
+  EXPECT_NE(e.find("animate: 10000 frames of 1003 keyframed values are too many to check: at most 10000000 values "
+                   "over all frames"),
+            std::string::npos)
       << e;
+  // The bound is on tracks times frames: the same tracks over 1000 frames are checked.
+  doc["frames"]["end"] = 1000;
+  EXPECT_EQ(parse(doc).scene.objects.size(), 250u);
 }
 
 TEST(JobFrames, KeysTheJobDoesNotWriteCanBeAnimated) {
@@ -235,9 +250,12 @@ TEST(JobFrames, KeysTheJobDoesNotWriteCanBeAnimated) {
                      {"keys", {{{"frame", 1}, {"value", {0, 1, 0}}}, {{"frame", 25}, {"value", {1, 1, 0}}}}}}};
   const Job at_13 = job_at_frame(parse(doc), 13);
   EXPECT_FLOAT_EQ(at_13.scene.camera->up.x, 0.5f);
-  // An absent key the object does not have is the job's own error, naming the path.
+  // An absent key the format does not have is refused as the job is read, naming the path.
   doc["animate"][0]["value"] = "scene.camera.upp";
-  EXPECT_NE(error_of(doc).find("scene.camera.upp: unknown key"), std::string::npos) << error_of(doc);
+  EXPECT_NE(error_of(doc).find("animate[0].value: 'scene.camera.upp': scene.camera has no key 'upp' (expected "
+                               "position, target, up, fov_y, near, far or aspect)"),
+            std::string::npos)
+      << error_of(doc);
 }
 
 }  // namespace
