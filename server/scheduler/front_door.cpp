@@ -11,6 +11,7 @@
 #include "server/common/network_address.h"
 #include "server/common/service_error.h"
 #include "server/common/sha256.h"
+#include "server/scheduler/jobs/submission_plan.h"
 #include "server/scheduler/scheduler_core.h"
 
 namespace farm {
@@ -397,6 +398,12 @@ v1::HasAssetsResponse SchedulerFrontDoor::has_assets(const Principal& who, const
     if (!core_.assets().has(sha)) response.add_missing(sha);
   }
   return response;
+}
+
+v1::PlanSubmissionResponse SchedulerFrontDoor::plan_submission(const Principal& who,
+                                                               const v1::PlanSubmissionRequest& request) const {
+  AccessControl::check(who, kJobSubmitters, "PlanSubmission");
+  return farm::plan_submission(request, core_.assets(), core_.options().limits);
 }
 
 std::filesystem::path SchedulerFrontDoor::asset_file(const Principal& who, const std::string& sha256) const {

@@ -7,7 +7,8 @@
 // tokens access() holds) and keeps only what is its own: streaming, pages, sessions.
 //
 // Who may do what (the roles of server/common/access_roles.h):
-//   submit, upload_asset, has_assets           submit, admin
+//   submit, plan_submission, upload_asset,     submit, admin
+//   has_assets
 //   get_job, watch_job, result_file,           submit (own jobs), read, admin
 //   live_preview, job_log
 //   list_jobs, watch_every_job                 submit (lists and hears only its own jobs), read, admin
@@ -172,6 +173,9 @@ class SchedulerFrontDoor {
   // An upload the caller may make (the header comes next: AssetUpload::begin).
   AssetUpload upload_asset(const Principal& who);
   v1::HasAssetsResponse has_assets(const Principal& who, const v1::HasAssetsRequest& request) const;
+  // Which files the job needs that the request does not describe, and which of its assets to
+  // upload (jobs/submission_plan.h): what a client asks before submit.
+  v1::PlanSubmissionResponse plan_submission(const Principal& who, const v1::PlanSubmissionRequest& request) const;
   // The blob GetAsset streams. ServiceError NOT_FOUND when the store does not hold it.
   std::filesystem::path asset_file(const Principal& who, const std::string& sha256) const;
 
