@@ -193,6 +193,10 @@ TEST_F(SubmissionPlanTest, AReferenceOutOfTheJobsFolderIsRefusedNamingTheModelAn
             "x/out.obj: '../../elsewhere.mtl' lies outside the asset root (the job's folder)");
   EXPECT_EQ(refusal(client({"x/abs.obj"}).request, store_),
             "x/abs.obj: '/etc/passwd' is an absolute path (a model names its files relative to its own folder)");
+  root_.write("x/latin1.obj", "mtllib caf\xe9.mtl\n");
+  store_.add(test::read_file(root_ / "x/latin1.obj"));
+  EXPECT_EQ(refusal(client({"x/latin1.obj"}).request, store_),
+            "x/latin1.obj: 'caf\xe9.mtl' is not UTF-8, and a plan names files in UTF-8");
   PlanningClient lib = client({"x/lib.obj"});
   lib.describe("x/lib.mtl");
   EXPECT_EQ(refusal(lib.request, store_),
