@@ -133,11 +133,15 @@ const ModelReferenceScanner::Files& ModelReferenceScanner::references(const fs::
   const fs::path key = model.lexically_normal();
   if (const auto found = models_.find(key); found != models_.end()) return found->second;
   partial_.clear();
-  const std::optional<std::string> bytes = read(key, "model file");
-  if (!bytes) return partial_;
+  std::vector<std::string> named;
+  {
+    const std::optional<std::string> bytes = read(key, "model file");
+    if (!bytes) return partial_;
+    named = model_references(key, *bytes);
+  }  // the model's bytes freed before its libraries are read: one file held at a time
   const bool obj = lowercase_extension(key) == ".obj";
   Files found;
-  for (std::string& written : model_references(key, *bytes)) {
+  for (std::string& written : named) {
     const std::optional<std::string> local = local_reference(written);
     if (!local) continue;
     if (auto file = source_.locate(key, key, ModelReference{std::move(written), *local})) found.push_back(std::move(*file));
@@ -168,10 +172,14 @@ const ModelReferenceScanner::Files& ModelReferenceScanner::references(const fs::
 
 const ModelReferenceScanner::Files* ModelReferenceScanner::library_maps(const fs::path& model, const fs::path& library) {
   if (const auto found = libraries_.find(library); found != libraries_.end()) return &found->second;
-  const std::optional<std::string> bytes = read(library, "material library");
-  if (!bytes) return nullptr;
+  std::vector<std::string> names;
+  {
+    const std::optional<std::string> bytes = read(library, "material library");
+    if (!bytes) return nullptr;
+    names = material_library_maps(*bytes);
+  }
   Files maps;
-  for (std::string& written : material_library_maps(*bytes)) {
+  for (std::string& written : names) {
     const std::optional<std::string> local = local_reference(written);
     if (!local) continue;
     if (auto map = source_.locate(model, library, ModelReference{std::move(written), *local})) maps.push_back(std::move(*map));
