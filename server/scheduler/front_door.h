@@ -22,7 +22,8 @@
 // an unknown job is NOT_FOUND, a bad argument InputError.
 //
 // Lock: mutex_ guards the registered workers and who registered them; a leaf, held only while
-// they are read or written (the core is called with it released).
+// they are read or written (the core is called with it released). plans_, a semaphore, bounds the
+// submissions planned at once (each holds one model's bytes); nothing is locked under it.
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -31,6 +32,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <semaphore>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -191,8 +193,13 @@ class SchedulerFrontDoor {
     std::string principal;  // the name of the caller that registered it
   };
 
+  // Plans read whole models in this process (jobs/submission_plan.h): as many at once as scene
+  // checks (--max-scene-checks), so that submitters cannot make it hold many large files together.
+  static constexpr std::ptrdiff_t kMaxPlansAtOnce = 64;
+
   SchedulerCore& core_;
   const SchedulerAccess access_;
+  mutable std::counting_semaphore<kMaxPlansAtOnce> plans_;
   std::mutex mutex_;
   std::map<std::string, Registered> registered_;  // by worker address
   // Who registered each worker id now in registered_: a heartbeat, every second from every
