@@ -20,6 +20,7 @@
 #include "renderer/util/confined_file.h"
 #include "renderer/util/input_error.h"
 #include "renderer/util/json_reader.h"
+#include "renderer/util/path_confinement.h"
 
 namespace farm {
 
@@ -34,6 +35,7 @@ struct Context {
   fs::path job_file;    // in job_dir with its symlinks resolved: what model paths are relative to
   fs::path asset_root;  // absolute, symlinks resolved
   std::string asset_root_hint;  // JobLoadOptions'
+  bool models_by_name = false;  // JobLoadOptions'
 };
 
 // An animated job's values are checked at every frame when it is loaded, so that no frame fails
@@ -49,6 +51,16 @@ std::string shown(const std::string& s) {
 fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
   const std::string written = v.string();
   if (written.empty()) v.fail("expected a file path, got an empty string");
+  if (ctx.models_by_name) {
+    // As the job will be laid out: under the root by the name it gives, an absolute path being
+    // one of the client's machine, which no farm lays out.
+    const fs::path named = (ctx.asset_root / written).lexically_normal();
+    if (written.find('\0') != std::string::npos) v.fail(fmt::format("'{}' contains a NUL character", shown(written)));
+    if (fs::path(written).has_root_path() || !lies_within(ctx.asset_root, named)) {
+      v.fail(fmt::format("'{}' lies outside the asset root ({})", shown(written), ctx.asset_root.string()));
+    }
+    return named;
+  }
   // A person writes a job on their own machine: an absolute path is fine if it lies in the root
   // (a submission rewrites it relative to the root before it travels).
   const ConfinedFile file =
@@ -342,7 +354,11 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
 
   Context ctx;
   ctx.job_dir = path.empty() ? fs::current_path() : fs::absolute(path).parent_path();
-  {
+  if (options.models_by_name) {
+    ctx.asset_root = options.asset_root.lexically_normal();
+    ctx.job_file = ctx.asset_root / (path.empty() ? fs::path("job.json") : path.filename());
+    ctx.models_by_name = true;
+  } else {
     const fs::path root = options.asset_root.empty() ? ctx.job_dir : fs::absolute(options.asset_root);
     std::error_code ec;
     ctx.asset_root = fs::weakly_canonical(root, ec);

@@ -84,6 +84,11 @@ struct JobLoadOptions {
   // How the person reading a refusal can widen the root, added to a "lies outside the asset root"
   // message (the commands: "give --asset-root DIR ..."); empty where nobody can (a worker).
   std::string asset_root_hint;
+  // Model paths resolved by name alone, under asset_root (absolute, and taken as it is): nothing
+  // is looked up, so the models need not exist yet. For a scheduler that plans a submission
+  // before it holds the job's files (PlanSubmission): it reads the job as it will lay it out. A
+  // path that is absolute or leads out of the root is refused as confine_file refuses it.
+  bool models_by_name = false;
 };
 
 // Parses and validates `path`. Model files must exist; they are not loaded here.

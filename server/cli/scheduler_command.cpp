@@ -304,7 +304,8 @@ void add_scheduler_command(CLI::App& app, CommandTable& commands) {
       ->capture_default_str();
   s->add_option("--max-scene-checks", o->limits.max_scene_checks,
                 "Scene checks (child processes) at once; others wait up to --max-scene-seconds for "
-                "one to end. 0: half the machine's hardware threads, at least 1")
+                "one to end. Also the submissions planned at once (PlanSubmission, at most 64; "
+                "others wait 30 s). 0: half the machine's hardware threads, at least 1")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
   add_log_level_option(*s, "info");

@@ -61,29 +61,7 @@ void refuse_corrupt_assets(const v1::JobSpec& spec, const AssetStore& store) {
 }
 
 // The path an asset is laid out at, relative to the scene folder; InputError if it could leave it.
-fs::path checked_relative_path(const v1::AssetRef& ref) {
-  const std::string& p = ref.path();
-  const auto fail = [&](const std::string& why) {
-    throw InputError(fmt::format("asset path '{}': {}", shown(p), why));
-  };
-  if (p.empty()) fail("empty");
-  if (p.find('\0') != std::string::npos) fail("contains a NUL character");
-  // Laid out under <data dir>/scenes/<hash>/, it must fit the file system's limits there too.
-  if (p.size() > kMaxAssetPathBytes) {
-    fail(fmt::format("{} bytes long; at most {}", p.size(), kMaxAssetPathBytes));
-  }
-  const fs::path path(p);
-  if (path.is_absolute() || path.has_root_path()) fail("must be relative to the job's folder");
-  for (const fs::path& part : path) {
-    if (part == "..") fail("must not contain '..'");
-    if (part.native().size() > kMaxFileNameBytes) {
-      fail(fmt::format("a name of {} bytes; a file name holds at most {}", part.native().size(), kMaxFileNameBytes));
-    }
-  }
-  const fs::path normal = path.lexically_normal();
-  if (normal.empty() || normal == "." || !normal.has_filename()) fail("names no file");
-  return normal;
-}
+fs::path checked_relative_path(const v1::AssetRef& ref) { return checked_asset_path(ref.path()); }
 
 // The job file's name inside the scene folder: the name it was submitted under, so parse_job's
 // messages read as they would for `farm render`, unless that is unusable or taken by an asset.
@@ -198,6 +176,29 @@ MissingAssetsError::MissingAssetsError(std::vector<v1::AssetRef> missing)
 
 CorruptAssetsError::CorruptAssetsError(std::vector<v1::AssetRef> corrupt)
     : MissingAssetsError(corrupt, corrupt_message(corrupt)) {}
+
+fs::path checked_asset_path(const std::string& p) {
+  const auto fail = [&](const std::string& why) {
+    throw InputError(fmt::format("asset path '{}': {}", shown(p), why));
+  };
+  if (p.empty()) fail("empty");
+  if (p.find('\0') != std::string::npos) fail("contains a NUL character");
+  // Laid out under <data dir>/scenes/<hash>/, it must fit the file system's limits there too.
+  if (p.size() > kMaxAssetPathBytes) {
+    fail(fmt::format("{} bytes long; at most {}", p.size(), kMaxAssetPathBytes));
+  }
+  const fs::path path(p);
+  if (path.is_absolute() || path.has_root_path()) fail("must be relative to the job's folder");
+  for (const fs::path& part : path) {
+    if (part == "..") fail("must not contain '..'");
+    if (part.native().size() > kMaxFileNameBytes) {
+      fail(fmt::format("a name of {} bytes; a file name holds at most {}", part.native().size(), kMaxFileNameBytes));
+    }
+  }
+  const fs::path normal = path.lexically_normal();
+  if (normal.empty() || normal == "." || !normal.has_filename()) fail("names no file");
+  return normal;
+}
 
 void validate_asset_refs(const v1::JobSpec& spec) {
   // Each is a file to check, link and perhaps fetch: far more than a scene's textures need.

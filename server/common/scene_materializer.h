@@ -42,6 +42,11 @@ inline constexpr int kMaxJobAssets = 10000;
 inline constexpr std::size_t kMaxAssetPathBytes = 1024;
 inline constexpr std::size_t kMaxFileNameBytes = 255;
 
+// An asset path ("textures/wood.png") as it is laid out under a scene folder: lexically normal.
+// InputError naming it unless it is relative, free of ".." and NUL, within the lengths above, and
+// names a file.
+std::filesystem::path checked_asset_path(const std::string& path);
+
 // InputError unless there are at most kMaxJobAssets, every asset path is relative, free of ".."
 // and NUL, within the lengths above, unique, and every hash is 64 lowercase hex digits.
 void validate_asset_refs(const v1::JobSpec& spec);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <thread>
 
 #include "renderer/job/job_limits.h"
 #include "renderer/util/input_error.h"
@@ -11,6 +12,7 @@
 #include "server/common/network_address.h"
 #include "server/common/service_error.h"
 #include "server/common/sha256.h"
+#include "server/scheduler/jobs/submission_plan.h"
 #include "server/scheduler/scheduler_core.h"
 
 namespace farm {
@@ -28,6 +30,16 @@ const Roles kJobSubmitters = Role::submit | Role::admin;
 const Roles kJobReaders = Role::submit | Role::read | Role::admin;
 const Roles kAllJobReaders = Role::read | Role::admin;
 const Roles kWorkers = Role::worker | Role::admin;
+
+// How long a plan waits for one of the others to end before it is refused.
+constexpr auto kPlanWait = std::chrono::seconds(30);
+
+// Plans at once: the scene checks' number (0: half the hardware threads, at least 1).
+std::ptrdiff_t plans_at_once(const SubmitLimits& limits, std::ptrdiff_t most) {
+  const int n = limits.max_scene_checks > 0 ? limits.max_scene_checks
+                                            : static_cast<int>(std::thread::hardware_concurrency() / 2);
+  return std::clamp<std::ptrdiff_t>(n, 1, most);
+}
 
 // What a registering worker says of itself, bounded: it is shown, never trusted.
 WorkerFacts facts_of(const v1::RegisterWorkerRequest& r) {
@@ -118,7 +130,7 @@ void AssetUpload::commit() { writer_->commit(); }
 // ---- The front door --------------------------------------------------------------------------------
 
 SchedulerFrontDoor::SchedulerFrontDoor(SchedulerCore& core, SchedulerAccess access)
-    : core_(core), access_(std::move(access)) {}
+    : core_(core), access_(std::move(access)), plans_(plans_at_once(core.options().limits, kMaxPlansAtOnce)) {}
 
 std::chrono::milliseconds SchedulerFrontDoor::upload_idle_timeout() const {
   return core_.options().upload_idle_timeout;
@@ -397,6 +409,21 @@ v1::HasAssetsResponse SchedulerFrontDoor::has_assets(const Principal& who, const
     if (!core_.assets().has(sha)) response.add_missing(sha);
   }
   return response;
+}
+
+v1::PlanSubmissionResponse SchedulerFrontDoor::plan_submission(const Principal& who,
+                                                               const v1::PlanSubmissionRequest& request) const {
+  AccessControl::check(who, kJobSubmitters, "PlanSubmission");
+  if (!plans_.try_acquire_for(kPlanWait)) {
+    throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                       "PlanSubmission: the scheduler is planning as many submissions as it reads at once "
+                       "(--max-scene-checks); ask again");
+  }
+  struct Release {
+    std::counting_semaphore<kMaxPlansAtOnce>& plans;
+    ~Release() { plans.release(); }
+  } release{plans_};
+  return farm::plan_submission(request, core_.assets(), core_.options().limits);
 }
 
 std::filesystem::path SchedulerFrontDoor::asset_file(const Principal& who, const std::string& sha256) const {

@@ -7,7 +7,8 @@
 // tokens access() holds) and keeps only what is its own: streaming, pages, sessions.
 //
 // Who may do what (the roles of server/common/access_roles.h):
-//   submit, upload_asset, has_assets           submit, admin
+//   submit, plan_submission, upload_asset,     submit, admin
+//   has_assets
 //   get_job, watch_job, result_file,           submit (own jobs), read, admin
 //   live_preview, job_log
 //   list_jobs, watch_every_job                 submit (lists and hears only its own jobs), read, admin
@@ -21,7 +22,8 @@
 // an unknown job is NOT_FOUND, a bad argument InputError.
 //
 // Lock: mutex_ guards the registered workers and who registered them; a leaf, held only while
-// they are read or written (the core is called with it released).
+// they are read or written (the core is called with it released). plans_, a semaphore, bounds the
+// submissions planned at once (each holds one model's bytes); nothing is locked under it.
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -30,6 +32,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <semaphore>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -172,6 +175,9 @@ class SchedulerFrontDoor {
   // An upload the caller may make (the header comes next: AssetUpload::begin).
   AssetUpload upload_asset(const Principal& who);
   v1::HasAssetsResponse has_assets(const Principal& who, const v1::HasAssetsRequest& request) const;
+  // Which files the job needs that the request does not describe, and which of its assets to
+  // upload (jobs/submission_plan.h): what a client asks before submit.
+  v1::PlanSubmissionResponse plan_submission(const Principal& who, const v1::PlanSubmissionRequest& request) const;
   // The blob GetAsset streams. ServiceError NOT_FOUND when the store does not hold it.
   std::filesystem::path asset_file(const Principal& who, const std::string& sha256) const;
 
@@ -187,8 +193,13 @@ class SchedulerFrontDoor {
     std::string principal;  // the name of the caller that registered it
   };
 
+  // Plans read whole models in this process (jobs/submission_plan.h): as many at once as scene
+  // checks (--max-scene-checks), so that submitters cannot make it hold many large files together.
+  static constexpr std::ptrdiff_t kMaxPlansAtOnce = 64;
+
   SchedulerCore& core_;
   const SchedulerAccess access_;
+  mutable std::counting_semaphore<kMaxPlansAtOnce> plans_;
   std::mutex mutex_;
   std::map<std::string, Registered> registered_;  // by worker address
   // Who registered each worker id now in registered_: a heartbeat, every second from every

@@ -217,6 +217,14 @@ grpc::Status SchedulerService::HasAssets(grpc::ServerContext* context, const v1:
   });
 }
 
+grpc::Status SchedulerService::PlanSubmission(grpc::ServerContext* context, const v1::PlanSubmissionRequest* request,
+                                              v1::PlanSubmissionResponse* response) {
+  return guarded([&] {
+    *response = front_door_.plan_submission(caller(*context), *request);
+    return grpc::Status::OK;
+  });
+}
+
 grpc::Status SchedulerService::GetAsset(grpc::ServerContext* context,
                                         const v1::GetAssetRequest* request,
                                         grpc::ServerWriter<v1::AssetChunk>* writer) {

@@ -35,6 +35,8 @@ class SchedulerService final : public v1::Scheduler::Service {
   grpc::Status HasAssets(grpc::ServerContext*, const v1::HasAssetsRequest*, v1::HasAssetsResponse*) override;
   grpc::Status GetAsset(grpc::ServerContext*, const v1::GetAssetRequest*,
                         grpc::ServerWriter<v1::AssetChunk>*) override;
+  grpc::Status PlanSubmission(grpc::ServerContext*, const v1::PlanSubmissionRequest*,
+                              v1::PlanSubmissionResponse*) override;
   grpc::Status RegisterWorker(grpc::ServerContext*, const v1::RegisterWorkerRequest*,
                               v1::RegisterWorkerResponse*) override;
   grpc::Status Heartbeat(grpc::ServerContext*, const v1::HeartbeatRequest*, v1::HeartbeatResponse*) override;

@@ -158,6 +158,7 @@ def service_seeds(pb):
         "9-register-worker": (9, pb.RegisterWorkerRequest(address="127.0.0.1:1", threads=1,
                                                           engines=["raster"])),
         "10-heartbeat": (10, pb.HeartbeatRequest(worker_id="w1")),
+        "11-plan-submission": (11, pb.PlanSubmissionRequest(job=spec, absent=["assets/none.png"])),
     }
     for name, (rpc, message) in calls.items():
         put("scheduler_requests", name, bytes([rpc]) + message.SerializeToString())

@@ -3,7 +3,8 @@
 // folder, served in process, called through the generated stub as a client on the network would
 // call it.
 //
-// An input is one call: its first byte picks the RPC (mod 11, in proto/farm.proto's order), and
+// An input is one call: its first byte picks the RPC (mod 12, in proto/farm.proto's order, then
+// PlanSubmission, added later, as 11), and
 // the rest is the serialized request. UploadAsset, a client stream, takes the rest as messages
 // each prefixed by its length (2 bytes, little endian). A job_id of "@" stands for the job the
 // last successful SubmitJob made, since the fuzzer cannot guess the scheduler's ids.
@@ -116,7 +117,7 @@ std::unique_ptr<grpc::ClientContext> context_with_deadline() {
 
 void InProcessScheduler::call(std::uint8_t rpc, std::string_view body) {
   auto context = context_with_deadline();
-  switch (rpc % 11) {
+  switch (rpc % 12) {
     case 0: {
       v1::SubmitJobRequest request;
       v1::SubmitJobResponse response;
@@ -216,11 +217,19 @@ void InProcessScheduler::call(std::uint8_t rpc, std::string_view body) {
       (void)stub_->RegisterWorker(context.get(), request, &response);
       return;
     }
-    default: {
+    case 10: {
       v1::HeartbeatRequest request;
       v1::HeartbeatResponse response;
       if (!parse(request, body)) return;
       (void)stub_->Heartbeat(context.get(), request, &response);
+      return;
+    }
+    default: {
+      // The example jobs' files are held: the plan reads the model and its library.
+      v1::PlanSubmissionRequest request;
+      v1::PlanSubmissionResponse response;
+      if (!parse(request, body)) return;
+      (void)stub_->PlanSubmission(context.get(), request, &response);
       return;
     }
   }

@@ -1205,6 +1205,12 @@ TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFe
       test::shell_quote((venv / "bin/python").string()) + " -c 'import farm_client._gen.farm_pb2 as m; print(m.__file__)'");
   ASSERT_EQ(where.exit_code, 0) << where.output;
   EXPECT_NE(where.output.find(venv.string()), std::string::npos) << "stubs generated into the installed package: " << where.output;
+  // A plan from another process is checked before the package acts on it: fake schedulers that
+  // ask for paths out of the root, ask twice, ask for nothing, or predate PlanSubmission.
+  const test::CommandResult distrust = test::run_command(
+      test::shell_quote((venv / "bin/python").string()) + " " +
+      test::shell_quote((test::kSource / "tests/python/farm_client_plan_check.py").string()));
+  EXPECT_EQ(distrust.exit_code, 0) << distrust.output;
 
   // The job file in a folder with its model and materials, as a user has them.
   const v1::JobSpec spec = cornell("raster", 48, 32, 1, 16);
@@ -1224,10 +1230,65 @@ TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFe
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json result = nlohmann::json::parse(r.output.substr(r.output.rfind('{')));
   EXPECT_EQ(result["state"], "SUCCEEDED") << r.output;
-  EXPECT_EQ(result["uploaded"], 2) << r.output;  // the model and its material library, found by the package
+  EXPECT_EQ(result["uploaded"], 2) << r.output;  // the model and its material library, found by the scheduler
   EXPECT_TRUE(result["listed"].get<bool>()) << r.output;
   EXPECT_GT(result["events"].get<int>(), 1) << r.output;
   EXPECT_EQ(differing_pixels(read_exr(result["exr"].get<std::string>()), fetch_exr(result["job_id"])), 0);
+
+  // #33: the package reads no model format; the scheduler says what each model names
+  // (PlanSubmission). An OBJ whose library names a texture (and a bump map that is not there), and
+  // a glTF with an external buffer: exactly their files are uploaded, and the jobs render.
+  const auto check = [&](const fs::path& job_file, const std::string& options = "") {
+    const test::CommandResult run = test::run_command(
+        test::shell_quote((venv / "bin/python").string()) + " " +
+        test::shell_quote((test::kSource / "tests/python/farm_client_package_check.py").string()) + " --scheduler " +
+        scheduler->address() + " --job " + test::shell_quote(job_file.string()) + " --out " +
+        test::shell_quote((dir_ / "python-out-2").string()) + " --token-file " + test::shell_quote(token_file.string()) +
+        options);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return nlohmann::json::parse(run.output.substr(run.output.rfind('{')));
+  };
+  const fs::path textured = dir_ / "textured";
+  fs::create_directories(textured / "assets/tex");
+  std::string obj = test::read_file(test::kSource / "jobs/assets/cornell_box.obj");
+  obj.replace(obj.find("mtllib cornell_box.mtl"), 22, "mtllib box.mtl");
+  std::ofstream(textured / "assets/box.obj") << obj;
+  std::ofstream(textured / "assets/box.mtl") << test::read_file(test::kSource / "jobs/assets/cornell_box.mtl")
+                                              << "map_Kd tex/wood.png\nbump tex/none.png\n";
+  std::ofstream(textured / "assets/tex/wood.png") << "the loaders read no texture";
+  std::string job_text = spec.job_json();
+  job_text.replace(job_text.find("assets/cornell_box.obj"), 22, "assets/box.obj");
+  std::ofstream(textured / "textured.json") << job_text;
+  nlohmann::json planned = check(textured / "textured.json");
+  EXPECT_EQ(planned["state"], "SUCCEEDED") << planned;
+  EXPECT_EQ(planned["asset_paths"], nlohmann::json({"assets/box.mtl", "assets/box.obj", "assets/tex/wood.png"}));
+  EXPECT_EQ(planned["absent"], nlohmann::json({"assets/tex/none.png"}));
+  EXPECT_EQ(planned["uploaded"], 3) << planned;
+  // Two rounds a level while the scheduler lacks the files (the model, its library, the map: each
+  // uploaded, then read), one a level once it holds them.
+  EXPECT_EQ(planned["rounds"], 6) << planned;
+  planned = check(textured / "textured.json", " --prepare-only");
+  EXPECT_EQ(planned["uploaded"], 0) << planned;
+  EXPECT_EQ(planned["rounds"], 3) << planned;
+
+  const fs::path gltf = dir_ / "gltf";
+  fs::create_directories(gltf / "assets");
+  const test::CommandResult split = test::run_command(
+      "/usr/bin/python3 -c 'import base64, json, sys; d = json.load(open(sys.argv[1])); b = d[\"buffers\"][0]; "
+      "open(sys.argv[2] + \"/torus.bin\", \"wb\").write(base64.b64decode(b[\"uri\"].split(\",\", 1)[1])); "
+      "b[\"uri\"] = \"torus.bin\"; json.dump(d, open(sys.argv[2] + \"/torus.gltf\", \"w\"))' " +
+      test::shell_quote((test::kSource / "jobs/assets/torus.gltf").string()) + " " +
+      test::shell_quote((gltf / "assets").string()));
+  ASSERT_EQ(split.exit_code, 0) << split.output;
+  nlohmann::json torus = nlohmann::json::parse(test::read_file(test::kSource / "jobs/torus.json"));
+  torus["render"]["width"] = 48;
+  torus["render"]["height"] = 32;
+  std::ofstream(gltf / "torus.json") << torus.dump(2);
+  planned = check(gltf / "torus.json");
+  EXPECT_EQ(planned["state"], "SUCCEEDED") << planned;
+  EXPECT_EQ(planned["asset_paths"], nlohmann::json({"assets/torus.bin", "assets/torus.gltf"}));
+  EXPECT_EQ(planned["uploaded"], 2) << planned;
+  EXPECT_EQ(planned["rounds"], 4) << planned;
 }
 
 }  // namespace

@@ -2,15 +2,21 @@
 """End-to-end check of the installed farm_client package (proto/python) against a running farm.
 
   farm_client_package_check.py --scheduler HOST:PORT --job JOB.json [--asset-root DIR] --out DIR
-      [--token-file FILE] [--timeout SECONDS]
+      [--token-file FILE] [--timeout SECONDS] [--prepare-only]
 
 Run with the python of a venv that has farm-client installed (the stubs come from the package,
-never from this script). It submits the job (its assets found automatically, only the missing ones
-uploaded), follows its events with watch(), checking their order (tiles_done never decreases, the
+never from this script). It prepares the job with the scheduler (PlanSubmission: the scheduler
+says which files the models name, only the missing ones are uploaded), submits it, follows its events with watch(), checking their order (tiles_done never decreases, the
 final state comes last and only last), waits for the job, fetches the EXR and the preview into
 --out, and checks that list() shows the job. Prints one JSON line:
 
-  {"job_id": ..., "state": "SUCCEEDED", "uploaded": N, "events": N, "exr": PATH, "exr_bytes": N, "listed": true}
+  {"job_id": ..., "state": "SUCCEEDED", "uploaded": N, "events": N, "exr": PATH, "exr_bytes": N, "listed": true,
+   "rounds": N, "asset_paths": [PATH, ...], "absent": [PATH, ...]}
+
+(rounds: the PlanSubmission calls preparing took; asset_paths: the spec's, sorted; absent: the
+files the models name that were not there.) With --prepare-only it stops once the job is prepared
+(its files planned and uploaded, nothing submitted) and prints only uploaded, rounds, asset_paths
+and absent.
 
 and exits 0 only when all of that held. A gRPC or input error prints
 {"error": CODE, "message": ...} and exits 1; so does a check that fails (error "CHECK_FAILED").
@@ -36,6 +42,10 @@ def check(condition, message):
 def run(args):
     with farm_client.Farm(args.scheduler, token_file=args.token_file, timeout=args.timeout) as farm:
         submission = farm.prepare(args.job, args.asset_root)
+        planned = {"uploaded": submission.uploaded, "rounds": submission.rounds,
+                   "asset_paths": [a.path for a in submission.assets], "absent": submission.absent}
+        if args.prepare_only:
+            return planned
         job = farm.submit(submission)
         check(job.job_id, "SubmitJob answered no job id")
 
@@ -75,9 +85,9 @@ def run(args):
         # A unique start of the id finds the job, as `farm status ID` does.
         check(farm.get(job.job_id[:6]).job_id == job.job_id, "the id prefix did not resolve to the job")
 
-        return {"job_id": job.job_id, "state": state, "uploaded": submission.uploaded,
-                "events": len(events), "exr": exr, "exr_bytes": exr_bytes, "listed": listed,
-                "preview": preview, "assets": len(submission.assets)}
+        return {"job_id": job.job_id, "state": state, "events": len(events), "exr": exr,
+                "exr_bytes": exr_bytes, "listed": listed, "preview": preview,
+                "assets": len(submission.assets), **planned}
 
 
 def main():
@@ -88,6 +98,7 @@ def main():
     parser.add_argument("--out", required=True, help="folder for the EXR and the preview")
     parser.add_argument("--token-file", help="file whose first line is the token (default: $FARM_TOKEN)")
     parser.add_argument("--timeout", type=float, default=300, help="seconds for each step (default 300)")
+    parser.add_argument("--prepare-only", action="store_true", help="stop once the job is prepared")
     args = parser.parse_args()
     try:
         result = run(args)

@@ -223,5 +223,31 @@ TEST_F(FrontDoorTest, WorkersAndAssetsAskForTheirRolesAndTheirOwnRegistrations) 
   EXPECT_TRUE(door_.heartbeat(kOtherWorker, beat).register_again());
 }
 
+TEST_F(FrontDoorTest, PlanningASubmissionTakesTheRolesOfSubmittingAndAnswersItsStatuses) {
+  // The Cornell box: the model held, its material library not yet described.
+  v1::PlanSubmissionRequest request;
+  *request.mutable_job() = test::cornell_job_spec("raster", 16, 16, 1);
+  request.mutable_job()->mutable_assets()->RemoveLast();  // the .mtl, named second
+  ASSERT_EQ(request.job().assets(0).path(), "assets/cornell_box.obj");
+  upload(kAlice, read_whole_file(test::cornell_assets()[0].second, "asset"));
+  EXPECT_EQ(code_of([&] { door_.plan_submission(kReader, request); }), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_EQ(code_of([&] { door_.plan_submission(kWorker, request); }), grpc::StatusCode::PERMISSION_DENIED);
+  const v1::PlanSubmissionResponse plan = door_.plan_submission(kAlice, request);
+  ASSERT_EQ(plan.needed_size(), 1);
+  EXPECT_EQ(plan.needed(0).path(), "assets/cornell_box.mtl");
+  EXPECT_EQ(plan.needed(0).named_by(), "assets/cornell_box.obj");
+  EXPECT_FALSE(plan.complete());
+  EXPECT_TRUE(door_.plan_submission(kAdmin, request).needed_size() == 1);
+  // A bad job is INVALID_ARGUMENT with SubmitJob's words; a spec over the limits RESOURCE_EXHAUSTED.
+  v1::PlanSubmissionRequest bad = request;
+  bad.mutable_job()->set_job_json("{\"version\": 2}");
+  std::string message;
+  EXPECT_EQ(code_of([&] { door_.plan_submission(kAlice, bad); }, &message), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(message.find("cornell.json: version: unsupported version 2"), std::string::npos) << message;
+  bad = request;
+  bad.mutable_job()->mutable_assets(0)->set_size(std::uint64_t{5} << 30);
+  EXPECT_EQ(code_of([&] { door_.plan_submission(kAlice, bad); }), grpc::StatusCode::RESOURCE_EXHAUSTED);
+}
+
 }  // namespace
 }  // namespace farm

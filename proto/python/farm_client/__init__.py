@@ -2,7 +2,7 @@
 
     import farm_client
     with farm_client.Farm("localhost:50051") as farm:
-        job = farm.submit("jobs/cornell.json")      # finds, hashes and uploads its assets
+        job = farm.submit("jobs/cornell.json")      # hashes and uploads its assets (the scheduler says which)
         for event in farm.watch(job):              # JobEvent, until a final state
             print(event.job.tiles_done, "/", event.job.tiles_total)
         farm.fetch(job, "cornell.exr")

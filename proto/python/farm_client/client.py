@@ -166,9 +166,24 @@ class Farm:
     # ---- jobs ----------------------------------------------------------------------------------
 
     def prepare(self, job_file, asset_root=None) -> JobSubmission:
-        """The job file and every file it reads, found and hashed as `farm submit` does, nothing
-        sent yet (farm_client.submission). FarmInputError for a bad job or a refused reference."""
-        return make_job_submission(job_file, asset_root)
+        """The job file and every file it reads, hashed, and those the scheduler lacks uploaded;
+        the job not yet submitted (farm_client.submission). The scheduler says which files the
+        models name (PlanSubmission): this package reads no model format, so preparing needs the
+        scheduler. FarmInputError for a bad job or a refused reference; FarmError for a scheduler
+        older than this client (no PlanSubmission)."""
+        return make_job_submission(job_file, asset_root, farm=self)
+
+    def _plan(self, spec, absent):
+        """One PlanSubmission call: PlanSubmissionResponse."""
+        request = pb.PlanSubmissionRequest(job=spec, absent=absent)
+        try:
+            return self._stub.PlanSubmission(request, timeout=self.timeout, metadata=self._metadata)
+        except grpc.RpcError as err:
+            if hasattr(err, "code") and err.code() == grpc.StatusCode.UNIMPLEMENTED:
+                raise FarmError(f"PlanSubmission: the scheduler at {self.address} does not offer it: the "
+                                "scheduler is older than this client, which asks it which files a job "
+                                "needs; upgrade the scheduler", err.code(), err.details() or "") from None
+            raise error_from_rpc(err, "PlanSubmission", self.address) from None
 
     def upload_missing(self, submission: JobSubmission) -> int:
         """Uploads the files the scheduler lacks (HasAssets first); returns how many were sent."""
@@ -232,8 +247,8 @@ class Farm:
             os.close(fd)
 
     def submit(self, job, asset_root=None, priority: int = 0) -> pb.Job:
-        """Sends a job: `job` is a job file (its assets found, hashed, and the missing ones
-        uploaded, as `farm submit` does) or a JobSubmission from prepare(). Returns the queued Job;
+        """Sends a job: `job` is a job file (prepared: its files found with the scheduler, hashed,
+        and the missing ones uploaded) or a JobSubmission from prepare(). Returns the queued Job;
         the submission's `uploaded` says how many files were sent."""
         submission = job if isinstance(job, JobSubmission) else self.prepare(job, asset_root)
         try:

@@ -1,13 +1,22 @@
 """A job file turned into what a scheduler is sent (farm.v1.JobSpec): the job's text and every file
 it reads, named by content, as server/client/job_submission.cpp makes it for `farm submit`.
 
+Which files a job reads besides its models is the scheduler's to say: this package reads no model
+format. The job's models are found, confined and hashed here; then the scheduler is asked
+(PlanSubmission) which of the files it lacks and which files the models name, read with the code
+`farm submit` scans with. Each needed file is confined under the asset root here (confine.py),
+hashed and described, or listed absent when there is no file; what the scheduler lacks is
+uploaded; until the plan is complete. A reply is checked before it is trusted: every path asked
+for must be relative, lexically normal and inside the root, asked for once.
+
 Asset paths in the spec are relative to the asset root (the job file's folder unless asset_root
 says otherwise). When the job's own folder is that root, the job text goes as it is, byte for
 byte; otherwise its model paths are rewritten relative to the root (the scheduler lays the files
 out under the root and reads the job from there).
 
-The job is not validated here beyond what finding its files needs (the JSON, scene.objects[].file):
-the scheduler judges the rest and its refusal names the file and the JSON path.
+The job is not validated here beyond what finding its models needs (the JSON,
+scene.objects[].file): the scheduler judges the rest and its refusal names the file and the JSON
+path.
 """
 from __future__ import annotations
 
@@ -18,10 +27,10 @@ import os
 import posixpath
 import stat
 
-from .confine import (ALLOWED, MISSING, absolute, confine_file, lexically_relative, open_confined,
-                      shown, weakly_canonical)
-from .dependencies import ModelDependencyScanner
-from .errors import FarmInputError
+from .confine import (ALLOWED, MISSING, absolute, confine_file, lexically_normal, lexically_relative,
+                      open_confined, shown, weakly_canonical)
+from ._gen import farm_pb2 as pb
+from .errors import FarmError, FarmInputError
 
 __all__ = ["JobSubmission", "make_job_submission", "MAX_JOB_FILE_BYTES", "MAX_JOB_ASSETS",
            "MAX_ASSET_BYTES", "MAX_JOB_ASSET_BYTES"]
@@ -36,6 +45,8 @@ MAX_ASSET_BYTES = 2 << 30
 MAX_JOB_ASSET_BYTES = 4 << 30
 
 _READ_BYTES = 1 << 20
+_MAX_ASSET_PATH_BYTES = 1024  # server/common/scene_materializer.h, kMaxAssetPathBytes
+_UPLOADS_OF_ONE_FILE = 2      # a blob the scheduler found damaged and removed is sent once more
 _SHOWN_TEXT = 64  # a user's string inside a job error, as renderer/job/job.cpp shortens it
 
 
@@ -57,9 +68,11 @@ class JobSubmission:
     asset_root: str
     assets: list[Asset]
     files: dict[str, str]
-    files_scanned: int = 0   # models and material libraries read to find references
+    files_scanned: int = 0   # 0: the scheduler reads the models for the files they name
     files_hashed: int = 0
     uploaded: int | None = None
+    rounds: int = 0          # PlanSubmission calls it took
+    absent: list[str] = dataclasses.field(default_factory=list)  # named by a model, no file here
 
     @property
     def total_bytes(self) -> int:
@@ -205,12 +218,36 @@ def _digest(root: str, resolved: str, path: str, max_bytes: int) -> tuple[str, i
     return digest.hexdigest(), size
 
 
-def make_job_submission(job_file, asset_root=None, *, max_assets: int = MAX_JOB_ASSETS,
+def _checked_needed_path(path: str) -> str:
+    """A path the scheduler asked for, refused unless it is one an asset can have: relative,
+    '/'-separated, lexically normal (no ".", no ".."), naming a file, bounded."""
+    if (not path or "\0" in path or path.startswith("/") or path.endswith("/")
+            or len(path.encode("utf-8", "surrogatepass")) > _MAX_ASSET_PATH_BYTES
+            or lexically_normal(path) != path or path.split("/")[0] in (".", "..")):
+        raise FarmError(f"PlanSubmission: the scheduler asked for '{shown(path, _SHOWN_TEXT)}', which is not a "
+                        "relative, normalised path inside the asset root; nothing was read")
+    return path
+
+
+def _spec_of(job_json: str, file_name: str, assets, job_file: str):
+    try:
+        spec = pb.JobSpec(job_json=job_json, file_name=file_name)
+        for asset in assets:
+            spec.assets.add(path=asset.path, sha256=asset.sha256, size=asset.size)
+    except (ValueError, TypeError) as err:
+        # A proto string must be UTF-8: a path of bytes that are not cannot be sent.
+        raise FarmInputError(f"{job_file}: cannot be sent: {err}") from None
+    return spec
+
+
+def make_job_submission(job_file, asset_root=None, *, farm, max_assets: int = MAX_JOB_ASSETS,
                         max_asset_bytes: int = MAX_ASSET_BYTES,
                         max_total_bytes: int = MAX_JOB_ASSET_BYTES) -> JobSubmission:
-    """The job file and every file it reads (its models, and what they name), hashed. Raises
-    FarmInputError, naming the file and the place, for a job whose files cannot be found or a
-    model reference that confine_file refuses: nothing refused is read."""
+    """The job file and every file it reads (its models, and what the scheduler finds they name),
+    hashed, the ones `farm` (a Farm) lacks uploaded. Raises FarmInputError, naming the file and
+    the place, for a job whose models cannot be found or a file that confine_file refuses (the
+    message names the file that names it and the reference): nothing refused is read; FarmError
+    for a scheduler without PlanSubmission or whose replies cannot be trusted."""
     job_file = os.fsdecode(job_file)
     data = _read_job_file(job_file)
     try:
@@ -257,24 +294,17 @@ def make_job_submission(job_file, asset_root=None, *, max_assets: int = MAX_JOB_
             item["file"] = lexically_relative(model, root)
         job_json = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
 
-    # spec path -> the file to read (resolved). The models go under their resolved names, what
-    # they reference under the names the models use, since a worker lays the files out by those.
-    by_path: dict[str, str] = {}
-    scanner = ModelDependencyScanner(root, max_read_bytes=max_asset_bytes)
-    for model in models:
-        by_path.setdefault(lexically_relative(model, root), model)
-        for dependency in scanner.dependencies(model):
-            by_path.setdefault(lexically_relative(dependency.named, root), dependency.resolved)
-        if len(by_path) > max_assets:
-            raise FarmInputError(f"{job_file}: the job reads more than {max_assets} files; a scheduler "
-                                 f"takes at most {max_assets}")
-
-    assets: list[Asset] = []
-    files: dict[str, str] = {}
+    submission = JobSubmission(job_file=job_file, file_name=posixpath.basename(job_file), job_json=job_json,
+                               asset_root=root, assets=[], files={}, uploaded=0)
+    by_path: dict[str, Asset] = {}
     digests: dict[str, tuple[str, int]] = {}  # resolved file -> digest: each file hashed once
     total = 0
-    for path in sorted(by_path):  # str order is UTF-8 byte order: the C++ std::map's
-        resolved = by_path[path]
+
+    def describe(path: str, resolved: str) -> None:
+        nonlocal total
+        if len(by_path) + len(submission.absent) >= max_assets:
+            raise FarmInputError(f"{job_file}: the job reads more than {max_assets} files; a scheduler "
+                                 f"takes at most {max_assets}")
         if resolved not in digests:
             digests[resolved] = _digest(root, resolved, path, max_asset_bytes)
         sha, size = digests[resolved]
@@ -282,8 +312,58 @@ def make_job_submission(job_file, asset_root=None, *, max_assets: int = MAX_JOB_
         if total > max_total_bytes:
             raise FarmInputError(f"{job_file}: the job's files are more than {max_total_bytes} bytes "
                                  "together; a scheduler takes at most that a job")
-        assets.append(Asset(path=path, sha256=sha, size=size, file=resolved))
-        files.setdefault(sha, resolved)
-    return JobSubmission(job_file=job_file, file_name=posixpath.basename(job_file), job_json=job_json,
-                         asset_root=root, assets=assets, files=files,
-                         files_scanned=scanner.files_scanned, files_hashed=len(digests))
+        by_path[path] = Asset(path=path, sha256=sha, size=size, file=resolved)
+        submission.files.setdefault(sha, resolved)
+
+    # The models under their resolved names, relative to the root, as the rewrite names them.
+    for model in models:
+        path = lexically_relative(model, root)
+        if path not in by_path:
+            describe(path, model)
+
+    uploads: dict[str, int] = {}
+    # Each round uploads a file or describes one asked for (each asked for once, each uploaded at
+    # most twice), so a scheduler that keeps answering without asking anything new is cut short.
+    for _ in range(3 * max_assets + 2):
+        assets = [by_path[p] for p in sorted(by_path)]  # str order is UTF-8 byte order: the C++ std::map's
+        plan = farm._plan(_spec_of(job_json, submission.file_name, assets, job_file), submission.absent)
+        submission.rounds += 1
+        if plan.complete:
+            if plan.missing_sha256 or plan.needed:
+                raise FarmError("PlanSubmission: the scheduler answered complete while asking for files")
+            submission.assets = assets
+            submission.files_hashed = len(digests)
+            return submission
+        progress = False
+        for sha in plan.missing_sha256:
+            if sha not in submission.files:
+                raise FarmError(f"PlanSubmission: the scheduler asked for '{shown(sha, _SHOWN_TEXT)}', a hash this "
+                                "job does not have")
+            uploads[sha] = uploads.get(sha, 0) + 1
+            if uploads[sha] > _UPLOADS_OF_ONE_FILE:
+                raise FarmError(f"PlanSubmission: the scheduler keeps asking for {sha} "
+                                f"({submission.files[sha]}), uploaded {_UPLOADS_OF_ONE_FILE} times")
+            farm._upload(sha, submission.files[sha])
+            submission.uploaded += 1
+            progress = True
+        absent = set(submission.absent)
+        for needed in plan.needed:
+            path = _checked_needed_path(needed.path)
+            if path in by_path or path in absent:
+                raise FarmError(f"PlanSubmission: the scheduler asked again for '{shown(path, _SHOWN_TEXT)}', "
+                                "which this client has described already")
+            # Confined here, under the root, as the C++ client confines a model's reference.
+            file = confine_file(root, posixpath.join(root, ".plan"), path)
+            if file.verdict == MISSING:
+                submission.absent.append(path)
+                absent.add(path)
+            elif file.verdict == ALLOWED:
+                describe(path, file.resolved)
+            else:
+                named_by = posixpath.join(root, shown(needed.named_by, _SHOWN_TEXT))
+                raise FarmInputError(f"{named_by}: '{shown(needed.reference, _SHOWN_TEXT)}': {file.reason}")
+            progress = True
+        if not progress:
+            raise FarmError("PlanSubmission: the scheduler answered that the job is not ready to submit, "
+                            "but asked for nothing")
+    raise FarmError(f"PlanSubmission: no complete plan after {submission.rounds} rounds")

@@ -1,4 +1,4 @@
-#include "server/client/collada_images.h"
+#include "server/common/collada_images.h"
 
 #include <pugixml.hpp>
 
