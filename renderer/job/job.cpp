@@ -341,8 +341,11 @@ std::string default_name(const fs::path& job_path) {
 }  // namespace
 
 Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadOptions& options) {
+  return parse_job_document(parse_json_strict(json_text, path.string()), path, options);
+}
+
+Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const JobLoadOptions& options) {
   const std::string file = path.string();
-  const nlohmann::json doc = parse_json_strict(json_text, file);
   const JsonObject top(JsonValue(doc, "", file),
                        {"version", "name", "frames", "animate", "scene", "render", "output", "validate"});
 

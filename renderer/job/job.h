@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -96,6 +97,11 @@ Job load_job(const std::filesystem::path& path, const JobLoadOptions& options = 
 // Same, from JSON text; `path` names the file in messages and anchors relative model paths.
 Job parse_job(const std::string& json_text, const std::filesystem::path& path,
               const JobLoadOptions& options = {});
+// Same, from the text already read by parse_json_strict (renderer/util/json_reader.h): for a
+// caller that also writes the document on (a submission rewriting its model paths), so that the
+// text is parsed once.
+Job parse_job_document(const nlohmann::json& document, const std::filesystem::path& path,
+                       const JobLoadOptions& options = {});
 // The text of the job file `path`, read as load_job reads it (a regular file, at most 16 MiB),
 // for callers that send the text on as well as parse it: then the file is read once.
 std::string read_job_file(const std::filesystem::path& path);

@@ -12,6 +12,7 @@
 
 #include "renderer/util/confined_file.h"
 #include "renderer/util/input_error.h"
+#include "renderer/util/json_reader.h"
 #include "server/client/model_dependencies.h"
 #include "server/common/sha256.h"
 
@@ -25,19 +26,16 @@ bool any_override(const RenderOverrides& o) {
          !o.add_aovs.empty() || o.image || o.preview || o.video || o.frames;
 }
 
-// The job text with model paths relative to the root and the overrides written in.
-std::string rewritten_job_text(const std::string& text, const Job& job, const fs::path& root,
-                               const RenderOverrides& o) {
-  // parse_job accepted the text already; it is parsed again here, once, because only an
-  // ordered document writes the keys back in the user's order.
-  nlohmann::ordered_json doc = nlohmann::ordered_json::parse(text);
+// The job's document with model paths relative to the root and the overrides written in, as
+// text: its keys in nlohmann's order (sorted), two spaces an indent.
+std::string rewritten_job_text(nlohmann::json doc, const Job& job, const fs::path& root, const RenderOverrides& o) {
   auto& objects = doc["scene"]["objects"];
   for (std::size_t i = 0; i < objects.size(); ++i) {
     objects[i]["file"] = job.scene.objects[i].file.lexically_relative(root).generic_string();
   }
   // The render block is touched only for an override of it: `doc["render"]` on a job without one
   // would write "render": null, which the scheduler refuses.
-  const auto render = [&]() -> nlohmann::ordered_json& { return doc["render"]; };
+  const auto render = [&]() -> nlohmann::json& { return doc["render"]; };
   if (o.engine) render()["engine"] = *o.engine;
   if (o.width) render()["width"] = *o.width;
   if (o.height) render()["height"] = *o.height;
@@ -48,7 +46,7 @@ std::string rewritten_job_text(const std::string& text, const Job& job, const fs
   if (o.seed) render()["seed"] = *o.seed;
   if (!o.add_aovs.empty()) {
     // The job's AOVs as parsed (overrides applied), written back in the job file's names.
-    nlohmann::ordered_json aovs = nlohmann::ordered_json::array();
+    nlohmann::json aovs = nlohmann::json::array();
     for (Aov aov : kAllAovs)
       if (job.render.aovs.has(aov)) aovs.push_back(std::string(to_string(aov)));
     doc["output"]["aovs"] = aovs;
@@ -109,9 +107,10 @@ Digest digest_of(const ConfinedFile& file, const std::string& path) {
 JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions& load,
                                   const RenderOverrides& overrides) {
   JobSubmission out;
-  // Read once: the same text is parsed here and sent.
+  // Read once and parsed once: the same text is sent, or the same document rewritten.
   const std::string text = read_job_file(job_file);
-  out.job = parse_job(text, job_file, load);
+  nlohmann::json document = parse_json_strict(text, job_file.string());
+  out.job = parse_job_document(document, job_file, load);
   apply_overrides(out.job, overrides);
   const fs::path job_dir = fs::weakly_canonical(fs::absolute(job_file).parent_path());
   const fs::path& root = out.job.asset_root;  // what parse_job confined the models to
@@ -123,7 +122,7 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
     return fs::path(o.file_as_written).lexically_normal() == o.file.lexically_relative(root);
   });
   const bool as_written = job_dir == root && !any_override(overrides) && models_as_resolved;
-  out.spec.set_job_json(as_written ? text : rewritten_job_text(text, out.job, root, overrides));
+  out.spec.set_job_json(as_written ? text : rewritten_job_text(std::move(document), out.job, root, overrides));
   out.spec.set_file_name(job_file.filename().string());
 
   std::map<std::string, fs::path> by_path;  // spec path -> the file to read (resolved)

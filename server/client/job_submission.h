@@ -5,8 +5,9 @@
 //
 // Asset paths in the spec are relative to the asset root (the job file's folder unless
 // --asset-root says otherwise). When the job's own folder is that root and nothing is
-// overridden, the job text goes as it is, byte for byte; otherwise its model paths are rewritten
-// relative to the root and the overrides written into it.
+// overridden, the job text goes as it is, byte for byte; otherwise the document parsed from it
+// (once: the same one the Job was read from) goes with its model paths rewritten relative to the
+// root and the overrides written into it, its keys sorted.
 #include <cstddef>
 #include <filesystem>
 #include <map>

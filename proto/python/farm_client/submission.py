@@ -288,11 +288,11 @@ def make_job_submission(job_file, asset_root=None, *, farm, max_assets: int = MA
     if job_dir == root:
         job_json = text  # byte for byte, as written
     else:
-        # Model paths relative to the root, the rest as written, in the user's key order; printed
-        # as nlohmann's dump(2) prints it.
+        # Model paths relative to the root, the rest as written; printed as the C++ client prints
+        # it (nlohmann's dump(2): keys sorted, two spaces an indent).
         for item, model in zip(doc["scene"]["objects"], models):
             item["file"] = lexically_relative(model, root)
-        job_json = json.dumps(doc, indent=2, ensure_ascii=False) + "\n"
+        job_json = json.dumps(doc, indent=2, ensure_ascii=False, sort_keys=True) + "\n"
 
     submission = JobSubmission(job_file=job_file, file_name=posixpath.basename(job_file), job_json=job_json,
                                asset_root=root, assets=[], files={}, uploaded=0)
