@@ -57,10 +57,9 @@ WorkerFacts facts_of(const v1::RegisterWorkerRequest& r) {
 
 // ---- JobWatch --------------------------------------------------------------------------------------
 
-JobWatch::JobWatch(SchedulerCore& core, std::string job_id, std::size_t capacity,
+JobWatch::JobWatch(SchedulerCore& core, std::string job_id, std::shared_ptr<JobEventQueue> queue,
                    std::optional<std::string> only_owner)
-    : core_(core), job_id_(std::move(job_id)), only_owner_(std::move(only_owner)),
-      queue_(core_.watch(job_id_, capacity)) {}
+    : core_(core), job_id_(std::move(job_id)), only_owner_(std::move(only_owner)), queue_(std::move(queue)) {}
 
 JobWatch::~JobWatch() { core_.unwatch(job_id_, queue_); }
 
@@ -138,7 +137,11 @@ std::chrono::milliseconds SchedulerFrontDoor::upload_idle_timeout() const {
 
 v1::Job SchedulerFrontDoor::visible_job(const Principal& who, const std::string& job_id, Roles any_job,
                                         const char* action) const {
-  std::optional<v1::Job> job = core_.get_job(job_id);
+  return visible(who, core_.get_job(job_id), job_id, any_job, action);
+}
+
+v1::Job SchedulerFrontDoor::visible(const Principal& who, std::optional<v1::Job> job, const std::string& job_id,
+                                    Roles any_job, const char* action) const {
   if (!job) throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("no job '{}'", job_id.substr(0, 80)));
   if (!who.roles.any_of(any_job) && job->owner() != who.name) {
     deny(who, fmt::format("{} job {}: it belongs to '{}'", action, job_id, job->owner()));
@@ -198,10 +201,13 @@ v1::ListJobsResponse SchedulerFrontDoor::list_jobs(const Principal& who, const v
 std::unique_ptr<JobWatch> SchedulerFrontDoor::watch_job(const Principal& who, const std::string& job_id,
                                                         std::size_t capacity) {
   AccessControl::check(who, kJobReaders, "WatchJob");
-  // Subscribed before the snapshot, so no event falls between them; a caller the snapshot then
-  // refuses is unsubscribed on the way out.
-  std::unique_ptr<JobWatch> watch(new JobWatch(core_, job_id, capacity, std::nullopt));
-  watch->snapshot_ = visible_job(who, job_id, kAllJobReaders, "watch");
+  // Subscribed and the snapshot read at one moment of the job's events, so none falls between
+  // them and none in the queue is older than the snapshot (a watcher saw tiles_done go 4, 3, 4
+  // when the snapshot was read after subscribing); a caller the snapshot then refuses is
+  // unsubscribed on the way out.
+  SchedulerCore::WatchStart start = core_.watch_from_now(job_id, capacity);
+  std::unique_ptr<JobWatch> watch(new JobWatch(core_, job_id, std::move(start.queue), std::nullopt));
+  watch->snapshot_ = visible(who, std::move(start.job), job_id, kAllJobReaders, "watch");
   watch->last_ = watch->snapshot_.state();
   return watch;
 }
@@ -211,7 +217,8 @@ std::unique_ptr<JobWatch> SchedulerFrontDoor::watch_every_job(const Principal& w
   // Every job's events are everyone's to hear only with read or admin; a submitter hears its own.
   std::optional<std::string> only_owner;
   if (!who.roles.any_of(kAllJobReaders)) only_owner = who.name;
-  return std::unique_ptr<JobWatch>(new JobWatch(core_, JobEvents::kEveryJob, capacity, std::move(only_owner)));
+  return std::unique_ptr<JobWatch>(
+      new JobWatch(core_, JobEvents::kEveryJob, core_.watch(JobEvents::kEveryJob, capacity), std::move(only_owner)));
 }
 
 v1::Job SchedulerFrontDoor::cancel_job(const Principal& who, const std::string& job_id) {

@@ -88,7 +88,9 @@ class JobWatch {
  private:
   friend class SchedulerFrontDoor;
   using Clock = std::chrono::steady_clock;
-  JobWatch(SchedulerCore& core, std::string job_id, std::size_t capacity, std::optional<std::string> only_owner);
+  // `queue`: subscribed to `job_id` already (SchedulerCore::watch or watch_from_now).
+  JobWatch(SchedulerCore& core, std::string job_id, std::shared_ptr<JobEventQueue> queue,
+           std::optional<std::string> only_owner);
   // The job read again after a quiet while, as a state_changed event when its state changed.
   bool read_again(v1::JobEvent& event);
 
@@ -185,6 +187,10 @@ class SchedulerFrontDoor {
   // The job `job_id` if `who` may see it: its owner, or a caller holding `any_job` roles.
   // ServiceError NOT_FOUND or PERMISSION_DENIED.
   v1::Job visible_job(const Principal& who, const std::string& job_id, Roles any_job, const char* action) const;
+  // `job` (as read for `job_id`) when `who` may see it: NOT_FOUND when empty, PERMISSION_DENIED
+  // for another owner's job without one of `any_job`.
+  v1::Job visible(const Principal& who, std::optional<v1::Job> job, const std::string& job_id, Roles any_job,
+                  const char* action) const;
   // Refuses a caller without admin a priority above max_priority (`what`: the action, for the message).
   void check_priority(const Principal& who, int priority, const char* what) const;
 

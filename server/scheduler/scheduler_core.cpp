@@ -312,6 +312,12 @@ std::shared_ptr<JobEventQueue> SchedulerCore::watch(const std::string& job_id, s
   return queue;
 }
 
+SchedulerCore::WatchStart SchedulerCore::watch_from_now(const std::string& job_id, std::size_t capacity) {
+  WatchStart start{std::make_shared<JobEventQueue>(capacity), std::nullopt};
+  start.job = events_.subscribe_and_read(job_id, start.queue);
+  return start;
+}
+
 void SchedulerCore::unwatch(const std::string& job_id, const std::shared_ptr<JobEventQueue>& queue) {
   events_.unsubscribe(job_id, queue);
 }

@@ -132,6 +132,14 @@ class SchedulerCore {
   // Events of `job_id` (JobEvents::kEveryJob: of every job) from now on, kept in a queue of
   // `capacity`; pass the queue to unwatch() when done.
   std::shared_ptr<JobEventQueue> watch(const std::string& job_id, std::size_t capacity = SIZE_MAX);
+  // A watch of one job begun with the job as it was then (JobEvents::subscribe_and_read): no event
+  // in the queue shows the job older than `job`, and none after it is missed. `job` empty: no such
+  // job (pass the queue to unwatch() all the same).
+  struct WatchStart {
+    std::shared_ptr<JobEventQueue> queue;
+    std::optional<v1::Job> job;
+  };
+  WatchStart watch_from_now(const std::string& job_id, std::size_t capacity = SIZE_MAX);
   // Every event this scheduler publishes from now on, in order (JobEvents::listen: must not block).
   void listen(std::function<void(const v1::JobEvent&)> listener) { events_.listen(std::move(listener)); }
   // The dashboard's live image of a frame (ResultFiles::live_preview).

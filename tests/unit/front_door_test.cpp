@@ -3,9 +3,11 @@
 // may see and do. A real SchedulerCore with no workers: every job submitted stays QUEUED.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include "server/common/read_whole_file.h"
 #include "server/common/service_error.h"
@@ -185,6 +187,28 @@ TEST_F(FrontDoorTest, AWatchOfEveryJobHearsOnlyTheCallersOwnUnlessItMayReadThemA
     cancelled = event.has_state_changed() && event.job().state() == v1::JOB_STATE_CANCELLED;
   }
   EXPECT_TRUE(cancelled);
+}
+
+// A watch's snapshot and its events meet at one moment: the first event after the snapshot never
+// shows the job older than the snapshot did. Each priority change is an event carrying the job, its
+// priority one higher than the last; watches are begun while they come as fast as the store takes
+// them. (A watch that subscribed, then read the job, could queue an event made before that read.)
+TEST_F(FrontDoorTest, NoEventAWatchHearsShowsTheJobOlderThanItsSnapshot) {
+  const std::string id = submit(kAlice);
+  std::atomic<bool> done{false};
+  std::thread changes([&] {
+    for (int priority = 1; !done; ++priority) door_.set_priority(kAdmin, id, priority);
+  });
+  int older = 0;
+  for (int i = 0; i < 200; ++i) {
+    const std::unique_ptr<JobWatch> watch = door_.watch_job(kAlice, id);
+    v1::JobEvent event;
+    ASSERT_TRUE(watch->next(event, 10s));
+    if (event.job().priority() < watch->snapshot().priority()) ++older;
+  }
+  done = true;
+  changes.join();
+  EXPECT_EQ(older, 0) << "of 200 watches, the first event showed the job older than the snapshot";
 }
 
 TEST_F(FrontDoorTest, WorkersAndAssetsAskForTheirRolesAndTheirOwnRegistrations) {

@@ -37,6 +37,13 @@ void JobEvents::subscribe(const std::string& job_id, std::shared_ptr<JobEventQue
   watchers_.emplace(job_id, std::move(queue));
 }
 
+std::optional<v1::Job> JobEvents::subscribe_and_read(const std::string& job_id,
+                                                     std::shared_ptr<JobEventQueue> queue) {
+  std::lock_guard lock(mutex_);
+  watchers_.emplace(job_id, std::move(queue));
+  return store_.jobs().get_job(job_id);
+}
+
 void JobEvents::unsubscribe(const std::string& job_id, const std::shared_ptr<JobEventQueue>& queue) {
   std::lock_guard lock(mutex_);
   auto [begin, end] = watchers_.equal_range(job_id);

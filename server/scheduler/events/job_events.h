@@ -55,6 +55,10 @@ class JobEvents {
   static constexpr const char* kEveryJob = "";
   void subscribe(const std::string& job_id, std::shared_ptr<JobEventQueue> queue);
   void unsubscribe(const std::string& job_id, const std::shared_ptr<JobEventQueue>& queue);
+  // subscribe(), and the job read from the store, both under mutex_: every event `queue` gets is
+  // made after the job was read, so none shows the job older than it, and none is missed. nullopt
+  // when the store has no such job (the queue is subscribed all the same).
+  std::optional<v1::Job> subscribe_and_read(const std::string& job_id, std::shared_ptr<JobEventQueue> queue);
 
   // An event carrying the job as the store has it now, filled in by `fill`.
   void publish(const std::string& job_id, const std::function<void(v1::JobEvent&)>& fill);
