@@ -23,8 +23,6 @@ constexpr int kDefaultPageSize = 50;
 constexpr int kMaxPageSize = 1000;
 constexpr std::size_t kMaxNameFilterBytes = 256;
 constexpr int kMaxLogPage = 1000;  // job_log's entries a page
-// A watch of a job on a shared store hears nothing for this long: the job is read again.
-constexpr auto kQuietWatchPoll = std::chrono::seconds(3);
 
 const Roles kJobSubmitters = Role::submit | Role::admin;
 const Roles kJobReaders = Role::submit | Role::read | Role::admin;
@@ -54,77 +52,6 @@ WorkerFacts facts_of(const v1::RegisterWorkerRequest& r) {
 }
 
 }  // namespace
-
-// ---- JobWatch --------------------------------------------------------------------------------------
-
-JobWatch::JobWatch(SchedulerCore& core, std::string job_id, std::shared_ptr<JobEventQueue> queue,
-                   std::optional<std::string> only_owner)
-    : core_(core), job_id_(std::move(job_id)), only_owner_(std::move(only_owner)), queue_(std::move(queue)) {}
-
-JobWatch::~JobWatch() { core_.unwatch(job_id_, queue_); }
-
-bool JobWatch::dropped() { return queue_->dropped(); }
-
-bool JobWatch::next(v1::JobEvent& event, std::chrono::milliseconds wait) {
-  const Clock::time_point until = Clock::now() + wait;
-  while (true) {
-    const auto left = std::max(std::chrono::milliseconds(0),
-                               std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()));
-    if (queue_->pop(event, left)) {
-      if (only_owner_ && event.job().owner() != *only_owner_) continue;
-    } else if (!read_again(event)) {
-      return false;
-    }
-    heard_ = Clock::now();
-    if (event.has_state_changed()) last_ = event.job().state();
-    return true;
-  }
-}
-
-bool JobWatch::read_again(v1::JobEvent& event) {
-  if (job_id_ == JobEvents::kEveryJob || !core_.store().is_shared()) return false;
-  if (Clock::now() - heard_ < kQuietWatchPoll) return false;
-  heard_ = Clock::now();
-  std::optional<v1::Job> now;
-  try {
-    now = core_.get_job(job_id_);
-  } catch (const StoreUnavailable&) {
-    return false;  // the store away: the watch waits for it, as the job does
-  }
-  if (!now || now->state() == last_) return false;
-  event.Clear();
-  *event.mutable_job() = std::move(*now);
-  event.mutable_state_changed()->set_from(last_);
-  event.mutable_state_changed()->set_to(event.job().state());
-  return true;
-}
-
-// ---- AssetUpload -----------------------------------------------------------------------------------
-
-bool AssetUpload::begin(const v1::AssetHeader& header) {
-  if (!is_sha256_hex(header.sha256())) {
-    throw InputError(fmt::format("UploadAsset: sha256 '{}' is not 64 lowercase hex digits",
-                                 header.sha256().substr(0, 80)));
-  }
-  if (const std::uint64_t limit = core_->options().limits.max_asset_bytes; header.size() > limit) {
-    throw ServiceError(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                       fmt::format("asset of {} bytes: at most {} (--max-asset-bytes)", header.size(), limit));
-  }
-  if (core_->assets().has(header.sha256())) return false;
-  size_ = header.size();
-  reserved_.emplace(core_->asset_quota().reserve(header.size(), owner_));
-  writer_.emplace(core_->assets().begin(header.sha256(), header.size()));
-  return true;
-}
-
-void AssetUpload::append(std::string_view bytes) {
-  if (writer_->bytes_written() + bytes.size() > size_) {
-    throw InputError(fmt::format("UploadAsset: more than the {} bytes the header announced", size_));
-  }
-  writer_->append(bytes);
-}
-
-void AssetUpload::commit() { writer_->commit(); }
 
 // ---- The front door --------------------------------------------------------------------------------
 

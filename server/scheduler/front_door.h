@@ -44,6 +44,8 @@
 #include "server/common/client_identity.h"
 #include "server/scheduler/assets/asset_quota.h"
 #include "server/scheduler/dispatch/unit_metrics.h"
+#include "server/scheduler/asset_upload.h"
+#include "server/scheduler/job_watch.h"
 #include "server/scheduler/store/job_records.h"
 
 namespace farm {
@@ -67,67 +69,6 @@ struct SchedulerMetrics {
   UnitMetrics::Snapshot units;          // units kept and failed, their rate and latency
 };
 
-// A caller's subscription to job events, from the moment it was made until it is destroyed.
-class JobWatch {
- public:
-  ~JobWatch();  // unsubscribed
-  JobWatch(const JobWatch&) = delete;
-  JobWatch& operator=(const JobWatch&) = delete;
-
-  // A watch of one job: the job as it was once the watch had begun (no event falls between the
-  // two). Empty for a watch of every job.
-  const v1::Job& snapshot() const { return snapshot_; }
-  // The next event the caller may see, waiting at most `wait`; false when none came. A watch of
-  // one job on a store other schedulers share hears their events through the relay, which may
-  // miss some: after a quiet while the job is read again, and a change of state comes as a
-  // state_changed event all the same.
-  bool next(v1::JobEvent& event, std::chrono::milliseconds wait);
-  // Whether events were dropped since the last call (a bounded watch whose reader fell behind).
-  bool dropped();
-
- private:
-  friend class SchedulerFrontDoor;
-  using Clock = std::chrono::steady_clock;
-  // `queue`: subscribed to `job_id` already (SchedulerCore::watch or watch_from_now).
-  JobWatch(SchedulerCore& core, std::string job_id, std::shared_ptr<JobEventQueue> queue,
-           std::optional<std::string> only_owner);
-  // The job read again after a quiet while, as a state_changed event when its state changed.
-  bool read_again(v1::JobEvent& event);
-
-  SchedulerCore& core_;
-  const std::string job_id_;                     // JobEvents::kEveryJob for every job
-  const std::optional<std::string> only_owner_;  // a submitter watching every job hears its own
-  std::shared_ptr<JobEventQueue> queue_;
-  v1::Job snapshot_;
-  v1::JobState last_ = v1::JOB_STATE_UNSPECIFIED;  // the state the watcher was last told
-  Clock::time_point heard_ = Clock::now();
-};
-
-// One asset uploaded by a caller the front door let upload (upload_asset): its header checked, its
-// size reserved against the asset quota in the caller's name, its bytes written and hashed. The
-// adapter reads the stream; an upload not committed leaves nothing behind.
-class AssetUpload {
- public:
-  // The upload's header. False when the store holds the asset already: nothing is written.
-  // InputError for a sha256 that is not 64 lowercase hex digits; ServiceError RESOURCE_EXHAUSTED
-  // past --max-asset-bytes or the quota (asset_quota.h).
-  bool begin(const v1::AssetHeader& header);
-  // InputError past the size the header announced; DiskFull when the disk has no room.
-  void append(std::string_view bytes);
-  // Publishes the blob. InputError when the bytes do not hash to the header's sha256.
-  void commit();
-
- private:
-  friend class SchedulerFrontDoor;
-  AssetUpload(SchedulerCore& core, std::string owner) : core_(&core), owner_(std::move(owner)) {}
-
-  SchedulerCore* core_;
-  std::string owner_;
-  std::uint64_t size_ = 0;  // as the header announced
-  // In this order, so that the blob's temporary file goes before its reservation is freed.
-  std::optional<AssetQuota::Reservation> reserved_;
-  std::optional<AssetStore::Writer> writer_;
-};
 
 class SchedulerFrontDoor {
  public:
