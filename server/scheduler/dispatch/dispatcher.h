@@ -46,7 +46,9 @@
 // registry's also directly (is the worker available?), the DiskFullPause's (is dispatch
 // paused?), and each call's TileCancel. None of those is held while it is taken; results are
 // handled, workers quarantined, events published and jobs finished without it. The spot checks'
-// rounds are spot_check_rounds.h's; what becomes of a failed batch is unit_failures.h's.
+// rounds are spot_check_rounds.h's; what becomes of a failed batch is unit_failures.h's; one
+// call is unit_call.h's. What stays here (dispatcher.cpp, some 480 lines) is what shares mutex_:
+// kept together on purpose, so that a reader of the lock sees every place it is taken.
 #include <condition_variable>
 #include <list>
 #include <map>
