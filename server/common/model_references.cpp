@@ -123,6 +123,19 @@ std::optional<std::string> local_reference(std::string written) {
   return percent_decode(written);
 }
 
+ModelReferenceScanner::Files ModelReferenceScanner::locate_each(const fs::path& model, const fs::path& referrer,
+                                                               std::vector<std::string> written) {
+  Files files;
+  for (std::string& reference : written) {
+    const std::optional<std::string> local = local_reference(reference);
+    if (!local) continue;
+    if (auto file = source_.locate(model, referrer, ModelReference{std::move(reference), *local})) {
+      files.push_back(std::move(*file));
+    }
+  }
+  return files;
+}
+
 std::optional<std::string> ModelReferenceScanner::read(const fs::path& file, const char* what) {
   std::optional<std::string> bytes = source_.read(file, what);
   if (bytes) ++files_scanned_;
@@ -140,12 +153,7 @@ const ModelReferenceScanner::Files& ModelReferenceScanner::references(const fs::
     named = model_references(key, *bytes);
   }  // the model's bytes freed before its libraries are read: one file held at a time
   const bool obj = lowercase_extension(key) == ".obj";
-  Files found;
-  for (std::string& written : named) {
-    const std::optional<std::string> local = local_reference(written);
-    if (!local) continue;
-    if (auto file = source_.locate(key, key, ModelReference{std::move(written), *local})) found.push_back(std::move(*file));
-  }
+  Files found = locate_each(key, key, std::move(named));
   // An OBJ's libraries name its maps; one not to be had leaves the model to be scanned again.
   bool whole = true;
   if (obj) {
@@ -178,13 +186,7 @@ const ModelReferenceScanner::Files* ModelReferenceScanner::library_maps(const fs
     if (!bytes) return nullptr;
     names = material_library_maps(*bytes);
   }
-  Files maps;
-  for (std::string& written : names) {
-    const std::optional<std::string> local = local_reference(written);
-    if (!local) continue;
-    if (auto map = source_.locate(model, library, ModelReference{std::move(written), *local})) maps.push_back(std::move(*map));
-  }
-  return &libraries_.emplace(library, std::move(maps)).first->second;
+  return &libraries_.emplace(library, locate_each(model, library, std::move(names))).first->second;
 }
 
 }  // namespace farm

@@ -72,6 +72,10 @@ class ModelReferenceScanner {
   // The maps a library names; nullopt when its bytes are not to be had.
   const Files* library_maps(const std::filesystem::path& model, const std::filesystem::path& library);
   std::optional<std::string> read(const std::filesystem::path& file, const char* what);
+  // The local files among `written` (references `referrer` makes, for `model`) that the source
+  // locates, in the order written.
+  Files locate_each(const std::filesystem::path& model, const std::filesystem::path& referrer,
+                    std::vector<std::string> written);
 
   ReferenceSource& source_;
   std::map<std::filesystem::path, Files> models_;     // scanned whole
