@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "renderer/util/input_error.h"
-#include "renderer/util/utf8_prefix.h"
+#include "renderer/util/utf8_text.h"
 
 namespace farm {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "renderer/util/input_error.h"
-#include "renderer/util/utf8_prefix.h"
+#include "renderer/util/utf8_text.h"
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"

@@ -7,7 +7,7 @@
 
 #include "renderer/job/job_limits.h"
 #include "renderer/util/input_error.h"
-#include "renderer/util/utf8_prefix.h"
+#include "renderer/util/utf8_text.h"
 #include "server/common/hex.h"
 #include "server/common/network_address.h"
 #include "server/common/service_error.h"

@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "renderer/util/utf8_prefix.h"
+#include "renderer/util/utf8_text.h"
 #include "server/common/hex.h"
 
 namespace farm {

@@ -8,7 +8,7 @@
 
 #include "renderer/util/input_error.h"
 #include "renderer/util/path_confinement.h"
-#include "renderer/util/utf8_prefix.h"
+#include "renderer/util/utf8_text.h"
 #include "server/common/model_references.h"
 #include "server/common/read_whole_file.h"
 #include "server/common/scene_materializer.h"
@@ -26,27 +26,6 @@ constexpr std::size_t kMaxShown = 200;
 
 std::string shown(const std::string& s) {
   return s.size() <= kMaxShown ? s : utf8_prefix(s, kMaxShown) + "...";
-}
-
-// Whether `s` is well-formed UTF-8: what a proto string carries to a client (Python refuses a
-// message holding anything else).
-bool is_utf8(const std::string& s) {
-  for (std::size_t i = 0; i < s.size();) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    const std::size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-    if (n == 0 || i + n > s.size()) return false;
-    std::uint32_t code = n == 1 ? c : c & (0x7Fu >> n);
-    for (std::size_t k = 1; k < n; ++k) {
-      const auto b = static_cast<unsigned char>(s[i + k]);
-      if ((b & 0xC0) != 0x80) return false;
-      code = (code << 6) | (b & 0x3Fu);
-    }
-    // Overlong forms, surrogates and what lies past U+10FFFF are not UTF-8.
-    static constexpr std::uint32_t kLeast[] = {0, 0, 0x80, 0x800, 0x10000};
-    if (code < kLeast[n] || (code >= 0xD800 && code <= 0xDFFF) || code > 0x10FFFF) return false;
-    i += n;
-  }
-  return true;
 }
 
 // A name under the job's folder as an asset path ("assets/box.obj").

@@ -9,6 +9,8 @@
 #include <charconv>
 #include <vector>
 
+#include "renderer/util/utf8_text.h"
+
 namespace farm {
 
 namespace {
@@ -50,21 +52,9 @@ using Result = std::unique_ptr<PGresult, ResultDeleter>;
 std::string storable_text(const std::string& text) {
   std::string out;
   out.reserve(text.size());
-  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
-  const std::size_t n = text.size();
-  for (std::size_t i = 0; i < n;) {
-    const unsigned char c = p[i];
-    std::size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xe ? 3 : (c >> 3) == 0x1e ? 4 : 0;
-    bool valid = c != 0 && length != 0 && i + length <= n;
-    for (std::size_t k = 1; valid && k < length; ++k) valid = (p[i + k] & 0xc0) == 0x80;
-    if (valid && length > 1) {
-      // Overlong forms, surrogates and code points past U+10FFFF are not UTF-8 either.
-      std::uint32_t code = c & (0xff >> (length + 1));
-      for (std::size_t k = 1; k < length; ++k) code = code << 6 | (p[i + k] & 0x3f);
-      constexpr std::uint32_t kSmallest[] = {0, 0, 0x80, 0x800, 0x10000};
-      valid = code >= kSmallest[length] && code <= 0x10ffff && (code < 0xd800 || code > 0xdfff);
-    }
-    if (valid) {
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t length = text[i] == '\0' ? 0 : utf8_character_bytes(text, i);
+    if (length > 0) {
       out.append(text, i, length);
       i += length;
     } else {
