@@ -12,6 +12,7 @@ namespace farm::bench {
 double median(std::vector<double> values);
 
 double ms_since(std::chrono::steady_clock::time_point start);
+double seconds_since(std::chrono::steady_clock::time_point start);
 
 // This very `farm` binary, for benchmarks that start it as a child process.
 std::string self_binary();

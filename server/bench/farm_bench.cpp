@@ -26,12 +26,12 @@ namespace farm {
 namespace {
 
 using bench::median;
+using bench::seconds_since;
 using bench::self_binary;
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Submit, follow to the end, fetch the EXR: what `farm submit --wait` does.
 double render_through(SchedulerClient& client, const JobSubmission& submission, const fs::path& out) {

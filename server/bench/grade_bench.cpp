@@ -18,9 +18,9 @@ namespace farm {
 namespace {
 
 namespace fs = std::filesystem;
+using bench::seconds_since;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // Student `i`'s version of a reference: every fourth one perfect, the others noisy, shifted by a
 // pixel or 5% darker, each with its own noise.

@@ -15,15 +15,14 @@
 #include "renderer/trace/sampler.h"
 #include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
+#include "server/bench/bench_support.h"
 
 namespace farm {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using bench::seconds_since;
 
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 AABB world_bounds(const PreparedScene& scene) {
   AABB box;

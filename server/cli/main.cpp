@@ -15,6 +15,7 @@
 #include "server/cli/compare_command.h"
 #include "server/cli/fetch_command.h"
 #include "server/cli/grade_command.h"
+#include "server/cli/health_command.h"
 #include "server/cli/info_command.h"
 #include "server/cli/job_action_commands.h"
 #include "server/cli/log_command.h"
@@ -77,6 +78,7 @@ int main(int argc, char** argv) {
   farm::add_job_action_commands(app, commands);
   farm::add_log_command(app, commands);
   farm::add_workers_command(app, commands);
+  farm::add_health_command(app, commands);
   farm::add_fetch_command(app, commands);
   farm::add_token_command(app, commands);
   farm::add_check_scene_command(app, commands);

@@ -23,7 +23,7 @@ constexpr int kLostMostShown = 5;
 constexpr int kLeft = 30, kBottom = 28, kTop = 12, kBarStep = 44, kBarGap = 4, kTickLength = 6;
 static_assert(kLeft + kHistogramBins * kBarStep <= kHistogramWidth);
 
-constexpr const char* kStyle = R"(
+constexpr const char* kClassSummaryStyle = R"(
 body { font: 14px/1.4 system-ui, sans-serif; margin: 2em; color: #222; max-width: 1100px; }
 h1 { margin-bottom: 0.2em; } .counts { color: #555; margin-bottom: 1.5em; }
 table { border-collapse: collapse; margin: 0.6em 0 1.2em 0; }
@@ -125,7 +125,7 @@ fs::path write_class_summary(const ClassGrades& grades, const fs::path& dir) {
                                  "<title>farm grade: {0}</title><style>{1}</style></head><body>\n"
                                  "<h1>farm grade: {0}</h1>\n<div class=\"counts\">{2} student{3} &middot; "
                                  "{4} task{5} &middot; {6} points at most</div>\n",
-                                 markup_escape(title), kStyle, grades.students.size(),
+                                 markup_escape(title), kClassSummaryStyle, grades.students.size(),
                                  grades.students.size() == 1 ? "" : "s", tasks.size(), tasks.size() == 1 ? "" : "s",
                                  format_points(maximum));
 

@@ -15,7 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr const char* kStyle = R"(
+constexpr const char* kFeedbackPageStyle = R"(
 body { font: 14px/1.4 system-ui, sans-serif; margin: 2em; color: #222; max-width: 1100px; }
 h1 { margin-bottom: 0.2em; } .total { font-size: 18px; margin-bottom: 1.5em; } .rubric { color: #555; }
 .task { border: 1px solid #ccc; border-radius: 6px; margin: 1em 0; padding: 0.8em 1em; }
@@ -84,7 +84,7 @@ fs::path write_feedback_page(const StudentGrade& student, const Rubric* rubric, 
   std::string html = fmt::format("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
                                  "<title>Feedback: {0}</title><style>{1}</style></head><body>\n"
                                  "<h1>Feedback: {0}</h1>\n",
-                                 id, kStyle);
+                                 id, kFeedbackPageStyle);
   if (rubric != nullptr && !rubric->name.empty())
     html += fmt::format("<div class=\"rubric\">{}</div>\n", markup_escape(rubric->name));
   html += fmt::format("<div class=\"total\">Total: <b>{} / {}</b> points</div>\n", format_points(points_total(student)),

@@ -9,7 +9,7 @@ namespace {
 constexpr std::uint64_t kApproxBytesPerTriangle = 256;
 // A frame that shares its models with another: world-space boxes and the rasterizer's set-up.
 constexpr std::uint64_t kApproxFrameBytesPerTriangle = 64;
-constexpr auto kPollInterval = std::chrono::milliseconds(20);
+constexpr auto kLoadPollInterval = std::chrono::milliseconds(20);
 }  // namespace
 
 CachedScene::CachedScene(Job j, Scene s, std::shared_ptr<ModelLibrary> m, std::shared_ptr<ModelGeometry> geometry)
@@ -37,7 +37,7 @@ SceneCache::Lookup SceneCache::get(const std::string& scene_hash, const Prepare&
   }
 
   if (future.valid()) {
-    while (future.wait_for(kPollInterval) != std::future_status::ready) {
+    while (future.wait_for(kLoadPollInterval) != std::future_status::ready) {
       if (cancelled && cancelled()) return {nullptr, true};
     }
     return {future.get(), true};

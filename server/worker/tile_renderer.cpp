@@ -37,7 +37,7 @@ using Clock = std::chrono::steady_clock;
 constexpr int kSubTile = 16;
 // How often the waiting handler looks at its client (IsCancelled); the deadline needs no look,
 // the render threads check it themselves.
-constexpr auto kPollInterval = std::chrono::milliseconds(10);
+constexpr auto kCancelPollInterval = std::chrono::milliseconds(10);
 // 48 bytes a pixel with every AOV; keeps a reply far below protobuf's 2 GiB message limit.
 constexpr std::int64_t kMaxRectPixels = std::int64_t{4096} * 4096;
 
@@ -123,7 +123,7 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
 // started are then skipped; those running see the flag within a few samples or triangles and
 // return without pasting: the pool is free again in a millisecond or so.
 bool finish_unless_stopped(ThreadPool::Work& work, const std::function<bool()>& is_stopped) {
-  while (!work.wait_for(kPollInterval)) {
+  while (!work.wait_for(kCancelPollInterval)) {
     if (is_stopped()) {
       work.cancel();
       return false;

@@ -137,6 +137,33 @@ TEST_F(FarmHealthTest, WorkerServesHealthThatReflectionAloneDescribes) {
                                     "farm.v1.Worker");
 }
 
+// `farm health`, what container and Compose health checks run: exit 0 and SERVING from a live
+// scheduler and worker, exit 1 from a worker stopped with SIGSTOP (it accepts connections but
+// answers nothing) and from an address nobody listens on.
+TEST_F(FarmHealthTest, FarmHealthCommandExitsZeroOnlyForAServingServer) {
+  auto scheduler = start_scheduler();
+  auto worker = start_worker();
+  ASSERT_FALSE(scheduler->address().empty());
+  ASSERT_FALSE(worker->address().empty());
+  const std::string farm = test::shell_quote(FARM_BINARY);
+  test::CommandResult r = test::run_command(farm + " health --scheduler " + scheduler->address() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, scheduler->address() + ": SERVING\n");
+  r = test::run_command(farm + " health " + worker->address() + " 2>&1");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, worker->address() + ": SERVING\n");
+
+  worker->process().send_signal(SIGSTOP);
+  r = test::run_command(farm + " health " + worker->address() + " --timeout 2s 2>&1");
+  worker->process().send_signal(SIGCONT);
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find(worker->address() + ": no answer: "), std::string::npos) << r.output;
+
+  r = test::run_command(farm + " health localhost:1 --timeout 2s 2>&1");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("localhost:1: no answer: "), std::string::npos) << r.output;
+}
+
 TEST_F(FarmHealthTest, CheckSpeaksTheSpecsWireFormat) {
   auto worker = start_worker();
   ASSERT_FALSE(worker->address().empty());

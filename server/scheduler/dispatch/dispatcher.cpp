@@ -22,7 +22,6 @@ namespace farm {
 namespace {
 
 
-std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
 
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;

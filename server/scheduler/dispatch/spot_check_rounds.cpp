@@ -15,7 +15,6 @@ namespace farm {
 
 namespace {
 
-std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
 std::string describe(const UnitSpan& span) { return describe_units(span.first, span.count); }
 
 // Pixels rendered in this process come as a buffer; a spot check compares encoded tiles.

@@ -12,7 +12,6 @@ namespace farm {
 
 namespace {
 
-std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
 
 // How a worker's error answer to RenderTile is accounted (worker_failures.h): a refusal is never
 // the unit's fault; INVALID_ARGUMENT says the unit can never render.

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "proto/farm.pb.h"
+#include "server/common/job_state.h"
 #include "renderer/image/tile_buffer.h"
 
 namespace farm {
@@ -66,6 +67,9 @@ struct UnitBatch {
   // When this process handed it out (the dispatcher's unit latency, unit_metrics.h).
   std::chrono::steady_clock::time_point handed_out = {};
 };
+
+// "tile 7" or "tiles 7-9", for messages about a batch.
+inline std::string describe(const UnitBatch& batch) { return describe_units(batch.first, batch.count); }
 
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued
 // (counted only up to claim_next_batch's `count_up_to`).
