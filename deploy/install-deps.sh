@@ -21,6 +21,8 @@ README command 1 installs --build only: what it takes to build `farm` and render
 USAGE
 }
 
+# Also what deploy/gradescope/setup.sh installs on Ubuntu 24.04 before building farm there: keep
+# to names both distributions have (tests/deploy/gradescope_ubuntu_test.sh).
 build_packages=(
   # toolchain (dpkg-dev, in build-essential, brings dpkg-shlibdeps for `cpack -G DEB`)
   build-essential cmake ninja-build pkg-config git ca-certificates

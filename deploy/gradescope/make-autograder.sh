@@ -48,8 +48,9 @@ versions Debian 12 builds the farm with (OpenEXR 3.1, gRPC 1.51, protobuf 3.21, 
 and tinygltf 2.8 where Debian has 3 and 2.7). The default, Ubuntu 22.04, has older ones (OpenEXR
 2.5, gRPC 1.30) and setup.sh refuses it. The references are rendered by the .deb's farm; a farm
 built on Ubuntu 24.04 renders the same pictures bit for bit and computes the same scene hashes
-(tests/deploy/gradescope_ubuntu_test.sh checks both). Needs: python3, zip, unzip, dpkg-deb, sha256sum, git,
-tar, gzip (and cpack without --deb).
+(tests/deploy/gradescope_ubuntu_test.sh checks both).
+
+Needs: python3, zip, unzip, dpkg-deb, sha256sum, git, tar, gzip (and cpack without --deb).
 EOF
 }
 
@@ -109,8 +110,9 @@ deb_name=$(basename "$deb")
 # carry two different farms.
 source="${source:-$here/../..}"
 [ -d "$source" ] || die "--source $source: no such folder"
-source=$(cd "$source" && pwd)
-git -C "$source" rev-parse --is-inside-work-tree >/dev/null 2>&1 || die "$source: not a git checkout (--source)"
+source=$(cd "$source" && pwd -P)
+[ "$(git -C "$source" rev-parse --show-toplevel 2>/dev/null)" = "$source" ] \
+  || die "$source: not the top of a git checkout (--source)"
 source_version=$(sed -n 's/^project([A-Za-z0-9_]* VERSION \([0-9.]*\).*/\1/p' "$source/CMakeLists.txt" 2>/dev/null | head -1)
 deb_version=$(dpkg-deb -f "$deb" Version)
 [ -n "$source_version" ] || die "$source/CMakeLists.txt: no project(... VERSION ...): not the farm's source"

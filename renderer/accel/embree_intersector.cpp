@@ -1,6 +1,11 @@
 #include "renderer/accel/embree_intersector.h"
 
+// Embree 4 (Ubuntu 24.04) renamed the header and dropped the intersect context argument.
+#if __has_include(<embree4/rtcore.h>)
+#include <embree4/rtcore.h>
+#else
 #include <embree3/rtcore.h>
+#endif
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -213,9 +218,13 @@ bool EmbreeIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalSt
   to_embree(ray, query.ray);
   query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+#if RTC_VERSION_MAJOR >= 4
+  rtcIntersect1(scene_.get(), &query);
+#else
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   rtcIntersect1(scene_.get(), &context, &query);
+#endif
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
   hit = SurfaceHit{};
@@ -232,9 +241,13 @@ bool EmbreeIntersector::occluded(const Ray& ray, TraversalStats*) const {
   if (!finite(ray.origin) || !finite(ray.direction)) return false;
   RTCRay query;
   to_embree(ray, query);
+#if RTC_VERSION_MAJOR >= 4
+  rtcOccluded1(scene_.get(), &query);
+#else
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   rtcOccluded1(scene_.get(), &context, &query);
+#endif
   return query.tfar == -std::numeric_limits<float>::infinity();
 }
 

@@ -734,8 +734,15 @@ Model load_gltf(const ModelFile& file) {
   GltfFiles files{file, {}};
 
   tinygltf::TinyGLTF loader;
-  loader.SetFsCallbacks(
-      {&file_exists, &no_expansion, &confined_read, &refuse_write, &files});
+  // Set by name: tinygltf 2.8 (Ubuntu 24.04) added GetFileSizeInBytes before user_data; left
+  // null, it is not called.
+  tinygltf::FsCallbacks callbacks{};
+  callbacks.FileExists = &file_exists;
+  callbacks.ExpandFilePath = &no_expansion;
+  callbacks.ReadWholeFile = &confined_read;
+  callbacks.WriteWholeFile = &refuse_write;
+  callbacks.user_data = &files;
+  loader.SetFsCallbacks(callbacks);
   loader.SetImageLoader(&skip_image, nullptr);
 
   tinygltf::Model gltf;

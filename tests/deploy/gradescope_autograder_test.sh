@@ -236,6 +236,7 @@ if [ "$system" = ubuntu ]; then
   [ "$(ls "$rerendered" | sort)" = "$(ls "$grading/references" | sort)" ] \
     || fail "the Ubuntu farm's scene hashes differ from the Debian farm's: $(ls "$rerendered") vs $(ls "$grading/references")"
   for reference in "$grading"/references/*/; do
+    reference="${reference%/}"
     hash=$(basename "$reference")
     "$FARM_BINARY" compare "$reference/reference.exr" "$rerendered/$hash/reference.exr" --metric exact >"$work/compare.log" 2>&1 \
       || { cat "$work/compare.log"; fail "scene $hash ($(ls "$reference/job" | grep '\.json$' | head -1)): the Ubuntu farm's render differs from the Debian reference"; }
