@@ -94,7 +94,7 @@ void add_grade_command(CLI::App& app, CommandTable& commands) {
                   "look into it; by default only the pictures the feedback shows are kept");
   grade->add_flag("--gradescope", o->gradescope,
                   "Grade the one submission in /autograder/submission and write /autograder/results/results.json "
-                  "(inside Gradescope's autograder; jobs/grade/run_autograder)");
+                  "(inside Gradescope's autograder; deploy/gradescope/run_autograder)");
   grade->add_option("--gradescope-root", o->gradescope_root, "The autograder folder for --gradescope")->capture_default_str();
   grade->footer("Exit codes: 0 graded (whatever the scores), 1 an internal error, 2 a bad rubric or a missing folder.");
   commands.add(grade, [o] { return run_grade_command(*o); });
