@@ -31,14 +31,15 @@ git -C "$FARM_SOURCE_DIR" bundle create "$work/head.bundle" HEAD 2>/dev/null
 mkdir -p "$root/work/shared"
 mount --bind -o ro "$(readlink -f "$FARM_SHARED_ASSETS/..")" "$root/work/shared"
 cp "$work/head.bundle" "$root/tmp/"
-in_chroot "$root" git clone -q /tmp/head.bundle /work/main
+in_chroot "$root" git -c advice.detachedHead=false clone -q /tmp/head.bundle /work/main
 
 start=$SECONDS
-in_chroot "$root" bash -c "cd /work/main && $command" >"$work/command.log" 2>&1 \
+# xtrace stamps each step of the command with the seconds since it began.
+in_chroot "$root" bash -c "PS4='+ [\$SECONDS s] '; set -x; cd /work/main && $command" >"$work/command.log" 2>&1 \
   || { tail -30 "$work/command.log"; fail "README command 1 failed on a fresh Debian 12"; }
 seconds=$((SECONDS - start))
 printf 'README command 1 on a fresh Debian 12 chroot: %d s (%d min %02d s)\n' "$seconds" $((seconds / 60)) $((seconds % 60))
-grep -E "^install-deps:|packages? (newly )?installed|Linking CXX executable server/farm" "$work/command.log" | cut -c1-200 || true
+grep -E '^\+ \[[0-9]+ s\] (deploy|cmake|./build)' "$work/command.log" | cut -c1-120 || true
 
 "$FARM_BINARY" render "$FARM_SOURCE_DIR/jobs/cow.json" --asset-root "$FARM_SHARED_ASSETS" \
   --out "$work/cow.exr" --preview none --quiet

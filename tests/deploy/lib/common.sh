@@ -55,6 +55,10 @@ chroot_fresh() {
   mkdir -p "$dir"
   tar -C "$dir" -xf "$tar"
   cp /etc/resolv.conf "$dir/etc/resolv.conf"
+  # The CAs this machine adds (an egress proxy's, say), so that HTTPS from inside (pip) works as
+  # it does here; ca-certificates folds them into the chroot's bundle when it is installed.
+  mkdir -p "$dir/usr/local/share/ca-certificates"
+  cp /usr/local/share/ca-certificates/*.crt "$dir/usr/local/share/ca-certificates/" 2>/dev/null || true
   mount -t proc proc "$dir/proc"
   mount --rbind /dev "$dir/dev"
   mount --make-rslave "$dir/dev"
