@@ -21,8 +21,6 @@ namespace farm {
 
 namespace {
 
-
-
 // A batch never holds more tiles than this, whatever the estimate says.
 constexpr int kMaxBatch = 64;
 // How long an idle slot waits before it looks for work again, unless woken earlier.

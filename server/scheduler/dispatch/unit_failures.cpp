@@ -12,7 +12,6 @@ namespace farm {
 
 namespace {
 
-
 // How a worker's error answer to RenderTile is accounted (worker_failures.h): a refusal is never
 // the unit's fault; INVALID_ARGUMENT says the unit can never render.
 FailureKind failure_kind(grpc::StatusCode code) {

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "proto/farm.pb.h"
-#include "server/common/job_state.h"
 #include "renderer/image/tile_buffer.h"
+#include "server/common/job_state.h"
 
 namespace farm {
 
