@@ -25,7 +25,6 @@ require_tool zip
 require_tool unzip
 require_tool python3
 require_tool git
-rubric="$FARM_SOURCE_DIR/jobs/grade/dandelion/rubric.json"
 # The rubric's cow is the lab's model in shared/ beside the checkout.
 [ -f "$FARM_SOURCE_DIR/../shared/assets/dae/cow.dae" ] || skip "the dandelion rubric's cow ($FARM_SOURCE_DIR/../shared/assets/dae/cow.dae) is missing"
 
@@ -40,6 +39,16 @@ cleanup() {
 trap cleanup EXIT
 started=$SECONDS
 elapsed() { echo "$((SECONDS - started)) s"; }
+
+# The rubric as a lab lays it out: main/ (the checkout: the rubric, its jobs' assets) beside
+# shared/ (the cow). Copied, links resolved, so that neither this checkout's folder name nor a
+# shared/ that is a link (which the farm's confinement rightly refuses) changes what is packed.
+lab="$work/lab"
+mkdir -p "$lab/main/jobs/grade" "$lab/shared/assets/dae"
+cp -rL "$FARM_SOURCE_DIR/jobs/grade/dandelion" "$lab/main/jobs/grade/"
+cp -rL "$FARM_SOURCE_DIR/jobs/assets" "$lab/main/jobs/"
+cp -L "$FARM_SOURCE_DIR/../shared/assets/dae/cow.dae" "$lab/shared/assets/dae/"
+rubric="$lab/main/jobs/grade/dandelion/rubric.json"
 
 deb=$(farm_deb)
 zip_file="$work/autograder.zip"

@@ -42,6 +42,10 @@ done
 # Not under /tmp, of which the services get a private one.
 tmp=$(mktemp -d /var/tmp/farm-systemd-test.XXXXXX)
 chmod 755 "$tmp"
+# The units run the .deb's /usr/bin/farm; here a copy of the build's, where their sandbox still
+# shows it (a build under /tmp, /home or /root is hidden by PrivateTmp= and ProtectHome=).
+mkdir -p "$tmp/bin" && cp "$FARM_BINARY" "$tmp/bin/farm" && chmod 755 "$tmp/bin" "$tmp/bin/farm"
+farm="$tmp/bin/farm"
 pids=()
 cleanup() {
   local pid i

@@ -138,18 +138,19 @@ TEST_F(FarmHealthTest, WorkerServesHealthThatReflectionAloneDescribes) {
 }
 
 // `farm health`, what container and Compose health checks run: exit 0 and SERVING from a live
-// scheduler and worker, exit 1 from a worker stopped with SIGSTOP (it accepts connections but
-// answers nothing) and from an address nobody listens on.
+// scheduler and worker (given a minute: a loaded machine is slow, not wrong), exit 1 from a worker
+// stopped with SIGSTOP (it accepts connections but never answers) and from an address nobody
+// listens on.
 TEST_F(FarmHealthTest, FarmHealthCommandExitsZeroOnlyForAServingServer) {
   auto scheduler = start_scheduler();
   auto worker = start_worker();
   ASSERT_FALSE(scheduler->address().empty());
   ASSERT_FALSE(worker->address().empty());
   const std::string farm = test::shell_quote(FARM_BINARY);
-  test::CommandResult r = test::run_command(farm + " health --scheduler " + scheduler->address() + " 2>&1");
+  test::CommandResult r = test::run_command(farm + " health --scheduler " + scheduler->address() + " --timeout 60s 2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output, scheduler->address() + ": SERVING\n");
-  r = test::run_command(farm + " health " + worker->address() + " 2>&1");
+  r = test::run_command(farm + " health " + worker->address() + " --timeout 60s 2>&1");
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output, worker->address() + ": SERVING\n");
 
