@@ -86,10 +86,7 @@ else
   mkdir "$work/rootfs"
   podman export "$scheduler" | tar -C "$work/rootfs" -xf -
   podman rm "$scheduler" >/dev/null
-  mount -t proc proc "$work/rootfs/proc"
-  mount --rbind /dev "$work/rootfs/dev"
-  mount --make-rslave "$work/rootfs/dev"
-  chroot_mounted+=("$work/rootfs")
+  chroot_mount "$work/rootfs"
   mkdir "$work/rootfs/out"
   trap 'umount "$work/rootfs/out" 2>/dev/null || true; cleanup' EXIT
   mount --bind "$work/out" "$work/rootfs/out"

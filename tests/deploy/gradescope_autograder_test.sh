@@ -32,8 +32,6 @@ work=$(mktemp -d /tmp/farm-gradescope-test.XXXXXX)
 root="$work/root"
 cleanup() {
   chroot_cleanup
-  umount -R "$root/dev" 2>/dev/null || umount -l "$root/dev" 2>/dev/null || true
-  umount "$root/proc" 2>/dev/null || umount -l "$root/proc" 2>/dev/null || true
   rm -rf "$work"
 }
 trap cleanup EXIT
@@ -92,12 +90,7 @@ ubuntu_rootfs_tar() {
 # run_autograder copied to /autograder/, the submission and the results folders.
 if [ "$system" = ubuntu ]; then
   tar=$(ubuntu_rootfs_tar)
-  mkdir -p "$root"
-  tar -C "$root" -xf "$tar"
-  cp /etc/resolv.conf "$root/etc/resolv.conf"
-  mount -t proc proc "$root/proc"
-  mount --rbind /dev "$root/dev"
-  mount --make-rslave "$root/dev"
+  chroot_from_tar "$root" "$tar"
   grep -qx 'VERSION_ID="24.04"' "$root/etc/os-release" || fail "the Ubuntu chroot is not 24.04: $(cat "$root/etc/os-release")"
   farm_path=/usr/local/bin/farm
 else

@@ -46,12 +46,18 @@ debian_rootfs_tar() {
   echo "$tar"
 }
 
-# Unpacks a fresh root filesystem into DIR and mounts what programs in it expect; chroot_cleanup
-# (set as an EXIT trap by the caller) unmounts it.
+# Unpacks a fresh Debian 12 root filesystem into DIR, mounted as chroot_from_tar says.
 chroot_fresh() {
   local dir="$1" include="${2:-}"
   local tar
   tar=$(debian_rootfs_tar "$include") || exit 1
+  chroot_from_tar "$dir" "$tar"
+}
+
+# Unpacks the root filesystem tarball TAR into DIR, with this machine's resolver and added CAs,
+# and mounts what programs in it expect (chroot_mount).
+chroot_from_tar() {
+  local dir="$1" tar="$2"
   mkdir -p "$dir"
   tar -C "$dir" -xf "$tar"
   cp /etc/resolv.conf "$dir/etc/resolv.conf"
@@ -59,6 +65,13 @@ chroot_fresh() {
   # it does here; ca-certificates folds them into the chroot's bundle when it is installed.
   mkdir -p "$dir/usr/local/share/ca-certificates"
   cp /usr/local/share/ca-certificates/*.crt "$dir/usr/local/share/ca-certificates/" 2>/dev/null || true
+  chroot_mount "$dir"
+}
+
+# Mounts /proc and /dev into the root filesystem DIR; chroot_cleanup (set as an EXIT trap by the
+# caller) unmounts them.
+chroot_mount() {
+  local dir="$1"
   mount -t proc proc "$dir/proc"
   mount --rbind /dev "$dir/dev"
   mount --make-rslave "$dir/dev"
