@@ -95,6 +95,32 @@ TEST(PostgresStoreTest, SchedulersOpeningOneNewDatabaseAtOnceMakeTheSchemaOnce) 
   PQfinish(c);
 }
 
+// A scheduler opens a store at this version while another is mid-transaction, writing tiles and
+// jobs: the open takes no table lock, so it neither waits for that transaction nor deadlocks with
+// it. (It ran the schema's "CREATE INDEX IF NOT EXISTS" before, whose share locks wait on the
+// writer's: PostgreSQL ended one of two schedulers started together with "deadlock detected".)
+// The opener's lock_timeout turns a wait into an error rather than a hang.
+TEST(PostgresStoreTest, OpeningACurrentStoreTakesNoTableLockAWriterHolds) {
+  test::StoreLocation where(SqlDialect::PostgreSQL);
+  ASSERT_TRUE(where.problem().empty()) << where.problem();
+  { JobStore made(connect_store(where.location())); }
+  PGconn* writer = PQconnectdb(where.location().c_str());
+  for (const char* sql : {"BEGIN", "UPDATE tiles SET state = state", "UPDATE jobs SET state = state"}) {
+    PGresult* r = PQexec(writer, sql);
+    ASSERT_EQ(PQresultStatus(r), PGRES_COMMAND_OK) << sql << ": " << PQerrorMessage(writer);
+    PQclear(r);
+  }
+  const std::string impatient = where.location() + "?options=-c%20lock_timeout%3D5000";
+  try {
+    JobStore store(connect_store(impatient));
+    store.jobs().add_job(one_row_job("opened", 1), 1);
+    EXPECT_TRUE(store.jobs().get_job("opened"));
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "opening beside a writer: " << e.what();
+  }
+  PQfinish(writer);
+}
+
 // The first upgrade written for both stores, on PostgreSQL: a version 6 database (no scheduler
 // leases) is upgraded in place, its jobs kept and its running tiles queued again.
 TEST(PostgresStoreTest, AVersion6StoreIsUpgradedInPlace) {

@@ -133,6 +133,7 @@ class StoreSchema {
   [[noreturn]] void refuse_version(int version) const;  // a version this farm cannot read
   void open_sqlite();    // the schema made, or upgraded from versions 1 to 7
   void open_postgres();  // the schema made, under a lock that other schedulers wait on
+  bool postgres_schema_current();  // the store already at this version: no DDL to run
   void upgrade_from_6(int version);           // the upgrades written for both stores
 
   SqlConnection* db_;
@@ -204,6 +205,13 @@ void StoreSchema::open_postgres() {
   // them at a time, under a lock of the transaction (released by its end).
   SqlTransaction t(*db_);
   db_->exec(fmt::format("SELECT pg_advisory_xact_lock({})", kSchemaLockKey));
+  // A store already at this version is left alone: "CREATE INDEX IF NOT EXISTS" takes its table's
+  // share lock before it looks for the index, so running the schema while another scheduler
+  // writes jobs and tiles deadlocked them (PostgreSQL ended one: a scheduler that never started).
+  if (postgres_schema_current()) {
+    t.commit();
+    return;
+  }
   db_->exec(schema(SqlDialect::PostgreSQL));
   db_->exec(kTilesByFrame);
   // The PostgreSQL store began at version 6: upgrades from there on are written for both.
@@ -214,6 +222,14 @@ void StoreSchema::open_postgres() {
     refuse_version(version);
   }
   t.commit();
+}
+
+bool StoreSchema::postgres_schema_current() {
+  // to_regclass reads the catalog without locking a table, and names a missing one NULL.
+  Query exists(db_->prepared("SELECT to_regclass('schema_version') IS NOT NULL"));
+  if (!exists.step() || exists.i64(0) == 0) return false;
+  Query version(db_->prepared("SELECT version FROM schema_version"));
+  return version.step() && version.i64(0) == kSchemaVersion;
 }
 
 void StoreSchema::upgrade_from_6(int version) {
