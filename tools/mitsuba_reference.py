@@ -4,7 +4,9 @@
 The job file is read as `farm render` reads it (camera, objects, OBJ/MTL materials, point lights,
 background, max_depth) and turned into the same scene in Mitsuba:
 
-  * Phong kd becomes a diffuse BSDF, two-sided like ours; Ke becomes an area emitter. Emitters
+  * Phong kd becomes a diffuse BSDF, two-sided like ours; a map_Kd (with Kd 1 1 1, which the
+    texture then is) its reflectance as an sRGB bitmap, bilinear and repeating, with the OBJ's vt
+    (Mitsuba flips v at load as the farm does); Ke becomes an area emitter. Emitters
     shine from their front face (the side the triangle's counter-clockwise winding faces) in both
     renderers. Mitsuba has no two-sided area light, so an object whose job material says
     "emission_sides": "both" gets a back-to-back twin of each emissive triangle 1e-4 behind it.
@@ -23,6 +25,8 @@ Reference images (what tests/data/reference/ holds):
       --width 128 --height 128 --spp 4096 -o tests/data/reference/cornell_path_mitsuba.exr
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/cornell_gap/cornell_gap.json \\
       --spp 2048 --half -o tests/data/reference/cornell_gap_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_textured.json \\
+      --width 128 --height 128 --spp 4096 --half -o tests/data/reference/cornell_textured_mitsuba.exr
 Throughput beside `farm bench path`:
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
       --width 512 --height 512 --spp 16 --threads 1 --bench
@@ -50,6 +54,8 @@ def parse_mtl(path):
             key, values = words[0], words[1:]
             if key == "newmtl":
                 current = materials.setdefault(values[0], {"Kd": [0.5] * 3, "Ke": [0.0] * 3, "Ks": [0.0] * 3})
+            elif current is not None and key == "map_Kd":
+                current["map_Kd"] = os.path.join(os.path.dirname(path), values[-1])
             elif current is not None and key in ("Kd", "Ke", "Ks"):
                 current[key] = [float(v) for v in values[:3]]
             elif current is not None and key in ("d", "Tr", "Ni", "Ns", "Ka", "illum"):
@@ -58,9 +64,10 @@ def parse_mtl(path):
 
 
 def parse_obj(path):
-    """Triangles grouped by material name: {material: [(p0, p1, p2), ...]}."""
+    """Triangles grouped by material name: {material: [(c0, c1, c2), ...]}, each corner a
+    (position, uv) pair, uv None where the face gives none."""
     folder = os.path.dirname(path)
-    vertices, groups, materials, material = [], {}, {}, "default"
+    vertices, uvs, groups, materials, material = [], [], {}, {}, "default"
     with open(path) as f:
         for number, line in enumerate(f, 1):
             words = line.split()
@@ -68,12 +75,18 @@ def parse_obj(path):
                 continue
             if words[0] == "v":
                 vertices.append(tuple(float(v) for v in words[1:4]))
+            elif words[0] == "vt":
+                uvs.append(tuple(float(v) for v in words[1:3]))
             elif words[0] == "mtllib":
                 materials.update(parse_mtl(os.path.join(folder, words[1])))
             elif words[0] == "usemtl":
                 material = words[1]
             elif words[0] == "f":
-                corners = [vertices[int(w.split("/")[0]) - 1] for w in words[1:]]
+                def corner(word):
+                    parts = word.split("/")
+                    uv = uvs[int(parts[1]) - 1] if len(parts) > 1 and parts[1] else None
+                    return vertices[int(parts[0]) - 1], uv
+                corners = [corner(w) for w in words[1:]]
                 for i in range(1, len(corners) - 1):  # a fan: the polygons are planar and convex
                     groups.setdefault(material, []).append((corners[0], corners[i], corners[i + 1]))
     return groups, materials
@@ -92,8 +105,9 @@ def transform_of(mi, obj):
 
 def write_triangles(path, triangles, flip=False, offset=0.0):
     """A plain OBJ of separate triangles; `flip` reverses them and moves them `offset` behind."""
-    lines = []
-    for a, b, c in triangles:
+    lines, uv_lines, with_uvs = [], [], all(uv is not None for t in triangles for _, uv in t)
+    for corners in triangles:
+        (a, ua), (b, ub), (c, uc) = corners
         if flip:
             e1 = [b[k] - a[k] for k in range(3)]
             e2 = [c[k] - a[k] for k in range(3)]
@@ -101,10 +115,19 @@ def write_triangles(path, triangles, flip=False, offset=0.0):
             length = math.sqrt(sum(x * x for x in n)) or 1.0
             shift = [-offset * x / length for x in n]
             a, b, c = [tuple(p[k] + shift[k] for k in range(3)) for p in (a, c, b)]
+            ub, uc = uc, ub
         for p in (a, b, c):
             lines.append("v %.9g %.9g %.9g" % p)
+        if with_uvs:
+            for uv in (ua, ub, uc):
+                uv_lines.append("vt %.9g %.9g" % uv)
+    lines += uv_lines
     for i in range(len(triangles)):
-        lines.append("f %d %d %d" % (3 * i + 1, 3 * i + 2, 3 * i + 3))
+        k = 3 * i
+        if with_uvs:
+            lines.append("f %d/%d %d/%d %d/%d" % (k + 1, k + 1, k + 2, k + 2, k + 3, k + 3))
+        else:
+            lines.append("f %d %d %d" % (k + 1, k + 2, k + 3))
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
 
@@ -158,8 +181,15 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
             m = materials.get(name, {"Kd": [0.5] * 3, "Ke": [0.0] * 3, "Ks": [0.0] * 3})
             if max(m["Ks"]) > 0 or m.get("d", [1])[0] < 1 or m.get("Tr", [0])[0] > 0:
                 raise RefusedScene(f"{obj['file']}: material '{name}': only diffuse and emissive materials are supported")
-            bsdf = {"type": "twosided", "bsdf": {"type": "diffuse",
-                                                 "reflectance": {"type": "rgb", "value": m["Kd"]}}}
+            reflectance = {"type": "rgb", "value": m["Kd"]}
+            if "map_Kd" in m:
+                if m["Kd"] != [1.0, 1.0, 1.0]:
+                    raise RefusedScene(f"{obj['file']}: material '{name}': a map_Kd needs Kd 1 1 1 here")
+                if any(uv is None for t in triangles for _, uv in t):
+                    raise RefusedScene(f"{obj['file']}: material '{name}': a face without vt")
+                reflectance = {"type": "bitmap", "filename": m["map_Kd"], "raw": False,
+                               "filter_type": "bilinear", "wrap_mode": "repeat"}
+            bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": reflectance}}
             emits = max(m["Ke"]) > 0
             twins = [("front", False)] + ([("back", True)] if emits and two_sided_emission else [])
             for side, flip in twins:

@@ -1,12 +1,23 @@
 #include "renderer/accel/model_triangles.h"
 
+#include <algorithm>
+
 namespace farm {
 
 ModelTriangles::ModelTriangles(const Model& model) {
+  const bool any_uvs = std::any_of(model.meshes.begin(), model.meshes.end(),
+                                   [](const Mesh& m) { return !m.uvs.empty(); });
   for (const Mesh& mesh : model.meshes) {
     const auto base = static_cast<std::uint32_t>(positions.size());
     positions.insert(positions.end(), mesh.positions.begin(), mesh.positions.end());
     normals.insert(normals.end(), mesh.normals.begin(), mesh.normals.end());
+    if (any_uvs) {
+      if (mesh.uvs.size() == mesh.positions.size()) {
+        uvs.insert(uvs.end(), mesh.uvs.begin(), mesh.uvs.end());
+      } else {
+        uvs.resize(positions.size(), glm::vec2(0.0f));
+      }
+    }
     for (const glm::uvec3& t : mesh.triangles) {
       triangles.push_back(t + glm::uvec3(base));
       material.push_back(mesh.material);

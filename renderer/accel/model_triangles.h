@@ -3,6 +3,7 @@
 // acceleration structure (ours and Embree) and every hit uses. Triangle t of a model is
 // triangles[t]; its corners index the concatenated positions and normals.
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <vector>
 
@@ -14,6 +15,7 @@ namespace farm {
 struct ModelTriangles {
   std::vector<glm::vec3> positions;    // all meshes' vertices, concatenated
   std::vector<glm::vec3> normals;      // one per position, unit
+  std::vector<glm::vec2> uvs;          // one per position when any mesh has them (0 elsewhere), else none
   std::vector<glm::uvec3> triangles;   // indices into positions
   std::vector<std::uint32_t> material; // per triangle: index into Model::materials
   AABB bounds;

@@ -4,6 +4,7 @@
 // (the ray is carried into model space, so an object's BVH is built once per model); the other
 // implementation is Embree, with the same triangle numbering, for validation and as a backend.
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <memory>
 #include <string_view>
@@ -26,6 +27,7 @@ struct SurfaceHit {
   glm::vec3 position{0.0f};      // world space
   glm::vec3 geometric_normal{0.0f};  // world, unit, as the triangle's winding gives it
   glm::vec3 shading_normal{0.0f};    // world, unit, interpolated vertex normals
+  glm::vec2 uv{0.0f};                // texture coordinates, interpolated (0 where the model has none)
   const Material* material = nullptr;
 };
 
@@ -51,5 +53,18 @@ std::shared_ptr<const SceneIntersector> cached_scene_intersector(
 // Fills position, normals and material of a hit given (object, triangle, u, v, t): shared by
 // every implementation so they agree on everything but the hit itself.
 void complete_surface_hit(const PreparedScene& scene, const Ray& ray, SurfaceHit& hit);
+
+// How much of the texture a pixel's footprint spans at a hit (Texture::sample's footprint), for a
+// ray cone `cone_width` wide there across the ray: the width stretched by the incidence, times the
+// triangle's uv length per world length (the square root of its uv area over its world area).
+// 0 when the hit's model has no texture coordinates or the triangle none to speak of.
+float texture_footprint(const PreparedScene& scene, const SurfaceHit& hit, const glm::vec3& ray_direction,
+                        float cone_width);
+
+// The material a hit is shaded with (material_at): its own when it has no textures, else `scratch`
+// holding it with its textures read at the hit's uv over a ray cone `cone_width` wide there (0: the
+// textures' finest level).
+const Material& hit_material(const PreparedScene& scene, const glm::vec3& ray_direction, const SurfaceHit& hit,
+                             float cone_width, Material& scratch);
 
 }  // namespace farm

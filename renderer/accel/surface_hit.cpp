@@ -1,8 +1,10 @@
+#include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
 
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/accel/scene_intersector.h"
+#include "renderer/texture/material_textures.h"
 
 namespace farm {
 
@@ -29,7 +31,37 @@ void complete_surface_hit(const PreparedScene& scene, const Ray& ray, SurfaceHit
     if (length > 0.0f && std::isfinite(length)) shading = world / length;
   }
   hit.shading_normal = shading;
+  if (!model.uvs.empty()) {
+    const float w0 = 1.0f - hit.u - hit.v;
+    hit.uv = w0 * model.uvs[tri.x] + hit.u * model.uvs[tri.y] + hit.v * model.uvs[tri.z];
+  }
   hit.material = &object.source->materials[model.material[hit.triangle]];
+}
+
+float texture_footprint(const PreparedScene& scene, const SurfaceHit& hit, const glm::vec3& ray_direction,
+                        float cone_width) {
+  const PreparedObject& object = scene.objects()[hit.object];
+  const ModelTriangles& model = *object.triangles;
+  if (model.uvs.empty() || !(cone_width > 0.0f)) return 0.0f;
+  const glm::uvec3& tri = model.triangles[hit.triangle];
+  const auto world = [&](std::uint32_t i) {
+    return glm::vec3(object.model_to_world * glm::vec4(model.positions[i], 1.0f));
+  };
+  const glm::vec3 p0 = world(tri.x);
+  const float world_area = glm::length(glm::cross(world(tri.y) - p0, world(tri.z) - p0));
+  const glm::vec2 a = model.uvs[tri.y] - model.uvs[tri.x], b = model.uvs[tri.z] - model.uvs[tri.x];
+  const float uv_area = std::fabs(a.x * b.y - a.y * b.x);
+  if (!(world_area > 0.0f) || !(uv_area > 0.0f)) return 0.0f;
+  // At grazing incidence the footprint grows without bound; a tenth keeps it to ten widths.
+  const float incidence = std::max(0.1f, std::fabs(glm::dot(glm::normalize(ray_direction), hit.geometric_normal)));
+  const float footprint = cone_width / incidence * std::sqrt(uv_area / world_area);
+  return std::isfinite(footprint) ? footprint : 0.0f;
+}
+
+const Material& hit_material(const PreparedScene& scene, const glm::vec3& ray_direction, const SurfaceHit& hit,
+                             float cone_width, Material& scratch) {
+  if (!hit.material->textures) return *hit.material;
+  return material_at(*hit.material, hit.uv, texture_footprint(scene, hit, ray_direction, cone_width), scratch);
 }
 
 }  // namespace farm

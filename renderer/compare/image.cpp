@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "renderer/image/image_limits.h"
+#include "renderer/image/image_format.h"
 #include "renderer/image/jpeg_reader.h"
 #include "renderer/util/atomic_file.h"
 #include "renderer/image/png_reader.h"
@@ -24,28 +25,12 @@
 #include "renderer/image/preview.h"
 #include "renderer/image/rgb8_image.h"
 #include "renderer/util/input_error.h"
+#include "renderer/util/c_file.h"
 
 namespace farm {
 namespace {
 
 namespace fs = std::filesystem;
-
-enum class Format { exr, png, jpeg, unknown };
-
-struct FileCloser {
-  void operator()(std::FILE* f) const { std::fclose(f); }
-};
-using File = std::unique_ptr<std::FILE, FileCloser>;
-
-Format sniff(std::FILE* in) {
-  std::array<unsigned char, 4> magic{};
-  const std::size_t got = std::fread(magic.data(), 1, magic.size(), in);
-  std::rewind(in);
-  if (got >= 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) return Format::exr;
-  if (got >= 4 && magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G') return Format::png;
-  if (got >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff) return Format::jpeg;
-  return Format::unknown;
-}
 
 // Colour first, as image tools list them (R G B A), then every other channel by name.
 int channel_rank(const std::string& name) {
@@ -128,50 +113,32 @@ Image make_image(int width, int height, std::vector<std::string> channels) {
 
 namespace {
 
-File open_image(const fs::path& file) {
+CFile open_image(const fs::path& file) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) {
     throw InputError(fmt::format("{}: {}", file.string(), fs::exists(file, ec) ? "not a regular file" : "no such file"));
   }
-  File in(std::fopen(file.c_str(), "rb"));
+  CFile in(std::fopen(file.c_str(), "rb"));
   if (!in) throw InputError(fmt::format("{}: cannot open for reading", file.string()));
   return in;
 }
 
-// A PNG's IHDR, which the format puts first: the size without libpng's decoder set up.
-std::pair<int, int> read_png_size(std::FILE* in, const fs::path& file) {
-  std::array<unsigned char, 24> head{};
-  const std::size_t got = std::fread(head.data(), 1, head.size(), in);
-  std::rewind(in);
-  if (got < head.size() || std::memcmp(head.data() + 12, "IHDR", 4) != 0) {
-    throw InputError(fmt::format("{}: cannot read PNG: no IHDR chunk first", file.string()));
-  }
-  const auto be32 = [&](std::size_t at) {
-    return (std::uint32_t{head[at]} << 24) | (std::uint32_t{head[at + 1]} << 16) | (std::uint32_t{head[at + 2]} << 8) |
-           std::uint32_t{head[at + 3]};
-  };
-  const std::uint32_t width = be32(16), height = be32(20);
-  if (width == 0 || height == 0 || width > 0x7fffffffu || height > 0x7fffffffu) {
-    throw InputError(fmt::format("{}: cannot read PNG: a {}x{} image", file.string(), width, height));
-  }
-  return {static_cast<int>(width), static_cast<int>(height)};
-}
-
 // The size and kind of the image open in `in` (its format sniffed already), from its header.
-Image header_of(std::FILE* in, Format format, const fs::path& file) {
+Image header_of(std::FILE* in, ImageFormat format, const fs::path& file) {
   Image header;
   try {
     switch (format) {
-      case Format::exr: {
+      case ImageFormat::exr: {
         Imf::InputFile exr(file.c_str());
         const Imath::Box2i dw = exr.header().dataWindow();
         header.width = dw.max.x - dw.min.x + 1;
         header.height = dw.max.y - dw.min.y + 1;
         return header;
       }
-      case Format::png: std::tie(header.width, header.height) = read_png_size(in, file); break;
-      case Format::jpeg: std::tie(header.width, header.height) = read_jpeg_size(in, file); break;
-      case Format::unknown: throw InputError(fmt::format("{}: not an EXR, PNG or JPEG image", file.string()));
+      case ImageFormat::png: std::tie(header.width, header.height) = read_png_size(in, file); break;
+      case ImageFormat::jpeg: std::tie(header.width, header.height) = read_jpeg_size(in, file); break;
+      case ImageFormat::radiance:
+      case ImageFormat::unknown: throw InputError(fmt::format("{}: not an EXR, PNG or JPEG image", file.string()));
     }
   } catch (const InputError&) {
     throw;
@@ -188,8 +155,8 @@ Image header_of(std::FILE* in, Format format, const fs::path& file) {
 }  // namespace
 
 Image read_image_header(const fs::path& file) {
-  const File in = open_image(file);
-  return header_of(in.get(), sniff(in.get()), file);
+  const CFile in = open_image(file);
+  return header_of(in.get(), sniff_image_format(in.get()), file);
 }
 
 std::pair<Image, Image> read_images_to_compare(const fs::path& reference, const fs::path& test) {
@@ -201,8 +168,8 @@ std::pair<Image, Image> read_images_to_compare(const fs::path& reference, const 
 Image read_image(const fs::path& file, int max_side) {
   if (max_side <= 0 || max_side > kMaxImageSide) max_side = kMaxImageSide;
   // One open, one sniff: the header is checked before the decoder is given the file.
-  const File in = open_image(file);
-  const Format format = sniff(in.get());
+  const CFile in = open_image(file);
+  const ImageFormat format = sniff_image_format(in.get());
   const Image header = header_of(in.get(), format, file);
   const std::uint64_t pixels = static_cast<std::uint64_t>(std::max(0, header.width)) * static_cast<std::uint64_t>(std::max(0, header.height));
   if (pixels > kMaxComparedPixels) {
@@ -212,10 +179,11 @@ Image read_image(const fs::path& file, int max_side) {
   }
   try {
     switch (format) {
-      case Format::exr: return read_exr_channels(file, max_side);
-      case Format::png: return from_decoded(read_png(in.get(), file, max_side));
-      case Format::jpeg: return from_decoded(read_jpeg(in.get(), file, max_side));
-      case Format::unknown: break;  // header_of refused it
+      case ImageFormat::exr: return read_exr_channels(file, max_side);
+      case ImageFormat::png: return from_decoded(read_png(in.get(), file, max_side));
+      case ImageFormat::jpeg: return from_decoded(read_jpeg(in.get(), file, max_side));
+      case ImageFormat::radiance:
+      case ImageFormat::unknown: break;  // header_of refused it
     }
   } catch (const InputError&) {
     throw;

@@ -3,13 +3,16 @@
 #include <fmt/format.h>
 #include <png.h>
 
+#include <array>
 #include <csetjmp>
+#include <cstring>
 #include <cstdint>
 #include <cstdio>
 #include <stdexcept>
 #include <vector>
 
 #include "renderer/image/png_error.h"
+#include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {
@@ -98,5 +101,25 @@ DecodedImage read_png(std::FILE* in, const std::filesystem::path& name, int max_
   }
   return image;
 }
+
+// A PNG's IHDR, which the format puts first: the size without libpng's decoder set up.
+std::pair<int, int> read_png_size(std::FILE* in, const std::filesystem::path& file) {
+  std::array<unsigned char, 24> head{};
+  const std::size_t got = std::fread(head.data(), 1, head.size(), in);
+  std::rewind(in);
+  if (got < head.size() || std::memcmp(head.data() + 12, "IHDR", 4) != 0) {
+    throw InputError(fmt::format("{}: cannot read PNG: no IHDR chunk first", file.string()));
+  }
+  const auto be32 = [&](std::size_t at) {
+    return (std::uint32_t{head[at]} << 24) | (std::uint32_t{head[at + 1]} << 16) | (std::uint32_t{head[at + 2]} << 8) |
+           std::uint32_t{head[at + 3]};
+  };
+  const std::uint32_t width = be32(16), height = be32(20);
+  if (width == 0 || height == 0 || width > 0x7fffffffu || height > 0x7fffffffu) {
+    throw InputError(fmt::format("{}: cannot read PNG: a {}x{} image", file.string(), width, height));
+  }
+  return {static_cast<int>(width), static_cast<int>(height)};
+}
+
 
 }  // namespace farm

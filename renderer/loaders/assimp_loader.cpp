@@ -20,6 +20,8 @@
 
 #include "renderer/loaders/confined_io_system.h"
 #include "renderer/loaders/loaders.h"
+#include "renderer/texture/material_textures.h"
+#include "renderer/texture/texture_cache.h"
 #include "renderer/util/input_error.h"
 
 namespace farm {
@@ -37,7 +39,38 @@ glm::mat4 to_glm(const aiMatrix4x4& m) {
   return out;
 }
 
-Material convert_material(const aiMaterial& in) {
+// The texture a material names for `type` (MTL's map_Kd, map_Ks, map_Ke; COLLADA's <texture>),
+// confined to the model's root and decoded through the process's cache. An empty slot when it
+// names none, or one embedded in the file ("*0"), which these formats do not use.
+TextureSlot texture_slot(const ModelFile& file, const aiMaterial& in, aiTextureType type, TextureColourSpace space) {
+  aiString path;
+  aiTextureMapMode modes[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
+  if (in.GetTexture(type, 0, &path, nullptr, nullptr, nullptr, nullptr, modes) != AI_SUCCESS) return {};
+  const std::string written = path.C_Str();
+  if (written.empty() || written[0] == '*') return {};
+  const ConfinedFile confined = confine_loader_path(file, written);
+  const std::string material = in.GetName().length > 0 ? in.GetName().C_Str() : "(unnamed)";
+  if (!confined.allowed()) {
+    throw InputError(file.name.string() + ": material '" + material + "': texture '" + written + "': " +
+                     (confined.reason.empty() ? "no such file" : confined.reason));
+  }
+  const auto wrap = [](aiTextureMapMode mode) {
+    return mode == aiTextureMapMode_Clamp ? TextureWrap::ClampToEdge
+           : mode == aiTextureMapMode_Mirror ? TextureWrap::MirroredRepeat
+                                              : TextureWrap::Repeat;
+  };
+  TextureSlot slot;
+  slot.sampler.wrap_u = wrap(modes[0]);
+  slot.sampler.wrap_v = wrap(modes[1]);
+  try {
+    slot.texture = TextureCache::process().get(confined.resolved, space);
+  } catch (const InputError& e) {
+    throw InputError(file.name.string() + ": material '" + material + "': " + e.what());
+  }
+  return slot;
+}
+
+Material convert_material(const ModelFile& file, const aiMaterial& in) {
   Material m;
   aiString name;
   if (in.Get(AI_MATKEY_NAME, name) == AI_SUCCESS && name.length > 0) m.name = name.C_Str();
@@ -65,6 +98,14 @@ Material convert_material(const aiMaterial& in) {
   scalar(AI_MATKEY_REFRACTI, m.ior);
   float opacity = 1.0f;
   if (scalar(AI_MATKEY_OPACITY, opacity)) m.transmission = 1.0f - std::clamp(opacity, 0.0f, 1.0f);
+
+  MaterialTextures textures;
+  textures.base_colour = texture_slot(file, in, aiTextureType_DIFFUSE, TextureColourSpace::Srgb);
+  textures.specular = texture_slot(file, in, aiTextureType_SPECULAR, TextureColourSpace::Srgb);
+  textures.emission = texture_slot(file, in, aiTextureType_EMISSIVE, TextureColourSpace::Srgb);
+  if (textures.base_colour || textures.specular || textures.emission) {
+    m.textures = std::make_shared<const MaterialTextures>(std::move(textures));
+  }
   return m;
 }
 
@@ -77,6 +118,14 @@ Mesh convert_mesh(const aiMesh& in, const std::string& node_name) {
   if (in.HasNormals()) {
     out.normals.reserve(in.mNumVertices);
     for (unsigned i = 0; i < in.mNumVertices; ++i) out.normals.push_back(to_glm(in.mNormals[i]));
+  }
+  if (in.HasTextureCoords(0)) {
+    // Assimp keeps the file's v, which points up in these formats; ours points down.
+    out.uvs.reserve(in.mNumVertices);
+    for (unsigned i = 0; i < in.mNumVertices; ++i) {
+      const aiVector3D& t = in.mTextureCoords[0][i];
+      out.uvs.emplace_back(t.x, 1.0f - t.y);
+    }
   }
   // SortByPType already moved points and lines out; keep exactly the triangles.
   for (unsigned f = 0; f < in.mNumFaces; ++f) {
@@ -213,7 +262,7 @@ Model load_with_assimp(const ModelFile& file) {
   Model model;
   model.source = file.name;
   for (unsigned i = 0; i < scene->mNumMaterials; ++i) {
-    model.materials.push_back(convert_material(*scene->mMaterials[i]));
+    model.materials.push_back(convert_material(file, *scene->mMaterials[i]));
   }
 
   // Depth-first walk with an explicit stack: a hostile file cannot exhaust the call stack.

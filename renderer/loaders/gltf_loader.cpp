@@ -21,6 +21,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/trigonometric.hpp>
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -30,6 +31,8 @@
 
 #include "renderer/loaders/loaders.h"
 #include "renderer/scene/model_animation.h"
+#include "renderer/texture/material_textures.h"
+#include "renderer/texture/texture_cache.h"
 #include "renderer/util/input_error.h"
 
 namespace farm {
@@ -79,7 +82,8 @@ bool refuse_write(std::string* err, const std::string&, const std::vector<unsign
   return false;
 }
 
-// Textures are not used by our materials; skip decoding them.
+// tinygltf is not asked to decode images: the texture cache decodes each file once
+// (material_textures), with its size checked before.
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
                 const unsigned char*, int, void*) {
   return true;
@@ -149,8 +153,8 @@ struct AccessorView {
 
 class GltfReader {
  public:
-  GltfReader(std::filesystem::path file, const tinygltf::Model& gltf)
-      : file_(std::move(file)), gltf_(gltf) {}
+  GltfReader(const ModelFile& source, const tinygltf::Model& gltf)
+      : source_(source), file_(source.name), gltf_(gltf) {}
 
   Model read();
 
@@ -161,6 +165,10 @@ class GltfReader {
 
   AccessorView view(int index, int element_type, const std::string& what) const;
   std::vector<glm::vec3> read_vec3(int accessor, const std::string& what) const;
+  std::vector<glm::vec2> read_texcoords(int accessor, const std::string& what) const;
+  TextureSlot texture_slot(const tinygltf::TextureInfo& info, const std::string& material, const char* what,
+                           TextureColourSpace space) const;
+  std::shared_ptr<const MaterialTextures> material_textures(const tinygltf::Material& in) const;
   std::vector<float> read_times(int accessor, const std::string& what) const;
   std::vector<glm::quat> read_rotations(int accessor, const std::string& what) const;
   std::vector<std::uint32_t> read_indices(int accessor, std::size_t vertex_count,
@@ -180,6 +188,7 @@ class GltfReader {
   void add_light(const tinygltf::Node& node, const glm::mat4& node_to_root);
   std::uint32_t default_material();
 
+  const ModelFile& source_;
   std::filesystem::path file_;
   const tinygltf::Model& gltf_;
   Model model_;
@@ -189,6 +198,83 @@ class GltfReader {
 template <class T>
 bool valid_index(int index, const std::vector<T>& items) {
   return index >= 0 && static_cast<std::size_t>(index) < items.size();
+}
+
+// A material's texture: the image its texture names (an external file, confined to the model's
+// root and decoded through the process's cache), the texture's sampler and KHR_texture_transform.
+// An empty slot when the material names none.
+TextureSlot GltfReader::texture_slot(const tinygltf::TextureInfo& info, const std::string& material,
+                                     const char* what, TextureColourSpace space) const {
+  if (info.index < 0) return {};
+  const std::string where = "material '" + material + "' " + what;
+  if (!valid_index(info.index, gltf_.textures)) fail(where + ": no such texture " + std::to_string(info.index));
+  const tinygltf::Texture& texture = gltf_.textures[static_cast<std::size_t>(info.index)];
+  if (!valid_index(texture.source, gltf_.images)) fail(where + ": texture " + std::to_string(info.index) + " has no image");
+  const tinygltf::Image& image = gltf_.images[static_cast<std::size_t>(texture.source)];
+  // Images embedded in the file (a .glb's buffer views, data: uris) are not read yet: such a
+  // material renders with its factors alone, as before textures were read at all.
+  if (image.uri.empty() || image.uri.rfind("data:", 0) == 0) return {};
+  const ConfinedFile file = confine_loader_path(source_, image.uri);
+  if (!file.allowed()) fail(where + ": image '" + image.uri + "': " + (file.reason.empty() ? "no such file" : file.reason));
+
+  TextureSlot slot;
+  if (texture.sampler >= 0) {
+    if (!valid_index(texture.sampler, gltf_.samplers)) fail(where + ": no such sampler " + std::to_string(texture.sampler));
+    const tinygltf::Sampler& sampler = gltf_.samplers[static_cast<std::size_t>(texture.sampler)];
+    const auto wrap = [](int mode) {
+      return mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? TextureWrap::ClampToEdge
+             : mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? TextureWrap::MirroredRepeat
+                                                             : TextureWrap::Repeat;
+    };
+    slot.sampler.wrap_u = wrap(sampler.wrapS);
+    slot.sampler.wrap_v = wrap(sampler.wrapT);
+    if (sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST) slot.sampler.magnify = TextureFilter::Nearest;
+    switch (sampler.minFilter) {
+      case TINYGLTF_TEXTURE_FILTER_NEAREST:
+        slot.sampler.minify = TextureFilter::Nearest;
+        slot.sampler.mipmaps = false;
+        break;
+      case TINYGLTF_TEXTURE_FILTER_LINEAR: slot.sampler.mipmaps = false; break;
+      case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_NEAREST:
+      case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_LINEAR: slot.sampler.minify = TextureFilter::Nearest; break;
+      default: break;  // linear with mipmaps, also when the file says nothing
+    }
+  }
+  if (const auto it = info.extensions.find("KHR_texture_transform"); it != info.extensions.end() && it->second.IsObject()) {
+    const tinygltf::Value& t = it->second;
+    const auto pair = [&](const char* key, glm::vec2 fallback) {
+      if (!t.Has(key)) return fallback;
+      const tinygltf::Value& v = t.Get(key);
+      if (!v.IsArray() || v.ArrayLen() != 2 || !v.Get(0).IsNumber() || !v.Get(1).IsNumber()) {
+        fail(where + ": KHR_texture_transform's " + key + " is not two numbers");
+      }
+      return glm::vec2(static_cast<float>(v.Get(0).GetNumberAsDouble()), static_cast<float>(v.Get(1).GetNumberAsDouble()));
+    };
+    const float rotation = t.Has("rotation") && t.Get("rotation").IsNumber()
+                               ? static_cast<float>(t.Get("rotation").GetNumberAsDouble())
+                               : 0.0f;
+    slot.transform = uv_transform(pair("offset", glm::vec2(0.0f)), rotation, pair("scale", glm::vec2(1.0f)));
+    for (int c = 0; c < 3; ++c) {
+      if (!all_finite(slot.transform[c])) fail(where + ": KHR_texture_transform is not finite");
+    }
+  }
+  try {
+    slot.texture = TextureCache::process().get(file.resolved, space);
+  } catch (const InputError& e) {
+    fail(where + ": " + e.what());
+  }
+  return slot;
+}
+
+std::shared_ptr<const MaterialTextures> GltfReader::material_textures(const tinygltf::Material& in) const {
+  const std::string name = in.name.empty() ? "(unnamed)" : in.name;
+  MaterialTextures textures;
+  textures.base_colour =
+      texture_slot(in.pbrMetallicRoughness.baseColorTexture, name, "baseColorTexture", TextureColourSpace::Srgb);
+  textures.metallic = glm::clamp(static_cast<float>(in.pbrMetallicRoughness.metallicFactor), 0.0f, 1.0f);
+  textures.emission = texture_slot(in.emissiveTexture, name, "emissiveTexture", TextureColourSpace::Srgb);
+  if (!textures.base_colour && !textures.emission) return nullptr;
+  return std::make_shared<const MaterialTextures>(std::move(textures));
 }
 
 AccessorView GltfReader::view(int index, int element_type, const std::string& what) const {
@@ -240,6 +326,30 @@ std::vector<glm::vec3> GltfReader::read_vec3(int accessor, const std::string& wh
     float xyz[3];
     std::memcpy(xyz, v.element(i), sizeof xyz);  // buffers need not be aligned for float
     out[i] = glm::vec3(xyz[0], xyz[1], xyz[2]);
+  }
+  return out;
+}
+
+// Texture coordinates: float, or normalized unsigned bytes or shorts (glTF 2.0, 3.7.2.1).
+std::vector<glm::vec2> GltfReader::read_texcoords(int accessor, const std::string& what) const {
+  const AccessorView v = view(accessor, TINYGLTF_TYPE_VEC2, what);
+  const tinygltf::Accessor& acc = gltf_.accessors[static_cast<std::size_t>(accessor)];
+  std::vector<glm::vec2> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) {
+    const unsigned char* e = v.element(i);
+    if (v.component_type == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+      float uv[2];
+      std::memcpy(uv, e, sizeof uv);
+      out[i] = glm::vec2(uv[0], uv[1]);
+    } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && acc.normalized) {
+      out[i] = glm::vec2(e[0], e[1]) / 255.0f;
+    } else if (v.component_type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT && acc.normalized) {
+      std::uint16_t uv[2];
+      std::memcpy(uv, e, sizeof uv);
+      out[i] = glm::vec2(uv[0], uv[1]) / 65535.0f;
+    } else {
+      fail(what + ": texture coordinates must be float or normalized unsigned bytes or shorts");
+    }
   }
   return out;
 }
@@ -397,6 +507,10 @@ void GltfReader::add_mesh(int mesh_index, int node, const glm::mat4& node_to_roo
       if (mesh.normals.size() != mesh.positions.size()) {
         fail(what + ": NORMAL and POSITION counts differ");
       }
+    }
+    if (const auto uv = prim.attributes.find("TEXCOORD_0"); uv != prim.attributes.end()) {
+      mesh.uvs = read_texcoords(uv->second, what + " TEXCOORD_0");
+      if (mesh.uvs.size() != mesh.positions.size()) fail(what + ": TEXCOORD_0 and POSITION counts differ");
     }
     const std::vector<std::uint32_t> indices =
         read_indices(prim.indices, mesh.positions.size(), what);
@@ -658,7 +772,8 @@ std::vector<int> GltfReader::root_nodes() const {
 Model GltfReader::read() {
   model_.source = file_;
   for (const tinygltf::Material& in : gltf_.materials) {
-    const Material m = convert_material(in);
+    Material m = convert_material(in);
+    m.textures = material_textures(in);
     if (!all_finite(m.diffuse) || !all_finite(m.specular) || !all_finite(m.emission) ||
         !std::isfinite(m.ior)) {
       fail("material '" + m.name + "' has values that are not finite");
@@ -765,8 +880,9 @@ Model load_gltf(const ModelFile& file) {
     if (!warn.empty()) message += " (" + trimmed(warn) + ")";
     throw InputError(message);
   }
-  // Warnings alone (an unreadable texture, say) do not stop the load: we use no textures.
-  return GltfReader(file.name, gltf).read();
+  // Warnings alone do not stop the load: the textures a material uses are read by the reader,
+  // which fails on one it cannot read.
+  return GltfReader(file, gltf).read();
 }
 
 }  // namespace farm

@@ -9,6 +9,7 @@
 #include "renderer/raster/sample_pattern.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/texture/material_textures.h"
 
 namespace farm::raster {
 namespace {
@@ -28,6 +29,26 @@ struct SurfaceAttributes {
   bool front_side;  // the camera sees the triangle's front face (for emission)
 };
 
+// What a textured surface adds, kept apart so that the z-buffer's attributes of an untextured
+// scene stay small enough for the core's first cache: written only where the material has
+// textures.
+struct TextureAttributes {
+  glm::vec2 uv;        // texture coordinates, perspective-correct
+  float uv_per_world;  // the triangle's uv length per view-space length
+};
+
+// A triangle's uv length per unit of length on it (texture_footprint's measure, the same in
+// view and world space, and unchanged by clipping, which keeps the plane and the uv map): the
+// square root of its uv area over its area.
+float uv_per_length(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, glm::vec2 ua, glm::vec2 ub,
+                    glm::vec2 uc) {
+  const float area = glm::length(glm::cross(b.view_position - a.view_position, c.view_position - a.view_position));
+  const glm::vec2 e1 = ub - ua, e2 = uc - ua;
+  const float uv_area = std::fabs(e1.x * e2.y - e1.y * e2.x);
+  const float ratio = area > 0.0f ? std::sqrt(uv_area / area) : 0.0f;
+  return std::isfinite(ratio) ? ratio : 0.0f;
+}
+
 // Rasterizes the triangles of one bin into one region (a bin, or the part of it inside a tile)
 // for one sub-pixel sample position. Owns its z-buffer: no other thread touches these pixels.
 class RegionRasterizer {
@@ -37,6 +58,7 @@ class RegionRasterizer {
     depth_.resize(kPixels);
     material_.resize(kPixels);
     attributes_.resize(kPixels);
+    texture_attributes_.resize(kPixels);
   }
 
   void begin(const Rect& region, FixedPoint sample_offset) {
@@ -50,8 +72,21 @@ class RegionRasterizer {
   // The surface seen at a pixel: null where no triangle covers its sample.
   const Material* material(int x, int y) const { return material_[index(x, y)]; }
   const SurfaceAttributes& attributes(int x, int y) const { return attributes_[index(x, y)]; }
+  // Only where material() has textures.
+  const TextureAttributes& texture_attributes(int x, int y) const { return texture_attributes_[index(x, y)]; }
   std::uint64_t fragments() const { return fragments_; }
 
+  void draw(const ScreenTriangle& t) {
+    // Two instances of the loop: an untextured triangle's is the loop as it was before textures.
+    if (t.material & kTexturedMaterial) {
+      draw<true>(t);
+    } else {
+      draw<false>(t);
+    }
+  }
+
+ private:
+  template <bool kTextured>
   void draw(const ScreenTriangle& t) {
     const ScreenVertex &s0 = frame_.vertex(t.v[0]), &s1 = frame_.vertex(t.v[1]),
                        &s2 = frame_.vertex(t.v[2]);
@@ -70,9 +105,12 @@ class RegionRasterizer {
                        step1 = -(p0.y - p2.y) * kSubpixelScale,
                        step2 = -(p1.y - p0.y) * kSubpixelScale;
     const float inv_area = 1.0f / static_cast<float>(area);
-    const Material* material = frame_.materials[t.material & ~kBackFace];
+    const Material* material = frame_.materials[t.material & kMaterialIndex];
     const bool front_side = (t.material & kBackFace) == 0;
     const ClipVertex &a0 = s0.attributes, &a1 = s1.attributes, &a2 = s2.attributes;
+    const glm::vec2 uv0 = kTextured ? frame_.uv(t.v[0]) : glm::vec2(0.0f), uv1 = kTextured ? frame_.uv(t.v[1]) : uv0,
+                    uv2 = kTextured ? frame_.uv(t.v[2]) : uv0;
+    const float uv_per_world = kTextured ? uv_per_length(a0, a1, a2, uv0, uv1, uv2) : 0.0f;
 
     for (int y = y_begin; y <= y_end; ++y) {
       const FixedPoint start{x_begin * kSubpixelScale + offset_.x, y * kSubpixelScale + offset_.y};
@@ -95,12 +133,15 @@ class RegionRasterizer {
             (q0 * a0.view_position + q1 * a1.view_position + q2 * a2.view_position) * inv_q;
         attributes_[i].world_normal =
             (q0 * a0.world_normal + q1 * a1.world_normal + q2 * a2.world_normal) * inv_q;
+        if constexpr (kTextured) {
+          texture_attributes_[i].uv = (q0 * uv0 + q1 * uv1 + q2 * uv2) * inv_q;
+          texture_attributes_[i].uv_per_world = uv_per_world;
+        }
         attributes_[i].front_side = front_side;
       }
     }
   }
 
- private:
   std::size_t index(int x, int y) const {
     return static_cast<std::size_t>(y - region_.y0) * static_cast<std::size_t>(region_.width()) +
            static_cast<std::size_t>(x - region_.x0);
@@ -112,17 +153,20 @@ class RegionRasterizer {
   std::vector<float> depth_;  // NDC depth of the nearest surface so far
   std::vector<const Material*> material_;
   std::vector<SurfaceAttributes> attributes_;
+  std::vector<TextureAttributes> texture_attributes_;
   std::uint64_t fragments_ = 0;
 };
 
 // Shades the region's visible surfaces and adds them to `out`; AOVs come from the first sample.
 void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, const Scene& scene,
                   const Rect& region, bool write_aovs, TileBuffer& out) {
+  const float pixel_size = scene.camera.pixel_size_at_unit_depth(frame.height);
+  Material textured;
   for (int y = region.y0; y < region.y1; ++y) {
     for (int x = region.x0; x < region.x1; ++x) {
-      const Material* material = raster.material(x, y);
+      const Material* base = raster.material(x, y);
       glm::vec4& pixel = out.rgba(x, y);
-      if (!material) {
+      if (!base) {
         pixel += glm::vec4(scene.background, 0.0f);
         continue;
       }
@@ -131,6 +175,15 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       const glm::vec3 to_eye = glm::normalize(frame.eye - world);
       glm::vec3 n = glm::normalize(hit.world_normal);
       if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: light the face we see
+      // The pixel's footprint as the ray engines' texture_footprint measures it, with the
+      // interpolated normal for the triangle's.
+      const Material* material = base;
+      if (base->textures) {
+        const TextureAttributes& texture = raster.texture_attributes(x, y);
+        const float footprint =
+            pixel_size * -hit.view_position.z / std::max(0.1f, glm::dot(n, to_eye)) * texture.uv_per_world;
+        material = &material_at(*base, texture.uv, footprint, textured);
+      }
       pixel += glm::vec4(limit_radiance(shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights,
                                                           scene.ambient)),
                          1.0f);

@@ -39,12 +39,25 @@ struct MeshRange {
   std::size_t first_triangle;
 };
 
+// The texture coordinates at `p`, a point clipping made on triangle (a, b, c) with coordinates
+// (ua, ub, uc): its barycentric weights in the triangle's plane. The uvs are affine on the plane,
+// so the clipped vertex gets what interpolating along the clipped edge would give.
+glm::vec2 uv_at(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, glm::vec2 ua,
+                glm::vec2 ub, glm::vec2 uc) {
+  const glm::vec3 n = glm::cross(b - a, c - a);
+  const float area = glm::dot(n, n);
+  if (!(area > 0.0f)) return ua;
+  const float wb = glm::dot(glm::cross(p - a, c - a), n) / area, wc = glm::dot(glm::cross(b - a, p - a), n) / area;
+  return (1.0f - wb - wc) * ua + wb * ub + wc * uc;
+}
+
 // What one set-up chunk produces, merged in chunk order afterwards. The chunks lie side by side
 // in one vector and two threads write the counts of neighbouring ones for every triangle: each on
 // cache lines of its own, or the lines bounce between the cores (false sharing, issue #32).
 struct alignas(64) SetupChunk {
   TriangleChunk triangles;
   std::vector<ScreenVertex> clipped_vertices;
+  std::vector<glm::vec2> clipped_uvs;  // beside clipped_vertices, when the frame has uvs
   std::vector<std::pair<std::uint32_t, std::uint32_t>> binned;  // (bin, local triangle)
   std::vector<std::uint32_t> bin_counts;                          // entries per bin
   std::uint64_t unreported_entries = 0;  // filed here, not yet added to the frame's count
@@ -73,11 +86,14 @@ class FrameBuilder {
         ranges_.push_back({&object, &mesh, vertices, triangles});
         frame.materials.push_back(&object.source->materials.at(mesh.material));
         mirrored_.push_back(glm::determinant(glm::mat3(object.model_to_world)) < 0.0f);
+        textured_.push_back(frame.materials.back()->textures != nullptr);
         vertices += mesh.positions.size();
         triangles += mesh.triangles.size();
+        has_uvs_ = has_uvs_ || !mesh.uvs.empty();
       }
     }
     frame.vertices.allocate(vertices);
+    if (has_uvs_) frame.vertex_uvs.resize(vertices);
     frame.input_triangles = triangles;
   }
 
@@ -165,6 +181,7 @@ class FrameBuilder {
         const glm::vec3 n = to_world_normal * range.mesh->normals[local];
         const float len = glm::length(n);
         v.attributes.world_normal = len > 0.0f ? n / len : n;
+        if (has_uvs_) frame_.vertex_uvs[i] = range.mesh->uvs.empty() ? glm::vec2(0.0f) : range.mesh->uvs[local];
         v.outcode = outcode(v.attributes.clip);
         project(v);
       }
@@ -191,7 +208,7 @@ class FrameBuilder {
     t.v[0] = i0;
     t.v[1] = i1;
     t.v[2] = i2;
-    t.material = material | (back_face ? kBackFace : 0u);
+    t.material = material | (back_face ? kBackFace : 0u) | (textured_[material] ? kTexturedMaterial : 0u);
     const std::int64_t min_x = std::min({p0.x, p1.x, p2.x}), max_x = std::max({p0.x, p1.x, p2.x}),
                        min_y = std::min({p0.y, p1.y, p2.y}), max_y = std::max({p0.y, p1.y, p2.y});
     if (centres_only_) {
@@ -261,6 +278,11 @@ class FrameBuilder {
         v.attributes = poly.vertices[k];
         project(v);
         chunk.clipped_vertices.push_back(v);
+        if (has_uvs_) {
+          chunk.clipped_uvs.push_back(uv_at(v.attributes.view_position, a.attributes.view_position,
+                                            b.attributes.view_position, c.attributes.view_position,
+                                            frame_.vertex_uvs[ia], frame_.vertex_uvs[ib], frame_.vertex_uvs[ic]));
+        }
       }
       for (std::uint32_t k = 2; k < poly.size; ++k) {
         emit(chunk, poll, true, material, first, first + k - 1, first + k);
@@ -294,6 +316,7 @@ class FrameBuilder {
       vertices += chunks_[c].clipped_vertices.size();
     }
     frame_.clipped_vertices.resize(vertices);
+    if (has_uvs_) frame_.clipped_uvs.resize(vertices);
 
     // Counting sort by bin, stable in chunk order, so every bin lists triangles in scene order.
     // Loops run chunk by chunk so that each walks one contiguous count array.
@@ -326,6 +349,8 @@ class FrameBuilder {
     const auto vertex_base = static_cast<std::uint32_t>(vertex_base_[c]);
     std::copy(chunk.clipped_vertices.begin(), chunk.clipped_vertices.end(),
               frame_.clipped_vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
+    std::copy(chunk.clipped_uvs.begin(), chunk.clipped_uvs.end(),
+              frame_.clipped_uvs.begin() + static_cast<std::ptrdiff_t>(vertex_base));
     // Only triangles made by clipping use clipped vertices.
     for (ScreenTriangle& tri : chunk.triangles.from_clipping) {
       for (std::uint32_t& v : tri.v) {
@@ -345,9 +370,11 @@ class FrameBuilder {
   const CancelFlag& cancel_;
   SetupObserver* observer_;
   bool centres_only_;  // spp 1: a triangle between pixel centres can be dropped here
+  bool has_uvs_ = false;  // some mesh has texture coordinates: the frame keeps them
   glm::mat4 view_{1.0f}, view_projection_{1.0f};
   std::vector<MeshRange> ranges_;
   std::vector<std::uint8_t> mirrored_;  // per range: its object's transform flips handedness
+  std::vector<std::uint8_t> textured_;  // per range: its material has textures
   std::vector<SetupChunk> chunks_;
   std::vector<std::size_t> vertex_base_;
   std::vector<std::uint32_t> bin_cursor_;

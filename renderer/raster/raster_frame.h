@@ -7,6 +7,7 @@
 // Triangles keep their scene order inside every bin, and each pixel sees exactly the triangles
 // that can cover it in that order, so depth ties resolve the same way for any tiling.
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <memory>
 #include <vector>
 
@@ -42,10 +43,14 @@ inline constexpr std::uint32_t kClippedVertex = 0x80000000u;
 // (when only pixel centres are sampled) covering at least the bounding box of one centre.
 // Marks a triangle's material index when the camera sees the triangle's back face.
 inline constexpr std::uint32_t kBackFace = 0x80000000u;
+// Marks a triangle's material index when the material has textures (the rasterizer then keeps
+// texture coordinates), so that no triangle's material is looked at while drawing to know.
+inline constexpr std::uint32_t kTexturedMaterial = 0x40000000u;
+inline constexpr std::uint32_t kMaterialIndex = ~(kBackFace | kTexturedMaterial);
 
 struct ScreenTriangle {
   std::uint32_t v[3];            // RasterFrame::vertex() indices
-  std::uint32_t material;        // index into RasterFrame::materials, | kBackFace if seen from behind
+  std::uint32_t material;        // index into RasterFrame::materials, | kBackFace, | kTexturedMaterial
   int x0, y0, x1, y1;            // pixels whose samples it may cover, inclusive, in the image
 };
 
@@ -68,12 +73,21 @@ struct RasterFrame {
   // the order.
   std::vector<TriangleChunk> triangle_chunks;
   std::vector<const Material*> materials;
+  // Texture coordinates beside the vertices, kept apart so that scenes without them pay nothing
+  // per vertex: one per scene vertex and one per clipped vertex, or none when no mesh has them.
+  std::vector<glm::vec2> vertex_uvs;
+  std::vector<glm::vec2> clipped_uvs;
   // Bin b holds bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order.
   std::vector<std::uint32_t> bin_start;
   UninitializedArray<const ScreenTriangle*> bin_triangles;
 
   const ScreenVertex& vertex(std::uint32_t i) const {
     return (i & kClippedVertex) ? clipped_vertices[i & ~kClippedVertex] : vertices[i];
+  }
+
+  glm::vec2 uv(std::uint32_t i) const {
+    if (vertex_uvs.empty()) return glm::vec2(0.0f);
+    return (i & kClippedVertex) ? clipped_uvs[i & ~kClippedVertex] : vertex_uvs[i];
   }
 
   void prefetch_vertices(const ScreenTriangle& t) const {

@@ -28,4 +28,8 @@ Ray Camera::primary_ray(float px, float py, int width, int height) const {
   return Ray{position, d, 0.0f, std::numeric_limits<float>::infinity()};
 }
 
+float Camera::pixel_size_at_unit_depth(int height) const {
+  return 2.0f * std::tan(glm::radians(fov_y_degrees) * 0.5f) / static_cast<float>(height);
+}
+
 }  // namespace farm

@@ -27,6 +27,10 @@ struct Camera {
   // Ray through image point (px, py) in pixels (y down; a pixel centre is x + 0.5). Its direction
   // has unit length along forward(), so the hit's t is the depth along the viewing axis.
   Ray primary_ray(float px, float py, int width, int height) const;
+
+  // How tall one pixel of an image `height` pixels tall is at unit depth: a pixel's footprint
+  // grows as this times the depth (texture filtering).
+  float pixel_size_at_unit_depth(int height) const;
 };
 
 }  // namespace farm

@@ -1,6 +1,7 @@
 #pragma once
 // Phong material as COLLADA and MTL describe it; the path tracer maps it to BSDFs later.
 #include <glm/vec3.hpp>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,6 +20,8 @@ inline std::optional<EmissionSides> emission_sides_from_string(std::string_view 
   return std::nullopt;
 }
 
+struct MaterialTextures;  // renderer/texture/material_textures.h
+
 struct Material {
   std::string name = "default";
   glm::vec3 ambient{1.0f};    // ka
@@ -29,6 +32,9 @@ struct Material {
   float ior = 1.33f;
   float transmission = 0.0f;  // 0 opaque, 1 fully transmissive (MTL 1-d, glTF transmission)
   EmissionSides emission_sides = EmissionSides::Front;
+  // What multiplies these values at a surface point (material_at); null for a material without
+  // textures. New shading values must be copied by material_at too.
+  std::shared_ptr<const MaterialTextures> textures;
 
   // Shininess this high means a perfect mirror (docs/architecture.md, "Conventions").
   bool is_mirror() const { return shininess >= 1000.0f; }

@@ -38,7 +38,11 @@ void generate_smooth_normals(Mesh& mesh, float crease_degrees) {
   // corners that agree on position and normal share one vertex.
   const float cos_crease = std::cos(glm::radians(crease_degrees));
   std::vector<glm::vec3> positions, normals;
-  std::map<std::tuple<Key, float, float, float>, unsigned> vertex_of;  // (position, normal)
+  std::vector<glm::vec2> uvs;
+  const bool has_uvs = mesh.uvs.size() == mesh.positions.size();
+  // (position, normal, uv): corners at one position with different texture coordinates (a seam)
+  // stay apart. Meshes without texture coordinates key every uv as 0.
+  std::map<std::tuple<Key, float, float, float, float, float>, unsigned> vertex_of;
   // A corner's normal depends only on its position and its face's unit normal, so it is worked
   // out once for each such pair. Without this, N faces meeting at one position cost N^2 steps:
   // a 160 kB OBJ of 20000 copies of one triangle (or of zero-area faces, whose unit normals are
@@ -49,6 +53,7 @@ void generate_smooth_normals(Mesh& mesh, float crease_degrees) {
     glm::uvec3& tri = mesh.triangles[t];
     for (int k = 0; k < 3; ++k) {
       const glm::vec3 p = mesh.positions[tri[k]];
+      const glm::vec2 uv = has_uvs ? mesh.uvs[tri[k]] : glm::vec2(0.0f);
       const auto corner_normal = [&] {
         glm::vec3 sum(0.0f);
         for (std::size_t f : faces_at[key(p)]) {
@@ -68,17 +73,19 @@ void generate_smooth_normals(Mesh& mesh, float crease_degrees) {
         if (fresh) known->second = corner_normal();
         n = known->second;
       }
-      auto [it, inserted] = vertex_of.try_emplace({key(p), n.x, n.y, n.z},
+      auto [it, inserted] = vertex_of.try_emplace({key(p), n.x, n.y, n.z, uv.x, uv.y},
                                                   static_cast<unsigned>(positions.size()));
       if (inserted) {
         positions.push_back(p);
         normals.push_back(n);
+        if (has_uvs) uvs.push_back(uv);
       }
       tri[k] = it->second;
     }
   }
   mesh.positions = std::move(positions);
   mesh.normals = std::move(normals);
+  mesh.uvs = std::move(uvs);
 }
 
 }  // namespace farm

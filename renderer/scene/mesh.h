@@ -2,6 +2,7 @@
 // Triangle mesh in model space. Loaders bake a file's node hierarchy into the positions, so a
 // model is one triangle soup per material group and the job's object transform sits on top.
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <string>
 #include <vector>
@@ -14,6 +15,9 @@ struct Mesh {
   std::string name;
   std::vector<glm::vec3> positions;
   std::vector<glm::vec3> normals;        // one per position, unit length
+  // Texture coordinates (renderer/texture/texture.h's convention: v down): one per position, or
+  // none when the file has none.
+  std::vector<glm::vec2> uvs;
   std::vector<glm::uvec3> triangles;     // indices into positions
   std::uint32_t material = 0;            // index into Model::materials
   int node = -1;  // glTF: the Model::nodes entry whose rest world transform is baked in; else -1
@@ -25,7 +29,8 @@ struct Mesh {
 // Area-weighted vertex normals for a mesh that has none. Faces meeting at a position are smoothed
 // together when their normals differ by less than `crease_degrees`, so a de-indexed mesh (one
 // vertex per face corner) still comes out smooth while a box keeps its hard edges. Vertices are
-// split where one position needs several normals; triangles are rewritten to match.
+// split where one position needs several normals (or, with texture coordinates, several of
+// those); triangles are rewritten to match.
 inline constexpr float kDefaultCreaseDegrees = 60.0f;
 void generate_smooth_normals(Mesh& mesh, float crease_degrees = kDefaultCreaseDegrees);
 

@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include "renderer/accel/prepared_scene.h"
+#include "renderer/texture/material_textures.h"
 
 namespace farm {
 namespace {
@@ -20,7 +21,12 @@ Emitters::Emitters(const PreparedScene& scene) {
     const ModelTriangles& mesh = *object.triangles;
     for (std::uint32_t t = 0; t < mesh.size(); ++t) {
       const Material& material = object.source->materials[mesh.material[t]];
-      const glm::vec3 le = material.emission;
+      const bool textured = material.textures && material.textures->emission && !mesh.uvs.empty();
+      glm::vec3 le = material.emission;
+      if (textured) {
+        const Texture& texture = *material.textures->emission.texture;
+        le *= glm::vec3(texture.texel(texture.levels() - 1, 0, 0));
+      }
       // Non-finite emission (possible only in scenes built in code) is not sampled: it would
       // poison the whole table; paths that hit it are dropped and counted by the engine.
       const float l = luminance(le);
@@ -44,6 +50,12 @@ Emitters::Emitters(const PreparedScene& scene) {
       if (!std::isfinite(w.normal.x)) continue;
       w.radiance = le;
       w.two_sided = material.emission_sides == EmissionSides::Both;
+      if (textured) {
+        w.textured = &material;
+        w.uv0 = mesh.uvs[tri.x];
+        w.uv1 = mesh.uvs[tri.y];
+        w.uv2 = mesh.uvs[tri.z];
+      }
       index_of_[(std::uint64_t{o} << 32) | t] = static_cast<std::uint32_t>(triangles_.size());
       triangles_.push_back(w);
       power.push_back(l * w.area);
@@ -71,6 +83,10 @@ EmitterSample Emitters::sample(float u_pick, float u1, float u2) const {
   out.position = t.p0 + b1 * t.e1 + b2 * t.e2;
   out.normal = t.normal;
   out.radiance = t.radiance;
+  if (t.textured) {
+    const glm::vec2 uv = (1.0f - b1 - b2) * t.uv0 + b1 * t.uv1 + b2 * t.uv2;
+    out.radiance = t.textured->emission * glm::vec3(t.textured->textures->emission.sample(uv, 0.0f));
+  }
   out.two_sided = t.two_sided;
   out.pdf_area = probability_[i] / t.area;
   return out;

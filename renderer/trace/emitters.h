@@ -3,8 +3,11 @@
 // proportional to their power (luminance of the emitted radiance times area) and sampled
 // uniformly by area. A triangle shines from its front face (where its geometric normal points)
 // unless its material says both (Material::emission_sides); the choice of triangles ignores the
-// side, so a point picked on the back of a front-only emitter simply contributes nothing.
+// side, so a point picked on the back of a front-only emitter simply contributes nothing. An
+// emission texture is read at the point picked; the choice weighs its triangle by the texture's
+// mean (its last mip level), and stays unbiased however the texture varies across it.
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <optional>
 #include <unordered_map>
@@ -13,6 +16,7 @@
 namespace farm {
 
 class PreparedScene;
+struct Material;
 
 struct EmitterSample {
   glm::vec3 position{0.0f};
@@ -43,6 +47,8 @@ class Emitters {
     glm::vec3 radiance;
     float area;
     bool two_sided;
+    const Material* textured = nullptr;  // the material, when its emission has a texture
+    glm::vec2 uv0{0.0f}, uv1{0.0f}, uv2{0.0f};
   };
   std::vector<Triangle> triangles_;
   std::vector<float> cdf_;  // cdf_[i] = P(pick <= i)

@@ -70,13 +70,15 @@ class PathTracer {
   PathTracer(const PreparedScene& scene, const RenderSettings& settings,
              const SceneIntersector& intersector, std::shared_ptr<const Emitters> emitters, CancelPoll& poll)
       : scene_(scene), settings_(settings), intersector_(intersector), emitters_(std::move(emitters)),
-        poll_(poll), next_event_estimation_(settings.light_sampling == LightSampling::NeeMis) {}
+        poll_(poll), next_event_estimation_(settings.light_sampling == LightSampling::NeeMis),
+        pixel_size_(scene.scene().camera.pixel_size_at_unit_depth(settings.height)) {}
 
   struct Result {
     glm::vec3 radiance{0.0f};
     bool hit = false;
     SurfaceHit first;
     glm::vec3 first_normal{0.0f};
+    glm::vec3 first_albedo{0.0f};  // its diffuse colour, textures read
   };
 
   // Closest-hit and shadow rays traced so far.
@@ -93,6 +95,7 @@ class PathTracer {
     float previous_pdf = 0.0f;
     glm::vec3 previous_position = ray.origin;
     std::uint32_t dim = 2;  // 0 and 1 placed the sample in the pixel
+    Material textured;      // the hit's material with its textures read (hit_material)
     const auto next = [&] { return sample_uniform(key, dim++); };
 
     for (int bounce = 0;; ++bounce) {
@@ -103,11 +106,15 @@ class PathTracer {
         result.radiance += beta * scene_.scene().background;  // a constant environment
         break;
       }
-      const Material& material = *hit.material;
+      // A camera ray's cone is a pixel wide at the hit's depth; later rays read the finest level
+      // (their many samples average it).
+      const Material& material =
+          hit_material(scene_, ray.direction, hit, bounce == 0 ? hit.t * pixel_size_ : 0.0f, textured);
       const glm::vec3 wo_world = -glm::normalize(ray.direction);
       if (bounce == 0) {
         result.hit = true;
         result.first = hit;
+        result.first_albedo = material.diffuse;
         result.first_normal = glm::dot(hit.shading_normal, wo_world) < 0.0f ? -hit.shading_normal
                                                                             : hit.shading_normal;
       }
@@ -225,6 +232,7 @@ class PathTracer {
   std::shared_ptr<const Emitters> emitters_;  // the frame cache's, kept alive while this traces
   CancelPoll& poll_;  // counts path segments; the caller's, so that it sees a stop too
   bool next_event_estimation_;
+  float pixel_size_;  // a camera ray's cone width per unit depth (Camera::pixel_size_at_unit_depth)
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
 };
 
@@ -275,7 +283,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
           if (s != range.begin || !r.hit) continue;
           if (out.aovs().depth) out.depth(x, y) = r.first.t;
           if (out.aovs().normal) out.normal(x, y) = r.first_normal;
-          if (out.aovs().albedo) out.albedo(x, y) = r.first.material->diffuse;
+          if (out.aovs().albedo) out.albedo(x, y) = r.first_albedo;
         }
         const float inv = 1.0f / static_cast<float>(range.count());
         out.rgba(x, y) = glm::vec4(sum * inv, coverage * inv);

@@ -23,13 +23,15 @@ class WhittedTracer {
  public:
   WhittedTracer(const PreparedScene& scene, const RenderSettings& settings,
                 const SceneIntersector& intersector, CancelPoll& poll)
-      : scene_(scene.scene()), settings_(settings), intersector_(intersector), poll_(poll) {}
+      : prepared_(scene), scene_(scene.scene()), settings_(settings), intersector_(intersector), poll_(poll),
+        pixel_size_(scene_.camera.pixel_size_at_unit_depth(settings.height)) {}
 
   struct Primary {
     glm::vec3 color{0.0f};
     bool hit = false;
     SurfaceHit surface;
     glm::vec3 facing_normal{0.0f};
+    glm::vec3 albedo{0.0f};  // the surface's diffuse colour, textures read
   };
 
   // Closest-hit and shadow rays traced so far.
@@ -48,7 +50,7 @@ class WhittedTracer {
       return p;
     }
     p.hit = true;
-    p.color = shade(ray, p.surface, 0, &p.facing_normal);
+    p.color = shade(ray, p.surface, 0, &p.facing_normal, &p.albedo);
     return p;
   }
 
@@ -78,8 +80,13 @@ class WhittedTracer {
     return !intersector_.occluded(shadow);
   }
 
-  glm::vec3 shade(const Ray& ray, const SurfaceHit& hit, int depth, glm::vec3* facing_normal) const {
-    const Material& m = *hit.material;
+  glm::vec3 shade(const Ray& ray, const SurfaceHit& hit, int depth, glm::vec3* facing_normal = nullptr,
+                  glm::vec3* albedo = nullptr) const {
+    // A camera ray's cone is a pixel wide at the hit's depth; reflected and refracted rays read
+    // the textures' finest level.
+    Material textured;
+    const Material& m = hit_material(prepared_, ray.direction, hit, depth == 0 ? hit.t * pixel_size_ : 0.0f, textured);
+    if (albedo) *albedo = m.diffuse;
     const glm::vec3 d = glm::normalize(ray.direction);
     const glm::vec3 to_eye = -d;
     // Two-sided shading, as in the rasterizer: light the side we see.
@@ -122,11 +129,13 @@ class WhittedTracer {
            m.transmission * (reflectance * reflected + (1.0f - reflectance) * through);
   }
 
+  const PreparedScene& prepared_;
   const Scene& scene_;
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
   CancelPoll& poll_;  // counts closest-hit rays; the caller's, so that it sees a stop too
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
+  float pixel_size_;  // a camera ray's cone width per unit depth (Camera::pixel_size_at_unit_depth)
 };
 
 }  // namespace
@@ -164,7 +173,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
           // primary_ray's direction has unit length along the viewing axis, so t is the depth.
           if (out.aovs().depth) out.depth(x, y) = p.surface.t;
           if (out.aovs().normal) out.normal(x, y) = p.facing_normal;
-          if (out.aovs().albedo) out.albedo(x, y) = p.surface.material->diffuse;
+          if (out.aovs().albedo) out.albedo(x, y) = p.albedo;
         }
         out.rgba(x, y) = sum / static_cast<float>(samples);
         return true;

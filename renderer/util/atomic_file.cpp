@@ -9,15 +9,9 @@
 #include <memory>
 #include <stdexcept>
 #include <system_error>
+#include "renderer/util/c_file.h"
 
 namespace farm {
-namespace {
-
-struct CloseFile {
-  void operator()(std::FILE* file) const { std::fclose(file); }
-};
-
-}  // namespace
 
 void write_file_atomically(const std::filesystem::path& target,
                            const std::function<void(const std::filesystem::path&)>& write) {
@@ -40,7 +34,7 @@ void write_file_atomically(const std::filesystem::path& target,
 void write_c_file_atomically(const std::filesystem::path& target, const std::function<void(std::FILE*)>& write) {
   write_file_atomically(target, [&](const std::filesystem::path& temp) {
     // The deleter closes it if `write` throws; otherwise it is closed below, where the result counts.
-    std::unique_ptr<std::FILE, CloseFile> out(std::fopen(temp.c_str(), "wb"));
+    CFile out(std::fopen(temp.c_str(), "wb"));
     // Errors keep their errno (std::system_error), so that a server tells a full disk (ENOSPC)
     // from a broken image.
     if (!out) {

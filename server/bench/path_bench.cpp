@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -99,6 +100,34 @@ void bench_scene(const std::string& name, const PreparedScene& scene, RenderSett
   }
 }
 
+// The textured Cornell box against the plain one, the same room with a checker on its floor and
+// back wall: frames taking turns (plain, textured, three times), best of each, and the cost of a
+// textured sample as a ratio.
+void bench_textured_pair(const PathBenchOptions& o) {
+  const Job plain_job = load_job(o.cornell_job), textured_job = load_job(o.textured_job);
+  const PreparedScene plain(build_scene(plain_job)), textured(build_scene(textured_job));
+  RenderSettings settings = plain_job.render;
+  settings.engine = EngineKind::Path;
+  settings.width = o.width;
+  settings.height = o.height;
+  settings.spp = o.spp;
+  settings.aovs = {};
+  fmt::print("\nscene cornell ({}) against cornell textured ({}): {}x{}, {} spp, turns of each\n",
+             o.cornell_job.string(), o.textured_job.string(), o.width, o.height, o.spp);
+  fmt::print("{:<10} {:>7} {:>16} {:>19} {:>22}\n", "threads", "turns", "plain Msamples/s", "textured Msamples/s",
+             "textured time/sample");
+  for (int threads : o.threads) {
+    double best_plain = 0.0, best_textured = 0.0;
+    constexpr int kTurns = 3;
+    for (int turn = 0; turn < kTurns; ++turn) {
+      best_plain = std::max(best_plain, measure(plain, settings, threads).msamples_per_s());
+      best_textured = std::max(best_textured, measure(textured, settings, threads).msamples_per_s());
+    }
+    fmt::print("{:<10} {:>7} {:>16.3f} {:>19.3f} {:>21.3f}x\n", threads, kTurns, best_plain, best_textured,
+               best_plain / best_textured);
+  }
+}
+
 }  // namespace
 
 void run_path_bench(const PathBenchOptions& options) {
@@ -118,6 +147,7 @@ void run_path_bench(const PathBenchOptions& options) {
     bench_scene(fmt::format("cornell ({})", o.cornell_job.string()), scene, job.render, o,
                 !o.mitsuba_python.empty());
   }
+  if (o.scene == "all" || o.scene == "textured") bench_textured_pair(o);
   if (o.scene == "all" || o.scene == "cbbunny") {
     const std::filesystem::path path = o.assets / "dae" / "CBbunny.dae";
     if (!std::filesystem::exists(path)) {

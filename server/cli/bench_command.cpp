@@ -100,8 +100,12 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
   add_thread_counts_option(*path, o->threads, "Thread counts (default: 1 and all)");
   add_spp_option(*path, o->spp);
   add_image_size_options(*path, o->width, o->height);
-  path->add_option("--scene", o->scene, "Which scene: cornell, cbbunny or all")
-      ->check(CLI::IsMember({"cornell", "cbbunny", "all"}))
+  path->add_option("--textured-job", o->textured_job, "The textured Cornell box job (for --scene textured)")
+      ->capture_default_str();
+  path->add_option("--scene", o->scene,
+                   "Which scene: cornell, textured (the textured Cornell box's cost per sample against "
+                   "the plain one's), cbbunny or all")
+      ->check(CLI::IsMember({"cornell", "textured", "cbbunny", "all"}))
       ->capture_default_str();
   path->add_option("--mitsuba", o->mitsuba_python,
                    "A Python with the mitsuba package (see tools/requirements-mitsuba.txt): "

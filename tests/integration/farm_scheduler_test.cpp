@@ -1255,7 +1255,7 @@ TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFe
   std::ofstream(textured / "assets/box.obj") << obj;
   std::ofstream(textured / "assets/box.mtl") << test::read_file(test::kSource / "jobs/assets/cornell_box.mtl")
                                               << "map_Kd tex/wood.png\nbump tex/none.png\n";
-  std::ofstream(textured / "assets/tex/wood.png") << "the loaders read no texture";
+  fs::copy_file(test::kSource / "jobs/assets/checker.png", textured / "assets/tex/wood.png");
   std::string job_text = spec.job_json();
   job_text.replace(job_text.find("assets/cornell_box.obj"), 22, "assets/box.obj");
   std::ofstream(textured / "textured.json") << job_text;

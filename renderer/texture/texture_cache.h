@@ -1,0 +1,37 @@
+#pragma once
+// Each texture file decoded once per process while anything holds it (docs/architecture.md,
+// "Textures"): every model, object and frame of a job, and every job on a worker, naming the
+// same file in the same colour space shares one Texture.
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+
+#include "renderer/texture/texture_file.h"
+
+namespace farm {
+
+class TextureCache {
+ public:
+  // The texture of `file` read as `space`: decoded by the first caller, shared with every later
+  // one while any of them holds it (weakly held: freed with its last user). A file changed since
+  // (size or modification time) is decoded again. Callers asking for one file at once wait for
+  // one decode. Throws what load_texture_file throws (and a later call tries again).
+  std::shared_ptr<const Texture> get(const std::filesystem::path& file, TextureColourSpace space);
+
+  // How many decodes this cache has begun (those that failed included): tests count with it.
+  std::uint64_t decodes() const;
+
+  // The process's cache, which the model loaders use.
+  static TextureCache& process();
+
+  TextureCache();
+  ~TextureCache();
+  TextureCache(const TextureCache&) = delete;
+  TextureCache& operator=(const TextureCache&) = delete;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace farm

@@ -1,0 +1,189 @@
+// Texture coordinates and the textures materials name, as the loaders read them: OBJ/MTL through
+// Assimp and glTF through tinygltf, each texture confined to the asset root and decoded once per
+// process however many models name it.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <string>
+
+#include "renderer/image/png_writer.h"
+#include "renderer/scene/model.h"
+#include "renderer/texture/material_textures.h"
+#include "renderer/texture/texture_cache.h"
+#include "renderer/util/input_error.h"
+#include "tests/support/temp_dir.h"
+
+namespace farm {
+namespace {
+
+namespace fs = std::filesystem;
+using test::TempDir;
+
+// A 2x2 RGB PNG: red, green / blue, white (rows top to bottom), 8-bit sRGB-encoded 255 and 0 only,
+// so its linear values are exactly 1 and 0.
+void write_checker_png(const fs::path& file) {
+  Rgb8Image image;
+  image.width = image.height = 2;
+  image.pixels = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+  std::FILE* out = std::fopen(file.c_str(), "wb");
+  ASSERT_NE(out, nullptr);
+  write_png(image, out, file);
+  std::fclose(out);
+}
+
+// One textured triangle: its vt's v points up, as OBJ's does.
+constexpr const char* kTexturedObj =
+    "mtllib m.mtl\n"
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+    "vt 0 0\nvt 1 0\nvt 0 1\n"
+    "vn 0 0 1\n"
+    "usemtl painted\n"
+    "f 1/1/1 2/2/1 3/3/1\n";
+
+std::string mtl_with_map(const std::string& map) { return "newmtl painted\nKd 0.5 0.5 0.5\nmap_Kd " + map + "\n"; }
+
+TEST(TexturedModel, ObjTextureCoordinatesArePointedDownAndMapKdIsTheBaseColour) {
+  TempDir dir;
+  write_checker_png(dir / "checker.png");
+  dir.write("m.mtl", mtl_with_map("checker.png"));
+  const Model model = load_model(dir.write("tri.obj", kTexturedObj), dir.path());
+  ASSERT_EQ(model.meshes.size(), 1u);
+  const Mesh& mesh = model.meshes[0];
+  ASSERT_EQ(mesh.uvs.size(), mesh.positions.size());
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    // vt (s, t) at position (x, y): (0,0) at the origin, (1,0) at x = 1, (0,1) at y = 1; v = 1 - t.
+    EXPECT_FLOAT_EQ(mesh.uvs[i].x, mesh.positions[i].x) << i;
+    EXPECT_FLOAT_EQ(mesh.uvs[i].y, 1.0f - mesh.positions[i].y) << i;
+  }
+  const Material& m = model.materials.at(mesh.material);
+  ASSERT_TRUE(m.textures);
+  ASSERT_TRUE(m.textures->base_colour);
+  const Texture& t = *m.textures->base_colour.texture;
+  ASSERT_EQ(t.width(), 2);
+  EXPECT_EQ(t.texel(0, 0, 0), glm::vec4(1, 0, 0, 1));  // top-left: red
+  EXPECT_EQ(t.texel(0, 0, 1), glm::vec4(0, 0, 1, 1));  // bottom-left: blue
+  // The factor times the texture: kd 0.5 over the red texel.
+  Material scratch;
+  const Material& at = material_at(m, glm::vec2(0.25f, 0.25f), 0.0f, scratch);
+  EXPECT_EQ(at.diffuse, glm::vec3(0.5f, 0.0f, 0.0f));
+  const Material plain;  // no textures: shaded as it is, not copied
+  EXPECT_EQ(&material_at(plain, glm::vec2(0.25f), 0.0f, scratch), &plain);
+}
+
+TEST(TexturedModel, AMissingOrEscapingMapIsAnErrorNamingTheModelTheMaterialAndTheFile) {
+  TempDir dir;
+  fs::create_directories(dir / "root");
+  write_checker_png(dir / "outside.png");
+  dir.write("root/m.mtl", mtl_with_map("nowhere.png"));
+  const fs::path obj = dir.write("root/tri.obj", kTexturedObj);
+  try {
+    load_model(obj, dir / "root");
+    FAIL() << "loaded a model whose texture is missing";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("tri.obj"), std::string::npos) << what;
+    EXPECT_NE(what.find("painted"), std::string::npos) << what;
+    EXPECT_NE(what.find("nowhere.png"), std::string::npos) << what;
+  }
+  dir.write("root/m.mtl", mtl_with_map("../outside.png"));
+  try {
+    load_model(obj, dir / "root");
+    FAIL() << "read a texture outside the asset root";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("outside"), std::string::npos) << what;
+  }
+}
+
+// A hundred models (a job's hundred objects) naming one texture: one decode, one Texture in memory.
+TEST(TexturedModel, AHundredModelsNamingOneTextureDecodeItOnce) {
+  TempDir dir;
+  write_checker_png(dir / "shared.png");
+  dir.write("m.mtl", mtl_with_map("shared.png"));
+  std::vector<Model> models;
+  const std::uint64_t before = TextureCache::process().decodes();
+  for (int i = 0; i < 100; ++i) {
+    models.push_back(load_model(dir.write("tri" + std::to_string(i) + ".obj", kTexturedObj), dir.path()));
+  }
+  EXPECT_EQ(TextureCache::process().decodes() - before, 1u);
+  std::set<const Texture*> distinct;
+  for (const Model& m : models) distinct.insert(m.materials.at(m.meshes[0].material).textures->base_colour.texture.get());
+  EXPECT_EQ(distinct.size(), 1u);
+}
+
+// PLY's per-vertex u, v (and s, t) are its texture coordinates, v pointing up as in OBJ.
+TEST(TexturedModel, PlyTextureCoordinatesAreReadFromUvAndSt) {
+  TempDir dir;
+  for (const char* names : {"u v", "s t"}) {
+    const std::string u(1, names[0]), v(1, names[2]);
+    const fs::path ply = dir.write("tri_" + u + ".ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                                         "property float x\nproperty float y\nproperty float z\n"
+                                                         "property float " + u + "\nproperty float " + v + "\n"
+                                                         "element face 1\nproperty list uchar int vertex_indices\n"
+                                                         "end_header\n0 0 0 0 0.25\n1 0 0 1 0.25\n0 1 0 0 1\n3 0 1 2\n");
+    const Model model = load_model(ply, dir.path());
+    ASSERT_EQ(model.meshes.size(), 1u) << names;
+    const Mesh& mesh = model.meshes[0];
+    ASSERT_EQ(mesh.uvs.size(), mesh.positions.size()) << names;
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+      const bool top = mesh.positions[i].y == 1.0f;
+      EXPECT_FLOAT_EQ(mesh.uvs[i].x, mesh.positions[i].x) << names << " " << i;
+      EXPECT_FLOAT_EQ(mesh.uvs[i].y, top ? 0.0f : 0.75f) << names << " " << i;
+    }
+  }
+}
+
+// A glTF quad with TEXCOORD_0 and a base colour texture whose sampler clamps, moved by
+// KHR_texture_transform.
+TEST(TexturedModel, GltfReadsTexcoordsTheSamplerAndTheTextureTransform) {
+  TempDir dir;
+  write_checker_png(dir / "checker.png");
+  // Positions (3 x vec3) then texcoords (3 x vec2), little-endian floats, base64 would do too but
+  // an external .bin keeps it readable.
+  const float data[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
+  {
+    std::FILE* bin = std::fopen((dir / "quad.bin").c_str(), "wb");
+    ASSERT_NE(bin, nullptr);
+    std::fwrite(data, sizeof data, 1, bin);
+    std::fclose(bin);
+  }
+  const fs::path gltf = dir.write("quad.gltf", R"({
+    "asset": {"version": "2.0"},
+    "extensionsUsed": ["KHR_texture_transform"],
+    "buffers": [{"uri": "quad.bin", "byteLength": 60}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+    "images": [{"uri": "checker.png"}],
+    "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728}],
+    "textures": [{"source": 0, "sampler": 0}],
+    "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+      "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [0.5, 1]}}}}}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+    "nodes": [{"mesh": 0}],
+    "scenes": [{"nodes": [0]}], "scene": 0})");
+  const Model model = load_model(gltf, dir.path());
+  ASSERT_EQ(model.meshes.size(), 1u);
+  const Mesh& mesh = model.meshes[0];
+  ASSERT_EQ(mesh.uvs.size(), 3u);
+  // glTF's v already points down: kept as written.
+  EXPECT_EQ(mesh.uvs[0], glm::vec2(0.0f, 1.0f));
+  EXPECT_EQ(mesh.uvs[1], glm::vec2(1.0f, 1.0f));
+  const Material& m = model.materials.at(mesh.material);
+  ASSERT_TRUE(m.textures && m.textures->base_colour);
+  const TextureSlot& slot = m.textures->base_colour;
+  EXPECT_EQ(slot.sampler.wrap_u, TextureWrap::ClampToEdge);
+  EXPECT_EQ(slot.sampler.wrap_v, TextureWrap::MirroredRepeat);
+  EXPECT_EQ(slot.sampler.magnify, TextureFilter::Nearest);
+  // uv (0.1, 0.2) moves to (0.5 + 0.05, 0.2): the top-right texel, green.
+  EXPECT_EQ(glm::vec3(slot.sample(glm::vec2(0.1f, 0.2f), 0.0f)), glm::vec3(0, 1, 0));
+  // Clamped in u: far right stays in the right column; mirrored in v: v = 1.2 reads as 0.8 (bottom).
+  EXPECT_EQ(glm::vec3(slot.sample(glm::vec2(3.0f, 1.2f), 0.0f)), glm::vec3(1, 1, 1));
+}
+
+}  // namespace
+}  // namespace farm
