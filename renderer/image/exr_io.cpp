@@ -147,14 +147,4 @@ TileBuffer read_exr(const std::filesystem::path& file) {
   }
 }
 
-std::pair<int, int> read_exr_size(const std::filesystem::path& file) {
-  try {
-    Imf::InputFile in(file.c_str());
-    const Imath::Box2i dw = in.header().dataWindow();
-    return {dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1};
-  } catch (const Iex::BaseExc& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read EXR: {}", file.string(), e.what()));
-  }
-}
-
 }  // namespace farm

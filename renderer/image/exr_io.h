@@ -2,7 +2,6 @@
 // OpenEXR files of a film: R G B A, plus the AOV layers Z, N.X N.Y N.Z, albedo.R albedo.G
 // albedo.B, bvh_cost and variance.R variance.G variance.B, named so any EXR tool finds them.
 #include <filesystem>
-#include <utility>
 
 #include "renderer/image/tile_buffer.h"
 
@@ -20,9 +19,5 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file,
 // Reads an EXR written by write_exr (or any EXR with those channel names) as floats. The buffer's
 // rect is the file's data window; AOVs are present when their channels are.
 TileBuffer read_exr(const std::filesystem::path& file);
-
-// The width and height of an EXR's data window, from its header alone. Throws std::runtime_error
-// naming the file.
-std::pair<int, int> read_exr_size(const std::filesystem::path& file);
 
 }  // namespace farm

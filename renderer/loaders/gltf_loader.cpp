@@ -82,10 +82,12 @@ bool refuse_write(std::string* err, const std::string&, const std::vector<unsign
   return false;
 }
 
-// tinygltf is not asked to decode images: the texture cache decodes each file once
-// (material_textures), with its size checked before.
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
-                const unsigned char*, int, void*) {
+// tinygltf hands every image's bytes (a file's, a buffer view's, a data: URI's) to this loader,
+// which keeps them as they are, encoded: the texture cache decodes an image only if a material
+// uses it (material_textures), with its size checked before.
+bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                        const unsigned char* bytes, int size, void*) {
+  if (bytes != nullptr && size > 0) image->image.assign(bytes, bytes + size);
   return true;
 }
 
@@ -100,8 +102,7 @@ std::optional<float> extension_number(const tinygltf::ExtensionMap& extensions, 
   return static_cast<float>(v.GetNumberAsDouble());
 }
 
-// Metallic-roughness to Phong. Metals have no diffuse lobe and tint their reflection; dielectrics
-// reflect about 4% at normal incidence.
+// Metallic-roughness to Phong (set_metal_roughness).
 Material convert_material(const tinygltf::Material& in) {
   Material m;
   if (!in.name.empty()) m.name = in.name;
@@ -110,15 +111,8 @@ Material convert_material(const tinygltf::Material& in) {
   if (pbr.baseColorFactor.size() >= 3) {
     base = glm::vec3(pbr.baseColorFactor[0], pbr.baseColorFactor[1], pbr.baseColorFactor[2]);
   }
-  const float metallic = glm::clamp(static_cast<float>(pbr.metallicFactor), 0.0f, 1.0f);
-  const float roughness = glm::clamp(static_cast<float>(pbr.roughnessFactor), 0.0f, 1.0f);
-  m.diffuse = base * (1.0f - metallic);
-  m.specular = glm::mix(glm::vec3(0.04f), base, metallic);
-  // The Blinn-Phong exponent whose lobe is as wide as a Beckmann lobe of slope alpha is
-  // 2 / alpha^2 - 2 (Walter et al. 2007), and glTF's alpha is roughness^2. Roughness below about
-  // 0.21 reaches 1000 and so becomes a mirror, as our material convention intends.
-  const float r4 = roughness * roughness * roughness * roughness;
-  m.shininess = r4 > 0.0f ? glm::clamp(2.0f / r4 - 2.0f, 1.0f, 10000.0f) : 10000.0f;
+  set_metal_roughness(m, base, glm::clamp(static_cast<float>(pbr.metallicFactor), 0.0f, 1.0f),
+                      glm::clamp(static_cast<float>(pbr.roughnessFactor), 0.0f, 1.0f));
 
   // A double-sided glTF material is meant to be seen from both sides: its emission shines from
   // both too.
@@ -211,11 +205,16 @@ TextureSlot GltfReader::texture_slot(const tinygltf::TextureInfo& info, const st
   const tinygltf::Texture& texture = gltf_.textures[static_cast<std::size_t>(info.index)];
   if (!valid_index(texture.source, gltf_.images)) fail(where + ": texture " + std::to_string(info.index) + " has no image");
   const tinygltf::Image& image = gltf_.images[static_cast<std::size_t>(texture.source)];
-  // Images embedded in the file (a .glb's buffer views, data: uris) are not read yet: such a
-  // material renders with its factors alone, as before textures were read at all.
-  if (image.uri.empty() || image.uri.rfind("data:", 0) == 0) return {};
-  const ConfinedFile file = confine_loader_path(source_, image.uri);
-  if (!file.allowed()) fail(where + ": image '" + image.uri + "': " + (file.reason.empty() ? "no such file" : file.reason));
+  // An image in the file itself (a .glb's buffer view, a data: URI) is decoded from its bytes;
+  // one beside it is a file, confined to the root as the model is.
+  const bool embedded = image.uri.empty() || image.uri.rfind("data:", 0) == 0;
+  ConfinedFile file;
+  if (!embedded) {
+    file = confine_loader_path(source_, image.uri);
+    if (!file.allowed()) fail(where + ": image '" + image.uri + "': " + (file.reason.empty() ? "no such file" : file.reason));
+  } else if (image.image.empty()) {
+    fail(where + ": image " + std::to_string(texture.source) + " has no data");
+  }
 
   TextureSlot slot;
   if (texture.sampler >= 0) {
@@ -259,7 +258,8 @@ TextureSlot GltfReader::texture_slot(const tinygltf::TextureInfo& info, const st
     }
   }
   try {
-    slot.texture = TextureCache::process().get(file.resolved, space);
+    slot.texture = embedded ? TextureCache::process().get_embedded(source_.file.resolved, texture.source, image.image, space)
+                            : TextureCache::process().get(file.resolved, space);
   } catch (const InputError& e) {
     fail(where + ": " + e.what());
   }
@@ -268,12 +268,28 @@ TextureSlot GltfReader::texture_slot(const tinygltf::TextureInfo& info, const st
 
 std::shared_ptr<const MaterialTextures> GltfReader::material_textures(const tinygltf::Material& in) const {
   const std::string name = in.name.empty() ? "(unnamed)" : in.name;
+  const tinygltf::PbrMetallicRoughness& pbr = in.pbrMetallicRoughness;
   MaterialTextures textures;
-  textures.base_colour =
-      texture_slot(in.pbrMetallicRoughness.baseColorTexture, name, "baseColorTexture", TextureColourSpace::Srgb);
-  textures.metallic = glm::clamp(static_cast<float>(in.pbrMetallicRoughness.metallicFactor), 0.0f, 1.0f);
+  textures.base_colour = texture_slot(pbr.baseColorTexture, name, "baseColorTexture", TextureColourSpace::Srgb);
+  // Data, not colour: blue is metalness, green roughness (glTF 2.0, 3.9.2).
+  textures.metal_roughness =
+      texture_slot(pbr.metallicRoughnessTexture, name, "metallicRoughnessTexture", TextureColourSpace::Linear);
   textures.emission = texture_slot(in.emissiveTexture, name, "emissiveTexture", TextureColourSpace::Srgb);
-  if (!textures.base_colour && !textures.emission) return nullptr;
+  tinygltf::TextureInfo occlusion;
+  occlusion.index = in.occlusionTexture.index;
+  occlusion.texCoord = in.occlusionTexture.texCoord;
+  occlusion.extensions = in.occlusionTexture.extensions;
+  textures.occlusion = texture_slot(occlusion, name, "occlusionTexture", TextureColourSpace::Linear);
+  textures.occlusion_strength = glm::clamp(static_cast<float>(in.occlusionTexture.strength), 0.0f, 1.0f);
+  if (!textures.base_colour && !textures.metal_roughness && !textures.emission && !textures.occlusion) return nullptr;
+  // The factors the textures multiply, for material_at to map the product to Phong again.
+  MetalRoughness factors;
+  if (pbr.baseColorFactor.size() >= 3) {
+    factors.base_colour = glm::vec3(pbr.baseColorFactor[0], pbr.baseColorFactor[1], pbr.baseColorFactor[2]);
+  }
+  factors.metallic = glm::clamp(static_cast<float>(pbr.metallicFactor), 0.0f, 1.0f);
+  factors.roughness = glm::clamp(static_cast<float>(pbr.roughnessFactor), 0.0f, 1.0f);
+  textures.metal_roughness_factors = factors;
   return std::make_shared<const MaterialTextures>(std::move(textures));
 }
 
@@ -858,7 +874,7 @@ Model load_gltf(const ModelFile& file) {
   callbacks.WriteWholeFile = &refuse_write;
   callbacks.user_data = &files;
   loader.SetFsCallbacks(callbacks);
-  loader.SetImageLoader(&skip_image, nullptr);
+  loader.SetImageLoader(&keep_encoded_image, nullptr);
 
   tinygltf::Model gltf;
   std::string err, warn;

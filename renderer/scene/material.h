@@ -1,5 +1,6 @@
 #pragma once
 // Phong material as COLLADA and MTL describe it; the path tracer maps it to BSDFs later.
+#include <glm/common.hpp>
 #include <glm/vec3.hpp>
 #include <memory>
 #include <optional>
@@ -45,6 +46,18 @@ struct Material {
     return front_side || emission_sides == EmissionSides::Both ? emission : glm::vec3(0.0f);
   }
 };
+
+// glTF's metal-roughness values as our Phong material (docs/architecture.md, §8.2): metals have
+// no diffuse lobe and tint their reflection, dielectrics reflect about 4% at normal incidence.
+// The Blinn-Phong exponent whose lobe is as wide as a Beckmann lobe of slope alpha is
+// 2 / alpha^2 - 2 (Walter et al. 2007), and glTF's alpha is roughness^2: roughness below about
+// 0.21 reaches 1000 and so becomes a mirror, as our material convention intends.
+inline void set_metal_roughness(Material& m, const glm::vec3& base, float metallic, float roughness) {
+  m.diffuse = base * (1.0f - metallic);
+  m.specular = glm::mix(glm::vec3(0.04f), base, metallic);
+  const float r4 = roughness * roughness * roughness * roughness;
+  m.shininess = r4 > 0.0f ? glm::clamp(2.0f / r4 - 2.0f, 1.0f, 10000.0f) : 10000.0f;
+}
 
 // The keys a job gives under `objects[i].material`; only those present replace the file's values.
 struct MaterialOverride {

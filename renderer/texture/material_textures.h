@@ -7,6 +7,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <memory>
+#include <optional>
 
 #include "renderer/scene/material.h"
 #include "renderer/texture/texture.h"
@@ -23,12 +24,30 @@ struct TextureSlot {
   glm::vec4 sample(glm::vec2 uv, float footprint) const;
 };
 
-struct MaterialTextures {
-  TextureSlot base_colour;  // multiplies kd, and ks as far as the material is metal
-  TextureSlot specular;     // multiplies ks (MTL's map_Ks)
-  TextureSlot emission;     // multiplies ke (glTF's emissiveTexture, MTL's map_Ke)
-  float metallic = 0.0f;    // glTF: a metal's ks is its base colour, so the base colour tints it
+// A glTF material's factors, which its textures multiply before the product is mapped to Phong
+// (set_metal_roughness).
+struct MetalRoughness {
+  glm::vec3 base_colour{1.0f};
+  float metallic = 1.0f;
+  float roughness = 1.0f;
 };
+
+struct MaterialTextures {
+  TextureSlot base_colour;      // MTL: multiplies kd; glTF: the base colour
+  TextureSlot specular;         // multiplies ks (MTL's map_Ks)
+  TextureSlot emission;         // multiplies ke (glTF's emissiveTexture, MTL's map_Ke)
+  TextureSlot metal_roughness;  // glTF: blue multiplies metalness, green roughness
+  TextureSlot occlusion;        // glTF: red darkens the ambient term, as far as the strength says
+  float occlusion_strength = 1.0f;
+  // glTF: kd, ks and the shininess are the metal-roughness mapping of the factors times the
+  // textures, worked out again at each point. Unset (MTL): the textures multiply kd and ks.
+  std::optional<MetalRoughness> metal_roughness_factors;
+};
+
+// A job's override on a material that may have textures: the keys it gives replace the file's
+// values, and a glTF material whose kd, ks or shininess it replaces stops deriving them from its
+// factors, so that its textures multiply the values the job gave (as MTL's do).
+void apply_override(const MaterialOverride& override, Material& m);
 
 // The material at texture coordinates `uv` with a pixel footprint of `footprint` uv units
 // (Texture::sample): `base` itself when it has no textures; else `scratch`, filled with base's

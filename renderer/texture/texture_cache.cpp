@@ -1,5 +1,7 @@
 #include "renderer/texture/texture_cache.h"
 
+#include <fmt/format.h>
+
 #include <future>
 #include <map>
 #include <mutex>
@@ -11,8 +13,9 @@ namespace farm {
 
 namespace fs = std::filesystem;
 
-// A file as decoded: where it is, how big, when it changed, and how it was read.
-using TextureKey = std::tuple<std::string, std::uintmax_t, std::int64_t, int>;
+// A file as decoded: where it is (and which of its embedded images: "" for the file itself), how
+// big, when it changed, and how it was read.
+using TextureKey = std::tuple<std::string, std::string, std::uintmax_t, std::int64_t, int>;
 
 struct TextureCache::State {
   std::mutex mutex;
@@ -27,13 +30,13 @@ namespace {
 
 // A file that cannot be looked at (missing, unreadable) keys by the path as given with size and
 // time 0: its decode fails and is tried again by the next caller, as nothing is kept for it.
-TextureKey key_of(const fs::path& file, TextureColourSpace space) {
+TextureKey key_of(const fs::path& file, const std::string& part, TextureColourSpace space) {
   std::error_code where_error, size_error, time_error;
   const fs::path where = fs::weakly_canonical(file, where_error);
   const std::uintmax_t size = fs::file_size(file, size_error);
   const fs::file_time_type changed = fs::last_write_time(file, time_error);
   const bool known = !size_error && !time_error;
-  return {(where_error ? file : where).string(), known ? size : 0,
+  return {(where_error ? file : where).string(), part, known ? size : 0,
           known ? static_cast<std::int64_t>(changed.time_since_epoch().count()) : 0, static_cast<int>(space)};
 }
 
@@ -43,7 +46,21 @@ TextureCache::TextureCache() : state_(std::make_unique<State>()) {}
 TextureCache::~TextureCache() = default;
 
 std::shared_ptr<const Texture> TextureCache::get(const fs::path& file, TextureColourSpace space) {
-  const TextureKey key = key_of(file, space);
+  return get_or_decode(file, "", space, [&] { return load_texture_file(file, space); });
+}
+
+std::shared_ptr<const Texture> TextureCache::get_embedded(const fs::path& container, int index,
+                                                          std::span<const unsigned char> encoded,
+                                                          TextureColourSpace space) {
+  const std::string name = fmt::format("{} image {}", container.string(), index);
+  return get_or_decode(container, fmt::format("image {}", index), space,
+                       [&] { return load_texture_bytes(encoded, name, space); });
+}
+
+template <typename Decode>
+std::shared_ptr<const Texture> TextureCache::get_or_decode(const fs::path& file, const std::string& part,
+                                                           TextureColourSpace space, Decode&& decode) {
+  const TextureKey key = key_of(file, part, space);
   State& s = *state_;
   std::unique_lock lock(s.mutex);
   if (const auto it = s.textures.find(key); it != s.textures.end()) {
@@ -61,7 +78,7 @@ std::shared_ptr<const Texture> TextureCache::get(const fs::path& file, TextureCo
 
   std::shared_ptr<const Texture> texture;
   try {
-    texture = load_texture_file(file, space);
+    texture = decode();
   } catch (...) {
     // Nothing is kept for a failure: the waiters get this exception, the next caller decodes anew.
     lock.lock();

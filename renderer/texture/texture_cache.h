@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
+#include <string>
 
 #include "renderer/texture/texture_file.h"
 
@@ -17,6 +19,12 @@ class TextureCache {
   // (size or modification time) is decoded again. Callers asking for one file at once wait for
   // one decode. Throws what load_texture_file throws (and a later call tries again).
   std::shared_ptr<const Texture> get(const std::filesystem::path& file, TextureColourSpace space);
+
+  // The same for image `index` embedded in `container` (a .glb's buffer, a data: URI), whose
+  // bytes are `encoded`: keyed by the container file and the index, so that it too is decoded
+  // once while held, and again when the container changes. Throws what load_texture_bytes throws.
+  std::shared_ptr<const Texture> get_embedded(const std::filesystem::path& container, int index,
+                                              std::span<const unsigned char> encoded, TextureColourSpace space);
 
   // How many decodes this cache has begun (those that failed included): tests count with it.
   std::uint64_t decodes() const;
@@ -31,6 +39,9 @@ class TextureCache {
 
  private:
   struct State;
+  template <typename Decode>
+  std::shared_ptr<const Texture> get_or_decode(const std::filesystem::path& file, const std::string& part,
+                                               TextureColourSpace space, Decode&& decode);
   std::unique_ptr<State> state_;
 };
 

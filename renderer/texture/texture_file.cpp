@@ -117,24 +117,46 @@ std::shared_ptr<const Texture> read_exr_texture(const fs::path& file) {
   }
 }
 
+// A PNG or JPEG open in `in`: its size checked from the header, then decoded.
+std::shared_ptr<const Texture> read_png_or_jpeg(std::FILE* in, ImageFormat format, const fs::path& name,
+                                                TextureColourSpace space) {
+  if (format == ImageFormat::png) {
+    const auto [width, height] = read_png_size(in, name);
+    check_size(name, width, height);
+    return from_decoded(read_png(in, name, kMaxTextureSide), space);
+  }
+  const auto [width, height] = read_jpeg_size(in, name);
+  std::rewind(in);
+  check_size(name, width, height);
+  return from_decoded(read_jpeg(in, name, kMaxTextureSide), space);
+}
+
 }  // namespace
+
+std::shared_ptr<const Texture> load_texture_bytes(std::span<const unsigned char> encoded, const std::string& name,
+                                                  TextureColourSpace space) {
+  if (encoded.empty()) throw InputError(fmt::format("{}: an empty image", name));
+  // libpng and libjpeg read a FILE: the bytes are handed to them as one, read-only.
+  CFile in(fmemopen(const_cast<unsigned char*>(encoded.data()), encoded.size(), "rb"));
+  if (!in) throw InputError(fmt::format("{}: cannot read the image from memory", name));
+  try {
+    const ImageFormat format = sniff_image_format(in.get());
+    if (format == ImageFormat::png || format == ImageFormat::jpeg) return read_png_or_jpeg(in.get(), format, name, space);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {  // the readers' errors name the image already
+    throw InputError(e.what());
+  }
+  throw InputError(fmt::format("{}: an image embedded in a model must be a PNG or a JPEG", name));
+}
 
 std::shared_ptr<const Texture> load_texture_file(const fs::path& file, TextureColourSpace space) {
   CFile in(std::fopen(file.c_str(), "rb"));
   if (!in) throw InputError(fmt::format("{}: cannot open the texture for reading", file.string()));
   try {
-    switch (sniff_image_format(in.get())) {
-      case ImageFormat::png: {
-        const auto [width, height] = read_png_size(in.get(), file);
-        check_size(file, width, height);
-        return from_decoded(read_png(in.get(), file, kMaxTextureSide), space);
-      }
-      case ImageFormat::jpeg: {
-        const auto [width, height] = read_jpeg_size(in.get(), file);
-        std::rewind(in.get());
-        check_size(file, width, height);
-        return from_decoded(read_jpeg(in.get(), file, kMaxTextureSide), space);
-      }
+    switch (const ImageFormat format = sniff_image_format(in.get())) {
+      case ImageFormat::png:
+      case ImageFormat::jpeg: return read_png_or_jpeg(in.get(), format, file, space);
       case ImageFormat::exr:
         in.reset();
         return read_exr_texture(file);

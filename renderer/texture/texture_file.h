@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
+#include <string>
 
 #include "renderer/texture/texture.h"
 
@@ -24,5 +26,10 @@ inline constexpr std::uint64_t kMaxTextureTexels = std::uint64_t{1} << 26;
 // Throws InputError naming the file: missing, not a PNG/JPEG/EXR/HDR, malformed, or larger than
 // the limits above (said from the header, nothing decoded).
 std::shared_ptr<const Texture> load_texture_file(const std::filesystem::path& file, TextureColourSpace space);
+
+// The same for a PNG or JPEG held in memory (an image embedded in a model file), `name` naming it
+// in messages.
+std::shared_ptr<const Texture> load_texture_bytes(std::span<const unsigned char> encoded, const std::string& name,
+                                                  TextureColourSpace space);
 
 }  // namespace farm

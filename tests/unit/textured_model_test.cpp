@@ -3,7 +3,10 @@
 // process however many models name it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <filesystem>
 #include <memory>
 #include <set>
@@ -183,6 +186,153 @@ TEST(TexturedModel, GltfReadsTexcoordsTheSamplerAndTheTextureTransform) {
   EXPECT_EQ(glm::vec3(slot.sample(glm::vec2(0.1f, 0.2f), 0.0f)), glm::vec3(0, 1, 0));
   // Clamped in u: far right stays in the right column; mirrored in v: v = 1.2 reads as 0.8 (bottom).
   EXPECT_EQ(glm::vec3(slot.sample(glm::vec2(3.0f, 1.2f), 0.0f)), glm::vec3(1, 1, 1));
+}
+
+// glTF's metal-roughness and occlusion textures: data, read as stored. One 1x1 texture holds
+// occlusion 64 (red), roughness 128 (green) and metalness 255 (blue), as glTF packs them; the
+// material's factors multiply them, and the product is mapped to Phong at each point as the
+// loader maps plain factors. A job's override of kd leaves the base colour texture multiplying it.
+TEST(TexturedModel, GltfMetalRoughnessAndOcclusionTexturesAreMappedAtEachPoint) {
+  TempDir dir;
+  write_checker_png(dir / "checker.png");
+  {
+    Rgb8Image orm;
+    orm.width = orm.height = 1;
+    orm.pixels = {64, 128, 255};
+    std::FILE* out = std::fopen((dir / "orm.png").c_str(), "wb");
+    ASSERT_NE(out, nullptr);
+    write_png(orm, out, dir / "orm.png");
+    std::fclose(out);
+  }
+  const float data[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
+  {
+    std::FILE* bin = std::fopen((dir / "tri.bin").c_str(), "wb");
+    ASSERT_NE(bin, nullptr);
+    std::fwrite(data, sizeof data, 1, bin);
+    std::fclose(bin);
+  }
+  const fs::path gltf = dir.write("pbr.gltf", R"({
+    "asset": {"version": "2.0"},
+    "buffers": [{"uri": "tri.bin", "byteLength": 60}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+    "images": [{"uri": "checker.png"}, {"uri": "orm.png"}],
+    "textures": [{"source": 0}, {"source": 1}],
+    "materials": [{"name": "worn", "occlusionTexture": {"index": 1, "strength": 0.5},
+      "pbrMetallicRoughness": {"baseColorFactor": [0.5, 1, 1, 1], "metallicFactor": 0.5, "roughnessFactor": 0.8,
+        "baseColorTexture": {"index": 0}, "metallicRoughnessTexture": {"index": 1}}}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+    "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0})");
+  const Model model = load_model(gltf, dir.path());
+  const Material& m = model.materials.at(model.meshes[0].material);
+  ASSERT_TRUE(m.textures && m.textures->metal_roughness && m.textures->occlusion);
+  Material scratch;
+  // The top-left texel is red: base colour (0.5, 0, 0); metalness 0.5 x 1; roughness 0.8 x 128/255.
+  const Material& at = material_at(m, glm::vec2(0.25f, 0.25f), 0.0f, scratch);
+  Material expected;
+  set_metal_roughness(expected, glm::vec3(0.5f, 0.0f, 0.0f), 0.5f, 0.8f * (128.0f / 255.0f));
+  EXPECT_EQ(at.diffuse, expected.diffuse);
+  EXPECT_EQ(at.specular, expected.specular);
+  EXPECT_FLOAT_EQ(at.shininess, expected.shininess);
+  EXPECT_NE(at.shininess, m.shininess);  // the texture's roughness moved it from the factor's
+  // Occlusion 64/255 at strength 0.5: the ambient term keeps 1 + 0.5 (0.251 - 1) of itself.
+  EXPECT_FLOAT_EQ(at.ambient.x, m.ambient.x * (1.0f + 0.5f * (64.0f / 255.0f - 1.0f)));
+
+  // A job that gives kd: the texture multiplies what it gave.
+  Material overridden = m;
+  MaterialOverride give;
+  give.diffuse = glm::vec3(0.25f);
+  apply_override(give, overridden);
+  EXPECT_EQ(material_at(overridden, glm::vec2(0.25f, 0.25f), 0.0f, scratch).diffuse, glm::vec3(0.25f, 0.0f, 0.0f));
+  EXPECT_TRUE(m.textures->metal_roughness_factors);  // the model's own material is left as it was
+}
+
+std::string read_bytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto byte = [&](std::size_t i) { return i < bytes.size() ? static_cast<std::uint8_t>(bytes[i]) : 0u; };
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::uint32_t v = byte(i) << 16 | byte(i + 1) << 8 | byte(i + 2);
+    const std::size_t present = std::min<std::size_t>(3, bytes.size() - i);  // bytes in this group
+    for (std::size_t k = 0; k < 4; ++k) out += k <= present ? kAlphabet[(v >> (18 - 6 * k)) & 63] : '=';
+  }
+  return out;
+}
+
+// A triangle whose material's base colour is the checker, its image inside the file: a .glb
+// whose binary chunk holds the PNG (a buffer view), and a .gltf whose image is a data: URI. Each
+// is decoded once, keyed by its model file, and reads as the same texels as the file beside it.
+TEST(TexturedModel, GltfImagesEmbeddedInTheFileAreDecodedFromTheirBytes) {
+  TempDir dir;
+  write_checker_png(dir / "checker.png");
+  const std::string png = read_bytes(dir / "checker.png");
+  const float geometry[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
+  std::string bin(reinterpret_cast<const char*>(geometry), sizeof geometry);
+  bin += png;
+  while (bin.size() % 4 != 0) bin += '\0';
+  const auto document = [&](const std::string& buffer, const std::string& image) {
+    return R"({"asset": {"version": "2.0"}, )" + buffer + R"(,
+      "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24},
+                      {"buffer": 0, "byteOffset": 60, "byteLength": )" + std::to_string(png.size()) + R"(}],
+      "accessors": [
+        {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+        {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+      "images": [)" + image + R"(],
+      "textures": [{"source": 0}],
+      "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+      "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+      "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0})";
+  };
+  // .glb: header, JSON chunk (padded with spaces), BIN chunk.
+  std::string json = document(R"("buffers": [{"byteLength": )" + std::to_string(bin.size()) + "}]",
+                              R"({"bufferView": 2, "mimeType": "image/png"})");
+  while (json.size() % 4 != 0) json += ' ';
+  const auto u32 = [](std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  const std::string glb = "glTF" + u32(2) + u32(static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + bin.size())) +
+                          u32(static_cast<std::uint32_t>(json.size())) + "JSON" + json +
+                          u32(static_cast<std::uint32_t>(bin.size())) + std::string("BIN\0", 4) + bin;
+  const fs::path glb_file = dir.write("embedded.glb", glb);
+  // .gltf: the same buffer as a data: URI, and the image as another.
+  const fs::path gltf_file = dir.write(
+      "embedded.gltf",
+      document(R"("buffers": [{"byteLength": )" + std::to_string(bin.size()) +
+                   R"(, "uri": "data:application/octet-stream;base64,)" + base64(bin) + R"("}])",
+               R"({"uri": "data:image/png;base64,)" + base64(png) + R"("})"));
+
+  const std::uint64_t before = TextureCache::process().decodes();
+  std::vector<Model> held;
+  for (const fs::path& file : {glb_file, gltf_file, glb_file}) {
+    held.push_back(load_model(file, dir.path()));
+    const Model& model = held.back();
+    ASSERT_EQ(model.meshes.size(), 1u) << file;
+    const Material& m = model.materials.at(model.meshes[0].material);
+    ASSERT_TRUE(m.textures && m.textures->base_colour) << file;
+    const Texture& t = *m.textures->base_colour.texture;
+    ASSERT_EQ(t.width(), 2) << file;
+    EXPECT_EQ(t.texel(0, 0, 0), glm::vec4(1, 0, 0, 1)) << file;  // red, top-left
+    EXPECT_EQ(t.texel(0, 1, 1), glm::vec4(1, 1, 1, 1)) << file;  // white, bottom-right
+  }
+  // One decode per model file: the .glb loaded twice shares its texture.
+  EXPECT_EQ(TextureCache::process().decodes() - before, 2u);
+  EXPECT_EQ(held[0].materials[0].textures->base_colour.texture, held[2].materials[0].textures->base_colour.texture);
+  // An embedded image that is no PNG or JPEG is an error naming the model and the material.
+  std::string broken = glb;
+  broken.replace(broken.find("\x89PNG"), 4, "GIF8");
+  try {
+    load_model(dir.write("broken.glb", broken), dir.path());
+    FAIL() << "decoded a GIF header as a texture";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("broken.glb"), std::string::npos) << what;
+    EXPECT_NE(what.find("painted"), std::string::npos) << what;
+  }
 }
 
 }  // namespace
