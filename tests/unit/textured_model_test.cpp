@@ -25,16 +25,42 @@ namespace {
 namespace fs = std::filesystem;
 using test::TempDir;
 
-// A 2x2 RGB PNG: red, green / blue, white (rows top to bottom), 8-bit sRGB-encoded 255 and 0 only,
-// so its linear values are exactly 1 and 0.
-void write_checker_png(const fs::path& file) {
+// An 8-bit RGB PNG of `pixels` (rows top to bottom).
+void write_rgb_png(const fs::path& file, int width, int height, std::vector<std::uint8_t> pixels) {
   Rgb8Image image;
-  image.width = image.height = 2;
-  image.pixels = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+  image.width = width;
+  image.height = height;
+  image.pixels = std::move(pixels);
   std::FILE* out = std::fopen(file.c_str(), "wb");
   ASSERT_NE(out, nullptr);
   write_png(image, out, file);
   std::fclose(out);
+}
+
+// A 2x2 RGB PNG: red, green / blue, white (rows top to bottom), 8-bit sRGB-encoded 255 and 0 only,
+// so its linear values are exactly 1 and 0.
+void write_checker_png(const fs::path& file) {
+  write_rgb_png(file, 2, 2, {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255});
+}
+
+// The glTF triangle every test below textures: positions (0,0,0), (1,0,0), (0,1,0) with texcoords
+// (0,1), (1,1), (1,0), little-endian floats in tri.bin (positions then texcoords), written beside
+// `name`, whose `texturing` (its "images", "samplers", "textures" and "materials", comma-separated
+// JSON members) the test gives. Returns the .gltf's path.
+const float kTriangleData[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
+
+fs::path write_textured_triangle(const TempDir& dir, const std::string& name, const std::string& texturing) {
+  dir.write("tri.bin", std::string(reinterpret_cast<const char*>(kTriangleData), sizeof kTriangleData));
+  return dir.write(name, R"({
+    "asset": {"version": "2.0"},
+    "buffers": [{"uri": "tri.bin", "byteLength": 60}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+    "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0,
+    )" + texturing + "}");
 }
 
 // One textured triangle: its vt's v points up, as OBJ's does.
@@ -144,31 +170,13 @@ TEST(TexturedModel, PlyTextureCoordinatesAreReadFromUvAndSt) {
 TEST(TexturedModel, GltfReadsTexcoordsTheSamplerAndTheTextureTransform) {
   TempDir dir;
   write_checker_png(dir / "checker.png");
-  // Positions (3 x vec3) then texcoords (3 x vec2), little-endian floats, base64 would do too but
-  // an external .bin keeps it readable.
-  const float data[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
-  {
-    std::FILE* bin = std::fopen((dir / "quad.bin").c_str(), "wb");
-    ASSERT_NE(bin, nullptr);
-    std::fwrite(data, sizeof data, 1, bin);
-    std::fclose(bin);
-  }
-  const fs::path gltf = dir.write("quad.gltf", R"({
-    "asset": {"version": "2.0"},
+  const fs::path gltf = write_textured_triangle(dir, "quad.gltf", R"(
     "extensionsUsed": ["KHR_texture_transform"],
-    "buffers": [{"uri": "quad.bin", "byteLength": 60}],
-    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
-    "accessors": [
-      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
-      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
     "images": [{"uri": "checker.png"}],
     "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728}],
     "textures": [{"source": 0, "sampler": 0}],
     "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
-      "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [0.5, 1]}}}}}],
-    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
-    "nodes": [{"mesh": 0}],
-    "scenes": [{"nodes": [0]}], "scene": 0})");
+      "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [0.5, 1]}}}}}])");
   const Model model = load_model(gltf, dir.path());
   ASSERT_EQ(model.meshes.size(), 1u);
   const Mesh& mesh = model.meshes[0];
@@ -195,36 +203,13 @@ TEST(TexturedModel, GltfReadsTexcoordsTheSamplerAndTheTextureTransform) {
 TEST(TexturedModel, GltfMetalRoughnessAndOcclusionTexturesAreMappedAtEachPoint) {
   TempDir dir;
   write_checker_png(dir / "checker.png");
-  {
-    Rgb8Image orm;
-    orm.width = orm.height = 1;
-    orm.pixels = {64, 128, 255};
-    std::FILE* out = std::fopen((dir / "orm.png").c_str(), "wb");
-    ASSERT_NE(out, nullptr);
-    write_png(orm, out, dir / "orm.png");
-    std::fclose(out);
-  }
-  const float data[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
-  {
-    std::FILE* bin = std::fopen((dir / "tri.bin").c_str(), "wb");
-    ASSERT_NE(bin, nullptr);
-    std::fwrite(data, sizeof data, 1, bin);
-    std::fclose(bin);
-  }
-  const fs::path gltf = dir.write("pbr.gltf", R"({
-    "asset": {"version": "2.0"},
-    "buffers": [{"uri": "tri.bin", "byteLength": 60}],
-    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
-    "accessors": [
-      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
-      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}],
+  write_rgb_png(dir / "orm.png", 1, 1, {64, 128, 255});
+  const fs::path gltf = write_textured_triangle(dir, "pbr.gltf", R"(
     "images": [{"uri": "checker.png"}, {"uri": "orm.png"}],
     "textures": [{"source": 0}, {"source": 1}],
     "materials": [{"name": "worn", "occlusionTexture": {"index": 1, "strength": 0.5},
       "pbrMetallicRoughness": {"baseColorFactor": [0.5, 1, 1, 1], "metallicFactor": 0.5, "roughnessFactor": 0.8,
-        "baseColorTexture": {"index": 0}, "metallicRoughnessTexture": {"index": 1}}}],
-    "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
-    "nodes": [{"mesh": 0}], "scenes": [{"nodes": [0]}], "scene": 0})");
+        "baseColorTexture": {"index": 0}, "metallicRoughnessTexture": {"index": 1}}}])");
   const Model model = load_model(gltf, dir.path());
   const Material& m = model.materials.at(model.meshes[0].material);
   ASSERT_TRUE(m.textures && m.textures->metal_roughness && m.textures->occlusion);
@@ -273,8 +258,7 @@ TEST(TexturedModel, GltfImagesEmbeddedInTheFileAreDecodedFromTheirBytes) {
   TempDir dir;
   write_checker_png(dir / "checker.png");
   const std::string png = read_bytes(dir / "checker.png");
-  const float geometry[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f};
-  std::string bin(reinterpret_cast<const char*>(geometry), sizeof geometry);
+  std::string bin(reinterpret_cast<const char*>(kTriangleData), sizeof kTriangleData);
   bin += png;
   while (bin.size() % 4 != 0) bin += '\0';
   const auto document = [&](const std::string& buffer, const std::string& image) {
