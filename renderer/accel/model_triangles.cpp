@@ -7,6 +7,8 @@ namespace farm {
 ModelTriangles::ModelTriangles(const Model& model) {
   const bool any_uvs = std::any_of(model.meshes.begin(), model.meshes.end(),
                                    [](const Mesh& m) { return !m.uvs.empty(); });
+  const bool any_tangents = std::any_of(model.meshes.begin(), model.meshes.end(),
+                                        [](const Mesh& m) { return !m.tangents.empty(); });
   for (const Mesh& mesh : model.meshes) {
     const auto base = static_cast<std::uint32_t>(positions.size());
     positions.insert(positions.end(), mesh.positions.begin(), mesh.positions.end());
@@ -16,6 +18,13 @@ ModelTriangles::ModelTriangles(const Model& model) {
         uvs.insert(uvs.end(), mesh.uvs.begin(), mesh.uvs.end());
       } else {
         uvs.resize(positions.size(), glm::vec2(0.0f));
+      }
+    }
+    if (any_tangents) {
+      if (mesh.tangents.size() == mesh.positions.size()) {
+        tangents.insert(tangents.end(), mesh.tangents.begin(), mesh.tangents.end());
+      } else {
+        tangents.resize(positions.size(), glm::vec4(0.0f));
       }
     }
     for (const glm::uvec3& t : mesh.triangles) {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <vector>
 
 #include "renderer/geometry/aabb.h"
@@ -16,6 +17,7 @@ struct ModelTriangles {
   std::vector<glm::vec3> positions;    // all meshes' vertices, concatenated
   std::vector<glm::vec3> normals;      // one per position, unit
   std::vector<glm::vec2> uvs;          // one per position when any mesh has them (0 elsewhere), else none
+  std::vector<glm::vec4> tangents;     // the same for tangent frames (Mesh::tangents)
   std::vector<glm::uvec3> triangles;   // indices into positions
   std::vector<std::uint32_t> material; // per triangle: index into Model::materials
   AABB bounds;

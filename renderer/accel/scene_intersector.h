@@ -64,7 +64,13 @@ float texture_footprint(const PreparedScene& scene, const SurfaceHit& hit, const
 // The material a hit is shaded with (material_at): its own when it has no textures, else `scratch`
 // holding it with its textures read at the hit's uv over a ray cone `cone_width` wide there (0: the
 // textures' finest level).
-const Material& hit_material(const PreparedScene& scene, const glm::vec3& ray_direction, const SurfaceHit& hit,
-                             float cone_width, Material& scratch);
+const Material& textured_hit_material(const PreparedScene& scene, const glm::vec3& ray_direction,
+                                      const SurfaceHit& hit, float cone_width, Material& scratch);
+// Inline, so that an untextured hit (every Phong scene's) costs the engines no call.
+inline const Material& hit_material(const PreparedScene& scene, const glm::vec3& ray_direction, const SurfaceHit& hit,
+                                    float cone_width, Material& scratch) {
+  return hit.material->textures ? textured_hit_material(scene, ray_direction, hit, cone_width, scratch)
+                                : *hit.material;
+}
 
 }  // namespace farm

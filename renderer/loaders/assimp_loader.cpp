@@ -103,7 +103,9 @@ Material convert_material(const ModelFile& file, const aiMaterial& in) {
   textures.base_colour = texture_slot(file, in, aiTextureType_DIFFUSE, TextureColourSpace::Srgb);
   textures.specular = texture_slot(file, in, aiTextureType_SPECULAR, TextureColourSpace::Srgb);
   textures.emission = texture_slot(file, in, aiTextureType_EMISSIVE, TextureColourSpace::Srgb);
-  if (textures.base_colour || textures.specular || textures.emission) {
+  // MTL's norm (a normal map; its bump is a height map, not read).
+  textures.normal = texture_slot(file, in, aiTextureType_NORMALS, TextureColourSpace::Linear);
+  if (textures.base_colour || textures.specular || textures.emission || textures.normal) {
     m.textures = std::make_shared<const MaterialTextures>(std::move(textures));
   }
   return m;

@@ -160,6 +160,7 @@ class GltfReader {
   AccessorView view(int index, int element_type, const std::string& what) const;
   std::vector<glm::vec3> read_vec3(int accessor, const std::string& what) const;
   std::vector<glm::vec2> read_texcoords(int accessor, const std::string& what) const;
+  std::vector<glm::vec4> read_tangents(int accessor, const std::string& what) const;
   TextureSlot texture_slot(const tinygltf::TextureInfo& info, const std::string& material, const char* what,
                            TextureColourSpace space) const;
   std::shared_ptr<const MaterialTextures> material_textures(const tinygltf::Material& in) const;
@@ -281,7 +282,17 @@ std::shared_ptr<const MaterialTextures> GltfReader::material_textures(const tiny
   occlusion.extensions = in.occlusionTexture.extensions;
   textures.occlusion = texture_slot(occlusion, name, "occlusionTexture", TextureColourSpace::Linear);
   textures.occlusion_strength = glm::clamp(static_cast<float>(in.occlusionTexture.strength), 0.0f, 1.0f);
-  if (!textures.base_colour && !textures.metal_roughness && !textures.emission && !textures.occlusion) return nullptr;
+  tinygltf::TextureInfo normal;
+  normal.index = in.normalTexture.index;
+  normal.texCoord = in.normalTexture.texCoord;
+  normal.extensions = in.normalTexture.extensions;
+  textures.normal = texture_slot(normal, name, "normalTexture", TextureColourSpace::Linear);
+  textures.normal_scale = static_cast<float>(in.normalTexture.scale);
+  if (!std::isfinite(textures.normal_scale)) fail("material '" + name + "' normalTexture: scale is not finite");
+  if (!textures.base_colour && !textures.metal_roughness && !textures.emission && !textures.occlusion &&
+      !textures.normal) {
+    return nullptr;
+  }
   // The factors the textures multiply, for material_at to map the product to Phong again.
   MetalRoughness factors;
   if (pbr.baseColorFactor.size() >= 3) {
@@ -342,6 +353,21 @@ std::vector<glm::vec3> GltfReader::read_vec3(int accessor, const std::string& wh
     float xyz[3];
     std::memcpy(xyz, v.element(i), sizeof xyz);  // buffers need not be aligned for float
     out[i] = glm::vec3(xyz[0], xyz[1], xyz[2]);
+  }
+  return out;
+}
+
+// Tangents: float VEC4, xyz a unit vector and w the bitangent's sign (glTF 2.0, 3.7.2.1). Values
+// that are not finite are refused; a w other than -1 reads as +1.
+std::vector<glm::vec4> GltfReader::read_tangents(int accessor, const std::string& what) const {
+  const AccessorView v = view(accessor, TINYGLTF_TYPE_VEC4, what);
+  if (v.count > 0 && v.component_type != TINYGLTF_COMPONENT_TYPE_FLOAT) fail(what + ": expected float components");
+  std::vector<glm::vec4> out(v.count);
+  for (std::size_t i = 0; i < v.count; ++i) {
+    float xyzw[4];
+    std::memcpy(xyzw, v.element(i), sizeof xyzw);
+    out[i] = glm::vec4(xyzw[0], xyzw[1], xyzw[2], xyzw[3] < 0.0f ? -1.0f : 1.0f);
+    if (!all_finite(glm::vec3(out[i]))) fail(what + ": a tangent that is not finite");
   }
   return out;
 }
@@ -523,6 +549,10 @@ void GltfReader::add_mesh(int mesh_index, int node, const glm::mat4& node_to_roo
       if (mesh.normals.size() != mesh.positions.size()) {
         fail(what + ": NORMAL and POSITION counts differ");
       }
+    }
+    if (const auto tangent = prim.attributes.find("TANGENT"); tangent != prim.attributes.end()) {
+      mesh.tangents = read_tangents(tangent->second, what + " TANGENT");
+      if (mesh.tangents.size() != mesh.positions.size()) fail(what + ": TANGENT and POSITION counts differ");
     }
     if (const auto uv = prim.attributes.find("TEXCOORD_0"); uv != prim.attributes.end()) {
       mesh.uvs = read_texcoords(uv->second, what + " TEXCOORD_0");

@@ -8,6 +8,7 @@
 
 #include "renderer/loaders/loaders.h"
 #include "renderer/scene/transform.h"
+#include "renderer/texture/material_textures.h"
 #include "renderer/util/input_error.h"
 
 namespace farm {
@@ -36,6 +37,20 @@ void bake_node_transform(Mesh& mesh, const glm::mat4& node_to_root) {
   // A singular transform or a zero normal in the file: regenerate rather than keep garbage.
   if (!normals_usable) mesh.normals.clear();
 
+  // Tangents lie in the surface: carried by the transform itself. Under a mirroring transform the
+  // bitangent, a cross product with the normal, would flip: w flips with it.
+  const glm::mat3 linear(node_to_root);
+  const float handedness = glm::determinant(linear) < 0.0f ? -1.0f : 1.0f;
+  for (glm::vec4& t : mesh.tangents) {
+    const glm::vec3 moved = linear * glm::vec3(t);
+    const float len = glm::length(moved);
+    if (!(len > 0.0f) || !std::isfinite(len)) {
+      mesh.tangents.clear();  // made again from the uvs where a normal map needs them
+      break;
+    }
+    t = glm::vec4(moved / len, t.w * handedness);
+  }
+
   if (glm::determinant(glm::mat3(node_to_root)) < 0.0f) {
     for (glm::uvec3& t : mesh.triangles) std::swap(t.y, t.z);
   }
@@ -61,6 +76,12 @@ void finish_loaded_model(Model& model) {
     }
     if (mesh.normals.size() != mesh.positions.size()) generate_smooth_normals(mesh);
     if (mesh.material >= model.materials.size()) mesh.material = 0;
+    // A normal map needs a tangent frame: the file's, or one made from the uvs.
+    const Material& material = model.materials[mesh.material];
+    if (material.textures && material.textures->normal && mesh.tangents.size() != mesh.positions.size()) {
+      mesh.tangents.clear();
+      generate_tangents(mesh);
+    }
   }
 
   if (model.triangle_count() == 0) throw InputError(file + ": the file contains no triangles");

@@ -35,6 +35,7 @@ struct SurfaceAttributes {
 struct TextureAttributes {
   glm::vec2 uv;        // texture coordinates, perspective-correct
   float uv_per_world;  // the triangle's uv length per view-space length
+  glm::vec4 tangent;   // world space, perspective-correct (zero where the mesh has none)
 };
 
 // A triangle's uv length per unit of length on it (texture_footprint's measure, the same in
@@ -58,7 +59,8 @@ class RegionRasterizer {
     depth_.resize(kPixels);
     material_.resize(kPixels);
     attributes_.resize(kPixels);
-    texture_attributes_.resize(kPixels);
+    // Only a frame with textured materials draws textured triangles: one without pays nothing.
+    if (frame.textured) texture_attributes_.resize(kPixels);
   }
 
   void begin(const Rect& region, FixedPoint sample_offset) {
@@ -77,7 +79,8 @@ class RegionRasterizer {
   std::uint64_t fragments() const { return fragments_; }
 
   void draw(const ScreenTriangle& t) {
-    // Two instances of the loop: an untextured triangle's is the loop as it was before textures.
+    // Two instances of the loop: an untextured triangle's is the loop as it was before textures,
+    // inlined here as it was.
     if (t.material & kTexturedMaterial) {
       draw<true>(t);
     } else {
@@ -87,7 +90,7 @@ class RegionRasterizer {
 
  private:
   template <bool kTextured>
-  void draw(const ScreenTriangle& t) {
+  [[gnu::always_inline]] void draw(const ScreenTriangle& t) {
     const ScreenVertex &s0 = frame_.vertex(t.v[0]), &s1 = frame_.vertex(t.v[1]),
                        &s2 = frame_.vertex(t.v[2]);
     const FixedPoint &p0 = s0.position, &p1 = s1.position, &p2 = s2.position;
@@ -108,9 +111,10 @@ class RegionRasterizer {
     const Material* material = frame_.materials[t.material & kMaterialIndex];
     const bool front_side = (t.material & kBackFace) == 0;
     const ClipVertex &a0 = s0.attributes, &a1 = s1.attributes, &a2 = s2.attributes;
-    const glm::vec2 uv0 = kTextured ? frame_.uv(t.v[0]) : glm::vec2(0.0f), uv1 = kTextured ? frame_.uv(t.v[1]) : uv0,
-                    uv2 = kTextured ? frame_.uv(t.v[2]) : uv0;
-    const float uv_per_world = kTextured ? uv_per_length(a0, a1, a2, uv0, uv1, uv2) : 0.0f;
+    const TextureVertex t0 = kTextured ? frame_.texture_vertex(t.v[0]) : TextureVertex{},
+                        t1 = kTextured ? frame_.texture_vertex(t.v[1]) : TextureVertex{},
+                        t2 = kTextured ? frame_.texture_vertex(t.v[2]) : TextureVertex{};
+    const float uv_per_world = kTextured ? uv_per_length(a0, a1, a2, t0.uv, t1.uv, t2.uv) : 0.0f;
 
     for (int y = y_begin; y <= y_end; ++y) {
       const FixedPoint start{x_begin * kSubpixelScale + offset_.x, y * kSubpixelScale + offset_.y};
@@ -134,8 +138,9 @@ class RegionRasterizer {
         attributes_[i].world_normal =
             (q0 * a0.world_normal + q1 * a1.world_normal + q2 * a2.world_normal) * inv_q;
         if constexpr (kTextured) {
-          texture_attributes_[i].uv = (q0 * uv0 + q1 * uv1 + q2 * uv2) * inv_q;
+          texture_attributes_[i].uv = (q0 * t0.uv + q1 * t1.uv + q2 * t2.uv) * inv_q;
           texture_attributes_[i].uv_per_world = uv_per_world;
+          texture_attributes_[i].tangent = (q0 * t0.tangent + q1 * t1.tangent + q2 * t2.tangent) * inv_q;
         }
         attributes_[i].front_side = front_side;
       }
@@ -174,15 +179,18 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       const glm::vec3 world = glm::vec3(frame.view_to_world * glm::vec4(hit.view_position, 1.0f));
       const glm::vec3 to_eye = glm::normalize(frame.eye - world);
       glm::vec3 n = glm::normalize(hit.world_normal);
+      const TextureAttributes* texture = base->textures ? &raster.texture_attributes(x, y) : nullptr;
+      // A normal map bends the surface's own normal, before the side seen is chosen (as in
+      // complete_surface_hit).
+      if (texture) n = mapped_normal(*base->textures, texture->uv, n, texture->tangent);
       if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: light the face we see
       // The pixel's footprint as the ray engines' texture_footprint measures it, with the
       // interpolated normal for the triangle's.
       const Material* material = base;
-      if (base->textures) {
-        const TextureAttributes& texture = raster.texture_attributes(x, y);
+      if (texture) {
         const float footprint =
-            pixel_size * -hit.view_position.z / std::max(0.1f, glm::dot(n, to_eye)) * texture.uv_per_world;
-        material = &material_at(*base, texture.uv, footprint, textured);
+            pixel_size * -hit.view_position.z / std::max(0.1f, glm::dot(n, to_eye)) * texture->uv_per_world;
+        material = &material_at(*base, texture->uv, footprint, textured);
       }
       pixel += glm::vec4(limit_radiance(shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights,
                                                           scene.ambient)),

@@ -39,16 +39,17 @@ struct MeshRange {
   std::size_t first_triangle;
 };
 
-// The texture coordinates at `p`, a point clipping made on triangle (a, b, c) with coordinates
-// (ua, ub, uc): its barycentric weights in the triangle's plane. The uvs are affine on the plane,
+// The texture vertex at `p`, a point clipping made on triangle (a, b, c) with texture vertices
+// (ta, tb, tc): its barycentric weights in the triangle's plane. The uvs are affine on the plane,
 // so the clipped vertex gets what interpolating along the clipped edge would give.
-glm::vec2 uv_at(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, glm::vec2 ua,
-                glm::vec2 ub, glm::vec2 uc) {
+TextureVertex texture_vertex_at(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+                                const TextureVertex& ta, const TextureVertex& tb, const TextureVertex& tc) {
   const glm::vec3 n = glm::cross(b - a, c - a);
   const float area = glm::dot(n, n);
-  if (!(area > 0.0f)) return ua;
+  if (!(area > 0.0f)) return ta;
   const float wb = glm::dot(glm::cross(p - a, c - a), n) / area, wc = glm::dot(glm::cross(b - a, p - a), n) / area;
-  return (1.0f - wb - wc) * ua + wb * ub + wc * uc;
+  const float wa = 1.0f - wb - wc;
+  return {wa * ta.uv + wb * tb.uv + wc * tc.uv, wa * ta.tangent + wb * tb.tangent + wc * tc.tangent};
 }
 
 // What one set-up chunk produces, merged in chunk order afterwards. The chunks lie side by side
@@ -57,7 +58,7 @@ glm::vec2 uv_at(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, cons
 struct alignas(64) SetupChunk {
   TriangleChunk triangles;
   std::vector<ScreenVertex> clipped_vertices;
-  std::vector<glm::vec2> clipped_uvs;  // beside clipped_vertices, when the frame has uvs
+  std::vector<TextureVertex> clipped_textures;  // beside clipped_vertices, when the frame has uvs
   std::vector<std::pair<std::uint32_t, std::uint32_t>> binned;  // (bin, local triangle)
   std::vector<std::uint32_t> bin_counts;                          // entries per bin
   std::uint64_t unreported_entries = 0;  // filed here, not yet added to the frame's count
@@ -87,13 +88,14 @@ class FrameBuilder {
         frame.materials.push_back(&object.source->materials.at(mesh.material));
         mirrored_.push_back(glm::determinant(glm::mat3(object.model_to_world)) < 0.0f);
         textured_.push_back(frame.materials.back()->textures != nullptr);
+        frame.textured = frame.textured || textured_.back();
         vertices += mesh.positions.size();
         triangles += mesh.triangles.size();
         has_uvs_ = has_uvs_ || !mesh.uvs.empty();
       }
     }
     frame.vertices.allocate(vertices);
-    if (has_uvs_) frame.vertex_uvs.resize(vertices);
+    if (has_uvs_) frame.vertex_textures.resize(vertices);
     frame.input_triangles = triangles;
   }
 
@@ -181,7 +183,17 @@ class FrameBuilder {
         const glm::vec3 n = to_world_normal * range.mesh->normals[local];
         const float len = glm::length(n);
         v.attributes.world_normal = len > 0.0f ? n / len : n;
-        if (has_uvs_) frame_.vertex_uvs[i] = range.mesh->uvs.empty() ? glm::vec2(0.0f) : range.mesh->uvs[local];
+        if (has_uvs_) {
+          TextureVertex& t = frame_.vertex_textures[i];
+          t.uv = range.mesh->uvs.empty() ? glm::vec2(0.0f) : range.mesh->uvs[local];
+          if (!range.mesh->tangents.empty()) {
+            const glm::vec4& tangent = range.mesh->tangents[local];
+            // Carried as the ray engines carry it (complete_surface_hit).
+            const glm::mat3 linear(range.object->model_to_world);
+            t.tangent = glm::vec4(linear * glm::vec3(tangent),
+                                  (tangent.w < 0.0f) != (glm::determinant(linear) < 0.0f) ? -1.0f : 1.0f);
+          }
+        }
         v.outcode = outcode(v.attributes.clip);
         project(v);
       }
@@ -279,9 +291,10 @@ class FrameBuilder {
         project(v);
         chunk.clipped_vertices.push_back(v);
         if (has_uvs_) {
-          chunk.clipped_uvs.push_back(uv_at(v.attributes.view_position, a.attributes.view_position,
-                                            b.attributes.view_position, c.attributes.view_position,
-                                            frame_.vertex_uvs[ia], frame_.vertex_uvs[ib], frame_.vertex_uvs[ic]));
+          chunk.clipped_textures.push_back(texture_vertex_at(
+              v.attributes.view_position, a.attributes.view_position, b.attributes.view_position,
+              c.attributes.view_position, frame_.vertex_textures[ia], frame_.vertex_textures[ib],
+              frame_.vertex_textures[ic]));
         }
       }
       for (std::uint32_t k = 2; k < poly.size; ++k) {
@@ -316,7 +329,7 @@ class FrameBuilder {
       vertices += chunks_[c].clipped_vertices.size();
     }
     frame_.clipped_vertices.resize(vertices);
-    if (has_uvs_) frame_.clipped_uvs.resize(vertices);
+    if (has_uvs_) frame_.clipped_textures.resize(vertices);
 
     // Counting sort by bin, stable in chunk order, so every bin lists triangles in scene order.
     // Loops run chunk by chunk so that each walks one contiguous count array.
@@ -349,8 +362,8 @@ class FrameBuilder {
     const auto vertex_base = static_cast<std::uint32_t>(vertex_base_[c]);
     std::copy(chunk.clipped_vertices.begin(), chunk.clipped_vertices.end(),
               frame_.clipped_vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
-    std::copy(chunk.clipped_uvs.begin(), chunk.clipped_uvs.end(),
-              frame_.clipped_uvs.begin() + static_cast<std::ptrdiff_t>(vertex_base));
+    std::copy(chunk.clipped_textures.begin(), chunk.clipped_textures.end(),
+              frame_.clipped_textures.begin() + static_cast<std::ptrdiff_t>(vertex_base));
     // Only triangles made by clipping use clipped vertices.
     for (ScreenTriangle& tri : chunk.triangles.from_clipping) {
       for (std::uint32_t& v : tri.v) {

@@ -8,6 +8,7 @@
 // that can cover it in that order, so depth ties resolve the same way for any tiling.
 #include <cstdint>
 #include <glm/vec2.hpp>
+#include <glm/vec4.hpp>
 #include <memory>
 #include <vector>
 
@@ -48,6 +49,13 @@ inline constexpr std::uint32_t kBackFace = 0x80000000u;
 inline constexpr std::uint32_t kTexturedMaterial = 0x40000000u;
 inline constexpr std::uint32_t kMaterialIndex = ~(kBackFace | kTexturedMaterial);
 
+// What a textured surface's vertex adds: its texture coordinates, and its tangent frame in world
+// space (Mesh::tangents carried by the object's transform; zero where the mesh has none).
+struct TextureVertex {
+  glm::vec2 uv{0.0f};
+  glm::vec4 tangent{0.0f};
+};
+
 struct ScreenTriangle {
   std::uint32_t v[3];            // RasterFrame::vertex() indices
   std::uint32_t material;        // index into RasterFrame::materials, | kBackFace, | kTexturedMaterial
@@ -73,10 +81,12 @@ struct RasterFrame {
   // the order.
   std::vector<TriangleChunk> triangle_chunks;
   std::vector<const Material*> materials;
-  // Texture coordinates beside the vertices, kept apart so that scenes without them pay nothing
-  // per vertex: one per scene vertex and one per clipped vertex, or none when no mesh has them.
-  std::vector<glm::vec2> vertex_uvs;
-  std::vector<glm::vec2> clipped_uvs;
+  // Texture coordinates and tangent frames beside the vertices, kept apart so that scenes without
+  // them pay nothing per vertex: one per scene vertex and one per clipped vertex, or none when no
+  // mesh has texture coordinates.
+  std::vector<TextureVertex> vertex_textures;
+  std::vector<TextureVertex> clipped_textures;
+  bool textured = false;  // some material has textures (with or without texture coordinates)
   // Bin b holds bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order.
   std::vector<std::uint32_t> bin_start;
   UninitializedArray<const ScreenTriangle*> bin_triangles;
@@ -85,9 +95,9 @@ struct RasterFrame {
     return (i & kClippedVertex) ? clipped_vertices[i & ~kClippedVertex] : vertices[i];
   }
 
-  glm::vec2 uv(std::uint32_t i) const {
-    if (vertex_uvs.empty()) return glm::vec2(0.0f);
-    return (i & kClippedVertex) ? clipped_uvs[i & ~kClippedVertex] : vertex_uvs[i];
+  TextureVertex texture_vertex(std::uint32_t i) const {
+    if (vertex_textures.empty()) return TextureVertex{};
+    return (i & kClippedVertex) ? clipped_textures[i & ~kClippedVertex] : vertex_textures[i];
   }
 
   void prefetch_vertices(const ScreenTriangle& t) const {

@@ -86,6 +86,43 @@ void generate_smooth_normals(Mesh& mesh, float crease_degrees) {
   mesh.positions = std::move(positions);
   mesh.normals = std::move(normals);
   mesh.uvs = std::move(uvs);
+  mesh.tangents.clear();  // a file's tangents mean nothing without its normals (glTF 2.0, 3.7.2.1)
+}
+
+void generate_tangents(Mesh& mesh) {
+  const std::size_t n = mesh.positions.size();
+  if (mesh.uvs.size() != n || mesh.normals.size() != n) return;
+  std::vector<glm::vec3> along_u(n, glm::vec3(0.0f)), along_v(n, glm::vec3(0.0f));
+  for (const glm::uvec3& t : mesh.triangles) {
+    const glm::vec3 e1 = mesh.positions[t.y] - mesh.positions[t.x], e2 = mesh.positions[t.z] - mesh.positions[t.x];
+    const glm::vec2 d1 = mesh.uvs[t.y] - mesh.uvs[t.x], d2 = mesh.uvs[t.z] - mesh.uvs[t.x];
+    const float det = d1.x * d2.y - d2.x * d1.y;
+    if (!(std::fabs(det) > 0.0f) || !std::isfinite(det)) continue;
+    // Solving e = du * U + dv * V for U and V; scaling by |det| rather than dividing keeps the
+    // sum weighted by each triangle's area in uv, and its sign keeps the directions' sense.
+    const float sign = det > 0.0f ? 1.0f : -1.0f;
+    const glm::vec3 u = sign * (d2.y * e1 - d1.y * e2), v = sign * (d1.x * e2 - d2.x * e1);
+    for (std::uint32_t k : {t.x, t.y, t.z}) {
+      along_u[k] += u;
+      along_v[k] += v;
+    }
+  }
+  mesh.tangents.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::vec3& normal = mesh.normals[i];
+    glm::vec3 t = along_u[i] - normal * glm::dot(normal, along_u[i]);
+    float length = glm::length(t);
+    if (!(length > 1e-20f) || !std::isfinite(length)) {
+      // Any direction across the normal: the axis it leans on least.
+      const glm::vec3 axis = std::fabs(normal.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+      t = axis - normal * glm::dot(normal, axis);
+      length = glm::length(t);
+    }
+    t /= length;
+    // The bitangent points where v falls: up the image, as glTF's normal maps (+Y green) say.
+    const float w = glm::dot(glm::cross(normal, t), along_v[i]) > 0.0f ? -1.0f : 1.0f;
+    mesh.tangents[i] = glm::vec4(t, w);
+  }
 }
 
 }  // namespace farm

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,10 @@ struct Mesh {
   // Texture coordinates (renderer/texture/texture.h's convention: v down): one per position, or
   // none when the file has none.
   std::vector<glm::vec2> uvs;
+  // Tangent frames for normal maps, glTF's TANGENT: one per position, or none. xyz the unit
+  // tangent (where u grows along the surface, perpendicular to the normal), w +1 or -1: the
+  // bitangent, w * cross(normal, tangent), points where v falls (up the image: a normal map's +Y).
+  std::vector<glm::vec4> tangents;
   std::vector<glm::uvec3> triangles;     // indices into positions
   std::uint32_t material = 0;            // index into Model::materials
   int node = -1;  // glTF: the Model::nodes entry whose rest world transform is baked in; else -1
@@ -33,5 +38,14 @@ struct Mesh {
 // those); triangles are rewritten to match.
 inline constexpr float kDefaultCreaseDegrees = 60.0f;
 void generate_smooth_normals(Mesh& mesh, float crease_degrees = kDefaultCreaseDegrees);
+
+// Tangents for a mesh with normals and texture coordinates but no tangents: each triangle's
+// directions of growing u and v (from its uv and position differences, weighted by its area),
+// summed at its corners, the sum of u's made perpendicular to the vertex normal, and w the side
+// v's sum lies on. This is the classic construction (Lengyel), not MikkTSpace's: a normal map
+// baked against MikkTSpace agrees on smooth, consistently mapped surfaces and may differ near
+// uv seams and mirrored islands. A vertex whose uvs are degenerate gets any tangent
+// perpendicular to its normal.
+void generate_tangents(Mesh& mesh);
 
 }  // namespace farm

@@ -1,6 +1,8 @@
 #include "renderer/texture/material_textures.h"
 
+#include <cmath>
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <glm/vec4.hpp>
 
 namespace farm {
@@ -18,6 +20,21 @@ void apply_override(const MaterialOverride& override, Material& m) {
     textures->metal_roughness_factors.reset();
     m.textures = std::move(textures);
   }
+}
+
+glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const glm::vec3& normal,
+                        const glm::vec4& tangent) {
+  if (!textures.normal) return normal;
+  const glm::vec3 t = glm::vec3(tangent) - normal * glm::dot(normal, glm::vec3(tangent));
+  const float t_length = glm::length(t);
+  if (!(t_length > 0.0f) || !std::isfinite(t_length)) return normal;
+  const glm::vec3 unit_t = t / t_length;
+  const glm::vec3 b = (tangent.w < 0.0f ? -1.0f : 1.0f) * glm::cross(normal, unit_t);
+  const glm::vec3 texel(textures.normal.sample(uv, 0.0f));
+  const glm::vec3 local = (2.0f * texel - 1.0f) * glm::vec3(textures.normal_scale, textures.normal_scale, 1.0f);
+  const glm::vec3 mapped = local.x * unit_t + local.y * b + local.z * normal;
+  const float length = glm::length(mapped);
+  return length > 0.0f && std::isfinite(length) ? mapped / length : normal;
 }
 
 const Material& material_at(const Material& base, glm::vec2 uv, float footprint, Material& scratch) {

@@ -6,6 +6,7 @@
 #include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <memory>
 #include <optional>
 
@@ -39,6 +40,8 @@ struct MaterialTextures {
   TextureSlot metal_roughness;  // glTF: blue multiplies metalness, green roughness
   TextureSlot occlusion;        // glTF: red darkens the ambient term, as far as the strength says
   float occlusion_strength = 1.0f;
+  TextureSlot normal;           // tangent-space normals (glTF's normalTexture, MTL's norm)
+  float normal_scale = 1.0f;    // glTF: scales the map's X and Y
   // glTF: kd, ks and the shininess are the metal-roughness mapping of the factors times the
   // textures, worked out again at each point. Unset (MTL): the textures multiply kd and ks.
   std::optional<MetalRoughness> metal_roughness_factors;
@@ -48,6 +51,13 @@ struct MaterialTextures {
 // values, and a glTF material whose kd, ks or shininess it replaces stops deriving them from its
 // factors, so that its textures multiply the values the job gave (as MTL's do).
 void apply_override(const MaterialOverride& override, Material& m);
+
+// The shading normal a normal map gives at `uv`: the map's tangent-space normal (its values
+// 2 * texel - 1, X and Y times the scale) in the frame of the interpolated `normal` and `tangent`
+// (world space; the tangent made perpendicular to the normal first, w its bitangent's side).
+// `normal` itself when the material has no normal map or the frame is degenerate.
+glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const glm::vec3& normal,
+                        const glm::vec4& tangent);
 
 // The material at texture coordinates `uv` with a pixel footprint of `footprint` uv units
 // (Texture::sample): `base` itself when it has no textures; else `scratch`, filled with base's

@@ -21,7 +21,8 @@ Emitters::Emitters(const PreparedScene& scene) {
     const ModelTriangles& mesh = *object.triangles;
     for (std::uint32_t t = 0; t < mesh.size(); ++t) {
       const Material& material = object.source->materials[mesh.material[t]];
-      const bool textured = material.textures && material.textures->emission && !mesh.uvs.empty();
+      // Without texture coordinates every point reads the texture at uv (0, 0), as hits do.
+      const bool textured = material.textures && material.textures->emission;
       glm::vec3 le = material.emission;
       if (textured) {
         const Texture& texture = *material.textures->emission.texture;
@@ -52,9 +53,11 @@ Emitters::Emitters(const PreparedScene& scene) {
       w.two_sided = material.emission_sides == EmissionSides::Both;
       if (textured) {
         w.textured = &material;
-        w.uv0 = mesh.uvs[tri.x];
-        w.uv1 = mesh.uvs[tri.y];
-        w.uv2 = mesh.uvs[tri.z];
+        if (!mesh.uvs.empty()) {
+          w.uv0 = mesh.uvs[tri.x];
+          w.uv1 = mesh.uvs[tri.y];
+          w.uv2 = mesh.uvs[tri.z];
+        }
       }
       index_of_[(std::uint64_t{o} << 32) | t] = static_cast<std::uint32_t>(triangles_.size());
       triangles_.push_back(w);

@@ -234,6 +234,25 @@ TEST(TexturedModel, GltfMetalRoughnessAndOcclusionTexturesAreMappedAtEachPoint) 
   EXPECT_TRUE(m.textures->metal_roughness_factors);  // the model's own material is left as it was
 }
 
+// A glTF normal map without TANGENTs: the loader makes the tangent frame from the uvs (u grows
+// along +x, v falls along +y on this triangle), and keeps the map's scale.
+TEST(TexturedModel, AGltfNormalMapGetsTangentsFromTheUvsWhenTheFileHasNone) {
+  TempDir dir;
+  write_rgb_png(dir / "normal.png", 1, 1, {128, 128, 255});
+  const fs::path gltf = write_textured_triangle(dir, "bumpy.gltf", R"(
+    "images": [{"uri": "normal.png"}],
+    "textures": [{"source": 0}],
+    "materials": [{"name": "bumpy", "normalTexture": {"index": 0, "scale": 0.5}}])");
+  const Model model = load_model(gltf, dir.path());
+  const Mesh& mesh = model.meshes[0];
+  const Material& m = model.materials.at(mesh.material);
+  ASSERT_TRUE(m.textures && m.textures->normal);
+  EXPECT_EQ(m.textures->normal_scale, 0.5f);
+  EXPECT_EQ(m.textures->normal.texture->texel(0, 0, 0).x, 128.0f / 255.0f);  // data: not sRGB-decoded
+  ASSERT_EQ(mesh.tangents.size(), mesh.positions.size());
+  for (const glm::vec4& t : mesh.tangents) EXPECT_EQ(t, glm::vec4(1, 0, 0, 1));
+}
+
 std::string read_bytes(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});

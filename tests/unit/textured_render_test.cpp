@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/trigonometric.hpp>
 #include <memory>
 #include <vector>
 
@@ -173,6 +175,67 @@ TEST(TexturedRender, NextEventEstimationReadsTheEmissionTextureAsBsdfSamplingDoe
   for (int c = 0; c < 3; ++c) {
     EXPECT_GT(nee[c], 0.005) << c;
     EXPECT_NEAR(nee[c], bsdf[c], 0.05 * bsdf[c] + 1e-3) << "channel " << c;
+  }
+}
+
+// A textured material on a mesh without texture coordinates (an OBJ whose MTL names a map but
+// whose faces give no vt) reads the texture at uv (0, 0) everywhere, in every engine, and renders.
+TEST(TexturedRender, ATexturedMaterialOnAMeshWithoutUvsReadsTheTextureAtTheOrigin) {
+  const TexturedQuad q;
+  Scene base = textured_quad_scene(q);
+  Model bare = test::make_quad(q.corner[0], q.corner[1], q.corner[2], q.corner[3]);
+  base.objects[0].model = std::make_shared<const Model>(std::move(bare));
+  const glm::vec3 expected = bilinear(glm::vec2(0.0f));
+  const PreparedScene scene(base);
+  for (const EngineKind engine : {EngineKind::Raster, EngineKind::Whitted, EngineKind::Path}) {
+    const TileBuffer image = test::render_full(scene, settings_for(engine));
+    const glm::vec4 centre = image.rgba(kWidth / 2, kHeight / 2);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(centre[c], expected[c], 1e-5f) << to_string(engine) << " channel " << c;
+  }
+}
+
+// A normal map on a plane facing +z, its one texel the tangent-space normal (sin a, 0, cos a):
+// with the tangent made from the uvs (u grows along +x), the shading normal tilts towards +x by
+// a, so a directional light from (1, 0, 1) lights it by kd cos(45 - a) instead of kd cos 45, on
+// every pixel of the plane, in whitted and in the rasterizer alike. A tangent frame turned the
+// wrong way, a map read as sRGB or not remapped to [-1, 1], or a bitangent on the wrong side of a
+// mirrored object each move the value.
+TEST(TexturedRender, ANormalMapTiltsTheShadingNormalInTheTangentFrame) {
+  const float a = glm::radians(30.0f);
+  const glm::vec3 tangent_space(std::sin(a), 0.0f, std::cos(a));
+  for (const bool mirrored : {false, true}) {
+    Model model = test::make_quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0});
+    Mesh& mesh = model.meshes[0];
+    mesh.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+    generate_tangents(mesh);
+    ASSERT_EQ(mesh.tangents.size(), 4u);
+    for (const glm::vec4& t : mesh.tangents) EXPECT_EQ(t, glm::vec4(1, 0, 0, 1));  // u along +x, v falling along +y
+    auto textures = std::make_shared<MaterialTextures>();
+    textures->normal.texture =
+        std::make_shared<const Texture>(1, 1, std::vector<glm::vec4>{glm::vec4(0.5f * (tangent_space + 1.0f), 1.0f)});
+    Material m;
+    m.diffuse = glm::vec3(0.8f);
+    m.ambient = glm::vec3(0.0f);
+    m.textures = textures;
+    Scene scene;
+    // Mirrored in x: the plane and its tilt mirror too, so the light must come from -x to see the
+    // same angle.
+    const glm::mat4 to_world = mirrored ? glm::scale(glm::mat4(1.0f), glm::vec3(-1, 1, 1)) : glm::mat4(1.0f);
+    scene.objects.push_back(test::object_of(model, to_world, m));
+    scene.ambient = glm::vec3(0.0f);
+    scene.background = glm::vec3(0.0f);
+    scene.camera.position = {0.0f, 0.0f, 3.0f};
+    scene.camera.target = {0.0f, 0.0f, 0.0f};
+    const glm::vec3 to_light = glm::normalize(glm::vec3(mirrored ? -1.0f : 1.0f, 0.0f, 1.0f));
+    scene.lights.push_back(Light{Light::Kind::Directional, {}, -to_light, glm::vec3(1.0f)});
+    const float expected = 0.8f * std::cos(glm::radians(45.0f) - a);
+    const PreparedScene prepared(scene);
+    for (const EngineKind engine : {EngineKind::Whitted, EngineKind::Raster}) {
+      const TileBuffer image = test::render_full(prepared, settings_for(engine));
+      const glm::vec4 centre = image.rgba(kWidth / 2, kHeight / 2);
+      EXPECT_NEAR(centre.x, expected, 1e-4f) << to_string(engine) << (mirrored ? " mirrored" : "");
+      EXPECT_NEAR(image.rgba(kWidth / 2 + 5, kHeight / 2 - 4).y, expected, 1e-4f) << to_string(engine);
+    }
   }
 }
 
