@@ -2,7 +2,7 @@
 """Renders a farm job with Mitsuba 3, an independent path tracer, for reference images and timings.
 
 The job file is read as `farm render` reads it (camera, objects, OBJ/MTL materials, point lights,
-background, max_depth) and turned into the same scene in Mitsuba:
+background or environment, max_depth) and turned into the same scene in Mitsuba:
 
   * Phong kd becomes a diffuse BSDF, two-sided like ours; a map_Kd (with Kd 1 1 1, which the
     texture then is) its reflectance as an sRGB bitmap, bilinear and repeating, with the OBJ's vt
@@ -10,6 +10,9 @@ background, max_depth) and turned into the same scene in Mitsuba:
     shine from their front face (the side the triangle's counter-clockwise winding faces) in both
     renderers. Mitsuba has no two-sided area light, so an object whose job material says
     "emission_sides": "both" gets a back-to-back twin of each emissive triangle 1e-4 behind it.
+  * scene.environment becomes an `envmap` of the same map, its rows laid out as Mitsuba reads
+    them (mitsuba_layout_map), its `scale` our intensity, a turn about +y its to_world; or a
+    `constant` emitter without a map.
   * Our max_depth counts scattering events, Mitsuba's path segments: Mitsuba's is ours + 1.
   * A box pixel filter, as ours, and the `independent` sampler.
 
@@ -27,6 +30,8 @@ Reference images (what tests/data/reference/ holds):
       --spp 2048 --half -o tests/data/reference/cornell_gap_mitsuba.exr
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_textured.json \\
       --width 128 --height 128 --spp 4096 --half -o tests/data/reference/cornell_textured_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/environment.json \\
+      --width 160 --height 120 --spp 4096 --half -o tests/data/reference/environment_mitsuba.exr
 Throughput beside `farm bench path`:
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
       --width 512 --height 512 --spp 16 --threads 1 --bench
@@ -132,6 +137,31 @@ def write_triangles(path, triangles, flip=False, offset=0.0):
         f.write("\n".join(lines) + "\n")
 
 
+def mitsuba_layout_map(mi, path, workdir):
+    """The lat-long map at `path` laid out as Mitsuba's envmap reads one, written as an EXR.
+
+    Both map a direction to (u, v) alike and both filter bilinearly, but the farm puts row j's
+    value at v = (j + 0.5) / H, as for every texture, and Mitsuba at v = j / (H - 1), its rows
+    running from pole to pole. Mitsuba is handed 2H + 1 rows holding the farm's bilinear value at
+    v = k / 2H: every knot of the farm's piecewise-linear rows is among those, so Mitsuba's
+    bilinear lookup between them is the farm's function exactly."""
+    import numpy as np
+    bitmap = mi.Bitmap(path).convert(pixel_format=mi.Bitmap.PixelFormat.RGB,
+                                     component_format=mi.Struct.Type.Float32, srgb_gamma=False)
+    texels = np.array(bitmap, dtype=np.float64)
+    height = texels.shape[0]
+    rows = []
+    for k in range(2 * height + 1):
+        y = k / (2 * height) * height - 0.5
+        y0 = int(np.floor(y))
+        f = y - y0
+        above, below = texels[min(max(y0, 0), height - 1)], texels[min(max(y0 + 1, 0), height - 1)]
+        rows.append((1 - f) * above + f * below)
+    out = os.path.join(workdir, "environment_mitsuba_layout.exr")
+    mi.Bitmap(np.array(rows, dtype=np.float32)).write(out)
+    return out
+
+
 def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
     folder = os.path.dirname(os.path.abspath(job_path))
     scene_json = job["scene"]
@@ -157,9 +187,27 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
             "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
         },
     }
-    background = scene_json.get("background", [100 / 255] * 3)
-    if max(background) > 0:
-        scene["background"] = {"type": "constant", "radiance": {"type": "rgb", "value": background}}
+    environment = scene_json.get("environment")
+    if environment is not None:
+        # Our lat-long layout is Mitsuba's envmap's, and a turn about +y its to_world's.
+        intensity = environment.get("intensity", 1.0)
+        radiance = environment.get("radiance", [1.0, 1.0, 1.0])
+        if not isinstance(radiance, list):
+            radiance = [radiance] * 3
+        if "map" in environment:
+            if radiance != [1.0, 1.0, 1.0]:
+                raise RefusedScene("scene.environment: a map tinted by a radiance is not supported here")
+            scene["environment"] = {
+                "type": "envmap", "filename": mitsuba_layout_map(mi, os.path.join(folder, environment["map"]), workdir),
+                "scale": intensity,
+                "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], environment.get("rotate_degrees", 0.0))}
+        else:
+            scene["environment"] = {"type": "constant",
+                                    "radiance": {"type": "rgb", "value": [c * intensity for c in radiance]}}
+    else:
+        background = scene_json.get("background", [100 / 255] * 3)
+        if max(background) > 0:
+            scene["background"] = {"type": "constant", "radiance": {"type": "rgb", "value": background}}
     for i, light in enumerate(scene_json.get("lights", [])):
         if "position" not in light:
             raise RefusedScene(f"scene.lights[{i}]: only point lights are supported")

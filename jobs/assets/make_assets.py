@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Writes the example jobs' models: a Cornell box (OBJ + MTL), the same box with a texture on its
-floor and back wall (OBJ + MTL + PNG), a torus (glTF, embedded buffer) and a sphere.
+floor and back wall (OBJ + MTL + PNG), a torus (glTF, embedded buffer), a sphere, and a yard of
+blocks on a ground under a sky (OBJ + MTL + a Radiance HDR environment map).
 
 Both are made here from first principles, so the examples need nothing outside this folder.
 Run it again to regenerate: python3 jobs/assets/make_assets.py
@@ -38,6 +39,24 @@ def write_checker(path, side=64, squares=8):
     write_png(path, side, side, rgb)
 
 
+def block_quads(cx, cz, half, y0, y1, angle_deg):
+    """The five faces (no bottom) of a square block standing from y0 to y1 on (cx, cz), turned
+    angle_deg about +y: each 4 corners counter-clockwise seen from outside."""
+    a = math.radians(angle_deg)
+    c, s = math.cos(a), math.sin(a)
+
+    def corner(dx, y, dz):
+        return (cx + c * dx - s * dz, y, cz + s * dx + c * dz)
+
+    p = [corner(-half, y0, -half), corner(half, y0, -half), corner(half, y0, half), corner(-half, y0, half)]
+    q = [corner(-half, y1, -half), corner(half, y1, -half), corner(half, y1, half), corner(-half, y1, half)]
+    return [[q[0], q[3], q[2], q[1]],   # top (+y)
+            [p[3], p[2], q[2], q[3]],   # +z side
+            [p[1], p[0], q[0], q[1]],   # -z side
+            [p[2], p[1], q[1], q[2]],   # +x side
+            [p[0], p[3], q[3], q[0]]]   # -x side
+
+
 def write_cornell_box(textured=False):
     """A 2 x 2 x 2 room centred on the origin, open towards +z, with two blocks and a ceiling light.
     Textured: the floor and the back wall take a checker texture instead of white (twice across the
@@ -46,20 +65,7 @@ def write_cornell_box(textured=False):
     uvs = {}    # quad index -> the texture coordinates of its corners
 
     def box(cx, cz, half, height, angle_deg, material):
-        a = math.radians(angle_deg)
-        c, s = math.cos(a), math.sin(a)
-
-        def corner(dx, y, dz):
-            return (cx + c * dx - s * dz, y, cz + s * dx + c * dz)
-
-        y0, y1 = -1.0, -1.0 + height
-        p = [corner(-half, y0, -half), corner(half, y0, -half), corner(half, y0, half), corner(-half, y0, half)]
-        q = [corner(-half, y1, -half), corner(half, y1, -half), corner(half, y1, half), corner(-half, y1, half)]
-        quads.append((material, [q[0], q[3], q[2], q[1]]))          # top (+y)
-        quads.append((material, [p[3], p[2], q[2], q[3]]))          # +z side
-        quads.append((material, [p[1], p[0], q[0], q[1]]))          # -z side
-        quads.append((material, [p[2], p[1], q[1], q[2]]))          # +x side
-        quads.append((material, [p[0], p[3], q[3], q[0]]))          # -x side
+        quads.extend((material, corners) for corners in block_quads(cx, cz, half, -1.0, -1.0 + height, angle_deg))
 
     # Walls face into the room.
     if textured:
@@ -183,8 +189,80 @@ def write_sphere(rings=32, segments=64):
         f.write("\n".join(lines) + "\n")
 
 
+def write_hdr(path, width, height, radiance):
+    """A Radiance HDR file of `radiance(u, v)` -> (r, g, b) at each pixel centre, rows top to bottom,
+    flat (uncompressed) RGBE scanlines."""
+    def rgbe(r, g, b):
+        v = max(r, g, b)
+        if v < 1e-32:
+            return b"\0\0\0\0"
+        mantissa, exponent = math.frexp(v)
+        scale = mantissa * 256.0 / v
+        return bytes([int(r * scale), int(g * scale), int(b * scale), exponent + 128])
+    pixels = b"".join(rgbe(*radiance((x + 0.5) / width, (y + 0.5) / height))
+                      for y in range(height) for x in range(width))
+    with open(path, "wb") as f:
+        f.write(f"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {height} +X {width}\n".encode() + pixels)
+
+
+def sky(u, v):
+    """An afternoon sky in the lat-long layout the farm and Mitsuba share (u = atan2(x, -z) / 2 pi,
+    v = acos(y) / pi): blue overhead, pale at the horizon, a brown ground, and a sun 5 degrees
+    wide, 35 degrees up, 60 degrees round from -z: asymmetric, so that a mirrored or turned map
+    shows."""
+    phi, theta = 2 * math.pi * u, math.pi * v
+    d = (math.sin(theta) * math.sin(phi), math.cos(theta), -math.sin(theta) * math.cos(phi))
+    sun_phi, sun_elevation = math.radians(60), math.radians(35)
+    sun = (math.cos(sun_elevation) * math.sin(sun_phi), math.sin(sun_elevation),
+           -math.cos(sun_elevation) * math.cos(sun_phi))
+    if sum(a * b for a, b in zip(d, sun)) > math.cos(math.radians(5)):
+        return (40.0, 36.0, 28.0)
+    if d[1] < 0:
+        return (0.20, 0.16, 0.12)
+    t = d[1] ** 0.5  # pale low down, deep blue overhead
+    horizon, zenith = (0.95, 0.95, 1.0), (0.25, 0.45, 0.95)
+    return tuple(h + (z - h) * t for h, z in zip(horizon, zenith))
+
+
+def write_yard():
+    """Three blocks on a square of ground, for the environment-lit examples: a white block, a
+    red one turned 30 degrees, and a tall green one, all Lambertian, all faces flat."""
+    quads = []
+
+    def block(cx, cz, half, height, angle_deg, material):
+        quads.extend((material, corners) for corners in block_quads(cx, cz, half, 0.0, height, angle_deg))
+
+    quads.append(("ground", [(-3, 0, 3), (3, 0, 3), (3, 0, -3), (-3, 0, -3)]))
+    block(-0.9, 0.2, 0.45, 0.9, 0, "white")
+    block(0.6, 0.6, 0.4, 0.8, 30, "red")
+    block(0.3, -0.9, 0.35, 1.6, -15, "green")
+    lines = ["# Blocks on a ground for the environment examples (generated by make_assets.py).",
+             "mtllib yard.mtl"]
+    index = 1
+    for material in ["ground", "white", "red", "green"]:
+        lines.append(f"o {material}")
+        lines.append(f"usemtl {material}")
+        for m, corners in quads:
+            if m != material:
+                continue
+            for x, y, z in corners:
+                lines.append(f"v {x:.6f} {y:.6f} {z:.6f}")
+            lines.append(f"f {index} {index + 1} {index + 2} {index + 3}")
+            index += 4
+    with open(os.path.join(HERE, "yard.obj"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    with open(os.path.join(HERE, "yard.mtl"), "w") as f:
+        f.write("# Materials of yard.obj (generated by make_assets.py).\n"
+                "newmtl ground\nKa 1 1 1\nKd 0.5 0.5 0.5\nKs 0 0 0\nNs 1\n\n"
+                "newmtl white\nKa 1 1 1\nKd 0.8 0.8 0.8\nKs 0 0 0\nNs 1\n\n"
+                "newmtl red\nKa 1 1 1\nKd 0.7 0.12 0.1\nKs 0 0 0\nNs 1\n\n"
+                "newmtl green\nKa 1 1 1\nKd 0.15 0.5 0.12\nKs 0 0 0\nNs 1\n")
+    write_hdr(os.path.join(HERE, "sky.hdr"), 256, 128, sky)
+
+
 if __name__ == "__main__":
     write_cornell_box()
     write_cornell_box(textured=True)
     write_torus()
     write_sphere()
+    write_yard()

@@ -48,7 +48,8 @@ std::string shown(const std::string& s) {
   return s.substr(0, kMaxShownText) + "...";
 }
 
-fs::path resolve_model_file(const JsonValue& v, const Context& ctx) {
+// A file the job names (a model, an environment map), confined to the asset root.
+fs::path resolve_named_file(const JsonValue& v, const Context& ctx) {
   const std::string written = v.string();
   if (written.empty()) v.fail("expected a file path, got an empty string");
   if (ctx.models_by_name) {
@@ -99,7 +100,7 @@ JobObject parse_object(const JsonValue& v, const Context& ctx) {
   const JsonObject obj = v.object({"file", "translate", "rotate", "scale", "material", "animation"});
   JobObject o;
   const JsonValue file = obj.require("file");
-  o.file = resolve_model_file(file, ctx);
+  o.file = resolve_named_file(file, ctx);
   o.file_as_written = file.string();
   if (auto x = obj.get("translate")) o.transform.translate = x->vec3();
   if (auto x = obj.get("rotate")) {
@@ -167,8 +168,24 @@ std::vector<Light> parse_lights(const JsonValue& v) {
   return lights;
 }
 
+// Degrees of a turn: any number of whole turns, within reason.
+const NumberRange kRotationDegrees = NumberRange::between(-36000.0, 36000.0);
+
+JobEnvironment parse_environment(const JsonValue& v, const Context& ctx) {
+  const JsonObject obj = v.object({"map", "radiance", "intensity", "rotate_degrees"});
+  JobEnvironment e;
+  if (auto x = obj.get("map")) {
+    e.map = resolve_named_file(*x, ctx);
+    e.map_as_written = x->string();
+  }
+  if (auto x = obj.get("radiance")) e.radiance = parse_intensity(*x);
+  if (auto x = obj.get("intensity")) e.intensity = x->real(kRadiometric);
+  if (auto x = obj.get("rotate_degrees")) e.rotate_degrees = x->real(kRotationDegrees);
+  return e;
+}
+
 JobScene parse_scene(const JsonValue& v, const Context& ctx) {
-  const JsonObject obj = v.object({"objects", "camera", "lights", "ambient", "background"});
+  const JsonObject obj = v.object({"objects", "camera", "lights", "ambient", "background", "environment"});
   JobScene scene;
   const JsonValue objects = obj.require("objects");
   const std::vector<JsonValue> items = objects.array();
@@ -178,6 +195,15 @@ JobScene parse_scene(const JsonValue& v, const Context& ctx) {
   if (auto x = obj.get("lights")) scene.lights = parse_lights(*x);
   if (auto x = obj.get("ambient")) scene.ambient = x->vec3(kRadiometric);
   if (auto x = obj.get("background")) scene.background = x->vec3(kRadiometric);
+  if (auto x = obj.get("environment")) {
+    // One light from all around: a constant background or ambient beside it would contradict it.
+    for (const char* replaced : {"background", "ambient"}) {
+      if (obj.get(replaced)) {
+        x->fail(fmt::format("an environment stands for scene.{} too: give one or the other", replaced));
+      }
+    }
+    scene.environment = parse_environment(*x, ctx);
+  }
   return scene;
 }
 
@@ -409,6 +435,13 @@ Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const Jo
   }
   job.output_patterns = job.output;
   return job.frames ? job_at_frame(job, job.frames->frames().front()) : job;
+}
+
+std::vector<fs::path> job_named_files(const Job& job) {
+  std::vector<fs::path> files;
+  for (const JobObject& o : job.scene.objects) files.push_back(o.file);
+  if (job.scene.environment && !job.scene.environment->map.empty()) files.push_back(job.scene.environment->map);
+  return files;
 }
 
 std::vector<int> job_frames(const Job& job) { return job.frames ? job.frames->frames() : std::vector<int>{0}; }

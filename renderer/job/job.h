@@ -34,13 +34,24 @@ struct JobObject {
   ObjectAnimation animation;
 };
 
+// scene.environment (jobs/README.md): light from all around, in place of background and ambient.
+struct JobEnvironment {
+  std::filesystem::path map;   // a lat-long image, confined like a model file; empty: constant
+  std::string map_as_written;  // as it appears in the job, for messages
+  glm::vec3 radiance{1.0f};    // the constant's radiance, or what multiplies the map
+  float intensity = 1.0f;
+  float rotate_degrees = 0.0f;  // about the world's +y axis
+};
+
 struct JobScene {
   std::vector<JobObject> objects;
   std::optional<Camera> camera;              // absent: the first model camera, else the default
   std::optional<std::vector<Light>> lights;  // absent: the models' lights
   glm::vec3 ambient{0.1f};
   glm::vec3 background{100.0f / 255.0f};
+  std::optional<JobEnvironment> environment;
 };
+
 
 struct JobOutput {
   std::filesystem::path image;    // EXR; relative paths are relative to the working directory
@@ -71,6 +82,10 @@ struct Job {
   JobOutput output_patterns;
   std::shared_ptr<const JobAnimation> animation;  // null: nothing is keyframed
 };
+
+// Every file the job names itself (each object's model, the environment's map), resolved, in
+// the job's order: what a submission uploads besides the files the models name.
+std::vector<std::filesystem::path> job_named_files(const Job& job);
 
 // The frames the job renders: its range's, or the still's frame 0.
 std::vector<int> job_frames(const Job& job);

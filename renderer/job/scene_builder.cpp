@@ -8,7 +8,9 @@
 #include <map>
 #include <memory>
 
+#include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
+#include "renderer/texture/texture_cache.h"
 #include "renderer/util/input_error.h"
 
 namespace farm {
@@ -80,6 +82,18 @@ Scene build_scene(const Job& job, ModelLibrary& models) {
   Scene scene;
   scene.ambient = job.scene.ambient;
   scene.background = job.scene.background;
+  if (const auto& e = job.scene.environment) {
+    std::shared_ptr<const Texture> map;
+    if (!e->map.empty()) {
+      try {
+        // Decoded once per process like every texture; 8-bit images hold sRGB colour.
+        map = TextureCache::process().get(e->map, TextureColourSpace::Srgb);
+      } catch (const InputError& error) {
+        throw InputError(fmt::format("{}: scene.environment.map: {}", job.path.string(), error.what()));
+      }
+    }
+    scene.environment = std::make_shared<const EnvironmentLight>(e->radiance, e->intensity, e->rotate_degrees, std::move(map));
+  }
 
   // Objects whose files share a stem get their job index appended, so names stay unique.
   std::map<std::string, int> stem_uses;

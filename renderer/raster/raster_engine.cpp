@@ -9,6 +9,7 @@
 #include "renderer/raster/sample_pattern.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
 
 namespace farm::raster {
@@ -162,9 +163,10 @@ class RegionRasterizer {
   std::uint64_t fragments_ = 0;
 };
 
-// Shades the region's visible surfaces and adds them to `out`; AOVs come from the first sample.
+// Shades the region's visible surfaces, seen from the sample at `offset` in each pixel, and adds
+// them to `out`; AOVs come from the first sample.
 void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, const Scene& scene,
-                  const Rect& region, bool write_aovs, TileBuffer& out) {
+                  const Rect& region, FixedPoint offset, bool write_aovs, TileBuffer& out) {
   const float pixel_size = scene.camera.pixel_size_at_unit_depth(frame.height);
   Material textured;
   for (int y = region.y0; y < region.y1; ++y) {
@@ -172,7 +174,16 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       const Material* base = raster.material(x, y);
       glm::vec4& pixel = out.rgba(x, y);
       if (!base) {
-        pixel += glm::vec4(scene.background, 0.0f);
+        // An environment is seen along the sample's camera ray, as the ray engines see it.
+        glm::vec3 background = scene.background;
+        if (scene.environment) {
+          const float scale = 1.0f / static_cast<float>(kSubpixelScale);
+          const Ray ray = scene.camera.primary_ray(static_cast<float>(x) + static_cast<float>(offset.x) * scale,
+                                                   static_cast<float>(y) + static_cast<float>(offset.y) * scale,
+                                                   frame.width, frame.height);
+          background = limit_radiance(background_radiance(scene, ray.direction));
+        }
+        pixel += glm::vec4(background, 0.0f);
         continue;
       }
       const SurfaceAttributes& hit = raster.attributes(x, y);
@@ -193,7 +204,7 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
         material = &material_at(*base, texture->uv, footprint, textured);
       }
       pixel += glm::vec4(limit_radiance(shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights,
-                                                          scene.ambient)),
+                                                          ambient_light(scene, *material, n))),
                          1.0f);
       if (!write_aovs) continue;
       if (out.aovs().depth) out.depth(x, y) = -hit.view_position.z;
@@ -257,7 +268,7 @@ StopReason render_tile_from_frame(const RasterFrame& frame, const PreparedScene&
           if (i + 4 < last) frame.prefetch_vertices(*frame.bin_triangles[i + 4]);
           raster.draw(*frame.bin_triangles[i]);
         }
-        shade_region(raster, frame, scene.scene(), region, s == 0, out);
+        shade_region(raster, frame, scene.scene(), region, sample_offset(s), s == 0, out);
       }
     }
   }

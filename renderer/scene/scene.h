@@ -14,6 +14,8 @@
 
 namespace farm {
 
+class EnvironmentLight;  // renderer/texture/environment_light.h
+
 struct SceneObject {
   std::string name;
   std::shared_ptr<const Model> model;
@@ -27,6 +29,9 @@ struct Scene {
   Camera camera;
   glm::vec3 ambient{0.1f};
   glm::vec3 background{100.0f / 255.0f};
+  // Light from all around, which then stands for both values above (background_radiance and
+  // ambient_light in environment_light.h read whichever the scene has); null: none.
+  std::shared_ptr<const EnvironmentLight> environment;
 
   std::size_t triangle_count() const;
 };

@@ -7,6 +7,7 @@
 #include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/texture/environment_light.h"
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/ray_tile.h"
@@ -46,7 +47,7 @@ class WhittedTracer {
     if (poll_()) return p;
     ++rays_;
     if (!intersector_.closest_hit(ray, p.surface, stats)) {
-      p.color = scene_.background;
+      p.color = background_radiance(scene_, ray.direction);
       return p;
     }
     p.hit = true;
@@ -60,7 +61,7 @@ class WhittedTracer {
     if (poll_()) return glm::vec3(0.0f);
     SurfaceHit hit;
     ++rays_;
-    if (!intersector_.closest_hit(ray, hit, nullptr)) return scene_.background;
+    if (!intersector_.closest_hit(ray, hit, nullptr)) return background_radiance(scene_, ray.direction);
     return shade(ray, hit, depth, nullptr);
   }
 
@@ -97,7 +98,7 @@ class WhittedTracer {
 
     const bool front_side = glm::dot(hit.geometric_normal, to_eye) >= 0.0f;
     const glm::vec3 local = shade_blinn_phong(
-        m, hit.position, n, to_eye, front_side, scene_.lights, scene_.ambient,
+        m, hit.position, n, to_eye, front_side, scene_.lights, ambient_light(scene_, m, n),
         [&](const glm::vec3& p, const LightIncidence& in) { return light_visible(p, ng, in); });
     if (depth >= settings_.max_depth) return local;
 

@@ -7,6 +7,7 @@
 
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/job/scene_builder.h"
+#include "renderer/texture/environment_light.h"
 #include "renderer/trace/emitter_facing.h"
 #include "server/cli/job_file_options.h"
 
@@ -78,6 +79,14 @@ void print_job(const std::filesystem::path& file, const JobLoadOptions& load) {
   warn_about_emitters_facing_away(scene);
   print_camera(scene.camera);
   for (const Light& l : scene.lights) print_light(l);
+  if (const auto& e = job.scene.environment) {
+    const Texture* map = scene.environment->map();
+    fmt::print("  environment: {} radiance {} intensity {} rotated {} degrees about +y\n",
+               map ? fmt::format("map {} ({}x{})", e->map_as_written, map->width(), map->height()) : std::string("constant"),
+               vec(e->radiance), e->intensity, e->rotate_degrees);
+  } else {
+    fmt::print("  ambient {} background {}\n", vec(scene.ambient), vec(scene.background));
+  }
   fmt::print("  render: engine {} {}x{} spp {} max_depth {} seed {} tile_size {} threads {} "
              "accel {}\n",
              to_string(r.engine), r.width, r.height, r.spp, r.max_depth, r.seed, r.tile_size,

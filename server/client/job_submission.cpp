@@ -33,6 +33,9 @@ std::string rewritten_job_text(nlohmann::json doc, const Job& job, const fs::pat
   for (std::size_t i = 0; i < objects.size(); ++i) {
     objects[i]["file"] = job.scene.objects[i].file.lexically_relative(root).generic_string();
   }
+  if (job.scene.environment && !job.scene.environment->map.empty()) {
+    doc["scene"]["environment"]["map"] = job.scene.environment->map.lexically_relative(root).generic_string();
+  }
   // The render block is touched only for an override of it: `doc["render"]` on a job without one
   // would write "render": null, which the scheduler refuses.
   const auto render = [&]() -> nlohmann::json& { return doc["render"]; };
@@ -118,10 +121,15 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   // The text goes as written only when it names each model as the scheduler will find it: by the
   // path under the root it resolves to. An absolute path inside the root, or a link in it, is
   // written as that path (issue #32: `farm submit` refused both, which `farm render` accepts).
-  const bool models_as_resolved = std::all_of(out.job.scene.objects.begin(), out.job.scene.objects.end(), [&](const JobObject& o) {
-    return fs::path(o.file_as_written).lexically_normal() == o.file.lexically_relative(root);
-  });
-  const bool as_written = job_dir == root && !any_override(overrides) && models_as_resolved;
+  const auto as_resolved = [&](const std::string& written, const fs::path& file) {
+    return fs::path(written).lexically_normal() == file.lexically_relative(root);
+  };
+  const std::optional<JobEnvironment>& environment = out.job.scene.environment;
+  const bool files_as_resolved =
+      std::all_of(out.job.scene.objects.begin(), out.job.scene.objects.end(),
+                  [&](const JobObject& o) { return as_resolved(o.file_as_written, o.file); }) &&
+      (!environment || environment->map.empty() || as_resolved(environment->map_as_written, environment->map));
+  const bool as_written = job_dir == root && !any_override(overrides) && files_as_resolved;
   out.spec.set_job_json(as_written ? text : rewritten_job_text(std::move(document), out.job, root, overrides));
   out.spec.set_file_name(job_file.filename().string());
 
@@ -133,9 +141,9 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   };
   // Objects that share a model (a field of 100 cows is one cow.dae) share one scan of it.
   ModelDependencyScanner scanner(root);
+  // parse_job confined the files the job names to the root already: resolved and inside.
+  for (const fs::path& named : job_named_files(out.job)) by_path.emplace(named.lexically_relative(root).generic_string(), named);
   for (const JobObject& object : out.job.scene.objects) {
-    // parse_job confined the model to the root already: the path is resolved and inside.
-    by_path.emplace(object.file.lexically_relative(root).generic_string(), object.file);
     for (const ConfinedFile& dependency : scanner.dependencies(object.file)) add(dependency);
   }
   out.files_scanned = scanner.files_scanned();

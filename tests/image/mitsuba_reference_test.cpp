@@ -9,6 +9,10 @@
 //    (sRGB PNG, map_Kd) on its floor and back wall (jobs/cornell_textured.json), 4096 spp, half:
 //      build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_textured.json
 //          --width 128 --height 128 --spp 4096 --half -o tests/data/reference/cornell_textured_mitsuba.exr
+//  - tests/data/reference/environment_mitsuba.exr: blocks on a ground lit only by a sky map with
+//    a sun (jobs/environment.json, Radiance HDR), 4096 spp, half:
+//      build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/environment.json
+//          --width 160 --height 120 --spp 4096 --half -o tests/data/reference/environment_mitsuba.exr
 //  - tests/data/reference/cornell_gap_mitsuba.exr: a held-out Cornell box whose lamp hangs 1 mm
 //    under the ceiling (tests/data/cornell_gap), max_depth 4 (Mitsuba's 5), 2048 spp, half float:
 //      build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/cornell_gap/cornell_gap.json
@@ -155,15 +159,19 @@ TEST(MitsubaReference, LampJustUnderTheCeilingShinesFromItsFrontOnlyAsInMitsuba)
   }
 }
 
-// The textured Cornell box: the checker's sRGB values decoded to linear, its v pointing the way
-// Mitsuba's does, repeated twice across the floor, lit and seen through every bounce. Mean
-// radiance over the whole image, the floor's rows and the back wall's middle, each channel, equal
-// to Mitsuba's by a z-test at 1% significance (|z| < 2.576), the standard errors from the variance
-// AOV (Mitsuba's, at 32 times the samples, taken as ours over sqrt(32)).
-TEST(MitsubaReference, TexturedCornellBoxMatchesInMeanByAZTest) {
-  const TileBuffer reference =
-      read_exr(fs::path(FARM_SOURCE_DIR) / "tests/data/reference/cornell_textured_mitsuba.exr");
-  Job job = load_job(fs::path(FARM_SOURCE_DIR) / "jobs/cornell_textured.json");
+struct MeanRegion {
+  const char* name;
+  Rect rect;
+};
+
+// Renders `job_file` at the size of `reference_file` with kSpp samples and holds the mean radiance
+// over each region, each channel, equal to Mitsuba's by a z-test at 1% significance
+// (|z| < 2.576), the standard errors from the variance AOV (Mitsuba's, at 32 times the samples,
+// taken as ours over sqrt(32)). `regions` gets the image's width and height.
+template <typename Regions>
+void expect_means_match_by_z_test(const char* job_file, const char* reference_file, Regions&& regions) {
+  const TileBuffer reference = read_exr(fs::path(FARM_SOURCE_DIR) / reference_file);
+  Job job = load_job(fs::path(FARM_SOURCE_DIR) / job_file);
   job.render.width = reference.rect().width();
   job.render.height = reference.rect().height();
   job.render.spp = kSpp;
@@ -173,13 +181,7 @@ TEST(MitsubaReference, TexturedCornellBoxMatchesInMeanByAZTest) {
   const TileBuffer ours = render_frame(scene, job.render);
   EXPECT_EQ(ours.stats().invalid_samples, 0u);
 
-  struct Region {
-    const char* name;
-    Rect rect;
-  };
-  const int w = job.render.width, h = job.render.height;
-  for (const Region& region : {Region{"image", {0, 0, w, h}}, Region{"floor", {w / 8, h * 13 / 16, w * 7 / 8, h}},
-                               Region{"back wall", {w * 3 / 8, h * 3 / 8, w * 5 / 8, h / 2}}}) {
+  for (const MeanRegion& region : regions(job.render.width, job.render.height)) {
     glm::dvec3 farm(0.0), variance(0.0), mitsuba(0.0);
     const Rect& r = region.rect;
     for (int y = r.y0; y < r.y1; ++y)
@@ -198,6 +200,32 @@ TEST(MitsubaReference, TexturedCornellBoxMatchesInMeanByAZTest) {
                 farm.x, farm.y, farm.z, mitsuba.x, mitsuba.y, mitsuba.z, z.x, z.y, z.z);
     for (int c = 0; c < 3; ++c) EXPECT_LT(std::fabs(z[c]), 2.576) << region.name << ", channel " << c;
   }
+}
+
+// The textured Cornell box: the checker's sRGB values decoded to linear, its v pointing the way
+// Mitsuba's does, repeated twice across the floor, lit and seen through every bounce. The whole
+// image, the floor's rows and the back wall's middle.
+TEST(MitsubaReference, TexturedCornellBoxMatchesInMeanByAZTest) {
+  expect_means_match_by_z_test(
+      "jobs/cornell_textured.json", "tests/data/reference/cornell_textured_mitsuba.exr", [](int w, int h) {
+        return std::vector<MeanRegion>{{"image", {0, 0, w, h}},
+                                       {"floor", {w / 8, h * 13 / 16, w * 7 / 8, h}},
+                                       {"back wall", {w * 3 / 8, h * 3 / 8, w * 5 / 8, h / 2}}};
+      });
+}
+
+// Blocks on a ground lit only by a sky map with a small sun (jobs/environment.json): the map
+// sampled by luminance and met by BSDF sampling, weighted by MIS, must light it as Mitsuba's
+// envmap does, and show it where rays leave the scene. The whole image, the sky seen above the
+// horizon, the ground in front, and the blocks with their shadows.
+TEST(MitsubaReference, EnvironmentLitYardMatchesInMeanByAZTest) {
+  expect_means_match_by_z_test(
+      "jobs/environment.json", "tests/data/reference/environment_mitsuba.exr", [](int w, int h) {
+        return std::vector<MeanRegion>{{"image", {0, 0, w, h}},
+                                       {"sky", {0, 0, w, h / 12}},
+                                       {"ground", {0, h * 7 / 8, w, h}},
+                                       {"blocks", {w / 4, h / 4, w * 3 / 4, h * 3 / 4}}};
+      });
 }
 
 }  // namespace

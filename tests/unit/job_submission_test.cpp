@@ -62,6 +62,23 @@ TEST(JobSubmission, JobInItsOwnFolderGoesByteForByteWithItsModelAndMaterials) {
   }
 }
 
+TEST(JobSubmission, AnEnvironmentMapTravelsWithTheJobAndItsPathIsRewrittenUnderTheRoot) {
+  const fs::path job = kSource / "jobs/environment.json";
+  const JobSubmission s = make_job_submission(job, {}, {});
+  EXPECT_EQ(s.spec.job_json(), test::read_file(job));  // as written: every path already under the root
+  EXPECT_EQ(asset_paths(s.spec),
+            (std::vector<std::string>{"assets/sky.hdr", "assets/yard.mtl", "assets/yard.obj"}));
+  // With the root above the job's folder, the map is named from the root like the model.
+  JobLoadOptions load;
+  load.asset_root = kSource;
+  const JobSubmission above = make_job_submission(job, load, {});
+  const auto doc = nlohmann::json::parse(above.spec.job_json());
+  EXPECT_EQ(doc["scene"]["environment"]["map"], "jobs/assets/sky.hdr");
+  EXPECT_EQ(doc["scene"]["objects"][0]["file"], "jobs/assets/yard.obj");
+  EXPECT_EQ(asset_paths(above.spec),
+            (std::vector<std::string>{"jobs/assets/sky.hdr", "jobs/assets/yard.mtl", "jobs/assets/yard.obj"}));
+}
+
 TEST(JobSubmission, OverridesAreWrittenIntoTheJobText) {
   RenderOverrides o;
   o.engine = "path";

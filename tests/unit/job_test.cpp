@@ -279,6 +279,25 @@ TEST_F(JobFiles, JobParse_BoundaryValuesAreAccepted) {
   EXPECT_EQ(upper.render.threads, 1024);
 }
 
+TEST_F(JobFiles, JobParse_EnvironmentKeepsItsMapRadianceIntensityAndTurn) {
+  const Job job = parse(job_with_scene_keys(
+      R"("environment": {"map": "assets/teapot.obj", "radiance": [1, 0.5, 0.25], "intensity": 3, "rotate_degrees": -90})"));
+  ASSERT_TRUE(job.scene.environment.has_value());
+  const JobEnvironment& e = *job.scene.environment;
+  EXPECT_EQ(e.map, asset("teapot.obj"));
+  EXPECT_EQ(e.map_as_written, "assets/teapot.obj");
+  EXPECT_EQ(e.radiance, glm::vec3(1.0f, 0.5f, 0.25f));
+  EXPECT_EQ(e.intensity, 3.0f);
+  EXPECT_EQ(e.rotate_degrees, -90.0f);
+  EXPECT_EQ(job_named_files(job), (std::vector<fs::path>{asset("cow.dae"), asset("teapot.obj")}));
+  // A constant one: no map, the radiance grey from one number.
+  const Job constant = parse(job_with_scene_keys(R"("environment": {"radiance": 0.5})"));
+  EXPECT_TRUE(constant.scene.environment->map.empty());
+  EXPECT_EQ(constant.scene.environment->radiance, glm::vec3(0.5f));
+  EXPECT_EQ(job_named_files(constant), (std::vector<fs::path>{asset("cow.dae")}));
+  EXPECT_FALSE(parse(job_with_scene_keys(R"("background": [0, 0, 0])")).scene.environment.has_value());
+}
+
 TEST_F(JobFiles, JobParse_RepeatedFileGivesOneObjectPerEntry) {
   const Job job = parse(job_with_object(
       R"({"file": "assets/cow.dae"}, {"file": "./assets/../assets/cow.dae", "translate": [3, 0, 0]})"));
@@ -451,6 +470,19 @@ const std::vector<BadJob> kBadJobs = {
      "scene.camera.near", "out of range"},
     {"NumberOverflowingFloat", job_with_scene_keys(R"("ambient": [1e39, 0, 0])"), "scene.ambient[0]",
      "out of range for a 32-bit float"},
+    // environment
+    {"EnvironmentBesideBackground", job_with_scene_keys(R"("background": [0, 0, 0], "environment": {})"),
+     "scene.environment", "an environment stands for scene.background too"},
+    {"EnvironmentBesideAmbient", job_with_scene_keys(R"("ambient": [0, 0, 0], "environment": {"radiance": 1})"),
+     "scene.environment", "an environment stands for scene.ambient too"},
+    {"EnvironmentMapMissing", job_with_scene_keys(R"("environment": {"map": "assets/sky.hdr"})"),
+     "scene.environment.map", "no such file 'assets/sky.hdr'"},
+    {"EnvironmentMapOutsideTheRoot", job_with_scene_keys(R"("environment": {"map": "../outside/secret.dae"})"),
+     "scene.environment.map", "outside"},
+    {"EnvironmentNegativeIntensity", job_with_scene_keys(R"("environment": {"intensity": -1})"),
+     "scene.environment.intensity", ">= 0"},
+    {"EnvironmentUnknownKey", job_with_scene_keys(R"("environment": {"rotate": 10})"),
+     "scene.environment.rotate", "unknown key"},
     {"NegativeWidth", job_with_keys(R"("render": {"width": -5})"), "render.width",
      "expected an integer >= 1, got -5"},
     {"ZeroHeight", job_with_keys(R"("render": {"height": 0})"), "render.height",

@@ -470,5 +470,48 @@ TEST(PathEmitterSides, AMirroringTransformKeepsTheLampsFrontWhereItsWindingSays)
   EXPECT_NEAR(bsdf, reference, 0.03 * reference);
 }
 
+// A directional light casts shadows: a box floating over a ground, the light slanting down at
+// 45 degrees, seen from straight above. Direct light only (max_depth 1, a black background), so
+// every lit ground pixel is kd / pi * cos 45 exactly and every shadowed one 0. (Its shadow rays
+// once ran to a point 1e30 away, which made every hit too near to count: no shadow at all.)
+TEST(PathDirectionalLight, CastsAShadowBesideTheBoxThatBlocksIt) {
+  Scene scene;
+  Material ground;
+  ground.diffuse = glm::vec3(0.5f);
+  scene.objects.push_back(test::object_of(test::make_quad({-3, 0, 3}, {3, 0, 3}, {3, 0, -3}, {-3, 0, -3}), glm::mat4(1.0f), ground));
+  scene.objects.push_back(test::object_of(test::make_box({-0.3f, 0.5f, -0.3f}, {0.3f, 1.1f, 0.3f})));
+  Light sun;
+  sun.kind = Light::Kind::Directional;
+  sun.direction = glm::normalize(glm::vec3(1.0f, -1.0f, 0.0f));  // travelling towards +x
+  sun.intensity = glm::vec3(1.0f);
+  scene.lights = {sun};
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {0.0f, 5.0f, 0.0f};
+  scene.camera.target = {0.0f, 0.0f, 0.0f};
+  scene.camera.up = {0.0f, 0.0f, -1.0f};  // image right is +x, image down is +z
+  scene.camera.far = 20.0f;
+  const PreparedScene prepared(std::move(scene));
+  RenderSettings s = path_settings(64, 64, 4);
+  s.max_depth = 1;
+  const TileBuffer image = render_frame(prepared, s);
+  // World x at pixel column px, on the ground (the view is 2 tan(22.5 deg) * 5 wide there).
+  const auto ground_x = [](int px) { return (2.0f * (static_cast<float>(px) + 0.5f) / 64.0f - 1.0f) * 5.0f * std::tan(glm::radians(22.5f)); };
+  const float lit = 0.5f / glm::pi<float>() * std::cos(glm::radians(45.0f));
+  int shadowed = 0, checked = 0;
+  for (int px = 0; px < 64; ++px) {
+    const float x = ground_x(px);
+    const float red = image.rgba(px, 32).x;  // the row through z = 0
+    if (x > 0.45f && x < 1.3f) {  // the box's shadow: from its bottom's 0.5 to its top's 1.1 beyond it
+      EXPECT_LT(red, 1e-6f) << "x " << x;
+      ++shadowed;
+    } else if (x < -0.35f || x > 1.45f) {
+      EXPECT_NEAR(red, lit, 1e-4f) << "x " << x;
+      ++checked;
+    }
+  }
+  EXPECT_GT(shadowed, 8);
+  EXPECT_GT(checked, 20);
+}
+
 }  // namespace
 }  // namespace farm

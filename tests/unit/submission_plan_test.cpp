@@ -183,6 +183,30 @@ std::string refusal(const v1::PlanSubmissionRequest& request, const AssetStore& 
   return "accepted";
 }
 
+TEST_F(SubmissionPlanTest, AnEnvironmentMapIsAskedForByTheJobAndNeverScanned) {
+  // A "map" named and written like an OBJ naming a library: were it scanned as a model, the
+  // library would be asked for too. (A plan reads no pixels; the worker's decode refuses it.)
+  root_.write("sky/sky.obj", "mtllib trap.mtl\n");
+  root_.write("sky/trap.mtl", "newmtl a\n");
+  PlanningClient c = client({"m/box.obj"});
+  c.request.mutable_job()->set_job_json(
+      R"({"version": 1, "scene": {"objects": [{"file": "m/box.obj"}], "environment": {"map": "sky/sky.obj"}}})");
+  const v1::PlanSubmissionResponse first = plan_submission(c.request, store_, SubmitLimits{});
+  ASSERT_EQ(first.needed_size(), 1);
+  EXPECT_EQ(first.needed(0).path(), "sky/sky.obj");
+  EXPECT_EQ(first.needed(0).named_by(), "job.json");
+  EXPECT_EQ(c.plan(), (std::set<std::string>{"m/box.obj", "m/mats/box.mtl", "m/tex/wood.png", "sky/sky.obj"}));
+
+  // Listed absent by the client: refused, naming the job's key.
+  PlanningClient gone = client({"m/box.obj"});
+  gone.request.mutable_job()->set_job_json(
+      R"({"version": 1, "scene": {"objects": [{"file": "m/box.obj"}], "environment": {"map": "sky/none.hdr"}}})");
+  gone.request.add_absent("sky/none.hdr");
+  const std::string why = refusal(gone.request, store_);
+  EXPECT_NE(why.find("scene.environment.map: no such file 'sky/none.hdr'"), std::string::npos) << why;
+}
+
+
 TEST_F(SubmissionPlanTest, AReferenceOutOfTheJobsFolderIsRefusedNamingTheModelAndTheReference) {
   root_.write("x/out.obj", "mtllib ../../elsewhere.mtl\n");
   root_.write("x/abs.obj", "mtllib /etc/passwd\n");

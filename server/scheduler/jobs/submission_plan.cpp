@@ -139,18 +139,26 @@ v1::PlanSubmissionResponse plan_submission(const v1::PlanSubmissionRequest& requ
     }
   }
   ModelReferenceScanner scanner(files);
-  for (std::size_t i = 0; i < job.scene.objects.size(); ++i) {
-    const JobObject& object = job.scene.objects[i];
-    const std::string path = asset_path_of(object.file);
+  // The files the job names itself: each must be sent, and a model is scanned for the files it
+  // names in turn (an image names none).
+  const auto plan_named = [&](const fs::path& file, const std::string& place, const std::string& as_written,
+                              bool model) {
+    const std::string path = asset_path_of(file);
     if (absent.count(path)) {
-      throw InputError(fmt::format("{}: scene.objects[{}].file: no such file '{}'", job_file.filename().string(), i,
-                                   shown(object.file_as_written)));
+      throw InputError(fmt::format("{}: {}: no such file '{}'", job_file.filename().string(), place, shown(as_written)));
     }
     if (!files.described(path)) {
-      files.add_needed(path, job_file.filename().string(), object.file_as_written);
-      continue;
+      files.add_needed(path, job_file.filename().string(), as_written);
+      return;
     }
-    scanner.references(object.file);
+    if (model) scanner.references(file);
+  };
+  for (std::size_t i = 0; i < job.scene.objects.size(); ++i) {
+    const JobObject& object = job.scene.objects[i];
+    plan_named(object.file, fmt::format("scene.objects[{}].file", i), object.file_as_written, true);
+  }
+  if (const auto& environment = job.scene.environment; environment && !environment->map.empty()) {
+    plan_named(environment->map, "scene.environment.map", environment->map_as_written, false);
   }
 
   v1::PlanSubmissionResponse response;
