@@ -138,7 +138,7 @@ def write_triangles(path, triangles, flip=False, offset=0.0):
 
 
 def mitsuba_layout_map(mi, path, workdir):
-    """The lat-long map at `path` laid out as Mitsuba's envmap reads one, written as an EXR.
+    """The lat-long map at `path` laid out as Mitsuba's envmap reads one, written as a PFM.
 
     Both map a direction to (u, v) alike and both filter bilinearly, but the farm puts row j's
     value at v = (j + 0.5) / H, as for every texture, and Mitsuba at v = j / (H - 1), its rows
@@ -157,7 +157,9 @@ def mitsuba_layout_map(mi, path, workdir):
         f = y - y0
         above, below = texels[min(max(y0, 0), height - 1)], texels[min(max(y0 + 1, 0), height - 1)]
         rows.append((1 - f) * above + f * below)
-    out = os.path.join(workdir, "environment_mitsuba_layout.exr")
+    # PFM: float32 exactly, and no OpenEXR writer (whose thread pool deadlocks under
+    # --threads 1).
+    out = os.path.join(workdir, "environment_mitsuba_layout.pfm")
     mi.Bitmap(np.array(rows, dtype=np.float32)).write(out)
     return out
 

@@ -49,11 +49,13 @@ Throughput measure(const PreparedScene& scene, RenderSettings settings, int thre
   return t;
 }
 
-// Runs tools/mitsuba_reference.py --bench and reads its one JSON line.
-std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, int threads, std::string& renderer) {
+// Runs tools/mitsuba_reference.py --bench on `job` and reads its one JSON line; a Mitsuba that
+// has not answered in 15 minutes is stopped.
+std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, const std::filesystem::path& job, int threads,
+                                          std::string& renderer) {
   const std::string command =
-      fmt::format("'{}' '{}' '{}' --width {} --height {} --spp {} --threads {} --bench 2>&1", o.mitsuba_python,
-                  o.mitsuba_script.string(), o.cornell_job.string(), o.width, o.height, o.spp, threads);
+      fmt::format("timeout 900 '{}' '{}' '{}' --width {} --height {} --spp {} --threads {} --bench 2>&1", o.mitsuba_python,
+                  o.mitsuba_script.string(), job.string(), o.width, o.height, o.spp, threads);
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
   if (!pipe) return std::nullopt;
   std::string output;
@@ -72,8 +74,9 @@ std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, int threads
   return t;
 }
 
+// `mitsuba_job`: the job Mitsuba renders beside ours; empty: none.
 void bench_scene(const std::string& name, const PreparedScene& scene, RenderSettings settings,
-                 const PathBenchOptions& o, bool with_mitsuba) {
+                 const PathBenchOptions& o, const std::filesystem::path& mitsuba_job) {
   settings.engine = EngineKind::Path;
   settings.width = o.width;
   settings.height = o.height;
@@ -90,9 +93,9 @@ void bench_scene(const std::string& name, const PreparedScene& scene, RenderSett
     fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9.2f} {:>11.2f} {:>7.2f}x\n", "farm path", threads,
                t.seconds, t.msamples_per_s(), t.mrays_per_s(), t.rays / t.samples,
                single > 0.0 ? t.msamples_per_s() / single : 0.0);
-    if (!with_mitsuba) continue;
+    if (mitsuba_job.empty() || o.mitsuba_python.empty()) continue;
     std::string renderer;
-    if (const auto m = measure_mitsuba(o, threads, renderer)) {
+    if (const auto m = measure_mitsuba(o, mitsuba_job, threads, renderer)) {
       fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9} {:>11} {:>8}   farm/mitsuba {:.2f}x\n", renderer,
                  threads, m->seconds, m->msamples_per_s(), "-", "-", "-",
                  t.msamples_per_s() / m->msamples_per_s());
@@ -144,8 +147,13 @@ void run_path_bench(const PathBenchOptions& options) {
   if (o.scene == "all" || o.scene == "cornell") {
     const Job job = load_job(o.cornell_job);
     const PreparedScene scene(build_scene(job));
-    bench_scene(fmt::format("cornell ({})", o.cornell_job.string()), scene, job.render, o,
-                !o.mitsuba_python.empty());
+    bench_scene(fmt::format("cornell ({})", o.cornell_job.string()), scene, job.render, o, o.cornell_job);
+  }
+  if (o.scene == "all" || o.scene == "environment") {
+    const Job job = load_job(o.environment_job);
+    const PreparedScene scene(build_scene(job));
+    bench_scene(fmt::format("environment ({}, lit by its map alone)", o.environment_job.string()), scene, job.render,
+                o, o.environment_job);
   }
   if (o.scene == "all" || o.scene == "textured") bench_textured_pair(o);
   if (o.scene == "all" || o.scene == "cbbunny") {
@@ -156,7 +164,7 @@ void run_path_bench(const PathBenchOptions& options) {
     const PreparedScene scene(bench::cbbunny_area_lit(load_model(path)));
     RenderSettings settings;
     settings.max_depth = -1;
-    bench_scene("CBbunny (ceiling lamp emissive)", scene, settings, o, false);
+    bench_scene("CBbunny (ceiling lamp emissive)", scene, settings, o, {});
   }
 }
 

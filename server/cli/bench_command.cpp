@@ -92,8 +92,9 @@ void add_rt_bench(CLI::App& bench, CommandTable& commands) {
 void add_path_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<PathBenchOptions>();
   CLI::App* path = bench.add_subcommand(
-      "path", "Path tracer Msamples/s and Mrays/s on the Cornell box and CBbunny at 512x512, on one "
-              "thread and all; with --mitsuba, Mitsuba 3 scalar_rgb on the same Cornell box beside it");
+      "path", "Path tracer Msamples/s and Mrays/s on the Cornell box, a yard lit by a sky map and CBbunny at "
+              "512x512, on one thread and all; with --mitsuba, Mitsuba 3 scalar_rgb on the same Cornell box and "
+              "yard beside it");
   path->add_option("--job", o->cornell_job, "The Cornell box job")->capture_default_str();
   path->add_option("--assets", o->assets,
                    "The lab's assets folder, for CBbunny (default ../shared/assets)");
@@ -102,14 +103,16 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
   add_image_size_options(*path, o->width, o->height);
   path->add_option("--textured-job", o->textured_job, "The textured Cornell box job (for --scene textured)")
       ->capture_default_str();
+  path->add_option("--environment-job", o->environment_job, "The job lit by a sky map (for --scene environment)")
+      ->capture_default_str();
   path->add_option("--scene", o->scene,
                    "Which scene: cornell, textured (the textured Cornell box's cost per sample against "
-                   "the plain one's), cbbunny or all")
-      ->check(CLI::IsMember({"cornell", "textured", "cbbunny", "all"}))
+                   "the plain one's), environment, cbbunny or all")
+      ->check(CLI::IsMember({"cornell", "textured", "environment", "cbbunny", "all"}))
       ->capture_default_str();
   path->add_option("--mitsuba", o->mitsuba_python,
                    "A Python with the mitsuba package (see tools/requirements-mitsuba.txt): "
-                   "time Mitsuba 3 scalar_rgb on the Cornell box too");
+                   "time Mitsuba 3 scalar_rgb on the Cornell box and the sky-lit yard too");
   path->add_option("--mitsuba-script", o->mitsuba_script,
                    "The script that renders a job with Mitsuba")
       ->capture_default_str();
