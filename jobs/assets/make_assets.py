@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the example jobs' models: a Cornell box (OBJ + MTL), the same box with a texture on its
-floor and back wall (OBJ + MTL + PNG), a torus (glTF, embedded buffer), a sphere, and a yard of
-blocks on a ground under a sky (OBJ + MTL + a Radiance HDR environment map).
+floor and back wall (OBJ + MTL + PNG), a torus (glTF, embedded buffer), a sphere, a yard of
+blocks on a ground under a sky (OBJ + MTL + a Radiance HDR environment map), and a glTF scene with
+every kind of texture (glTF + PNGs).
 
 Both are made here from first principles, so the examples need nothing outside this folder.
 Run it again to regenerate: python3 jobs/assets/make_assets.py
@@ -260,9 +261,131 @@ def write_yard():
     write_hdr(os.path.join(HERE, "sky.hdr"), 256, 128, sky)
 
 
+def write_showcase():
+    """A glTF scene that uses every texture the farm reads, for jobs/showcase.json: a ball with
+    base colour, metal-roughness, normal and occlusion textures (its tangents left for the loader
+    to make from the uvs), standing on a ground whose checker repeats four times by
+    KHR_texture_transform, before a panel that glows through an emissive texture at
+    KHR_materials_emissive_strength 3. The images lie beside the model, so a submission sends
+    them as the model's files."""
+    side = 64
+
+    def image(name, texel):
+        rgb = []
+        for y in range(side):
+            for x in range(side):
+                rgb.extend(max(0, min(255, int(round(255 * c)))) for c in texel((x + 0.5) / side, (y + 0.5) / side))
+        write_png(os.path.join(HERE, name), side, side, rgb)
+
+    def srgb(c):  # linear -> the sRGB-encoded value a colour texture stores
+        return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+
+    band = lambda u: int(u * 8) % 2  # eight bands round the ball
+    image("showcase_base.png", lambda u, v: [srgb(c) for c in ((0.8, 0.3, 0.1) if band(u) else (0.15, 0.35, 0.75))])
+    # G roughness 0.3 at the top to 0.8 at the bottom; B metallic on the orange bands.
+    image("showcase_mr.png", lambda u, v: (0.0, 0.3 + 0.5 * v, 1.0 if band(u) else 0.0))
+
+    def bumps(u, v):
+        n = (0.45 * math.sin(2 * math.pi * 16 * u), 0.45 * math.sin(2 * math.pi * 8 * v), 1.0)
+        length = math.sqrt(sum(c * c for c in n))
+        return [(c / length + 1) / 2 for c in n]
+    image("showcase_normal.png", bumps)
+    # Darker in the grooves between bands.
+    image("showcase_occlusion.png", lambda u, v: [0.35 + 0.65 * min(1.0, abs(u * 8 - round(u * 8)) * 6)] * 3)
+    image("showcase_ground.png", lambda u, v: [srgb(c) for c in ((0.7, 0.7, 0.65) if (int(u * 2) + int(v * 2)) % 2 else (0.25, 0.27, 0.3))])
+    image("showcase_glow.png", lambda u, v: [srgb(c) for c in ((1.0, 0.8, 0.4) if int(v * 6) % 2 else (0.1, 0.6, 1.0))])
+
+    meshes, views, accessors, chunks = [], [], [], []
+
+    def add_view(data, target):
+        offset = sum(len(c) for c in chunks)
+        chunks.append(data + b"\0" * (-len(data) % 4))
+        views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(data), "target": target})
+        return len(views) - 1
+
+    def add_mesh(name, positions, normals, uvs, indices, material):
+        attributes = {}
+        for key, values, kind in (("POSITION", positions, "VEC3"), ("NORMAL", normals, "VEC3"),
+                                  ("TEXCOORD_0", uvs, "VEC2")):
+            fmt = "<3f" if kind == "VEC3" else "<2f"
+            accessor = {"bufferView": add_view(b"".join(struct.pack(fmt, *x) for x in values), 34962),
+                        "componentType": 5126, "count": len(values), "type": kind}
+            if key == "POSITION":
+                accessor["min"] = [min(p[k] for p in positions) for k in range(3)]
+                accessor["max"] = [max(p[k] for p in positions) for k in range(3)]
+            accessors.append(accessor)
+            attributes[key] = len(accessors) - 1
+        accessors.append({"bufferView": add_view(b"".join(struct.pack("<H", k) for k in indices), 34963),
+                          "componentType": 5123, "count": len(indices), "type": "SCALAR"})
+        meshes.append({"name": name, "primitives": [{"attributes": attributes, "indices": len(accessors) - 1,
+                                                      "material": material}]})
+
+    # The ball: radius 1, u round from -z towards +x, v from the top down (glTF's v).
+    rings, segments = 32, 64
+    positions, normals, uvs, indices = [], [], [], []
+    for r in range(rings + 1):
+        theta = math.pi * r / rings
+        for s in range(segments + 1):
+            phi = 2 * math.pi * s / segments
+            n = (math.sin(theta) * math.sin(phi), math.cos(theta), -math.sin(theta) * math.cos(phi))
+            positions.append(n)
+            normals.append(n)
+            uvs.append((s / segments, r / rings))
+    for r in range(rings):
+        for s in range(segments):
+            a, b = r * (segments + 1) + s, r * (segments + 1) + s + 1
+            c, d = (r + 1) * (segments + 1) + s + 1, (r + 1) * (segments + 1) + s
+            if r != 0:
+                indices += [a, d, b]
+            if r != rings - 1:
+                indices += [b, d, c]
+    add_mesh("ball", positions, normals, uvs, indices, 0)
+
+    def quad(corners, normal):
+        return corners, [normal] * 4, [(0, 1), (1, 1), (1, 0), (0, 0)], [0, 1, 2, 0, 2, 3]
+    add_mesh("ground", *quad([(-4, -1, 4), (4, -1, 4), (4, -1, -4), (-4, -1, -4)], (0, 1, 0)), 1)
+    add_mesh("panel", *quad([(-1.5, -1, 0), (1.5, -1, 0), (1.5, 1, 0), (-1.5, 1, 0)], (0, 0, 1)), 2)
+
+    texture = lambda index, **extra: dict({"index": index}, **extra)
+    buffer = b"".join(chunks)
+    gltf = {
+        "asset": {"version": "2.0", "generator": "farm jobs/assets/make_assets.py"},
+        "extensionsUsed": ["KHR_texture_transform", "KHR_materials_emissive_strength"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [{"name": "ball", "mesh": 0, "rotation": [0.0, 0.3826834, 0.0, 0.9238795]},
+                  {"name": "ground", "mesh": 1},
+                  {"name": "panel", "mesh": 2, "translation": [0.4, 0.6, -2.6]}],
+        "meshes": meshes,
+        "materials": [
+            {"name": "ball", "pbrMetallicRoughness": {
+                "baseColorTexture": texture(0), "metallicRoughnessTexture": texture(1)},
+             "normalTexture": texture(2, scale=1.0), "occlusionTexture": texture(3, strength=1.0)},
+            {"name": "ground", "pbrMetallicRoughness": {
+                "baseColorTexture": texture(4, extensions={"KHR_texture_transform": {"scale": [4, 4]}}),
+                "metallicFactor": 0.0, "roughnessFactor": 0.9}},
+            {"name": "panel", "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.05, 0.05, 1.0],
+                                                       "metallicFactor": 0.0},
+             "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": texture(5),
+             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 3.0}}}],
+        "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}],
+        "images": [{"uri": name} for name in ("showcase_base.png", "showcase_mr.png", "showcase_normal.png",
+                                               "showcase_occlusion.png", "showcase_ground.png", "showcase_glow.png")],
+        "textures": [{"sampler": 0, "source": i} for i in range(6)],
+        "buffers": [{"byteLength": len(buffer),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(buffer).decode()}],
+        "bufferViews": views,
+        "accessors": accessors,
+    }
+    with open(os.path.join(HERE, "showcase.gltf"), "w") as f:
+        json.dump(gltf, f, indent=1)
+        f.write("\n")
+
+
 if __name__ == "__main__":
     write_cornell_box()
     write_cornell_box(textured=True)
     write_torus()
     write_sphere()
     write_yard()
+    write_showcase()

@@ -1,12 +1,14 @@
-// An environment-lit job through a real farm: `farm submit --wait` uploads the job's map with
-// its model (the map is a file the job names, not one a model names), a worker decodes it, and
-// the image is the one `farm render` makes, bit for bit, for each engine.
+// Environment-lit jobs through a real farm: `farm submit --wait` uploads the job's map with its
+// model (the map is a file the job names, not one a model names) and the images a glTF names
+// (jobs/showcase.json: six PNGs), a worker decodes them, and the image is the one `farm render`
+// makes, bit for bit, for each engine.
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 #include "renderer/image/exr_io.h"
 #include "tests/support/job_specs.h"
@@ -19,16 +21,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-TEST(FarmEnvironment, ASubmittedJobSendsItsMapAndMatchesFarmRenderBitForBit) {
+TEST(FarmEnvironment, SubmittedJobsSendTheirMapAndTexturesAndMatchFarmRenderBitForBit) {
   test::TempDir dir;
   // The example job and its files, away from the checkout; its outputs named absolutely.
   fs::create_directories(dir / "job");
   fs::copy(fs::path(FARM_SOURCE_DIR) / "jobs/assets", dir / "job/assets", fs::copy_options::recursive);
-  nlohmann::json job = nlohmann::json::parse(test::read_file(fs::path(FARM_SOURCE_DIR) / "jobs/environment.json"));
   test::LocalFarm farm = test::start_local_farm(dir / "farm", 1);
   ASSERT_TRUE(farm.problem.empty()) << farm.problem;
-  for (const char* engine : {"raster", "path"}) {
-    SCOPED_TRACE(engine);
+  const std::pair<const char*, const char*> runs[] = {
+      {"environment.json", "raster"}, {"environment.json", "path"}, {"showcase.json", "raster"}, {"showcase.json", "path"}};
+  for (const auto& [example, engine] : runs) {
+    SCOPED_TRACE(std::string(example) + ", " + engine);
+    nlohmann::json job = nlohmann::json::parse(test::read_file(fs::path(FARM_SOURCE_DIR) / "jobs" / example));
     const auto write_job = [&](const std::string& name) {
       job["render"] = {{"engine", engine}, {"width", 48}, {"height", 36}, {"spp", 4}, {"max_depth", -1}};
       job["output"] = {{"image", (dir / (name + ".exr")).string()}, {"preview", ""}};
