@@ -204,7 +204,7 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
         material = &material_at(*base, texture->uv, footprint, textured);
       }
       pixel += glm::vec4(limit_radiance(shade_blinn_phong(*material, world, n, to_eye, hit.front_side, scene.lights,
-                                                          ambient_light(scene, *material, n))),
+                                                          ambient_light(scene, *material, n, to_eye))),
                          1.0f);
       if (!write_aovs) continue;
       if (out.aovs().depth) out.depth(x, y) = -hit.view_position.z;

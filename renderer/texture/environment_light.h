@@ -9,6 +9,7 @@
 // their ambient term from its irradiance (nine spherical harmonics, Ramamoorthi and Hanrahan
 // 2001); the path tracer samples it by luminance and weighs that against BSDF sampling (MIS).
 #include <cstdint>
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 #include <memory>
 #include <optional>
@@ -76,12 +77,22 @@ inline glm::vec3 background_radiance(const Scene& scene, const glm::vec3& direct
   return scene.environment ? scene.environment->radiance(direction) : scene.background;
 }
 
-// The ambient term's light for `material` at unit `normal` (what blinn_phong.h multiplies by ka):
-// without an environment the scene's constant ambient; with one, kd times the irradiance over pi,
-// what a Lambertian surface of that colour reflects of it.
-inline glm::vec3 ambient_light(const Scene& scene, const Material& material, const glm::vec3& normal) {
+// The ambient term's light for `material` at unit `normal`, seen from unit `to_eye` (what
+// blinn_phong.h multiplies by ka). Without an environment, the scene's constant ambient. With
+// one, what its light does to a Lambertian layer of colour kd and a glossy one of colour ks:
+// kd E(n) / pi + ks E(r) / pi, r the mirror direction of to_eye, the irradiance about r standing
+// for a rough lobe's blur of the map. `glossy` false leaves out the ks part where the engine
+// traces that reflection itself (Whitted's mirrors and glass).
+inline glm::vec3 ambient_light(const Scene& scene, const Material& material, const glm::vec3& normal,
+                               const glm::vec3& to_eye, bool glossy = true) {
   if (!scene.environment) return scene.ambient;
-  return material.diffuse * scene.environment->irradiance(normal) * 0.318309886f;  // 1 / pi
+  constexpr float kInvPi = 0.318309886f;
+  glm::vec3 light = material.diffuse * scene.environment->irradiance(normal) * kInvPi;
+  if (glossy && material.specular != glm::vec3(0.0f)) {
+    const glm::vec3 mirror = 2.0f * glm::dot(normal, to_eye) * normal - to_eye;
+    light += material.specular * scene.environment->irradiance(mirror) * kInvPi;
+  }
+  return light;
 }
 
 }  // namespace farm

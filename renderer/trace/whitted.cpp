@@ -97,13 +97,13 @@ class WhittedTracer {
     const glm::vec3& ng = hit.geometric_normal;
 
     const bool front_side = glm::dot(hit.geometric_normal, to_eye) >= 0.0f;
-    const glm::vec3 local = shade_blinn_phong(
-        m, hit.position, n, to_eye, front_side, scene_.lights, ambient_light(scene_, m, n),
-        [&](const glm::vec3& p, const LightIncidence& in) { return light_visible(p, ng, in); });
-    if (depth >= settings_.max_depth) return local;
-
     const bool dielectric = m.transmission > 0.0f && m.ior > 1.0f;
-    if (!dielectric && !m.is_mirror()) return local;
+    // A mirror's or glass's reflection of an environment is traced below, not approximated.
+    const bool traced = dielectric || m.is_mirror();
+    const glm::vec3 local = shade_blinn_phong(
+        m, hit.position, n, to_eye, front_side, scene_.lights, ambient_light(scene_, m, n, to_eye, !traced),
+        [&](const glm::vec3& p, const LightIncidence& in) { return light_visible(p, ng, in); });
+    if (depth >= settings_.max_depth || !traced) return local;
 
     // The normal on the side the ray comes from, and the indices on either side.
     const bool entering = glm::dot(d, ng) < 0.0f;

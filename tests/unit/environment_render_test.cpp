@@ -77,6 +77,28 @@ TEST(EnvironmentRender, RasterAndWhittedShowAConstantEnvironmentAndReflectKdTime
   }
 }
 
+TEST(EnvironmentRender, RasterAndWhittedReflectKsTimesAConstantEnvironmentFromAGlossyMetal) {
+  // kd 0, ks 0.8, not a mirror: without the glossy part of the ambient term it was black.
+  Material metal = lambertian(glm::vec3(0.0f));
+  metal.specular = glm::vec3(0.8f, 0.6f, 0.3f);
+  metal.shininess = 50.0f;
+  const glm::vec3 radiance(0.5f, 0.7f, 0.9f);
+  const PreparedScene prepared(scene_of(test::make_box(glm::vec3(-0.5f), glm::vec3(0.5f)), metal,
+                                        std::make_shared<const EnvironmentLight>(radiance, 1.0f, 0.0f, nullptr), false));
+  for (EngineKind engine : {EngineKind::Raster, EngineKind::Whitted}) {
+    const TileBuffer image = test::render_full(prepared, settings_for(engine, 1));
+    int object = 0;
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        const glm::vec4 p = image.rgba(x, y);
+        if (p.w == 0.0f) continue;
+        ++object;
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(p[c], metal.specular[c] * radiance[c], 1e-5f) << to_string(engine);
+      }
+    EXPECT_GT(object, 100) << to_string(engine);
+  }
+}
+
 TEST(EnvironmentRender, TheAmbientTermOfRasterAndWhittedFollowsTheSkysIrradiance) {
   const auto environment = std::make_shared<const EnvironmentLight>(glm::vec3(1.0f), 1.0f, 0.0f, horizon_map());
   const PreparedScene prepared(scene_of(test::make_sphere(48, 96), lambertian(glm::vec3(1.0f)), environment, true));
