@@ -9,6 +9,7 @@
 #include "renderer/raster/sample_pattern.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/scene/shading_normal.h"
 #include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
 
@@ -189,12 +190,15 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       const SurfaceAttributes& hit = raster.attributes(x, y);
       const glm::vec3 world = glm::vec3(frame.view_to_world * glm::vec4(hit.view_position, 1.0f));
       const glm::vec3 to_eye = glm::normalize(frame.eye - world);
-      glm::vec3 n = glm::normalize(hit.world_normal);
+      const glm::vec3 surface = glm::normalize(hit.world_normal);
+      glm::vec3 n = surface;
       const TextureAttributes* texture = base->textures ? &raster.texture_attributes(x, y) : nullptr;
       // A normal map bends the surface's own normal, before the side seen is chosen (as in
       // complete_surface_hit).
       if (texture) n = mapped_normal(*base->textures, texture->uv, n, texture->tangent);
-      if (glm::dot(n, to_eye) < 0.0f) n = -n;  // two-sided: light the face we see
+      if (glm::dot(n, to_eye) < 0.0f) {  // two-sided: light the face we see
+        n = texture && has_normal_map(*base) ? bent_normal_facing(n, surface, to_eye) : -n;
+      }
       // The pixel's footprint as the ray engines' texture_footprint measures it, with the
       // interpolated normal for the triangle's.
       const Material* material = base;

@@ -52,6 +52,9 @@ struct MaterialTextures {
 // factors, so that its textures multiply the values the job gave (as MTL's do).
 void apply_override(const MaterialOverride& override, Material& m);
 
+// Whether `m` bends its shading normals by a normal map.
+inline bool has_normal_map(const Material& m) { return m.textures && m.textures->normal; }
+
 // The shading normal a normal map gives at `uv`: the map's tangent-space normal (its values
 // 2 * texel - 1, X and Y times the scale) in the frame of the interpolated `normal` and `tangent`
 // (world space; the tangent made perpendicular to the normal first, w its bitangent's side).

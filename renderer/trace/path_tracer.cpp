@@ -7,7 +7,9 @@
 
 #include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/scene/shading_normal.h"
 #include "renderer/texture/environment_light.h"
+#include "renderer/texture/material_textures.h"
 #include "renderer/trace/bsdf.h"
 #include "renderer/trace/emitters.h"
 #include "renderer/trace/ray_offset.h"
@@ -146,7 +148,9 @@ class PathTracer {
       glm::vec3 n = hit.shading_normal;
       if (glm::dot(n, hit.geometric_normal) < 0.0f) n = -n;
       const bool dielectric = material.transmission > 0.0f && material.ior > 1.0f;
-      if (!dielectric && glm::dot(n, wo_world) < 0.0f) n = -n;
+      if (!dielectric && glm::dot(n, wo_world) < 0.0f) {
+        n = hit.material && has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, wo_world) : -n;
+      }
       const Frame frame(n);
       const glm::vec3 wo = frame.to_local(wo_world);
 

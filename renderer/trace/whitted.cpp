@@ -7,7 +7,9 @@
 #include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/blinn_phong.h"
 #include "renderer/scene/radiance_limit.h"
+#include "renderer/scene/shading_normal.h"
 #include "renderer/texture/environment_light.h"
+#include "renderer/texture/material_textures.h"
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/ray_tile.h"
@@ -92,7 +94,9 @@ class WhittedTracer {
     const glm::vec3 to_eye = -d;
     // Two-sided shading, as in the rasterizer: light the side we see.
     glm::vec3 n = hit.shading_normal;
-    if (glm::dot(n, to_eye) < 0.0f) n = -n;
+    if (glm::dot(n, to_eye) < 0.0f) {
+      n = has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, to_eye) : -n;
+    }
     if (facing_normal) *facing_normal = n;
     const glm::vec3& ng = hit.geometric_normal;
 

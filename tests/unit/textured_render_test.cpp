@@ -8,6 +8,7 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/constants.hpp>
 #include <glm/trigonometric.hpp>
 #include <memory>
 #include <vector>
@@ -236,6 +237,58 @@ TEST(TexturedRender, ANormalMapTiltsTheShadingNormalInTheTangentFrame) {
       EXPECT_NEAR(centre.x, expected, 1e-4f) << to_string(engine) << (mirrored ? " mirrored" : "");
       EXPECT_NEAR(image.rgba(kWidth / 2 + 5, kHeight / 2 - 4).y, expected, 1e-4f) << to_string(engine);
     }
+  }
+}
+
+// A normal map bent so far that a grazing viewer lies below it: the tangent-space normal
+// (0.8, 0, 0.6) on a plane facing +z is bent towards +x, and the camera looks from low on the -x
+// side. Turned around (as a plain normal seen from behind is) it would point into the plane and a
+// light above would be behind it: black. Reflected about the plane's normal it is (-0.8, 0, 0.6),
+// facing the viewer, and a directional light from (-0.6, 0, 0.8) lights it by 0.96: kd * 0.96 in
+// the rasterizer and Whitted, kd / pi * 0.96 in the path tracer (direct light only), on every
+// pixel of the plane, and the rasterizer's and Whitted's normal AOV is the reflected normal.
+TEST(TexturedRender, ANormalMapBentAwayFromAGrazingViewerIsReflectedAboutThePlaneNotTurnedIntoIt) {
+  Model model = test::make_quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0});
+  Mesh& mesh = model.meshes[0];
+  mesh.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+  generate_tangents(mesh);
+  auto textures = std::make_shared<MaterialTextures>();
+  const glm::vec3 tangent_space(0.8f, 0.0f, 0.6f);
+  textures->normal.texture =
+      std::make_shared<const Texture>(1, 1, std::vector<glm::vec4>{glm::vec4(0.5f * (tangent_space + 1.0f), 1.0f)});
+  Material m;
+  m.diffuse = glm::vec3(0.5f);
+  m.ambient = glm::vec3(0.0f);
+  m.textures = textures;
+  Scene scene;
+  scene.objects.push_back(test::object_of(model, glm::mat4(1.0f), m));
+  scene.ambient = glm::vec3(0.0f);
+  scene.background = glm::vec3(0.0f);
+  scene.camera.position = {-3.0f, 0.0f, 1.0f};
+  scene.camera.target = {0.0f, 0.0f, 0.0f};
+  scene.camera.up = {0.0f, 0.0f, 1.0f};
+  scene.lights.push_back(Light{Light::Kind::Directional, {}, -glm::vec3(-0.6f, 0.0f, 0.8f), glm::vec3(1.0f)});
+  const PreparedScene prepared(scene);
+  const glm::vec3 reflected(-0.8f, 0.0f, 0.6f);
+  for (const EngineKind engine : {EngineKind::Raster, EngineKind::Whitted, EngineKind::Path}) {
+    RenderSettings settings = settings_for(engine);
+    settings.aovs.normal = true;
+    if (engine == EngineKind::Path) {
+      settings.spp = 4;
+      settings.max_depth = 1;
+    }
+    const TileBuffer image = test::render_full(prepared, settings);
+    const float expected = 0.5f * 0.96f / (engine == EngineKind::Path ? glm::pi<float>() : 1.0f);
+    int plane = 0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        if (image.rgba(x, y).w < 1.0f) continue;
+        ++plane;
+        ASSERT_NEAR(image.rgba(x, y).x, expected, 1e-4f) << to_string(engine) << " at " << x << "," << y;
+        if (engine == EngineKind::Path) continue;  // its normal AOV is the surface's, not the frame's
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(image.normal(x, y)[c], reflected[c], 1e-4f) << to_string(engine);
+      }
+    EXPECT_GT(plane, 50) << to_string(engine);
   }
 }
 
