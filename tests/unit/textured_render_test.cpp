@@ -195,6 +195,27 @@ TEST(TexturedRender, ATexturedMaterialOnAMeshWithoutUvsReadsTheTextureAtTheOrigi
   }
 }
 
+// The square [-1, 1]^2 on z = 0 facing +z, its uvs once across (u along +x, v falling along +y)
+// and its tangents made from them; and a material of diffuse `kd` whose one-texel normal map holds
+// `tangent_space`, in a scene with no ambient light and a black background.
+struct NormalMappedSquare {
+  Model model;
+  Material material;
+};
+NormalMappedSquare normal_mapped_square(const glm::vec3& tangent_space, float kd) {
+  NormalMappedSquare out{test::make_quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}), {}};
+  Mesh& mesh = out.model.meshes[0];
+  mesh.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+  generate_tangents(mesh);
+  auto textures = std::make_shared<MaterialTextures>();
+  textures->normal.texture =
+      std::make_shared<const Texture>(1, 1, std::vector<glm::vec4>{glm::vec4(0.5f * (tangent_space + 1.0f), 1.0f)});
+  out.material.diffuse = glm::vec3(kd);
+  out.material.ambient = glm::vec3(0.0f);
+  out.material.textures = textures;
+  return out;
+}
+
 // A normal map on a plane facing +z, its one texel the tangent-space normal (sin a, 0, cos a):
 // with the tangent made from the uvs (u grows along +x), the shading normal tilts towards +x by
 // a, so a directional light from (1, 0, 1) lights it by kd cos(45 - a) instead of kd cos 45, on
@@ -205,24 +226,15 @@ TEST(TexturedRender, ANormalMapTiltsTheShadingNormalInTheTangentFrame) {
   const float a = glm::radians(30.0f);
   const glm::vec3 tangent_space(std::sin(a), 0.0f, std::cos(a));
   for (const bool mirrored : {false, true}) {
-    Model model = test::make_quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0});
-    Mesh& mesh = model.meshes[0];
-    mesh.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
-    generate_tangents(mesh);
+    const NormalMappedSquare square = normal_mapped_square(tangent_space, 0.8f);
+    const Mesh& mesh = square.model.meshes[0];
     ASSERT_EQ(mesh.tangents.size(), 4u);
     for (const glm::vec4& t : mesh.tangents) EXPECT_EQ(t, glm::vec4(1, 0, 0, 1));  // u along +x, v falling along +y
-    auto textures = std::make_shared<MaterialTextures>();
-    textures->normal.texture =
-        std::make_shared<const Texture>(1, 1, std::vector<glm::vec4>{glm::vec4(0.5f * (tangent_space + 1.0f), 1.0f)});
-    Material m;
-    m.diffuse = glm::vec3(0.8f);
-    m.ambient = glm::vec3(0.0f);
-    m.textures = textures;
     Scene scene;
     // Mirrored in x: the plane and its tilt mirror too, so the light must come from -x to see the
     // same angle.
     const glm::mat4 to_world = mirrored ? glm::scale(glm::mat4(1.0f), glm::vec3(-1, 1, 1)) : glm::mat4(1.0f);
-    scene.objects.push_back(test::object_of(model, to_world, m));
+    scene.objects.push_back(test::object_of(square.model, to_world, square.material));
     scene.ambient = glm::vec3(0.0f);
     scene.background = glm::vec3(0.0f);
     scene.camera.position = {0.0f, 0.0f, 3.0f};
@@ -248,20 +260,9 @@ TEST(TexturedRender, ANormalMapTiltsTheShadingNormalInTheTangentFrame) {
 // the rasterizer and Whitted, kd / pi * 0.96 in the path tracer (direct light only), on every
 // pixel of the plane, and the rasterizer's and Whitted's normal AOV is the reflected normal.
 TEST(TexturedRender, ANormalMapBentAwayFromAGrazingViewerIsReflectedAboutThePlaneNotTurnedIntoIt) {
-  Model model = test::make_quad({-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0});
-  Mesh& mesh = model.meshes[0];
-  mesh.uvs = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
-  generate_tangents(mesh);
-  auto textures = std::make_shared<MaterialTextures>();
-  const glm::vec3 tangent_space(0.8f, 0.0f, 0.6f);
-  textures->normal.texture =
-      std::make_shared<const Texture>(1, 1, std::vector<glm::vec4>{glm::vec4(0.5f * (tangent_space + 1.0f), 1.0f)});
-  Material m;
-  m.diffuse = glm::vec3(0.5f);
-  m.ambient = glm::vec3(0.0f);
-  m.textures = textures;
+  const NormalMappedSquare square = normal_mapped_square(glm::vec3(0.8f, 0.0f, 0.6f), 0.5f);
   Scene scene;
-  scene.objects.push_back(test::object_of(model, glm::mat4(1.0f), m));
+  scene.objects.push_back(test::object_of(square.model, glm::mat4(1.0f), square.material));
   scene.ambient = glm::vec3(0.0f);
   scene.background = glm::vec3(0.0f);
   scene.camera.position = {-3.0f, 0.0f, 1.0f};
