@@ -197,7 +197,7 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
       // complete_surface_hit).
       if (texture) n = mapped_normal(*base->textures, texture->uv, n, texture->tangent);
       if (glm::dot(n, to_eye) < 0.0f) {  // two-sided: light the face we see
-        n = texture && has_normal_map(*base) ? bent_normal_facing(n, surface, to_eye) : -n;
+        n = has_normal_map(*base) ? bent_normal_facing(n, surface, to_eye) : -n;
       }
       // The pixel's footprint as the ray engines' texture_footprint measures it, with the
       // interpolated normal for the triangle's.

@@ -149,7 +149,7 @@ class PathTracer {
       if (glm::dot(n, hit.geometric_normal) < 0.0f) n = -n;
       const bool dielectric = material.transmission > 0.0f && material.ior > 1.0f;
       if (!dielectric && glm::dot(n, wo_world) < 0.0f) {
-        n = hit.material && has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, wo_world) : -n;
+        n = has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, wo_world) : -n;
       }
       const Frame frame(n);
       const glm::vec3 wo = frame.to_local(wo_world);
