@@ -5,6 +5,10 @@
   const body = document.querySelector('#jobs tbody');
   const error = document.getElementById('error');
   const shown = new Map();  // job id -> its row
+  // A list read before an event arrived must not put back what the event replaced: rows that
+  // events refreshed after the newest load was asked for stay as they are when its list lands.
+  let loads = 0;
+  const newer = new Set();
   let filter = { state: '', name: '' };
 
   function matches(job) {
@@ -60,20 +64,30 @@
     const tr = row(job);
     if (old) old.replaceWith(tr); else body.prepend(tr);
     shown.set(job.job_id, tr);
+    newer.add(job.job_id);
   }
 
   async function load() {
     const params = new URLSearchParams({ page_size: '200' });
     if (filter.state) params.set('state', filter.state);
     if (filter.name) params.set('name', filter.name);
+    const mine = ++loads;
+    newer.clear();
     try {
       const list = await farm.api('/api/v1/jobs?' + params);
+      if (mine !== loads) return;  // a later load is on its way
+      const kept = new Map([...newer].filter((id) => shown.has(id)).map((id) => [id, shown.get(id)]));
       body.replaceChildren();
       shown.clear();
       for (const job of list.jobs) {
-        const tr = row(job);
+        const tr = kept.get(job.job_id) || row(job);
+        kept.delete(job.job_id);
         body.append(tr);
         shown.set(job.job_id, tr);
+      }
+      for (const [id, tr] of kept) {  // new since the list was read
+        body.prepend(tr);
+        shown.set(id, tr);
       }
       document.getElementById('count').textContent = `${list.jobs.length} job(s)` +
         (list.next_page_token ? ' (the newest 200)' : '');

@@ -60,8 +60,9 @@ def text_of(driver, selector):
 
 
 def click(driver, selector):
-    """Finds and clicks in one step of the page (an element found earlier may have been redrawn)."""
-    return driver.execute_script("const e = document.querySelector(arguments[0]); if (!e) return false; "
+    """Finds and clicks in one step of the page (an element found earlier may have been redrawn);
+    false while there is no such element or it is disabled (a click on it would do nothing)."""
+    return driver.execute_script("const e = document.querySelector(arguments[0]); if (!e || e.disabled) return false; "
                                  "e.click(); return true;", selector)
 
 

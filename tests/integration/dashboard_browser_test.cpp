@@ -63,20 +63,25 @@ TEST(DashboardBrowserTest, JobsJobAndWorkersPagesShowTheFarmLiveAndTheCancelButt
                     .ok());
     return submitted.job_id();
   };
+  const auto pause = [&](const std::string& job_id) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    v1::PauseJobRequest request;
+    request.set_job_id(job_id);
+    request.set_paused(true);
+    v1::PauseJobResponse paused;
+    return stub->PauseJob(&context, request, &paused).ok();
+  };
   const std::string rendering = submit("watched", 256, 512, 1);
+  // Paused, so that it is still active whenever the browser gets to its cancel button: a queued
+  // job this small could otherwise be rendered by a worker the watched job leaves idle, and a
+  // finished job's button is disabled.
   const std::string waiting = submit("to-cancel", 64, 4, 0);
+  ASSERT_TRUE(pause(waiting));
   // An animation, paused until the browser resumes it, then first in the queue: its job page is
   // opened while its frames are being merged, and must show every frame's thumbnail in the end.
   const std::string animation = submit("animation", 32, 8, 2, 48);
-  {
-    grpc::ClientContext context;
-    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-    v1::PauseJobRequest pause;
-    pause.set_job_id(animation);
-    pause.set_paused(true);
-    v1::PauseJobResponse paused;
-    ASSERT_TRUE(stub->PauseJob(&context, pause, &paused).ok());
-  }
+  ASSERT_TRUE(pause(animation));
 
   const fs::path artifacts = fs::path(FARM_SOURCE_DIR) / "build" / "test-artifacts";
   fs::create_directories(artifacts);
