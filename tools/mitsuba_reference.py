@@ -10,13 +10,21 @@ background or environment, max_depth) and turned into the same scene in Mitsuba:
     shine from their front face (the side the triangle's counter-clockwise winding faces) in both
     renderers. Mitsuba has no two-sided area light, so an object whose job material says
     "emission_sides": "both" gets a back-to-back twin of each emissive triangle 1e-4 behind it.
+  * A glTF model's metal-roughness material (factors only, ior from KHR_materials_ior or 1.5)
+    becomes what our path tracer's metal-roughness BSDF is: its dielectric half (diffuse base
+    under a rough coat) `roughplastic` with GGX alpha = roughness^2, nonlinear=false, the base
+    colour as diffuse_reflectance and int_ior the ior; its metal half `principled` with
+    metallic=1 and the same roughness (GGX of Schlick's Fresnel from the base colour); between
+    them a `blendbsdf` weighted by metallic; all two-sided. The mesh is read from the file's
+    buffers with its normals (positions baked: no node transforms).
   * scene.environment becomes an `envmap` of the same map, its rows laid out as Mitsuba reads
     them (mitsuba_layout_map), its `scale` our intensity, a turn about +y its to_world; or a
     `constant` emitter without a map.
   * Our max_depth counts scattering events, Mitsuba's path segments: Mitsuba's is ours + 1.
   * A box pixel filter, as ours, and the `independent` sampler.
 
-Only what the reference scenes need is supported (OBJ models, diffuse + emissive materials,
+Only what the reference scenes need is supported (OBJ models with diffuse + emissive materials,
+glTF models with factor-only metal-roughness materials,
 translate/rotate/scale, a material override of emission_sides alone); anything else is refused
 with a message rather than silently changed.
 
@@ -32,6 +40,8 @@ Reference images (what tests/data/reference/ holds):
       --width 128 --height 128 --spp 4096 --half -o tests/data/reference/cornell_textured_mitsuba.exr
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/environment.json \\
       --width 160 --height 120 --spp 4096 --half -o tests/data/reference/environment_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/metal_roughness/balls.json \\
+      --spp 4096 --half -o tests/data/reference/metal_roughness_mitsuba.exr
 Throughput beside `farm bench path`:
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
       --width 512 --height 512 --spp 16 --threads 1 --bench
@@ -95,6 +105,133 @@ def parse_obj(path):
                 for i in range(1, len(corners) - 1):  # a fan: the polygons are planar and convex
                     groups.setdefault(material, []).append((corners[0], corners[i], corners[i + 1]))
     return groups, materials
+
+
+GLTF_COMPONENTS = {5121: "B", 5123: "H", 5125: "I", 5126: "f"}
+GLTF_WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3}
+
+
+def parse_gltf(path):
+    """[(material, positions, normals, triangles)] of a glTF file's primitives: its root nodes'
+    meshes, which must have no transforms and no children."""
+    import base64
+    import struct
+    with open(path) as f:
+        gltf = json.load(f)
+    buffers = []
+    for b in gltf.get("buffers", []):
+        uri = b["uri"]
+        if uri.startswith("data:"):
+            buffers.append(base64.b64decode(uri.split(",", 1)[1]))
+        else:
+            with open(os.path.join(os.path.dirname(path), uri), "rb") as f:
+                buffers.append(f.read())
+
+    def accessor(index):
+        a = gltf["accessors"][index]
+        view = gltf["bufferViews"][a["bufferView"]]
+        width = GLTF_WIDTHS[a["type"]]
+        fmt = "<" + GLTF_COMPONENTS[a["componentType"]] * width
+        stride = view.get("byteStride", struct.calcsize(fmt))
+        offset = view.get("byteOffset", 0) + a.get("byteOffset", 0)
+        data = buffers[view["buffer"]]
+        return [struct.unpack_from(fmt, data, offset + k * stride) for k in range(a["count"])]
+
+    primitives = []
+    for node_index in gltf["scenes"][gltf.get("scene", 0)]["nodes"]:
+        node = gltf["nodes"][node_index]
+        if set(node) & {"matrix", "translation", "rotation", "scale", "children"}:
+            raise RefusedScene(f"{path}: node {node_index}: only nodes without transforms or children are supported")
+        for prim in gltf["meshes"][node["mesh"]]["primitives"]:
+            if prim.get("mode", 4) != 4 or "NORMAL" not in prim["attributes"] or "indices" not in prim:
+                raise RefusedScene(f"{path}: only indexed triangles with normals are supported")
+            indices = [i[0] for i in accessor(prim["indices"])]
+            triangles = [tuple(indices[k:k + 3]) for k in range(0, len(indices), 3)]
+            material = gltf["materials"][prim["material"]] if "material" in prim else {}
+            primitives.append((material, accessor(prim["attributes"]["POSITION"]),
+                               accessor(prim["attributes"]["NORMAL"]), triangles))
+    return primitives
+
+
+def internal_reflectance(alpha, eta, mus, strata=128):
+    """2 * the mean over `mus` of R(mu) mu, R(mu) the share of light inside a GGX dielectric
+    interface (relative index 1 / eta) arriving at cos(theta) = mu that the interface reflects back
+    in: Fresnel (total beyond the critical angle) times the reflected ray's masking, averaged over
+    visible normals (Heitz 2018) on a strata x strata grid."""
+    import numpy as np
+    u1, u2 = np.meshgrid((np.arange(strata) + 0.5) / strata, (np.arange(strata) + 0.5) / strata)
+    u1, u2 = u1.ravel(), u2.ravel()
+
+    def g1(z, alpha):
+        tan2 = np.maximum(0.0, 1.0 - z * z) / np.maximum(z * z, 1e-12)
+        return 1.0 / (1.0 + 0.5 * (-1.0 + np.sqrt(1.0 + alpha * alpha * tan2)))
+
+    total = 0.0
+    for mu in mus:
+        w = np.array([math.sqrt(max(0.0, 1.0 - mu * mu)), 0.0, mu])
+        v = np.array([alpha * w[0], 0.0, w[2]])
+        v /= np.linalg.norm(v)
+        t1 = np.array([0.0, 1.0, 0.0]) if v[0] > 0 else np.array([1.0, 0.0, 0.0])
+        t2 = np.cross(v, t1)
+        r, phi = np.sqrt(u1), 2.0 * math.pi * u2
+        p1 = r * np.cos(phi)
+        s = 0.5 * (1.0 + v[2])
+        p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * r * np.sin(phi)
+        pz = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
+        n = p1[:, None] * t1 + p2[:, None] * t2 + pz[:, None] * v
+        m = np.stack([alpha * n[:, 0], alpha * n[:, 1], np.maximum(1e-6, n[:, 2])], axis=1)
+        m /= np.linalg.norm(m, axis=1)[:, None]
+        cos_i = m @ w
+        reflected_z = 2.0 * cos_i * m[:, 2] - w[2]
+        sin_t = eta * np.sqrt(np.maximum(0.0, 1.0 - cos_i * cos_i))  # from inside, index eta to 1
+        cos_t = np.sqrt(np.maximum(0.0, 1.0 - sin_t * sin_t))
+        rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+        rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+        fresnel = np.where(sin_t >= 1.0, 1.0, 0.5 * (rs * rs + rp * rp))
+        weight = np.where((cos_i > 0) & (reflected_z > 0), fresnel * g1(reflected_z, alpha), 0.0)
+        total += weight.mean() * mu
+    return 2.0 * total / len(mus)
+
+
+def metal_roughness_bsdf(path, material):
+    """Mitsuba's counterpart of our metal-roughness BSDF for a glTF material's factors."""
+    name = material.get("name", "(unnamed)")
+    pbr = material.get("pbrMetallicRoughness", {})
+    if any(key.endswith("Texture") for key in list(pbr) + list(material)):
+        raise RefusedScene(f"{path}: material '{name}': textures are not supported here")
+    if set(material.get("extensions", {})) - {"KHR_materials_ior"} or max(material.get("emissiveFactor", [0])) > 0:
+        raise RefusedScene(f"{path}: material '{name}': only metal-roughness factors and ior are supported here")
+    base = {"type": "rgb", "value": pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]}
+    metallic, roughness = pbr.get("metallicFactor", 1.0), pbr.get("roughnessFactor", 1.0)
+    ior = material.get("extensions", {}).get("KHR_materials_ior", {}).get("ior", 1.5)
+    alpha = max(roughness ** 2, 1e-3)
+    # roughplastic divides its diffuse reflectance by 1 - R_int, R_int twice the mean of R(mu) mu
+    # over 64 points from 0 to 1 inclusive: about (63/64) of the integral, which leaves its base
+    # about 2% darker than the model it describes at ior 1.5. Its reflectance is scaled here so
+    # that it divides by 1 - the integral itself, as our coat does.
+    import numpy as np
+    mitsubas = internal_reflectance(alpha, ior, np.maximum(1e-6, np.linspace(0.0, 1.0, 64)))
+    integral = internal_reflectance(alpha, ior, (np.arange(256) + 0.5) / 256)
+    base_under_coat = {"type": "rgb", "value": [c * (1.0 - mitsubas) / (1.0 - integral) for c in base["value"]]}
+    plastic = {"type": "roughplastic", "distribution": "ggx", "alpha": alpha, "int_ior": ior, "ext_ior": 1.0,
+               "nonlinear": False, "diffuse_reflectance": base_under_coat}
+    metal = {"type": "principled", "base_color": base, "metallic": 1.0, "roughness": roughness,
+             "spec_tint": 0.0, "sheen": 0.0, "clearcoat": 0.0, "spec_trans": 0.0, "anisotropic": 0.0}
+    if metallic <= 0:
+        bsdf = plastic
+    elif metallic >= 1:
+        bsdf = metal
+    else:
+        bsdf = {"type": "blendbsdf", "weight": metallic, "plastic": plastic, "metal": metal}
+    return {"type": "twosided", "bsdf": bsdf}
+
+
+def write_smooth_mesh(path, positions, normals, triangles):
+    """An OBJ with per-vertex normals, for Mitsuba to interpolate as we do."""
+    lines = ["v %.9g %.9g %.9g" % p for p in positions] + ["vn %.9g %.9g %.9g" % n for n in normals]
+    lines += ["f %d//%d %d//%d %d//%d" % (a + 1, a + 1, b + 1, b + 1, c + 1, c + 1) for a, b, c in triangles]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
 
 
 def transform_of(mi, obj):
@@ -219,8 +356,18 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
         scene[f"light_{i}"] = {"type": "point", "position": light["position"],
                                "intensity": {"type": "rgb", "value": intensity}}
     for i, obj in enumerate(scene_json["objects"]):
+        if obj["file"].lower().endswith(".gltf"):
+            if set(obj) - {"file"}:
+                raise RefusedScene(f"scene.objects[{i}]: a glTF model without transforms or overrides only")
+            path = os.path.join(folder, obj["file"])
+            for k, (material, positions, normals, triangles) in enumerate(parse_gltf(path)):
+                mesh = os.path.join(workdir, f"object{i}_primitive{k}.obj")
+                write_smooth_mesh(mesh, positions, normals, triangles)
+                scene[f"object{i}_primitive{k}"] = {"type": "obj", "filename": mesh, "face_normals": False,
+                                                    "bsdf": metal_roughness_bsdf(path, material)}
+            continue
         if not obj["file"].lower().endswith(".obj"):
-            raise RefusedScene(f"scene.objects[{i}].file: only OBJ models are supported")
+            raise RefusedScene(f"scene.objects[{i}].file: only OBJ and glTF models are supported")
         override = obj.get("material", {})
         if set(override) - {"emission_sides"}:
             raise RefusedScene(f"scene.objects[{i}].material: only emission_sides can be overridden here")

@@ -17,13 +17,16 @@ import zlib
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def write_png(path, width, height, rgb):
-    """An 8-bit RGB PNG of `rgb` (rows top to bottom, 3 bytes a pixel), with only the standard library."""
+def write_png(path, width, height, rgb, channels=3):
+    """An 8-bit RGB (or, with channels=4, RGBA) PNG of `rgb` (rows top to bottom, `channels` bytes a
+    pixel), with only the standard library."""
     def chunk(kind, data):
         return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
-    rows = b"".join(b"\x00" + bytes(rgb[y * width * 3:(y + 1) * width * 3]) for y in range(height))
+    stride = width * channels
+    rows = b"".join(b"\x00" + bytes(rgb[y * stride:(y + 1) * stride]) for y in range(height))
+    colour_type = 6 if channels == 4 else 2
     with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) +
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour_type, 0, 0, 0)) +
                 chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b""))
 
 
@@ -266,7 +269,9 @@ def write_showcase():
     base colour, metal-roughness, normal and occlusion textures (its tangents left for the loader
     to make from the uvs), standing on a ground whose checker repeats four times by
     KHR_texture_transform, before a panel that glows through an emissive texture at
-    KHR_materials_emissive_strength 3. The images lie beside the model, so a submission sends
+    KHR_materials_emissive_strength 3, between a fence whose slats are cut out of a quad by the
+    lattice texture's alpha (alphaMode MASK) and a pane of blue glaze a third opaque (BLEND). The
+    images lie beside the model, so a submission sends
     them as the model's files."""
     side = 64
 
@@ -294,6 +299,13 @@ def write_showcase():
     image("showcase_occlusion.png", lambda u, v: [0.35 + 0.65 * min(1.0, abs(u * 8 - round(u * 8)) * 6)] * 3)
     image("showcase_ground.png", lambda u, v: [srgb(c) for c in ((0.7, 0.7, 0.65) if (int(u * 2) + int(v * 2)) % 2 else (0.25, 0.27, 0.3))])
     image("showcase_glow.png", lambda u, v: [srgb(c) for c in ((1.0, 0.8, 0.4) if int(v * 6) % 2 else (0.1, 0.6, 1.0))])
+    # A lattice of wooden slats, the gaps between them transparent (alpha 0): glTF's alpha MASK.
+    lattice = []
+    for y in range(side):
+        for x in range(side):
+            slat = (x * 6 // side + y * 6 // side) % 2 == 0 or min(x % (side // 6), y % (side // 6)) < 2
+            lattice += [int(round(255 * srgb(c))) for c in (0.45, 0.3, 0.16)] + [255 if slat else 0]
+    write_png(os.path.join(HERE, "showcase_lattice.png"), side, side, lattice, channels=4)
 
     meshes, views, accessors, chunks = [], [], [], []
 
@@ -345,6 +357,8 @@ def write_showcase():
         return corners, [normal] * 4, [(0, 1), (1, 1), (1, 0), (0, 0)], [0, 1, 2, 0, 2, 3]
     add_mesh("ground", *quad([(-4, -1, 4), (4, -1, 4), (4, -1, -4), (-4, -1, -4)], (0, 1, 0)), 1)
     add_mesh("panel", *quad([(-1.5, -1, 0), (1.5, -1, 0), (1.5, 1, 0), (-1.5, 1, 0)], (0, 0, 1)), 2)
+    add_mesh("fence", *quad([(-2.2, -1, 1.0), (-1.1, -1, 1.3), (-1.1, 0.5, 1.3), (-2.2, 0.5, 1.0)], (0, 0, 1)), 3)
+    add_mesh("pane", *quad([(1.1, -1, 1.3), (2.1, -1, 1.0), (2.1, 0.3, 1.0), (1.1, 0.3, 1.3)], (0, 0, 1)), 4)
 
     texture = lambda index, **extra: dict({"index": index}, **extra)
     buffer = b"".join(chunks)
@@ -352,10 +366,11 @@ def write_showcase():
         "asset": {"version": "2.0", "generator": "farm jobs/assets/make_assets.py"},
         "extensionsUsed": ["KHR_texture_transform", "KHR_materials_emissive_strength"],
         "scene": 0,
-        "scenes": [{"nodes": [0, 1, 2]}],
+        "scenes": [{"nodes": [0, 1, 2, 3, 4]}],
         "nodes": [{"name": "ball", "mesh": 0, "rotation": [0.0, 0.3826834, 0.0, 0.9238795]},
                   {"name": "ground", "mesh": 1},
-                  {"name": "panel", "mesh": 2, "translation": [0.4, 0.6, -2.6]}],
+                  {"name": "panel", "mesh": 2, "translation": [0.4, 0.6, -2.6]},
+                  {"name": "fence", "mesh": 3}, {"name": "pane", "mesh": 4}],
         "meshes": meshes,
         "materials": [
             {"name": "ball", "pbrMetallicRoughness": {
@@ -367,11 +382,17 @@ def write_showcase():
             {"name": "panel", "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.05, 0.05, 1.0],
                                                        "metallicFactor": 0.0},
              "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": texture(5),
-             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 3.0}}}],
+             "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 3.0}}},
+            {"name": "fence", "alphaMode": "MASK", "alphaCutoff": 0.5, "doubleSided": True,
+             "pbrMetallicRoughness": {"baseColorTexture": texture(6), "metallicFactor": 0.0, "roughnessFactor": 0.8}},
+            {"name": "pane", "alphaMode": "BLEND", "doubleSided": True,
+             "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.5, 0.9, 0.35], "metallicFactor": 0.0,
+                                      "roughnessFactor": 0.15}}],
         "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}],
         "images": [{"uri": name} for name in ("showcase_base.png", "showcase_mr.png", "showcase_normal.png",
-                                               "showcase_occlusion.png", "showcase_ground.png", "showcase_glow.png")],
-        "textures": [{"sampler": 0, "source": i} for i in range(6)],
+                                               "showcase_occlusion.png", "showcase_ground.png", "showcase_glow.png",
+                                               "showcase_lattice.png")],
+        "textures": [{"sampler": 0, "source": i} for i in range(7)],
         "buffers": [{"byteLength": len(buffer),
                      "uri": "data:application/octet-stream;base64," + base64.b64encode(buffer).decode()}],
         "bufferViews": views,

@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "renderer/accel/cutout_intersector.h"
 #include "renderer/accel/embree_intersector.h"
 #include "renderer/accel/prepared_scene.h"
 
@@ -134,8 +135,8 @@ std::unique_ptr<InstanceIntersector> build_instance_intersector(const PreparedSc
 
 std::unique_ptr<SceneIntersector> build_scene_intersector(const PreparedScene& scene, AccelKind accel,
                                                           const CancelFlag& cancel) {
-  if (accel == AccelKind::Embree) return build_embree_intersector(scene, cancel);
-  return build_instance_intersector(scene, accel, cancel);
+  return skip_cutouts(scene, accel == AccelKind::Embree ? build_embree_intersector(scene, cancel)
+                                                      : build_instance_intersector(scene, accel, cancel));
 }
 
 }  // namespace farm

@@ -118,7 +118,7 @@ Scene build_scene(const Job& job, ModelLibrary& models) {
       so.model_to_world = model_to_world;
       so.materials = so.model->materials;
       if (so.materials.empty()) so.materials.emplace_back();  // loaders promise one; be safe
-      for (Material& mat : so.materials) apply_override(o.material, mat);
+      for (Material& mat : so.materials) o.material.apply_to(mat);
       scene.objects.push_back(std::move(so));
     };
     // A model's cameras and lights follow its object (at the rest pose: animations move meshes).

@@ -102,10 +102,11 @@ std::optional<float> extension_number(const tinygltf::ExtensionMap& extensions, 
   return static_cast<float>(v.GetNumberAsDouble());
 }
 
-// Metallic-roughness to Phong (set_metal_roughness).
+// The metal-roughness values, and their Phong counterpart (set_metal_roughness).
 Material convert_material(const tinygltf::Material& in) {
   Material m;
   if (!in.name.empty()) m.name = in.name;
+  m.ior = 1.5f;  // glTF's dielectrics, without KHR_materials_ior
   const tinygltf::PbrMetallicRoughness& pbr = in.pbrMetallicRoughness;
   glm::vec3 base(1.0f);
   if (pbr.baseColorFactor.size() >= 3) {
@@ -116,6 +117,10 @@ Material convert_material(const tinygltf::Material& in) {
 
   // A double-sided glTF material is meant to be seen from both sides: its emission shines from
   // both too.
+  if (pbr.baseColorFactor.size() >= 4) m.alpha = glm::clamp(static_cast<float>(pbr.baseColorFactor[3]), 0.0f, 1.0f);
+  if (in.alphaMode == "MASK") m.alpha_mode = AlphaMode::Mask;
+  if (in.alphaMode == "BLEND") m.alpha_mode = AlphaMode::Blend;
+  m.alpha_cutoff = static_cast<float>(in.alphaCutoff);
   if (in.doubleSided) m.emission_sides = EmissionSides::Both;
   if (in.emissiveFactor.size() == 3) {
     m.emission = glm::vec3(in.emissiveFactor[0], in.emissiveFactor[1], in.emissiveFactor[2]);
@@ -124,9 +129,7 @@ Material convert_material(const tinygltf::Material& in) {
           extension_number(in.extensions, "KHR_materials_emissive_strength", "emissiveStrength")) {
     m.emission *= *strength;
   }
-  if (in.extensions.count("KHR_materials_ior") > 0) {  // the extension's default ior is 1.5
-    m.ior = extension_number(in.extensions, "KHR_materials_ior", "ior").value_or(1.5f);
-  }
+  if (auto ior = extension_number(in.extensions, "KHR_materials_ior", "ior")) m.ior = *ior;
   if (auto transmission =
           extension_number(in.extensions, "KHR_materials_transmission", "transmissionFactor")) {
     m.transmission = glm::clamp(*transmission, 0.0f, 1.0f);
@@ -203,6 +206,10 @@ TextureSlot GltfReader::texture_slot(const tinygltf::TextureInfo& info, const st
   if (info.index < 0) return {};
   const std::string where = "material '" + material + "' " + what;
   if (!valid_index(info.index, gltf_.textures)) fail(where + ": no such texture " + std::to_string(info.index));
+  // Meshes carry one set of texture coordinates: a map laid out on another would be read wrong.
+  if (info.texCoord != 0) {
+    fail(where + ": reads TEXCOORD_" + std::to_string(info.texCoord) + "; only TEXCOORD_0 is read");
+  }
   const tinygltf::Texture& texture = gltf_.textures[static_cast<std::size_t>(info.index)];
   if (!valid_index(texture.source, gltf_.images)) fail(where + ": texture " + std::to_string(info.index) + " has no image");
   const tinygltf::Image& image = gltf_.images[static_cast<std::size_t>(texture.source)];
@@ -276,8 +283,10 @@ std::shared_ptr<const MaterialTextures> GltfReader::material_textures(const tiny
   textures.metal_roughness =
       texture_slot(pbr.metallicRoughnessTexture, name, "metallicRoughnessTexture", TextureColourSpace::Linear);
   textures.emission = texture_slot(in.emissiveTexture, name, "emissiveTexture", TextureColourSpace::Srgb);
+  // An occlusion map on a second set of texture coordinates (a baked lightmap's, often) is left
+  // out rather than refused: it only darkens the rasterizer's and Whitted's ambient term.
   tinygltf::TextureInfo occlusion;
-  occlusion.index = in.occlusionTexture.index;
+  occlusion.index = in.occlusionTexture.texCoord == 0 ? in.occlusionTexture.index : -1;
   occlusion.texCoord = in.occlusionTexture.texCoord;
   occlusion.extensions = in.occlusionTexture.extensions;
   textures.occlusion = texture_slot(occlusion, name, "occlusionTexture", TextureColourSpace::Linear);
@@ -293,14 +302,6 @@ std::shared_ptr<const MaterialTextures> GltfReader::material_textures(const tiny
       !textures.normal) {
     return nullptr;
   }
-  // The factors the textures multiply, for material_at to map the product to Phong again.
-  MetalRoughness factors;
-  if (pbr.baseColorFactor.size() >= 3) {
-    factors.base_colour = glm::vec3(pbr.baseColorFactor[0], pbr.baseColorFactor[1], pbr.baseColorFactor[2]);
-  }
-  factors.metallic = glm::clamp(static_cast<float>(pbr.metallicFactor), 0.0f, 1.0f);
-  factors.roughness = glm::clamp(static_cast<float>(pbr.roughnessFactor), 0.0f, 1.0f);
-  textures.metal_roughness_factors = factors;
   return std::make_shared<const MaterialTextures>(std::move(textures));
 }
 
@@ -821,7 +822,7 @@ Model GltfReader::read() {
     Material m = convert_material(in);
     m.textures = material_textures(in);
     if (!all_finite(m.diffuse) || !all_finite(m.specular) || !all_finite(m.emission) ||
-        !std::isfinite(m.ior)) {
+        !std::isfinite(m.ior) || !std::isfinite(m.alpha_cutoff)) {
       fail("material '" + m.name + "' has values that are not finite");
     }
     model_.materials.push_back(m);

@@ -12,6 +12,7 @@
 #include "renderer/scene/shading_normal.h"
 #include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
+#include "renderer/util/mix64.h"
 
 namespace farm::raster {
 namespace {
@@ -133,6 +134,12 @@ class RegionRasterizer {
         if (!(depth < depth_[i])) continue;  // ties keep the earlier triangle
         const float q0 = l0 * s0.inv_w, q1 = l1 * s1.inv_w, q2 = l2 * s2.inv_w;
         const float inv_q = 1.0f / (q0 + q1 + q2);
+        glm::vec2 uv(0.0f);
+        if constexpr (kTextured) {
+          uv = (q0 * t0.uv + q1 * t1.uv + q2 * t2.uv) * inv_q;
+          // A cut-out fragment leaves the depth as it was: what lies behind shows through.
+          if (material->alpha_mode != AlphaMode::Opaque && cut_out(*material, uv, fragment_hash(x, y, t))) continue;
+        }
         depth_[i] = depth;
         material_[i] = material;
         attributes_[i].view_position =
@@ -140,13 +147,23 @@ class RegionRasterizer {
         attributes_[i].world_normal =
             (q0 * a0.world_normal + q1 * a1.world_normal + q2 * a2.world_normal) * inv_q;
         if constexpr (kTextured) {
-          texture_attributes_[i].uv = (q0 * t0.uv + q1 * t1.uv + q2 * t2.uv) * inv_q;
+          texture_attributes_[i].uv = uv;
           texture_attributes_[i].uv_per_world = uv_per_world;
           texture_attributes_[i].tangent = (q0 * t0.tangent + q1 * t1.tangent + q2 * t2.tangent) * inv_q;
         }
         attributes_[i].front_side = front_side;
       }
     }
+  }
+
+  // A number uniform in [0, 1) for one fragment of one triangle at one sample position, so that
+  // a blended surface of coverage a covers a share a of a pixel's samples (hashed alpha testing:
+  // the rasterizer has no order to blend in; the average over spp samples stands for it).
+  float fragment_hash(int x, int y, const ScreenTriangle& t) const {
+    const auto bits = [](std::int64_t v) { return static_cast<std::uint64_t>(v); };
+    std::uint64_t h = mix64((bits(x) << 32) ^ bits(y));
+    h = mix64(h ^ (bits(offset_.x) << 32) ^ bits(offset_.y));
+    return unit_float(mix64(h ^ t.v[0]));
   }
 
   std::size_t index(int x, int y) const {

@@ -87,7 +87,10 @@ class FrameBuilder {
         ranges_.push_back({&object, &mesh, vertices, triangles});
         frame.materials.push_back(&object.source->materials.at(mesh.material));
         mirrored_.push_back(glm::determinant(glm::mat3(object.model_to_world)) < 0.0f);
-        textured_.push_back(frame.materials.back()->textures != nullptr);
+        // Textured: the fragments carry texture coordinates, for the textures and for the alpha
+        // a non-opaque material cuts fragments out by.
+        textured_.push_back(frame.materials.back()->textures != nullptr ||
+                            frame.materials.back()->alpha_mode != AlphaMode::Opaque);
         frame.textured = frame.textured || textured_.back();
         vertices += mesh.positions.size();
         triangles += mesh.triangles.size();

@@ -23,6 +23,20 @@ inline std::optional<EmissionSides> emission_sides_from_string(std::string_view 
 
 struct MaterialTextures;  // renderer/texture/material_textures.h
 
+// How a material's alpha (its alpha factor times its base colour texture's alpha) covers the
+// surface, as glTF's alphaMode says (docs/architecture.md, §8.4): not at all (Opaque, every
+// Phong material), all or nothing by the cutoff (Mask), or partly (Blend).
+enum class AlphaMode { Opaque, Mask, Blend };
+
+// glTF's metal-roughness values (docs/architecture.md, §8.2): the path tracer shades them with its
+// metal-roughness BSDF; the rasterizer and Whitted shade the Phong values set_metal_roughness
+// derives from them.
+struct MetalRoughness {
+  glm::vec3 base_colour{1.0f};
+  float metallic = 1.0f;
+  float roughness = 1.0f;
+};
+
 struct Material {
   std::string name = "default";
   glm::vec3 ambient{1.0f};    // ka
@@ -32,6 +46,11 @@ struct Material {
   float shininess = 5.0f;     // Phong exponent p
   float ior = 1.33f;
   float transmission = 0.0f;  // 0 opaque, 1 fully transmissive (MTL 1-d, glTF transmission)
+  // Set for glTF's materials (with ior the dielectric's index); unset for Phong ones.
+  std::optional<MetalRoughness> metal_roughness;
+  AlphaMode alpha_mode = AlphaMode::Opaque;
+  float alpha = 1.0f;          // glTF: baseColorFactor's fourth value
+  float alpha_cutoff = 0.5f;   // Mask: covered where alpha >= this
   EmissionSides emission_sides = EmissionSides::Front;
   // What multiplies these values at a surface point (material_at); null for a material without
   // textures. New shading values must be copied by material_at too.
@@ -47,12 +66,14 @@ struct Material {
   }
 };
 
-// glTF's metal-roughness values as our Phong material (docs/architecture.md, §8.2): metals have
-// no diffuse lobe and tint their reflection, dielectrics reflect about 4% at normal incidence.
-// The Blinn-Phong exponent whose lobe is as wide as a Beckmann lobe of slope alpha is
-// 2 / alpha^2 - 2 (Walter et al. 2007), and glTF's alpha is roughness^2: roughness below about
-// 0.21 reaches 1000 and so becomes a mirror, as our material convention intends.
+// glTF's metal-roughness values, kept for the path tracer, and their Phong counterpart for the
+// other engines (docs/architecture.md, §8.2): metals have no diffuse lobe and tint their
+// reflection, dielectrics reflect about 4% at normal incidence. The Blinn-Phong exponent whose
+// lobe is as wide as a Beckmann lobe of slope alpha is 2 / alpha^2 - 2 (Walter et al. 2007), and
+// glTF's alpha is roughness^2: roughness below about 0.21 reaches 1000 and so becomes a mirror in
+// the rasterizer and Whitted, as our material convention intends.
 inline void set_metal_roughness(Material& m, const glm::vec3& base, float metallic, float roughness) {
+  m.metal_roughness = MetalRoughness{base, metallic, roughness};
   m.diffuse = base * (1.0f - metallic);
   m.specular = glm::mix(glm::vec3(0.04f), base, metallic);
   const float r4 = roughness * roughness * roughness * roughness;
@@ -65,7 +86,10 @@ struct MaterialOverride {
   std::optional<float> shininess, ior, transmission;
   std::optional<EmissionSides> emission_sides;
 
+  // A job that gives kd, ks or the shininess asks for that Phong material: a glTF material it is
+  // given to stops being a metal-roughness one (and its textures multiply the values given).
   void apply_to(Material& m) const {
+    if (diffuse || specular || shininess) m.metal_roughness.reset();
     if (ambient) m.ambient = *ambient;
     if (diffuse) m.diffuse = *diffuse;
     if (specular) m.specular = *specular;

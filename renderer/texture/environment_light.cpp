@@ -1,4 +1,5 @@
 #include "renderer/texture/environment_light.h"
+#include "renderer/util/pi.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +12,6 @@
 namespace farm {
 namespace {
 
-constexpr float kPi = std::numbers::pi_v<float>;
 // The sampling distribution and the harmonics read a level of the map at most this large: a
 // larger map's 2x2 averages shape where samples go just as well, and its memory stays bounded
 // (two floats a texel: 16 MiB).

@@ -12,16 +12,6 @@ glm::vec4 TextureSlot::sample(glm::vec2 uv, float footprint) const {
   return texture->sample(glm::vec2(moved), sampler, footprint);
 }
 
-void apply_override(const MaterialOverride& override, Material& m) {
-  override.apply_to(m);
-  const bool phong_given = override.diffuse || override.specular || override.shininess;
-  if (phong_given && m.textures && m.textures->metal_roughness_factors) {
-    auto textures = std::make_shared<MaterialTextures>(*m.textures);
-    textures->metal_roughness_factors.reset();
-    m.textures = std::move(textures);
-  }
-}
-
 glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const glm::vec3& normal,
                         const glm::vec4& tangent) {
   if (!textures.normal) return normal;
@@ -37,6 +27,11 @@ glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const gl
   return length > 0.0f && std::isfinite(length) ? mapped / length : normal;
 }
 
+float coverage_at(const Material& m, glm::vec2 uv) {
+  if (!m.textures || !m.textures->base_colour) return m.alpha;
+  return m.alpha * m.textures->base_colour.sample(uv, 0.0f).w;
+}
+
 const Material& material_at(const Material& base, glm::vec2 uv, float footprint, Material& scratch) {
   if (!base.textures) return base;
   const MaterialTextures& t = *base.textures;
@@ -50,7 +45,11 @@ const Material& material_at(const Material& base, glm::vec2 uv, float footprint,
   scratch.ior = base.ior;
   scratch.transmission = base.transmission;
   scratch.emission_sides = base.emission_sides;
-  if (const std::optional<MetalRoughness>& f = t.metal_roughness_factors) {
+  scratch.metal_roughness = base.metal_roughness;
+  scratch.alpha_mode = base.alpha_mode;
+  scratch.alpha = base.alpha;
+  scratch.alpha_cutoff = base.alpha_cutoff;
+  if (const std::optional<MetalRoughness>& f = base.metal_roughness) {
     glm::vec3 colour = f->base_colour;
     float metallic = f->metallic, roughness = f->roughness;
     if (t.base_colour) colour *= glm::vec3(t.base_colour.sample(uv, footprint));

@@ -25,16 +25,8 @@ struct TextureSlot {
   glm::vec4 sample(glm::vec2 uv, float footprint) const;
 };
 
-// A glTF material's factors, which its textures multiply before the product is mapped to Phong
-// (set_metal_roughness).
-struct MetalRoughness {
-  glm::vec3 base_colour{1.0f};
-  float metallic = 1.0f;
-  float roughness = 1.0f;
-};
-
 struct MaterialTextures {
-  TextureSlot base_colour;      // MTL: multiplies kd; glTF: the base colour
+  TextureSlot base_colour;      // MTL: multiplies kd; glTF: multiplies the base colour
   TextureSlot specular;         // multiplies ks (MTL's map_Ks)
   TextureSlot emission;         // multiplies ke (glTF's emissiveTexture, MTL's map_Ke)
   TextureSlot metal_roughness;  // glTF: blue multiplies metalness, green roughness
@@ -42,15 +34,7 @@ struct MaterialTextures {
   float occlusion_strength = 1.0f;
   TextureSlot normal;           // tangent-space normals (glTF's normalTexture, MTL's norm)
   float normal_scale = 1.0f;    // glTF: scales the map's X and Y
-  // glTF: kd, ks and the shininess are the metal-roughness mapping of the factors times the
-  // textures, worked out again at each point. Unset (MTL): the textures multiply kd and ks.
-  std::optional<MetalRoughness> metal_roughness_factors;
 };
-
-// A job's override on a material that may have textures: the keys it gives replace the file's
-// values, and a glTF material whose kd, ks or shininess it replaces stops deriving them from its
-// factors, so that its textures multiply the values the job gave (as MTL's do).
-void apply_override(const MaterialOverride& override, Material& m);
 
 // Whether `m` bends its shading normals by a normal map.
 inline bool has_normal_map(const Material& m) { return m.textures && m.textures->normal; }
@@ -62,9 +46,26 @@ inline bool has_normal_map(const Material& m) { return m.textures && m.textures-
 glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const glm::vec3& normal,
                         const glm::vec4& tangent);
 
+// How much of the surface `m` covers at `uv` (glTF's alpha: the alpha factor times the base colour
+// texture's alpha at its finest level), and whether a ray or a fragment passes through it there:
+// never for an opaque material, below the cutoff for a masked one, and for a blended one where
+// the coverage is below `u`, a number uniform in [0, 1) for that ray or fragment (so that a
+// surface of coverage a stops a share a of them).
+float coverage_at(const Material& m, glm::vec2 uv);
+inline bool cut_out(const Material& m, glm::vec2 uv, float u) {
+  switch (m.alpha_mode) {
+    case AlphaMode::Opaque: return false;
+    case AlphaMode::Mask: return coverage_at(m, uv) < m.alpha_cutoff;
+    case AlphaMode::Blend: return coverage_at(m, uv) <= u;
+  }
+  return false;
+}
+
 // The material at texture coordinates `uv` with a pixel footprint of `footprint` uv units
 // (Texture::sample): `base` itself when it has no textures; else `scratch`, filled with base's
-// values and its textures multiplied in, and returned.
+// values and its textures multiplied in, and returned. A metal-roughness material's textures
+// multiply its factors, and kd, ks and the shininess are derived again from the product
+// (set_metal_roughness); a Phong material's multiply kd and ks.
 const Material& material_at(const Material& base, glm::vec2 uv, float footprint, Material& scratch);
 
 }  // namespace farm

@@ -7,11 +7,10 @@
 
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ggx.h"
+#include "renderer/util/pi.h"
 
 namespace farm {
 namespace {
-
-constexpr float kPi = std::numbers::pi_v<float>;
 
 float max_component(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
 
@@ -31,6 +30,16 @@ Bsdf::Bsdf(const Material& m) {
   if (m.transmission > 0.0f && m.ior > 1.0f) {
     kind_ = Kind::Dielectric;
     ior_ = m.ior;
+    return;
+  }
+  if (const std::optional<MetalRoughness>& mr = m.metal_roughness) {
+    kind_ = Kind::MetalRoughness;
+    specular_ = glm::clamp(mr->base_colour, 0.0f, 1.0f);
+    metallic_ = std::clamp(mr->metallic, 0.0f, 1.0f);
+    alpha_ = std::clamp(mr->roughness * mr->roughness, 1e-3f, 1.0f);
+    coat_.emplace(m.ior, alpha_);
+    const float eta = coat_->eta();
+    diffuse_ = specular_ * ((1.0f - metallic_) / (kPi * eta * eta * (1.0f - coat_->internal_reflectance())));
     return;
   }
   if (m.is_mirror()) {
@@ -65,22 +74,71 @@ glm::vec3 Bsdf::eval_layered(const glm::vec3& wo, const glm::vec3& wi) const {
   return f;
 }
 
-float Bsdf::pdf_layered(const glm::vec3& wo, const glm::vec3& wi) const {
+// Schlick's Fresnel from the base colour for the metal, the exact dielectric one for the coat
+// (whose F0 is 0.04 at glTF's ior 1.5), at the microfacet's cosine; the coat's diffuse base below.
+glm::vec3 Bsdf::eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const {
+  if (wo.z <= 0.0f || wi.z <= 0.0f) return glm::vec3(0.0f);
+  const glm::vec3 m = glm::normalize(wo + wi);
+  const float cos_m = std::max(0.0f, glm::dot(wo, m));
+  const float schlick = std::pow(1.0f - cos_m, 5.0f);
+  const glm::vec3 fresnel = (1.0f - metallic_) * fresnel_dielectric(cos_m, 1.0f, coat_->eta()) +
+                            metallic_ * (specular_ + (1.0f - specular_) * schlick);
+  glm::vec3 f = fresnel * (ggx::distribution(m, alpha_) * ggx::smith_g2(wo, wi, alpha_) / (4.0f * wo.z * wi.z));
+  if (metallic_ < 1.0f) f += diffuse_ * (coat_->transmittance(wo.z) * coat_->transmittance(wi.z));
+  return f;
+}
+
+float Bsdf::specular_probability(const glm::vec3& wo) const {
+  if (kind_ != Kind::MetalRoughness) return specular_probability_;
+  // What each lobe reflects, roughly: the metal all of its light, the coat what it does not
+  // let in; the base its colour of what the coat lets in.
+  const float entering = coat_->transmittance(wo.z);
+  const float s = metallic_ + (1.0f - metallic_) * (1.0f - entering);
+  const float d = (1.0f - metallic_) * max_component(specular_) * entering;
+  return s + d > 0.0f ? s / (s + d) : 1.0f;
+}
+
+float Bsdf::mixture_pdf(const glm::vec3& wo, const glm::vec3& wi, float specular_probability) const {
   if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
-  float pdf = (1.0f - specular_probability_) * wi.z / kPi;
-  if (specular_probability_ > 0.0f) {
+  float pdf = (1.0f - specular_probability) * wi.z / kPi;
+  if (specular_probability > 0.0f) {
     const glm::vec3 m = glm::normalize(wo + wi);
-    pdf += specular_probability_ * ggx::visible_normal_pdf(wo, m, alpha_) / (4.0f * glm::dot(wo, m));
+    pdf += specular_probability * ggx::visible_normal_pdf(wo, m, alpha_) / (4.0f * glm::dot(wo, m));
   }
   return pdf;
 }
 
+template <typename Eval>
+std::optional<BsdfSample> Bsdf::sample_mixture(const glm::vec3& wo, float u_lobe, float u1, float u2,
+                                               float specular_probability, Eval&& eval) const {
+  if (wo.z <= 0.0f) return std::nullopt;
+  BsdfSample s;
+  if (u_lobe < specular_probability) {
+    s.wi = ggx::reflect_about(wo, ggx::sample_visible_normal(wo, alpha_, u1, u2));
+  } else {
+    s.wi = cosine_hemisphere(u1, u2);
+  }
+  if (s.wi.z <= 0.0f) return std::nullopt;
+  s.pdf = mixture_pdf(wo, s.wi, specular_probability);
+  if (!(s.pdf > 0.0f)) return std::nullopt;
+  s.weight = eval(wo, s.wi) * s.wi.z / s.pdf;
+  return s;
+}
+
 glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
-  return kind_ == Kind::Layered ? eval_layered(wo, wi) : glm::vec3(0.0f);
+  switch (kind_) {
+    case Kind::Layered: return eval_layered(wo, wi);
+    case Kind::MetalRoughness: return eval_metal_roughness(wo, wi);
+    default: return glm::vec3(0.0f);
+  }
 }
 
 float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
-  return kind_ == Kind::Layered ? pdf_layered(wo, wi) : 0.0f;
+  switch (kind_) {
+    case Kind::Layered: return mixture_pdf(wo, wi, specular_probability_);
+    case Kind::MetalRoughness: return mixture_pdf(wo, wi, specular_probability(wo));
+    default: return 0.0f;
+  }
 }
 
 std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float u1, float u2) const {
@@ -118,19 +176,13 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
       return s;
     }
 
-    case Kind::Layered: {
+    case Kind::Layered:
+      return sample_mixture(wo, u_lobe, u1, u2, specular_probability_,
+                            [this](const glm::vec3& o, const glm::vec3& i) { return eval_layered(o, i); });
+    case Kind::MetalRoughness:
       if (wo.z <= 0.0f) return std::nullopt;
-      if (u_lobe < specular_probability_) {
-        s.wi = ggx::reflect_about(wo, ggx::sample_visible_normal(wo, alpha_, u1, u2));
-      } else {
-        s.wi = cosine_hemisphere(u1, u2);
-      }
-      if (s.wi.z <= 0.0f) return std::nullopt;
-      s.pdf = pdf_layered(wo, s.wi);
-      if (!(s.pdf > 0.0f)) return std::nullopt;
-      s.weight = eval_layered(wo, s.wi) * s.wi.z / s.pdf;
-      return s;
-    }
+      return sample_mixture(wo, u_lobe, u1, u2, specular_probability(wo),
+                            [this](const glm::vec3& o, const glm::vec3& i) { return eval_metal_roughness(o, i); });
   }
   return std::nullopt;
 }

@@ -1,6 +1,11 @@
 #pragma once
 // Scattering functions for the path tracer, mapped from the Phong material (docs/architecture.md, "Conventions"):
 //   smooth dielectric  transmission > 0 and ior > 1 (Fresnel reflection and refraction)
+//   metal-roughness    glTF's materials (Material::metal_roughness): GGX of alpha roughness^2
+//                      with Schlick's Fresnel from the base colour, weighed by metallic, over a
+//                      diffuse base under a rough dielectric coat of index ior (DielectricCoat),
+//                      weighed by 1 - metallic; single scattering, as glTF's reference and Mitsuba
+//                      (a blend of roughplastic and principled) have it
 //   perfect mirror     shininess >= 1000 (reflectance ks, or white when ks is black)
 //   diffuse + glossy   (1 - max ks) * Lambert(kd) + ks * GGX, roughness from the shininess, with
 //                      the energy single scattering loses given back (multiple scattering)
@@ -10,6 +15,7 @@
 #include <optional>
 
 #include "renderer/scene/material.h"
+#include "renderer/trace/dielectric_coat.h"
 
 namespace farm {
 
@@ -39,10 +45,18 @@ class Bsdf {
   static float roughness_from_shininess(float shininess);
 
  private:
-  enum class Kind { Layered, Mirror, Dielectric };
+  enum class Kind { Layered, MetalRoughness, Mirror, Dielectric };
 
   glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
-  float pdf_layered(const glm::vec3& wo, const glm::vec3& wi) const;
+  glm::vec3 eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const;
+  // Chance of sampling GGX's visible normals rather than the cosine lobe, seen from wo.
+  float specular_probability(const glm::vec3& wo) const;
+  // Density of that mixture of the two sampling strategies, and a direction drawn from it
+  // weighted by `eval`.
+  float mixture_pdf(const glm::vec3& wo, const glm::vec3& wi, float specular_probability) const;
+  template <typename Eval>
+  std::optional<BsdfSample> sample_mixture(const glm::vec3& wo, float u_lobe, float u1, float u2,
+                                           float specular_probability, Eval&& eval) const;
 
   Kind kind_ = Kind::Layered;
   glm::vec3 diffuse_{0.0f};   // kd scaled by what the specular layer leaves
@@ -50,7 +64,11 @@ class Bsdf {
   glm::vec3 multiple_scattering_{0.0f};  // ks / (pi (1 - E_avg))
   float alpha_ = 1.0f;        // GGX roughness
   float ior_ = 1.5f;
-  float specular_probability_ = 0.0f;  // chance of sampling GGX visible normals
+  float specular_probability_ = 0.0f;  // Layered: chance of sampling GGX visible normals
+  // MetalRoughness: the base colour as ks above, metallic, and the coat with its diffuse base
+  // (kd / (pi eta^2 (1 - R_int)) in diffuse_).
+  float metallic_ = 0.0f;
+  std::optional<DielectricCoat> coat_;
 };
 
 }  // namespace farm

@@ -4,14 +4,9 @@
 // dimension), so an image never depends on tiling, threads or retries.
 #include <cstdint>
 
-namespace farm {
+#include "renderer/util/mix64.h"
 
-// SplitMix64's finaliser: a bijective 64-bit mix with good avalanche.
-inline std::uint64_t mix64(std::uint64_t z) {
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
+namespace farm {
 
 // The seed a frame's random numbers are keyed by: the job's seed itself at frame 0 (a still), so
 // that a frame range leaves a still's pixels as they were, and one mixed with the frame number
@@ -33,7 +28,7 @@ struct SampleKey {
   std::uint64_t h = mix64(key.seed ^ 0x9e3779b97f4a7c15ULL);
   h = mix64(h ^ key.pixel);
   h = mix64(h ^ ((static_cast<std::uint64_t>(key.sample) << 32) | dimension));
-  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);  // top 24 bits
+  return unit_float(h);
 }
 
 }  // namespace farm

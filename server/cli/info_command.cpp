@@ -57,6 +57,15 @@ void print_model(const std::filesystem::path& file) {
                "transmission {:.4g} emission_sides {}\n",
                m.name, vec(m.ambient), vec(m.diffuse), vec(m.specular), vec(m.emission),
                m.shininess, m.ior, m.transmission, to_string(m.emission_sides));
+    if (const std::optional<MetalRoughness>& mr = m.metal_roughness) {
+      fmt::print("    metal-roughness (the path tracer's): base colour {} metallic {:.4g} roughness {:.4g}\n",
+                 vec(mr->base_colour), mr->metallic, mr->roughness);
+    }
+    if (m.alpha_mode == AlphaMode::Mask) {
+      fmt::print("    alpha {:.4g} (times the base colour texture's), cut out below {:.4g}\n", m.alpha, m.alpha_cutoff);
+    } else if (m.alpha_mode == AlphaMode::Blend) {
+      fmt::print("    alpha {:.4g} (times the base colour texture's), blended\n", m.alpha);
+    }
   }
   for (const Camera& c : model.cameras) print_camera(c);
   for (const Light& l : model.lights) print_light(l);

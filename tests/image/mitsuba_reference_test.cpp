@@ -13,6 +13,10 @@
 //    a sun (jobs/environment.json, Radiance HDR), 4096 spp, half:
 //      build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/environment.json
 //          --width 160 --height 120 --spp 4096 --half -o tests/data/reference/environment_mitsuba.exr
+//  - tests/data/reference/metal_roughness_mitsuba.exr: three glTF metal-roughness balls in the
+//    empty Cornell box (tests/data/metal_roughness/balls.json), 4096 spp, half:
+//      build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/metal_roughness/balls.json
+//          --spp 4096 --half -o tests/data/reference/metal_roughness_mitsuba.exr
 //  - tests/data/reference/cornell_gap_mitsuba.exr: a held-out Cornell box whose lamp hangs 1 mm
 //    under the ceiling (tests/data/cornell_gap), max_depth 4 (Mitsuba's 5), 2048 spp, half float:
 //      build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/cornell_gap/cornell_gap.json
@@ -225,6 +229,23 @@ TEST(MitsubaReference, EnvironmentLitYardMatchesInMeanByAZTest) {
                                        {"sky", {0, 0, w, h / 12}},
                                        {"ground", {0, h * 7 / 8, w, h}},
                                        {"blocks", {w / 4, h / 4, w * 3 / 4, h * 3 / 4}}};
+      });
+}
+
+// glTF's metal-roughness material in the path tracer against Mitsuba's counterpart
+// (tools/mitsuba_reference.py writes the mapping down): a rough gold conductor (metallic 1,
+// roughness 0.35: principled), a half-metallic copper (0.5, 0.5: a blend of the two) and a rough
+// red dielectric (0, 0.3: roughplastic), each ball's middle, and the whole image, where the
+// walls see the balls' reflections.
+TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
+  expect_means_match_by_z_test(
+      "tests/data/metal_roughness/balls.json", "tests/data/reference/metal_roughness_mitsuba.exr", [](int w, int h) {
+        // The balls' centres and radii in pixels at 128 x 128 (camera at z 3.9, 40 degrees).
+        const auto ball = [&](const char* name, int x, int y) {
+          return MeanRegion{name, {x * w / 128 - 9, y * h / 128 - 9, x * w / 128 + 9, y * h / 128 + 9}};
+        };
+        return std::vector<MeanRegion>{{"image", {0, 0, w, h}}, ball("rough gold", 35, 96),
+                                       ball("half copper", 64, 93), ball("red plastic", 93, 96)};
       });
 }
 

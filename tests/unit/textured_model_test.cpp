@@ -222,6 +222,11 @@ TEST(TexturedModel, GltfMetalRoughnessAndOcclusionTexturesAreMappedAtEachPoint) 
   EXPECT_EQ(at.specular, expected.specular);
   EXPECT_FLOAT_EQ(at.shininess, expected.shininess);
   EXPECT_NE(at.shininess, m.shininess);  // the texture's roughness moved it from the factor's
+  // The path tracer's values: the same product, unmapped.
+  ASSERT_TRUE(at.metal_roughness);
+  EXPECT_EQ(at.metal_roughness->base_colour, glm::vec3(0.5f, 0.0f, 0.0f));
+  EXPECT_FLOAT_EQ(at.metal_roughness->metallic, 0.5f);
+  EXPECT_FLOAT_EQ(at.metal_roughness->roughness, 0.8f * (128.0f / 255.0f));
   // Occlusion 64/255 at strength 0.5: the ambient term keeps 1 + 0.5 (0.251 - 1) of itself.
   EXPECT_FLOAT_EQ(at.ambient.x, m.ambient.x * (1.0f + 0.5f * (64.0f / 255.0f - 1.0f)));
 
@@ -229,9 +234,62 @@ TEST(TexturedModel, GltfMetalRoughnessAndOcclusionTexturesAreMappedAtEachPoint) 
   Material overridden = m;
   MaterialOverride give;
   give.diffuse = glm::vec3(0.25f);
-  apply_override(give, overridden);
-  EXPECT_EQ(material_at(overridden, glm::vec2(0.25f, 0.25f), 0.0f, scratch).diffuse, glm::vec3(0.25f, 0.0f, 0.0f));
-  EXPECT_TRUE(m.textures->metal_roughness_factors);  // the model's own material is left as it was
+  give.apply_to(overridden);
+  const Material& phong = material_at(overridden, glm::vec2(0.25f, 0.25f), 0.0f, scratch);
+  EXPECT_EQ(phong.diffuse, glm::vec3(0.25f, 0.0f, 0.0f));
+  EXPECT_FALSE(phong.metal_roughness);  // a Phong material now, in the path tracer too
+  EXPECT_TRUE(m.metal_roughness);       // the model's own material is left as it was
+}
+
+// glTF's alphaMode, alphaCutoff and the base colour's alpha: a MASK material's coverage is the
+// factor's alpha times the texture's (the checker's RGB PNG has alpha 1), and it is cut out
+// below the cutoff; an OPAQUE one never, whatever its alpha.
+TEST(TexturedModel, GltfAlphaModeCutoffAndBaseColourAlphaAreRead) {
+  TempDir dir;
+  write_checker_png(dir / "checker.png");
+  const fs::path gltf = write_textured_triangle(dir, "cut.gltf", R"(
+    "images": [{"uri": "checker.png"}],
+    "textures": [{"source": 0}],
+    "materials": [{"name": "lace", "alphaMode": "MASK", "alphaCutoff": 0.25,
+      "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.2], "baseColorTexture": {"index": 0}}},
+      {"name": "veil", "alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.6]}},
+      {"name": "plain", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.1]}}])");
+  const Model model = load_model(gltf, dir.path());
+  ASSERT_EQ(model.materials.size(), 3u);
+  const Material &lace = model.materials[0], &veil = model.materials[1], &plain = model.materials[2];
+  EXPECT_EQ(lace.alpha_mode, AlphaMode::Mask);
+  EXPECT_FLOAT_EQ(lace.alpha_cutoff, 0.25f);
+  EXPECT_FLOAT_EQ(coverage_at(lace, glm::vec2(0.3f, 0.3f)), 0.2f);
+  EXPECT_TRUE(cut_out(lace, glm::vec2(0.3f, 0.3f), 0.0f));
+  EXPECT_EQ(veil.alpha_mode, AlphaMode::Blend);
+  EXPECT_FALSE(cut_out(veil, glm::vec2(0.0f), 0.59f));
+  EXPECT_TRUE(cut_out(veil, glm::vec2(0.0f), 0.61f));
+  EXPECT_EQ(plain.alpha_mode, AlphaMode::Opaque);
+  EXPECT_FALSE(cut_out(plain, glm::vec2(0.0f), 0.99f));
+}
+
+// One set of texture coordinates is read: a base colour map on TEXCOORD_1 is refused with the
+// material and the slot named, an occlusion map there (a lightmap's, typically) left out.
+TEST(TexturedModel, AGltfMapOnASecondSetOfTextureCoordinatesIsRefusedUnlessItIsOcclusion) {
+  TempDir dir;
+  write_checker_png(dir / "checker.png");
+  const std::string images = R"("images": [{"uri": "checker.png"}], "textures": [{"source": 0}],)";
+  const fs::path second = write_textured_triangle(dir, "uv1.gltf", images + R"(
+    "materials": [{"name": "decal", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}}}])");
+  try {
+    load_model(second, dir.path());
+    FAIL() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("material 'decal' baseColorTexture: reads TEXCOORD_1"), std::string::npos)
+        << e.what();
+  }
+  const fs::path lightmapped = write_textured_triangle(dir, "ao.gltf", images + R"(
+    "materials": [{"name": "baked", "occlusionTexture": {"index": 0, "texCoord": 1},
+      "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}])");
+  const Model model = load_model(lightmapped, dir.path());
+  ASSERT_TRUE(model.materials[0].textures);
+  EXPECT_TRUE(model.materials[0].textures->base_colour);
+  EXPECT_FALSE(model.materials[0].textures->occlusion);
 }
 
 // A glTF normal map without TANGENTs: the loader makes the tangent frame from the uvs (u grows
