@@ -1,6 +1,7 @@
 #include "renderer/raster/raster_engine.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -138,7 +139,7 @@ class RegionRasterizer {
         if constexpr (kTextured) {
           uv = (q0 * t0.uv + q1 * t1.uv + q2 * t2.uv) * inv_q;
           // A cut-out fragment leaves the depth as it was: what lies behind shows through.
-          if (material->alpha_mode != AlphaMode::Opaque && cut_out(*material, uv, fragment_hash(x, y, t))) continue;
+          if (material->alpha_mode != AlphaMode::Opaque && cut_out(*material, uv, fragment_hash(x, y, depth))) continue;
         }
         depth_[i] = depth;
         material_[i] = material;
@@ -156,14 +157,16 @@ class RegionRasterizer {
     }
   }
 
-  // A number uniform in [0, 1) for one fragment of one triangle at one sample position, so that
-  // a blended surface of coverage a covers a share a of a pixel's samples (hashed alpha testing:
-  // the rasterizer has no order to blend in; the average over spp samples stands for it).
-  float fragment_hash(int x, int y, const ScreenTriangle& t) const {
+  // A number uniform in [0, 1) for one fragment at one sample position, so that a blended
+  // surface of coverage a covers a share a of a pixel's samples (hashed alpha testing: the
+  // rasterizer has no order to blend in; the average over spp samples stands for it). The depth
+  // tells the surfaces at one sample apart, and unlike a vertex index it does not depend on how
+  // the frame's triangles were set up (clipping, chunks, threads).
+  float fragment_hash(int x, int y, float depth) const {
     const auto bits = [](std::int64_t v) { return static_cast<std::uint64_t>(v); };
     std::uint64_t h = mix64((bits(x) << 32) ^ bits(y));
     h = mix64(h ^ (bits(offset_.x) << 32) ^ bits(offset_.y));
-    return unit_float(mix64(h ^ t.v[0]));
+    return unit_float(mix64(h ^ std::bit_cast<std::uint32_t>(depth)));
   }
 
   std::size_t index(int x, int y) const {

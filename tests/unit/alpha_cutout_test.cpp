@@ -6,12 +6,14 @@
 
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include "renderer/accel/cutout_intersector.h"
 #include "renderer/engine.h"
+#include "renderer/render_frame.h"
 #include "renderer/texture/material_textures.h"
 #include "renderer/trace/sampler.h"
 #include "tests/support/scene_fixtures.h"
@@ -139,6 +141,26 @@ TEST(AlphaCutout, ABlendedQuadStopsAShareOfTheSamplesEqualToItsAlpha) {
     ASSERT_GT(n, 500);
     // 64 samples on each of n pixels: a binomial share's standard error is under 0.003.
     EXPECT_NEAR(sum / n, 0.3, 0.012) << to_string(engine);
+  }
+}
+
+// The hashes that decide a blended surface's samples are keyed by what is rendered (the ray, or
+// the pixel, sample position and depth), never by the tiles or threads: bit-identical images.
+TEST(AlphaCutout, BlendedAndMaskedSurfacesGiveTheSameBitsAcrossTilesAndThreads) {
+  Scene base = quad_scene(glowing(AlphaMode::Blend, 0.4f, false));
+  Scene masked = quad_scene(glowing(AlphaMode::Mask, 1.0f, true));
+  masked.objects[0].model_to_world = glm::translate(glm::mat4(1.0f), glm::vec3(0.3f, 0.2f, -0.5f));
+  base.objects.push_back(masked.objects[0]);
+  const PreparedScene scene(base);
+  for (const EngineKind engine : {EngineKind::Raster, EngineKind::Whitted, EngineKind::Path}) {
+    RenderSettings whole = settings_for(engine, 8), tiled = whole;
+    whole.tile_size = 64;
+    whole.threads = 1;
+    tiled.tile_size = 7;
+    tiled.threads = 3;
+    const TileBuffer a = render_frame(scene, whole), b = render_frame(scene, tiled);
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) ASSERT_EQ(a.rgba(x, y), b.rgba(x, y)) << to_string(engine) << " " << x << "," << y;
   }
 }
 
