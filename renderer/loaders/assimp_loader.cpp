@@ -105,7 +105,11 @@ Material convert_material(const ModelFile& file, const aiMaterial& in) {
   textures.emission = texture_slot(file, in, aiTextureType_EMISSIVE, TextureColourSpace::Srgb);
   // MTL's norm (a normal map; its bump is a height map, not read).
   textures.normal = texture_slot(file, in, aiTextureType_NORMALS, TextureColourSpace::Linear);
-  if (textures.base_colour || textures.specular || textures.emission || textures.normal) {
+  // MTL's map_d, a dissolve texture: the surface covers what it says, partly where it is grey
+  // (blended; a map of 0s and 1s, the usual cut-out leaf, cuts exactly).
+  textures.opacity = texture_slot(file, in, aiTextureType_OPACITY, TextureColourSpace::Linear);
+  if (textures.opacity) m.alpha_mode = AlphaMode::Blend;
+  if (textures.base_colour || textures.specular || textures.emission || textures.normal || textures.opacity) {
     m.textures = std::make_shared<const MaterialTextures>(std::move(textures));
   }
   return m;

@@ -28,8 +28,10 @@ glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const gl
 }
 
 float coverage_at(const Material& m, glm::vec2 uv) {
-  if (!m.textures || !m.textures->base_colour) return m.alpha;
-  return m.alpha * m.textures->base_colour.sample(uv, 0.0f).w;
+  if (!m.textures) return m.alpha;
+  if (m.textures->opacity) return m.alpha * m.textures->opacity.sample(uv, 0.0f).x;
+  if (m.textures->base_colour) return m.alpha * m.textures->base_colour.sample(uv, 0.0f).w;
+  return m.alpha;
 }
 
 const Material& material_at(const Material& base, glm::vec2 uv, float footprint, Material& scratch) {

@@ -32,6 +32,7 @@ struct MaterialTextures {
   TextureSlot metal_roughness;  // glTF: blue multiplies metalness, green roughness
   TextureSlot occlusion;        // glTF: red darkens the ambient term, as far as the strength says
   float occlusion_strength = 1.0f;
+  TextureSlot opacity;          // MTL's map_d: red is the coverage (1 opaque), for alpha
   TextureSlot normal;           // tangent-space normals (glTF's normalTexture, MTL's norm)
   float normal_scale = 1.0f;    // glTF: scales the map's X and Y
 };
@@ -47,7 +48,7 @@ glm::vec3 mapped_normal(const MaterialTextures& textures, glm::vec2 uv, const gl
                         const glm::vec4& tangent);
 
 // How much of the surface `m` covers at `uv` (glTF's alpha: the alpha factor times the base colour
-// texture's alpha at its finest level), and whether a ray or a fragment passes through it there:
+// texture's alpha at its finest level; MTL's map_d: its red instead), and whether a ray or a fragment passes through it there:
 // never for an opaque material, below the cutoff for a masked one, and for a blended one where
 // the coverage is below `u`, a number uniform in [0, 1) for that ray or fragment (so that a
 // surface of coverage a stops a share a of them).

@@ -268,6 +268,23 @@ TEST(TexturedModel, GltfAlphaModeCutoffAndBaseColourAlphaAreRead) {
   EXPECT_FALSE(cut_out(plain, glm::vec2(0.0f), 0.99f));
 }
 
+// MTL's map_d, a dissolve texture, is the surface's coverage (its red; 1 opaque), blended: a
+// texel of 0 lets every ray through, one of 255 none.
+TEST(TexturedModel, AnMtlDissolveMapIsTheSurfacesCoverage) {
+  TempDir dir;
+  write_rgb_png(dir / "holes.png", 2, 1, {0, 0, 0, 255, 255, 255});
+  dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nmap_d holes.png\n");
+  const Model model = load_model(dir.write("tri.obj", kTexturedObj), dir.path());
+  const Material& m = model.materials.at(model.meshes[0].material);
+  ASSERT_TRUE(m.textures && m.textures->opacity);
+  EXPECT_EQ(m.alpha_mode, AlphaMode::Blend);
+  // At the texels' centres (bilinear, repeating: elsewhere the two mix).
+  EXPECT_FLOAT_EQ(coverage_at(m, glm::vec2(0.25f, 0.5f)), 0.0f);
+  EXPECT_FLOAT_EQ(coverage_at(m, glm::vec2(0.75f, 0.5f)), 1.0f);
+  EXPECT_TRUE(cut_out(m, glm::vec2(0.25f, 0.5f), 0.0f));
+  EXPECT_FALSE(cut_out(m, glm::vec2(0.75f, 0.5f), 0.999f));
+}
+
 // One set of texture coordinates is read: a base colour map on TEXCOORD_1 is refused with the
 // material and the slot named, an occlusion map there (a lightmap's, typically) left out.
 TEST(TexturedModel, AGltfMapOnASecondSetOfTextureCoordinatesIsRefusedUnlessItIsOcclusion) {
