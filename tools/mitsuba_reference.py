@@ -17,6 +17,9 @@ background or environment, max_depth) and turned into the same scene in Mitsuba:
     metallic=1 and the same roughness (GGX of Schlick's Fresnel from the base colour); between
     them a `blendbsdf` weighted by metallic; all two-sided. The mesh is read from the file's
     buffers with its normals (positions baked: no node transforms).
+  * MTL's `norm` wraps that in a `normalmap` of the same image (raw, bilinear, repeating), with
+    its shadowing function off (Mitsuba adds one by default; the normal-mapped surface itself,
+    ours, and the direct-light integral have none).
   * scene.environment becomes an `envmap` of the same map, its rows laid out as Mitsuba reads
     them (mitsuba_layout_map), its `scale` our intensity, a turn about +y its to_world; or a
     `constant` emitter without a map.
@@ -24,7 +27,7 @@ background or environment, max_depth) and turned into the same scene in Mitsuba:
   * A box pixel filter, as ours, and the `independent` sampler.
 
 Only what the reference scenes need is supported (OBJ models with diffuse + emissive materials,
-glTF models with factor-only metal-roughness materials,
+a map_Kd and a norm, glTF models with factor-only metal-roughness materials,
 translate/rotate/scale, a material override of emission_sides alone); anything else is refused
 with a message rather than silently changed.
 
@@ -42,6 +45,8 @@ Reference images (what tests/data/reference/ holds):
       --width 160 --height 120 --spp 4096 --half -o tests/data/reference/environment_mitsuba.exr
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/metal_roughness/balls.json \\
       --spp 4096 --half -o tests/data/reference/metal_roughness_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/normal_mapped/floor.json \\
+      --spp 4096 --half -o tests/data/reference/normal_mapped_mitsuba.exr
 Throughput beside `farm bench path`:
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
       --width 512 --height 512 --spp 16 --threads 1 --bench
@@ -69,8 +74,8 @@ def parse_mtl(path):
             key, values = words[0], words[1:]
             if key == "newmtl":
                 current = materials.setdefault(values[0], {"Kd": [0.5] * 3, "Ke": [0.0] * 3, "Ks": [0.0] * 3})
-            elif current is not None and key == "map_Kd":
-                current["map_Kd"] = os.path.join(os.path.dirname(path), values[-1])
+            elif current is not None and key in ("map_Kd", "norm"):
+                current[key] = os.path.join(os.path.dirname(path), values[-1])
             elif current is not None and key in ("Kd", "Ke", "Ks"):
                 current[key] = [float(v) for v in values[:3]]
             elif current is not None and key in ("d", "Tr", "Ni", "Ns", "Ka", "illum"):
@@ -387,6 +392,15 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
                 reflectance = {"type": "bitmap", "filename": m["map_Kd"], "raw": False,
                                "filter_type": "bilinear", "wrap_mode": "repeat"}
             bsdf = {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": reflectance}}
+            if "norm" in m:
+                if any(uv is None for t in triangles for _, uv in t):
+                    raise RefusedScene(f"{obj['file']}: material '{name}': a face without vt")
+                # Mitsuba's normalmap darkens by default with a shadowing term for bumps
+                # (Estevez et al. 2019) that the normal map itself does not have, and we do not:
+                # off here. Its flip of a normal facing away from the viewer is ours too.
+                bsdf = {"type": "normalmap", "use_shadowing_function": False, "bsdf": bsdf,
+                        "normalmap": {"type": "bitmap", "filename": m["norm"], "raw": True,
+                                      "filter_type": "bilinear", "wrap_mode": "repeat"}}
             emits = max(m["Ke"]) > 0
             twins = [("front", False)] + ([("back", True)] if emits and two_sided_emission else [])
             for side, flip in twins:

@@ -17,6 +17,10 @@
 //    empty Cornell box (tests/data/metal_roughness/balls.json), 4096 spp, half:
 //      build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/metal_roughness/balls.json
 //          --spp 4096 --half -o tests/data/reference/metal_roughness_mitsuba.exr
+//  - tests/data/reference/normal_mapped_mitsuba.exr: a floor whose MTL norm bends it into ridges,
+//    under a small lamp (tests/data/normal_mapped/floor.json), 4096 spp, half:
+//      build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/normal_mapped/floor.json
+//          --spp 4096 --half -o tests/data/reference/normal_mapped_mitsuba.exr
 //  - tests/data/reference/cornell_gap_mitsuba.exr: a held-out Cornell box whose lamp hangs 1 mm
 //    under the ceiling (tests/data/cornell_gap), max_depth 4 (Mitsuba's 5), 2048 spp, half float:
 //      build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/cornell_gap/cornell_gap.json
@@ -246,6 +250,20 @@ TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
         };
         return std::vector<MeanRegion>{{"image", {0, 0, w, h}}, ball("rough gold", 35, 96),
                                        ball("half copper", 64, 93), ball("red plastic", 93, 96)};
+      });
+}
+
+// A floor bent into ridges by a tangent-space normal map (MTL's norm, tangents made from the
+// uvs), lit by a small lamp to one side: the shading normals, the map's axes and its Y's sign
+// must be Mitsuba's normalmap's (its shadowing function off, see tools/mitsuba_reference.py).
+// The whole image, and the halves near and away from the lamp (the far one lit at grazing
+// angles, where the bent normals matter most).
+TEST(MitsubaReference, NormalMappedFloorMatchesInMeanByAZTest) {
+  expect_means_match_by_z_test(
+      "tests/data/normal_mapped/floor.json", "tests/data/reference/normal_mapped_mitsuba.exr", [](int w, int h) {
+        return std::vector<MeanRegion>{{"image", {0, 0, w, h}},
+                                       {"near the lamp", {0, 0, w / 2, h}},
+                                       {"away from the lamp", {w / 2, 0, w, h}}};
       });
 }
 
