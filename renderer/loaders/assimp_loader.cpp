@@ -70,6 +70,13 @@ TextureSlot texture_slot(const ModelFile& file, const aiMaterial& in, aiTextureT
   return slot;
 }
 
+// Whether a texture's mean (its last, 1x1 mip level) is a tangent-space normal map's: pointing
+// mostly out of the surface, leaning little either way.
+bool looks_like_normal_map(const Texture& texture) {
+  const glm::vec4& mean = texture.texel(texture.levels() - 1, 0, 0);
+  return mean.z > 0.7f && std::fabs(mean.x - 0.5f) < 0.15f && std::fabs(mean.y - 0.5f) < 0.15f;
+}
+
 Material convert_material(const ModelFile& file, const aiMaterial& in) {
   Material m;
   aiString name;
@@ -103,8 +110,14 @@ Material convert_material(const ModelFile& file, const aiMaterial& in) {
   textures.base_colour = texture_slot(file, in, aiTextureType_DIFFUSE, TextureColourSpace::Srgb);
   textures.specular = texture_slot(file, in, aiTextureType_SPECULAR, TextureColourSpace::Srgb);
   textures.emission = texture_slot(file, in, aiTextureType_EMISSIVE, TextureColourSpace::Srgb);
-  // MTL's norm (a normal map; its bump is a height map, not read).
+  // MTL's norm, a normal map. Its bump (map_Bump) is a height map by the format's definition,
+  // but exporters such as Blender's write their normal maps there: an image whose mean is a
+  // normal map's (blue near 1, red and green near a half) is read as one; a height map is not.
   textures.normal = texture_slot(file, in, aiTextureType_NORMALS, TextureColourSpace::Linear);
+  if (!textures.normal) {
+    TextureSlot bump = texture_slot(file, in, aiTextureType_HEIGHT, TextureColourSpace::Linear);
+    if (bump && looks_like_normal_map(*bump.texture)) textures.normal = std::move(bump);
+  }
   // MTL's map_d, a dissolve texture: the surface covers what it says, partly where it is grey
   // (blended; a map of 0s and 1s, the usual cut-out leaf, cuts exactly).
   textures.opacity = texture_slot(file, in, aiTextureType_OPACITY, TextureColourSpace::Linear);

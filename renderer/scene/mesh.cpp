@@ -1,8 +1,10 @@
 #include "renderer/scene/mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
+#include <limits>
 #include <map>
 #include <tuple>
 
@@ -92,23 +94,61 @@ void generate_smooth_normals(Mesh& mesh, float crease_degrees) {
 void generate_tangents(Mesh& mesh) {
   const std::size_t n = mesh.positions.size();
   if (mesh.uvs.size() != n || mesh.normals.size() != n) return;
-  std::vector<glm::vec3> along_u(n, glm::vec3(0.0f)), along_v(n, glm::vec3(0.0f));
-  for (const glm::uvec3& t : mesh.triangles) {
-    const glm::vec3 e1 = mesh.positions[t.y] - mesh.positions[t.x], e2 = mesh.positions[t.z] - mesh.positions[t.x];
+  // A triangle's orientation: whether its uv map keeps (+1) or mirrors (-1) its winding; 0 where
+  // its uvs are degenerate (it adds nothing). A vertex whose triangles disagree (a mirrored
+  // island's seam) is split: the mirrored side gets a copy of it, so each side keeps its frame.
+  std::vector<int> orientation(mesh.triangles.size(), 0);
+  std::vector<int> vertex_orientation(n, 0);
+  std::vector<std::uint32_t> twin(n, std::numeric_limits<std::uint32_t>::max());
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    glm::uvec3& t = mesh.triangles[f];
     const glm::vec2 d1 = mesh.uvs[t.y] - mesh.uvs[t.x], d2 = mesh.uvs[t.z] - mesh.uvs[t.x];
     const float det = d1.x * d2.y - d2.x * d1.y;
     if (!(std::fabs(det) > 0.0f) || !std::isfinite(det)) continue;
-    // Solving e = du * U + dv * V for U and V; scaling by |det| rather than dividing keeps the
-    // sum weighted by each triangle's area in uv, and its sign keeps the directions' sense.
-    const float sign = det > 0.0f ? 1.0f : -1.0f;
-    const glm::vec3 u = sign * (d2.y * e1 - d1.y * e2), v = sign * (d1.x * e2 - d2.x * e1);
-    for (std::uint32_t k : {t.x, t.y, t.z}) {
-      along_u[k] += u;
-      along_v[k] += v;
+    orientation[f] = det > 0.0f ? 1 : -1;
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t& v = t[k];
+      if (vertex_orientation[v] == 0) vertex_orientation[v] = orientation[f];
+      if (vertex_orientation[v] == orientation[f]) continue;
+      if (twin[v] == std::numeric_limits<std::uint32_t>::max()) {
+        twin[v] = static_cast<std::uint32_t>(mesh.positions.size());
+        mesh.positions.push_back(mesh.positions[v]);
+        mesh.normals.push_back(mesh.normals[v]);
+        mesh.uvs.push_back(mesh.uvs[v]);
+      }
+      v = twin[v];
     }
   }
-  mesh.tangents.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  const std::size_t vertices = mesh.positions.size();
+  // MikkTSpace's weighting (Mikkelsen 2008): at each corner, the triangle's directions of
+  // growing u and v are laid into the plane of the vertex normal and normalised, and weighted by
+  // the corner's angle in that plane; so neither a triangle's size nor its uv scale tips the sum.
+  std::vector<glm::vec3> along_u(vertices, glm::vec3(0.0f)), along_v(vertices, glm::vec3(0.0f));
+  const auto in_plane = [](const glm::vec3& normal, const glm::vec3& d) {
+    const glm::vec3 p = d - normal * glm::dot(normal, d);
+    const float length = glm::length(p);
+    return length > 1e-20f && std::isfinite(length) ? p / length : glm::vec3(0.0f);
+  };
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    if (orientation[f] == 0) continue;
+    const glm::uvec3& t = mesh.triangles[f];
+    const glm::vec3 e1 = mesh.positions[t.y] - mesh.positions[t.x], e2 = mesh.positions[t.z] - mesh.positions[t.x];
+    const glm::vec2 d1 = mesh.uvs[t.y] - mesh.uvs[t.x], d2 = mesh.uvs[t.z] - mesh.uvs[t.x];
+    // Solving e = du * U + dv * V for U and V, up to the positive factor 1 / |det|.
+    const float sign = static_cast<float>(orientation[f]);
+    const glm::vec3 u = sign * (d2.y * e1 - d1.y * e2), v = sign * (d1.x * e2 - d2.x * e1);
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t i = t[k];
+      const glm::vec3& normal = mesh.normals[i];
+      const glm::vec3 to_next = in_plane(normal, mesh.positions[t[(k + 1) % 3]] - mesh.positions[i]);
+      const glm::vec3 to_prev = in_plane(normal, mesh.positions[t[(k + 2) % 3]] - mesh.positions[i]);
+      const float angle = std::acos(std::clamp(glm::dot(to_next, to_prev), -1.0f, 1.0f));
+      along_u[i] += angle * in_plane(normal, u);
+      along_v[i] += angle * in_plane(normal, v);
+    }
+  }
+  mesh.tangents.resize(vertices);
+  for (std::size_t i = 0; i < vertices; ++i) {
     const glm::vec3& normal = mesh.normals[i];
     glm::vec3 t = along_u[i] - normal * glm::dot(normal, along_u[i]);
     float length = glm::length(t);

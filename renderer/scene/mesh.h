@@ -39,13 +39,15 @@ struct Mesh {
 inline constexpr float kDefaultCreaseDegrees = 60.0f;
 void generate_smooth_normals(Mesh& mesh, float crease_degrees = kDefaultCreaseDegrees);
 
-// Tangents for a mesh with normals and texture coordinates but no tangents: each triangle's
-// directions of growing u and v (from its uv and position differences, weighted by its area),
-// summed at its corners, the sum of u's made perpendicular to the vertex normal, and w the side
-// v's sum lies on. This is the classic construction (Lengyel), not MikkTSpace's: a normal map
-// baked against MikkTSpace agrees on smooth, consistently mapped surfaces and may differ near
-// uv seams and mirrored islands. A vertex whose uvs are degenerate gets any tangent
-// perpendicular to its normal.
+// Tangents for a mesh with normals and texture coordinates but no tangents, built as MikkTSpace
+// builds them (Mikkelsen 2008; glTF asks for it): at each corner the triangle's directions of
+// growing u and v, laid into the plane of the vertex normal and normalised, weighted by the
+// corner's angle there, summed per vertex; w the side v's sum lies on. A vertex shared by
+// triangles whose uv maps disagree in orientation (the seam of a mirrored island) is split, each
+// side keeping its own frame, and triangles are rewritten to match. Written from the paper, not
+// from its reference code: a vertex whose corners are not joined by edges (a bow-tie) is not
+// split as MikkTSpace would. A vertex whose uvs are degenerate gets any tangent perpendicular to
+// its normal.
 void generate_tangents(Mesh& mesh);
 
 }  // namespace farm

@@ -285,6 +285,23 @@ TEST(TexturedModel, AnMtlDissolveMapIsTheSurfacesCoverage) {
   EXPECT_FALSE(cut_out(m, glm::vec2(0.75f, 0.5f), 0.999f));
 }
 
+// MTL's bump (map_Bump) holding a normal map, as Blender's OBJ exporter writes one, is read as
+// the normal map; a grey height map there is not read (bump mapping from heights is not done).
+TEST(TexturedModel, AnMtlBumpHoldingANormalMapIsReadAsOneAndAHeightMapIsNot) {
+  TempDir dir;
+  write_rgb_png(dir / "normal.png", 1, 1, {128, 128, 255});
+  write_rgb_png(dir / "height.png", 1, 1, {128, 128, 128});
+  dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nmap_Bump -bm 1.0 normal.png\n");
+  const Model bumped = load_model(dir.write("tri.obj", kTexturedObj), dir.path());
+  const Material& b = bumped.materials.at(bumped.meshes[0].material);
+  ASSERT_TRUE(b.textures && b.textures->normal);
+  EXPECT_EQ(bumped.meshes[0].tangents.size(), bumped.meshes[0].positions.size());  // a frame to read it in
+  dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nbump height.png\n");
+  const Model heights = load_model(dir.path() / "tri.obj", dir.path());
+  const Material& h = heights.materials.at(heights.meshes[0].material);
+  EXPECT_FALSE(h.textures && h.textures->normal);
+}
+
 // One set of texture coordinates is read: a base colour map on TEXCOORD_1 is refused with the
 // material and the slot named, an occlusion map there (a lightmap's, typically) left out.
 TEST(TexturedModel, AGltfMapOnASecondSetOfTextureCoordinatesIsRefusedUnlessItIsOcclusion) {
