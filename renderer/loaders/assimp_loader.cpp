@@ -115,8 +115,13 @@ Material convert_material(const ModelFile& file, const aiMaterial& in) {
   // normal map's (blue near 1, red and green near a half) is read as one; a height map is not.
   textures.normal = texture_slot(file, in, aiTextureType_NORMALS, TextureColourSpace::Linear);
   if (!textures.normal) {
-    TextureSlot bump = texture_slot(file, in, aiTextureType_HEIGHT, TextureColourSpace::Linear);
-    if (bump && looks_like_normal_map(*bump.texture)) textures.normal = std::move(bump);
+    // Nothing else reads a bump map: one that cannot be read (missing, outside the root, not an
+    // image) is left out, as it always was, rather than failing the model.
+    try {
+      TextureSlot bump = texture_slot(file, in, aiTextureType_HEIGHT, TextureColourSpace::Linear);
+      if (bump && looks_like_normal_map(*bump.texture)) textures.normal = std::move(bump);
+    } catch (const InputError&) {
+    }
   }
   // MTL's map_d, a dissolve texture: the surface covers what it says, partly where it is grey
   // (blended; a map of 0s and 1s, the usual cut-out leaf, cuts exactly).

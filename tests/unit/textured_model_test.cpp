@@ -300,6 +300,10 @@ TEST(TexturedModel, AnMtlBumpHoldingANormalMapIsReadAsOneAndAHeightMapIsNot) {
   const Model heights = load_model(dir.path() / "tri.obj", dir.path());
   const Material& h = heights.materials.at(heights.meshes[0].material);
   EXPECT_FALSE(h.textures && h.textures->normal);
+  // Nor is one that is missing: the model loads without it, as before bump was looked at.
+  dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nbump missing.png\n");
+  const Model missing = load_model(dir.path() / "tri.obj", dir.path());
+  EXPECT_FALSE(missing.materials.at(missing.meshes[0].material).textures);
 }
 
 // One set of texture coordinates is read: a base colour map on TEXCOORD_1 is refused with the
