@@ -88,8 +88,7 @@ glm::vec3 Bsdf::eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) c
   return f;
 }
 
-float Bsdf::specular_probability(const glm::vec3& wo) const {
-  if (kind_ != Kind::MetalRoughness) return specular_probability_;
+float Bsdf::metal_roughness_specular_probability(const glm::vec3& wo) const {
   // What each lobe reflects, roughly: the metal all of its light, the coat what it does not
   // let in; the base its colour of what the coat lets in.
   const float entering = coat_->transmittance(wo.z);
@@ -136,7 +135,7 @@ glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
 float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Layered: return mixture_pdf(wo, wi, specular_probability_);
-    case Kind::MetalRoughness: return mixture_pdf(wo, wi, specular_probability(wo));
+    case Kind::MetalRoughness: return mixture_pdf(wo, wi, metal_roughness_specular_probability(wo));
     default: return 0.0f;
   }
 }
@@ -180,8 +179,7 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
       return sample_mixture(wo, u_lobe, u1, u2, specular_probability_,
                             [this](const glm::vec3& o, const glm::vec3& i) { return eval_layered(o, i); });
     case Kind::MetalRoughness:
-      if (wo.z <= 0.0f) return std::nullopt;
-      return sample_mixture(wo, u_lobe, u1, u2, specular_probability(wo),
+      return sample_mixture(wo, u_lobe, u1, u2, metal_roughness_specular_probability(wo),
                             [this](const glm::vec3& o, const glm::vec3& i) { return eval_metal_roughness(o, i); });
   }
   return std::nullopt;

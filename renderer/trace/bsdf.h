@@ -49,8 +49,9 @@ class Bsdf {
 
   glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
   glm::vec3 eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const;
-  // Chance of sampling GGX's visible normals rather than the cosine lobe, seen from wo.
-  float specular_probability(const glm::vec3& wo) const;
+  // MetalRoughness: the chance of sampling GGX's visible normals rather than the cosine lobe,
+  // seen from wo (Layered's is the constant specular_probability_).
+  float metal_roughness_specular_probability(const glm::vec3& wo) const;
   // Density of that mixture of the two sampling strategies, and a direction drawn from it
   // weighted by `eval`.
   float mixture_pdf(const glm::vec3& wo, const glm::vec3& wi, float specular_probability) const;
