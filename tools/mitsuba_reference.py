@@ -15,11 +15,18 @@ background or environment, max_depth) and turned into the same scene in Mitsuba:
     under a rough coat) `roughplastic` with GGX alpha = roughness^2, nonlinear=false, the base
     colour as diffuse_reflectance and int_ior the ior; its metal half `principled` with
     metallic=1 and the same roughness (GGX of Schlick's Fresnel from the base colour); between
-    them a `blendbsdf` weighted by metallic; all two-sided. The mesh is read from the file's
-    buffers with its normals (positions baked: no node transforms).
+    them a `blendbsdf` weighted by metallic; all two-sided. KHR_materials_transmission's share of
+    the dielectric half, t (1 - metallic), is a smooth `dielectric` (specular_transmittance the
+    base colour's square root: tinted by it over two crossings), blended with that two-sided
+    rest (whose metallic becomes metallic / (1 - t (1 - metallic))); in a blend, a `roughdielectric`
+    of alpha 1e-4, as blendbsdf mishandles a delta component (see metal_roughness_bsdf). The mesh
+    is read from the file's buffers with its normals (positions baked: no node transforms).
   * MTL's `norm` wraps that in a `normalmap` of the same image (raw, bilinear, repeating), with
     its shadowing function off (Mitsuba adds one by default; the normal-mapped surface itself,
     ours, and the direct-light integral have none).
+  * MTL's `bump` (a height map, -bm its multiplier) wraps it in a `bumpmap` of the same image,
+    its shadowing function off as well, its scale -bm times the world length of a uv unit (our
+    heights are in uv units, Mitsuba's in world units; one scale across the group, or refused).
   * scene.environment becomes an `envmap` of the same map, its rows laid out as Mitsuba reads
     them (mitsuba_layout_map), its `scale` our intensity, a turn about +y its to_world; or a
     `constant` emitter without a map.
@@ -27,7 +34,7 @@ background or environment, max_depth) and turned into the same scene in Mitsuba:
   * A box pixel filter, as ours, and the `independent` sampler.
 
 Only what the reference scenes need is supported (OBJ models with diffuse + emissive materials,
-a map_Kd and a norm, glTF models with factor-only metal-roughness materials,
+a map_Kd, a norm and a bump, glTF models with factor-only metal-roughness materials and transmission,
 translate/rotate/scale, a material override of emission_sides alone); anything else is refused
 with a message rather than silently changed.
 
@@ -45,8 +52,12 @@ Reference images (what tests/data/reference/ holds):
       --width 160 --height 120 --spp 4096 --half -o tests/data/reference/environment_mitsuba.exr
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/metal_roughness/balls.json \\
       --spp 4096 --half -o tests/data/reference/metal_roughness_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/metal_roughness/glass_balls.json \\
+      --spp 4096 --half -o tests/data/reference/glass_balls_mitsuba.exr
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/normal_mapped/floor.json \\
       --spp 4096 --half -o tests/data/reference/normal_mapped_mitsuba.exr
+  build/mitsuba-venv/bin/python tools/mitsuba_reference.py tests/data/normal_mapped/bumped_floor.json \\
+      --spp 4096 --half -o tests/data/reference/bump_mapped_mitsuba.exr
 Throughput beside `farm bench path`:
   build/mitsuba-venv/bin/python tools/mitsuba_reference.py jobs/cornell_path.json \\
       --width 512 --height 512 --spp 16 --threads 1 --bench
@@ -74,8 +85,13 @@ def parse_mtl(path):
             key, values = words[0], words[1:]
             if key == "newmtl":
                 current = materials.setdefault(values[0], {"Kd": [0.5] * 3, "Ke": [0.0] * 3, "Ks": [0.0] * 3})
-            elif current is not None and key in ("map_Kd", "norm"):
+            elif current is not None and key in ("map_Kd", "norm", "bump"):
                 current[key] = os.path.join(os.path.dirname(path), values[-1])
+                if key == "bump":
+                    options = dict(zip(values[:-1:2], values[1:-1:2]))
+                    if set(options) - {"-bm"}:
+                        raise RefusedScene(f"{path}:{number}: only -bm is supported on a bump here")
+                    current["bump_multiplier"] = float(options.get("-bm", 1.0))
             elif current is not None and key in ("Kd", "Ke", "Ks"):
                 current[key] = [float(v) for v in values[:3]]
             elif current is not None and key in ("d", "Tr", "Ni", "Ns", "Ka", "illum"):
@@ -204,11 +220,20 @@ def metal_roughness_bsdf(path, material):
     pbr = material.get("pbrMetallicRoughness", {})
     if any(key.endswith("Texture") for key in list(pbr) + list(material)):
         raise RefusedScene(f"{path}: material '{name}': textures are not supported here")
-    if set(material.get("extensions", {})) - {"KHR_materials_ior"} or max(material.get("emissiveFactor", [0])) > 0:
-        raise RefusedScene(f"{path}: material '{name}': only metal-roughness factors and ior are supported here")
+    extensions = material.get("extensions", {})
+    if set(extensions) - {"KHR_materials_ior", "KHR_materials_transmission"} or \
+            max(material.get("emissiveFactor", [0])) > 0:
+        raise RefusedScene(f"{path}: material '{name}': only metal-roughness factors, ior and transmission "
+                           "are supported here")
     base = {"type": "rgb", "value": pbr.get("baseColorFactor", [1, 1, 1, 1])[:3]}
     metallic, roughness = pbr.get("metallicFactor", 1.0), pbr.get("roughnessFactor", 1.0)
-    ior = material.get("extensions", {}).get("KHR_materials_ior", {}).get("ior", 1.5)
+    ior = extensions.get("KHR_materials_ior", {}).get("ior", 1.5)
+    # The smooth glass share of the surface, and the metal's share of the rest.
+    glass = extensions.get("KHR_materials_transmission", {}).get("transmissionFactor", 0.0) * (1.0 - metallic)
+    if glass > 0 and ior > 1:
+        metallic = metallic / (1.0 - glass) if glass < 1 else 0.0
+    else:
+        glass = 0.0
     alpha = max(roughness ** 2, 1e-3)
     # roughplastic divides its diffuse reflectance by 1 - R_int, R_int twice the mean of R(mu) mu
     # over 64 points from 0 to 1 inclusive: about (63/64) of the integral, which leaves its base
@@ -228,7 +253,41 @@ def metal_roughness_bsdf(path, material):
         bsdf = metal
     else:
         bsdf = {"type": "blendbsdf", "weight": metallic, "plastic": plastic, "metal": metal}
-    return {"type": "twosided", "bsdf": bsdf}
+    bsdf = {"type": "twosided", "bsdf": bsdf}
+    if glass > 0:
+        # Tinted by the base colour over two crossings: its square root at each.
+        tint = {"type": "rgb", "value": [math.sqrt(c) for c in base["value"]]}
+        dielectric = {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0, "specular_transmittance": tint}
+        if glass >= 1:
+            return dielectric
+        # Mitsuba 3.9's blendbsdf weighs a sample of a delta component (its discrete probability)
+        # against the other component's density in the same direction, which dims the glass's
+        # reflection (to 4% of it for a coat of alpha 0.04 here): a GGX roughdielectric of alpha
+        # 1e-4, smooth for every purpose here, has a density and blends correctly.
+        nearly_smooth = dict(dielectric, type="roughdielectric", distribution="ggx", alpha=1e-4)
+        bsdf = {"type": "blendbsdf", "weight": glass, "rest": bsdf, "glass": nearly_smooth}
+    return bsdf
+
+
+def uv_scale(obj, name, triangles):
+    """The world length of one uv unit on a group of triangles, which must be the same along u and
+    v on every one: our bump heights are in uv units, Mitsuba's bumpmap's in world units."""
+    if any(key in obj for key in ("scale", "matrix")):
+        raise RefusedScene(f"{obj['file']}: material '{name}': a bump map on a scaled object is not supported here")
+    lengths = set()
+    for t in triangles:
+        if any(uv is None for _, uv in t):
+            raise RefusedScene(f"{obj['file']}: material '{name}': a face without vt")
+        (p0, t0), (p1, t1), (p2, t2) = t
+        e1, e2 = [b - a for a, b in zip(p0, p1)], [b - a for a, b in zip(p0, p2)]
+        du1, dv1, du2, dv2 = t1[0] - t0[0], t1[1] - t0[1], t2[0] - t0[0], t2[1] - t0[1]
+        det = du1 * dv2 - du2 * dv1
+        dp_du = [(dv2 * a - dv1 * b) / det for a, b in zip(e1, e2)]
+        dp_dv = [(du1 * b - du2 * a) / det for a, b in zip(e1, e2)]
+        lengths |= {round(math.sqrt(sum(c * c for c in d)), 4) for d in (dp_du, dp_dv)}
+    if len(lengths) != 1:
+        raise RefusedScene(f"{obj['file']}: material '{name}': a bump map needs one uv scale, found {sorted(lengths)}")
+    return lengths.pop()
 
 
 def write_smooth_mesh(path, positions, normals, triangles):
@@ -401,6 +460,11 @@ def scene_of(mi, job_path, job, width, height, spp, seed, workdir):
                 bsdf = {"type": "normalmap", "use_shadowing_function": False, "bsdf": bsdf,
                         "normalmap": {"type": "bitmap", "filename": m["norm"], "raw": True,
                                       "filter_type": "bilinear", "wrap_mode": "repeat"}}
+            if "bump" in m:
+                bsdf = {"type": "bumpmap", "use_shadowing_function": False, "bsdf": bsdf,
+                        "scale": m["bump_multiplier"] * uv_scale(obj, name, triangles),
+                        "heights": {"type": "bitmap", "filename": m["bump"], "raw": True,
+                                    "filter_type": "bilinear", "wrap_mode": "repeat"}}
             emits = max(m["Ke"]) > 0
             twins = [("front", False)] + ([("back", True)] if emits and two_sided_emission else [])
             for side, flip in twins:

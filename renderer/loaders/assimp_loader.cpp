@@ -1,6 +1,7 @@
 // COLLADA, OBJ and PLY through Assimp. The node hierarchy is baked into the meshes, so the model
 // comes out in the file's root space; Assimp's COLLADA importer already rotates Z_UP files to +Y
 // up through the root node's transform, which the bake picks up like any other node transform.
+#include <assimp/ObjMaterial.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -39,15 +40,21 @@ glm::mat4 to_glm(const aiMatrix4x4& m) {
   return out;
 }
 
-// The texture a material names for `type` (MTL's map_Kd, map_Ks, map_Ke; COLLADA's <texture>),
-// confined to the model's root and decoded through the process's cache. An empty slot when it
-// names none, or one embedded in the file ("*0"), which these formats do not use.
-TextureSlot texture_slot(const ModelFile& file, const aiMaterial& in, aiTextureType type, TextureColourSpace space) {
+// A texture a material names for `type` (MTL's map_Kd, map_Ks, map_Ke; COLLADA's <texture>),
+// confined to the model's root, with the sampler its wrap modes give; none when it names none,
+// or one embedded in the file ("*0"), which these formats do not use.
+struct NamedTexture {
+  std::filesystem::path resolved;
+  TextureSampler sampler;
+  std::string material;  // for messages
+};
+
+std::optional<NamedTexture> named_texture(const ModelFile& file, const aiMaterial& in, aiTextureType type) {
   aiString path;
   aiTextureMapMode modes[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
-  if (in.GetTexture(type, 0, &path, nullptr, nullptr, nullptr, nullptr, modes) != AI_SUCCESS) return {};
+  if (in.GetTexture(type, 0, &path, nullptr, nullptr, nullptr, nullptr, modes) != AI_SUCCESS) return std::nullopt;
   const std::string written = path.C_Str();
-  if (written.empty() || written[0] == '*') return {};
+  if (written.empty() || written[0] == '*') return std::nullopt;
   const ConfinedFile confined = confine_loader_path(file, written);
   const std::string material = in.GetName().length > 0 ? in.GetName().C_Str() : "(unnamed)";
   if (!confined.allowed()) {
@@ -59,14 +66,30 @@ TextureSlot texture_slot(const ModelFile& file, const aiMaterial& in, aiTextureT
            : mode == aiTextureMapMode_Mirror ? TextureWrap::MirroredRepeat
                                               : TextureWrap::Repeat;
   };
-  TextureSlot slot;
-  slot.sampler.wrap_u = wrap(modes[0]);
-  slot.sampler.wrap_v = wrap(modes[1]);
+  NamedTexture named{confined.resolved, {}, material};
+  named.sampler.wrap_u = wrap(modes[0]);
+  named.sampler.wrap_v = wrap(modes[1]);
+  return named;
+}
+
+// `decode` run for `named`, its failure said as the material's.
+template <typename Decode>
+std::shared_ptr<const Texture> decoded(const ModelFile& file, const NamedTexture& named, Decode&& decode) {
   try {
-    slot.texture = TextureCache::process().get(confined.resolved, space);
+    return decode();
   } catch (const InputError& e) {
-    throw InputError(file.name.string() + ": material '" + material + "': " + e.what());
+    throw InputError(file.name.string() + ": material '" + named.material + "': " + e.what());
   }
+}
+
+// The texture a material names for `type`, decoded through the process's cache; an empty slot
+// when it names none.
+TextureSlot texture_slot(const ModelFile& file, const aiMaterial& in, aiTextureType type, TextureColourSpace space) {
+  const std::optional<NamedTexture> named = named_texture(file, in, type);
+  if (!named) return {};
+  TextureSlot slot;
+  slot.sampler = named->sampler;
+  slot.texture = decoded(file, *named, [&] { return TextureCache::process().get(named->resolved, space); });
   return slot;
 }
 
@@ -75,6 +98,31 @@ TextureSlot texture_slot(const ModelFile& file, const aiMaterial& in, aiTextureT
 bool looks_like_normal_map(const Texture& texture) {
   const glm::vec4& mean = texture.texel(texture.levels() - 1, 0, 0);
   return mean.z > 0.7f && std::fabs(mean.x - 0.5f) < 0.15f && std::fabs(mean.y - 0.5f) < 0.15f;
+}
+
+// MTL's bump (map_Bump) as a normal map. It is a height map by the format's definition, turned
+// into the normal map it describes, its heights times -bm (normal_map_from_height); but
+// exporters such as Blender's write their normal maps there: an image whose mean is a normal
+// map's (blue near 1, red and green near a half) is read as one. A bump map that cannot be read
+// (missing, outside the root, not an image) is left out, as it always was, rather than failing
+// the model.
+TextureSlot bump_slot(const ModelFile& file, const aiMaterial& in) {
+  try {
+    const std::optional<NamedTexture> named = named_texture(file, in, aiTextureType_HEIGHT);
+    if (!named) return {};
+    TextureSlot slot;
+    slot.sampler = named->sampler;
+    TextureCache& cache = TextureCache::process();
+    slot.texture = decoded(file, *named, [&] { return cache.get(named->resolved, TextureColourSpace::Linear); });
+    if (looks_like_normal_map(*slot.texture)) return slot;
+    ai_real scale = 1;
+    if (in.Get(AI_MATKEY_OBJ_BUMPMULT_HEIGHT(0), scale) != AI_SUCCESS || !std::isfinite(scale)) scale = 1;
+    slot.texture = cache.get_normals_from_height(named->resolved, *slot.texture, static_cast<float>(scale),
+                                                 slot.sampler.wrap_u, slot.sampler.wrap_v);
+    return slot;
+  } catch (const InputError&) {
+    return {};
+  }
 }
 
 Material convert_material(const ModelFile& file, const aiMaterial& in) {
@@ -110,19 +158,9 @@ Material convert_material(const ModelFile& file, const aiMaterial& in) {
   textures.base_colour = texture_slot(file, in, aiTextureType_DIFFUSE, TextureColourSpace::Srgb);
   textures.specular = texture_slot(file, in, aiTextureType_SPECULAR, TextureColourSpace::Srgb);
   textures.emission = texture_slot(file, in, aiTextureType_EMISSIVE, TextureColourSpace::Srgb);
-  // MTL's norm, a normal map. Its bump (map_Bump) is a height map by the format's definition,
-  // but exporters such as Blender's write their normal maps there: an image whose mean is a
-  // normal map's (blue near 1, red and green near a half) is read as one; a height map is not.
+  // MTL's norm, a normal map; else its bump (map_Bump).
   textures.normal = texture_slot(file, in, aiTextureType_NORMALS, TextureColourSpace::Linear);
-  if (!textures.normal) {
-    // Nothing else reads a bump map: one that cannot be read (missing, outside the root, not an
-    // image) is left out, as it always was, rather than failing the model.
-    try {
-      TextureSlot bump = texture_slot(file, in, aiTextureType_HEIGHT, TextureColourSpace::Linear);
-      if (bump && looks_like_normal_map(*bump.texture)) textures.normal = std::move(bump);
-    } catch (const InputError&) {
-    }
-  }
+  if (!textures.normal) textures.normal = bump_slot(file, in);
   // MTL's map_d, a dissolve texture: the surface covers what it says, partly where it is grey
   // (blended; a map of 0s and 1s, the usual cut-out leaf, cuts exactly).
   textures.opacity = texture_slot(file, in, aiTextureType_OPACITY, TextureColourSpace::Linear);

@@ -9,6 +9,8 @@
 #include <system_error>
 #include <tuple>
 
+#include "renderer/texture/height_map.h"
+
 namespace farm {
 
 namespace fs = std::filesystem;
@@ -55,6 +57,15 @@ std::shared_ptr<const Texture> TextureCache::get_embedded(const fs::path& contai
   const std::string name = fmt::format("{} image {}", container.string(), index);
   return get_or_decode(container, fmt::format("image {}", index), space,
                        [&] { return load_texture_bytes(encoded, name, space); });
+}
+
+std::shared_ptr<const Texture> TextureCache::get_normals_from_height(const fs::path& file, const Texture& height,
+                                                                     float scale, TextureWrap wrap_u,
+                                                                     TextureWrap wrap_v) {
+  const std::string part = fmt::format("normals from height, scale {}, wrap {} {}", scale, static_cast<int>(wrap_u),
+                                       static_cast<int>(wrap_v));
+  return get_or_decode(file, part, TextureColourSpace::Linear,
+                       [&] { return normal_map_from_height(height, scale, wrap_u, wrap_v); });
 }
 
 template <typename Decode>

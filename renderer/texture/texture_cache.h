@@ -26,6 +26,12 @@ class TextureCache {
   std::shared_ptr<const Texture> get_embedded(const std::filesystem::path& container, int index,
                                               std::span<const unsigned char> encoded, TextureColourSpace space);
 
+  // The normal map made from the height map `file` (normal_map_from_height with these arguments),
+  // kept as decoded textures are: made once while anything holds it. `height` is that file as
+  // get(file, Linear) gives it, which the caller holds already.
+  std::shared_ptr<const Texture> get_normals_from_height(const std::filesystem::path& file, const Texture& height,
+                                                         float scale, TextureWrap wrap_u, TextureWrap wrap_v);
+
   // How many decodes this cache has begun (those that failed included): tests count with it.
   std::uint64_t decodes() const;
 

@@ -26,16 +26,19 @@ float Bsdf::roughness_from_shininess(float shininess) {
   return std::clamp(std::sqrt(2.0f / (std::max(shininess, 0.0f) + 2.0f)), 1e-3f, 1.0f);
 }
 
-Bsdf::Bsdf(const Material& m) {
-  if (m.transmission > 0.0f && m.ior > 1.0f) {
+Bsdf::Bsdf(const Material& m, bool transmitted) {
+  if (transmitted) {
     kind_ = Kind::Dielectric;
     ior_ = m.ior;
+    tint_ = m.transmission_tint();
     return;
   }
   if (const std::optional<MetalRoughness>& mr = m.metal_roughness) {
     kind_ = Kind::MetalRoughness;
     specular_ = glm::clamp(mr->base_colour, 0.0f, 1.0f);
-    metallic_ = std::clamp(mr->metallic, 0.0f, 1.0f);
+    // Of what is not glass (1 - t (1 - metallic)), metallic is the metal's share.
+    const float opaque = 1.0f - m.transmitted_share();
+    metallic_ = opaque > 0.0f ? std::clamp(mr->metallic / opaque, 0.0f, 1.0f) : 0.0f;
     alpha_ = std::clamp(mr->roughness * mr->roughness, 1e-3f, 1.0f);
     coat_.emplace(m.ior, alpha_);
     const float eta = coat_->eta();
@@ -170,7 +173,7 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
       s.wi = glm::normalize(-eta * wo + (eta * cos_i - cos_t) * n);
       // Radiance is compressed by (eta_i / eta_t)^2 entering a denser medium (it cancels on the
       // way back out).
-      s.weight = glm::vec3(eta * eta);
+      s.weight = eta * eta * tint_;
       s.pdf = 1.0f - reflectance;
       return s;
     }

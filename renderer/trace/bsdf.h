@@ -1,6 +1,8 @@
 #pragma once
 // Scattering functions for the path tracer, mapped from the Phong material (docs/architecture.md, "Conventions"):
-//   smooth dielectric  transmission > 0 and ior > 1 (Fresnel reflection and refraction)
+//   smooth dielectric  the glass part of a material (Material::transmitted_share: Fresnel
+//                      reflection and refraction, tinted by transmission_tint at each crossing);
+//                      a partly transmissive material is this part or the rest, picked per hit
 //   metal-roughness    glTF's materials (Material::metal_roughness): GGX of alpha roughness^2
 //                      with Schlick's Fresnel from the base colour, weighed by metallic, over a
 //                      diffuse base under a rough dielectric coat of index ior (DielectricCoat),
@@ -28,7 +30,12 @@ struct BsdfSample {
 
 class Bsdf {
  public:
-  explicit Bsdf(const Material& material);
+  // The BSDF of `material`'s glass part when `transmitted`, else of the rest (for glTF, its
+  // metallic renormalised over what is left). A path picks the glass part with probability
+  // transmitted_share(), so that on average it sees the whole.
+  Bsdf(const Material& material, bool transmitted);
+  // A material that is wholly one or the other; a partly transmissive one gets its glass part.
+  explicit Bsdf(const Material& material) : Bsdf(material, material.transmitted_share() > 0.0f) {}
 
   // f(wo, wi) of the non-delta lobes (without the cosine).
   glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi) const;
@@ -65,6 +72,7 @@ class Bsdf {
   glm::vec3 multiple_scattering_{0.0f};  // ks / (pi (1 - E_avg))
   float alpha_ = 1.0f;        // GGX roughness
   float ior_ = 1.5f;
+  glm::vec3 tint_{1.0f};      // Dielectric: what refraction keeps
   float specular_probability_ = 0.0f;  // Layered: chance of sampling GGX visible normals
   // MetalRoughness: the base colour as ks above, metallic, and the coat with its diffuse base
   // (kd / (pi eta^2 (1 - R_int)) in diffuse_).

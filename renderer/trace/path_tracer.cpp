@@ -145,12 +145,15 @@ class PathTracer {
       }
       if (settings_.max_depth >= 0 && bounce >= settings_.max_depth) break;
 
+      // A partly transmissive surface is glass or the rest, picked by the glass's share (a number
+      // drawn only for such a surface: every other scene's samples stay the ones they were).
+      const float transmitted = material.transmitted_share();
+      const bool dielectric = transmitted >= 1.0f || (transmitted > 0.0f && next() < transmitted);
+      const Bsdf bsdf(material, dielectric);
       // The shading frame on the side the ray arrives from (for dielectrics: the geometric
       // side decides inside or outside).
-      const Bsdf bsdf(material);
       glm::vec3 n = hit.shading_normal;
       if (glm::dot(n, hit.geometric_normal) < 0.0f) n = -n;
-      const bool dielectric = material.transmission > 0.0f && material.ior > 1.0f;
       if (!dielectric && glm::dot(n, wo_world) < 0.0f) {
         n = has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, wo_world) : -n;
       }

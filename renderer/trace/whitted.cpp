@@ -101,7 +101,8 @@ class WhittedTracer {
     const glm::vec3& ng = hit.geometric_normal;
 
     const bool front_side = glm::dot(hit.geometric_normal, to_eye) >= 0.0f;
-    const bool dielectric = m.transmission > 0.0f && m.ior > 1.0f;
+    const float transmitted = m.transmitted_share();
+    const bool dielectric = transmitted > 0.0f;
     // A mirror's or glass's reflection of an environment is traced below, not approximated.
     const bool traced = dielectric || m.is_mirror();
     const glm::vec3 local = shade_blinn_phong(
@@ -128,10 +129,10 @@ class WhittedTracer {
       const float eta = eta_i / eta_t;
       const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
       const glm::vec3 refracted_dir = eta * d + (eta * cos_i - cos_t) * nf;
-      through = trace(Ray{offset_ray_origin(hit.position, ng, refracted_dir), refracted_dir}, depth + 1);
+      through = m.transmission_tint() *
+                trace(Ray{offset_ray_origin(hit.position, ng, refracted_dir), refracted_dir}, depth + 1);
     }
-    return (1.0f - m.transmission) * local +
-           m.transmission * (reflectance * reflected + (1.0f - reflectance) * through);
+    return (1.0f - transmitted) * local + transmitted * (reflectance * reflected + (1.0f - reflectance) * through);
   }
 
   const PreparedScene& prepared_;

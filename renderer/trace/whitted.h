@@ -1,8 +1,9 @@
 #pragma once
 // Whitted-style ray tracing: a primary ray per sample, Blinn-Phong at the hit with a shadow ray
 // per light, and recursion for mirrors (shininess >= 1000, weighted by the Fresnel reflectance)
-// and smooth dielectrics (transmission > 0 and ior > 1: Fresnel-weighted reflection and
-// refraction, total internal reflection included), up to max_depth bounces.
+// and smooth dielectrics (Material::transmitted_share of the surface, when transmission > 0 and
+// ior > 1: Fresnel-weighted reflection and refraction, total internal reflection included; the
+// rest shaded as if opaque), up to max_depth bounces.
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
 #include "renderer/job/render_settings.h"

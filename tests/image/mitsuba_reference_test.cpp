@@ -253,6 +253,21 @@ TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
       });
 }
 
+// KHR_materials_transmission against Mitsuba's blend of that mapping with a smooth `dielectric`
+// (tools/mitsuba_reference.py): a grey dielectric half glass (transmission 0.5), a blue-tinted
+// glass (1), and a half-metallic copper 80% transmissive, whose glass is 40% of it. Each ball's
+// middle, where the camera sees through the glass, and the whole image with the caustics.
+TEST(MitsubaReference, GlassBallsMatchInMeanByAZTest) {
+  expect_means_match_by_z_test(
+      "tests/data/metal_roughness/glass_balls.json", "tests/data/reference/glass_balls_mitsuba.exr", [](int w, int h) {
+        const auto ball = [&](const char* name, int x, int y) {
+          return MeanRegion{name, {x * w / 128 - 9, y * h / 128 - 9, x * w / 128 + 9, y * h / 128 + 9}};
+        };
+        return std::vector<MeanRegion>{{"image", {0, 0, w, h}}, ball("half glass", 35, 96),
+                                       ball("blue glass", 64, 93), ball("copper glass", 93, 96)};
+      });
+}
+
 // A floor bent into ridges by a tangent-space normal map (MTL's norm, tangents made from the
 // uvs), lit by a small lamp to one side: the shading normals, the map's axes and its Y's sign
 // must be Mitsuba's normalmap's (its shadowing function off, see tools/mitsuba_reference.py).
@@ -261,6 +276,18 @@ TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
 TEST(MitsubaReference, NormalMappedFloorMatchesInMeanByAZTest) {
   expect_means_match_by_z_test(
       "tests/data/normal_mapped/floor.json", "tests/data/reference/normal_mapped_mitsuba.exr", [](int w, int h) {
+        return std::vector<MeanRegion>{{"image", {0, 0, w, h}},
+                                       {"near the lamp", {0, 0, w / 2, h}},
+                                       {"away from the lamp", {w / 2, 0, w, h}}};
+      });
+}
+
+// The same floor bent by a height map instead (MTL's bump, -bm 0.04): the slopes made from its
+// heights in uv units, their axes and signs, against Mitsuba's bumpmap (heights in world units,
+// its scale the reference script's conversion; its shadowing function off too).
+TEST(MitsubaReference, BumpMappedFloorMatchesInMeanByAZTest) {
+  expect_means_match_by_z_test(
+      "tests/data/normal_mapped/bumped_floor.json", "tests/data/reference/bump_mapped_mitsuba.exr", [](int w, int h) {
         return std::vector<MeanRegion>{{"image", {0, 0, w, h}},
                                        {"near the lamp", {0, 0, w / 2, h}},
                                        {"away from the lamp", {w / 2, 0, w, h}}};

@@ -251,5 +251,44 @@ TEST(Bsdf, MetalRoughnessPdfOfSampledDirectionsMatchesThePdfFunction) {
   }
 }
 
+// KHR_materials_transmission: a share t (1 - metallic) of the surface is smooth glass, tinted by
+// the base colour's square root at each crossing; the rest, with its metallic renormalised, must
+// make up exactly the metal's share and the opaque dielectric's (1 - metallic)(1 - t), so that
+// the average over the parts is glTF's mix.
+TEST(Bsdf, APartlyTransmissiveMaterialsPartsAddUpToGltfsMix) {
+  const glm::vec3 base{0.95f, 0.64f, 0.54f};
+  Material m = metal_roughness(base, 0.5f, 0.5f);
+  m.transmission = 0.8f;
+  const float glass_share = m.transmitted_share();
+  EXPECT_FLOAT_EQ(glass_share, 0.4f);
+  const Bsdf rest(m, false), metal(metal_roughness(base, 1.0f, 0.5f)), plastic(metal_roughness(base, 0.0f, 0.5f));
+  EXPECT_FALSE(rest.is_specular());
+  for (float theta_o : {10.0f, 60.0f})
+    for (float theta_i : {-70.0f, 5.0f, 45.0f}) {
+      const glm::vec3 wo = direction_at(theta_o), wi = direction_at(theta_i);
+      const glm::vec3 mixed = (1.0f - glass_share) * rest.eval(wo, wi);
+      const glm::vec3 gltf = 0.5f * metal.eval(wo, wi) + 0.5f * 0.2f * plastic.eval(wo, wi);
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(mixed[c], gltf[c], 1e-5f * (1.0f + gltf[c])) << theta_o << " " << theta_i;
+    }
+
+  const Bsdf glass(m, true);
+  EXPECT_TRUE(glass.is_specular());
+  const glm::vec3 wo = direction_at(30.0f);
+  const auto refracted = glass.sample(wo, 0.999f, 0.0f, 0.0f);
+  ASSERT_TRUE(refracted);
+  EXPECT_LT(refracted->wi.z, 0.0f);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(refracted->weight[c], std::sqrt(base[c]) / (1.5f * 1.5f), 1e-6f);
+  EXPECT_EQ(glass.sample(wo, 0.0f, 0.0f, 0.0f)->weight, glm::vec3(1.0f)) << "reflection is not tinted";
+
+  // Phong glass (MTL's d, a job's transmission) is clear, and all of it glass at t = 1.
+  Material phong;
+  phong.transmission = 0.3f;
+  phong.ior = 1.5f;
+  EXPECT_FLOAT_EQ(phong.transmitted_share(), 0.3f);
+  EXPECT_NEAR(Bsdf(phong, true).sample(wo, 0.999f, 0.0f, 0.0f)->weight.y, 1.0f / 2.25f, 1e-7f);
+  phong.ior = 1.0f;
+  EXPECT_EQ(phong.transmitted_share(), 0.0f) << "no ior, no glass";
+}
+
 }  // namespace
 }  // namespace farm

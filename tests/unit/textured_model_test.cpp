@@ -6,11 +6,14 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <glm/geometric.hpp>
 #include <iterator>
 #include <filesystem>
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "renderer/image/png_writer.h"
 #include "renderer/scene/model.h"
@@ -286,24 +289,55 @@ TEST(TexturedModel, AnMtlDissolveMapIsTheSurfacesCoverage) {
 }
 
 // MTL's bump (map_Bump) holding a normal map, as Blender's OBJ exporter writes one, is read as
-// the normal map; a grey height map there is not read (bump mapping from heights is not done).
-TEST(TexturedModel, AnMtlBumpHoldingANormalMapIsReadAsOneAndAHeightMapIsNot) {
+// the normal map; one that is missing is left out, as before bump was looked at.
+TEST(TexturedModel, AnMtlBumpHoldingANormalMapIsReadAsOne) {
   TempDir dir;
   write_rgb_png(dir / "normal.png", 1, 1, {128, 128, 255});
-  write_rgb_png(dir / "height.png", 1, 1, {128, 128, 128});
   dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nmap_Bump -bm 1.0 normal.png\n");
   const Model bumped = load_model(dir.write("tri.obj", kTexturedObj), dir.path());
   const Material& b = bumped.materials.at(bumped.meshes[0].material);
   ASSERT_TRUE(b.textures && b.textures->normal);
   EXPECT_EQ(bumped.meshes[0].tangents.size(), bumped.meshes[0].positions.size());  // a frame to read it in
-  dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nbump height.png\n");
-  const Model heights = load_model(dir.path() / "tri.obj", dir.path());
-  const Material& h = heights.materials.at(heights.meshes[0].material);
-  EXPECT_FALSE(h.textures && h.textures->normal);
-  // Nor is one that is missing: the model loads without it, as before bump was looked at.
+  EXPECT_EQ(b.textures->normal.texture->texel(0, 0, 0), glm::vec4(128.0f / 255.0f, 128.0f / 255.0f, 1.0f, 1.0f))
+      << "read as stored, not made from heights";
   dir.write("m.mtl", "newmtl painted\nKd 0.5 0.5 0.5\nbump missing.png\n");
   const Model missing = load_model(dir.path() / "tri.obj", dir.path());
   EXPECT_FALSE(missing.materials.at(missing.meshes[0].material).textures);
+}
+
+// A height map in MTL's bump bends the shading normal away from the slope, by the slope its
+// heights times -bm make in uv units: on this triangle u runs along +x and v along -y, so a ramp
+// rising to the right (u) tilts the normal towards -x and one rising down the image (v, towards
+// -y) towards +y. 16 texels from 0 to 240 of 255: a slope of 0.5 * 16 * 16 / 255 per uv unit.
+TEST(TexturedModel, AnMtlBumpHoldingAHeightMapBendsTheNormalByItsSlopeTimesBm) {
+  TempDir dir;
+  std::vector<std::uint8_t> along_u, along_v;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x)
+      for (int c = 0; c < 3; ++c) {
+        along_u.push_back(static_cast<std::uint8_t>(16 * x));
+        along_v.push_back(static_cast<std::uint8_t>(16 * y));
+      }
+  write_rgb_png(dir / "along_u.png", 16, 16, along_u);
+  write_rgb_png(dir / "along_v.png", 16, 16, along_v);
+  dir.write("tri.obj", kTexturedObj);
+  const float slope = 0.5f * 16.0f * 16.0f / 255.0f;
+  const std::uint64_t decodes_before = TextureCache::process().decodes();
+  for (const auto& [map, expected] : {std::pair{"along_u.png", glm::vec3(-slope, 0.0f, 1.0f)},
+                                      std::pair{"along_v.png", glm::vec3(0.0f, slope, 1.0f)}}) {
+    dir.write("m.mtl", std::string("newmtl painted\nKd 0.5 0.5 0.5\nbump -bm 0.5 ") + map + "\n");
+    const Model model = load_model(dir.path() / "tri.obj", dir.path());
+    const Mesh& mesh = model.meshes[0];
+    const Material& m = model.materials.at(mesh.material);
+    ASSERT_TRUE(m.textures && m.textures->normal) << map;
+    ASSERT_EQ(mesh.tangents.size(), mesh.positions.size());
+    // Away from the edges, where the repeating map's slope jumps back from 240 to 0.
+    const glm::vec3 n = mapped_normal(*m.textures, glm::vec2(0.3f, 0.4f), glm::vec3(0, 0, 1), mesh.tangents[0]);
+    const glm::vec3 want = glm::normalize(expected);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(n[c], want[c], 1e-5f) << map << " component " << c;
+  }
+  // Each file decoded once, and its normal map made once.
+  EXPECT_EQ(TextureCache::process().decodes() - decodes_before, 4u);
 }
 
 // One set of texture coordinates is read: a base colour map on TEXCOORD_1 is refused with the

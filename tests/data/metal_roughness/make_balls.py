@@ -5,6 +5,10 @@ From left to right: a rough gold conductor (metallic 1), a half-metallic copper 
 and a rough red dielectric (metallic 0). Factors only, positions baked into the mesh (no node
 transforms), smooth normals, so that tools/mitsuba_reference.py reads it without a glTF library.
 
+And glass_balls.gltf for glass_balls.json, the same balls with KHR_materials_transmission: a
+half-transmissive clear dielectric (transmission 0.5), a blue-tinted glass (transmission 1) and
+a half-metallic copper that is 80% transmissive (of which its metal half lets nothing through).
+
     python3 tests/data/metal_roughness/make_balls.py
 """
 import base64
@@ -29,6 +33,22 @@ MATERIALS = [
         "baseColorFactor": [0.8, 0.15, 0.1, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.3}},
 ]
 
+GLASS_EXTENSIONS = ["KHR_materials_ior", "KHR_materials_transmission"]
+
+
+def glass(name, base, metallic, roughness, transmission):
+    return {"name": name, "pbrMetallicRoughness": {
+        "baseColorFactor": base + [1.0], "metallicFactor": metallic, "roughnessFactor": roughness},
+        "extensions": {"KHR_materials_ior": {"ior": 1.5},
+                       "KHR_materials_transmission": {"transmissionFactor": transmission}}}
+
+
+GLASS_MATERIALS = [
+    glass("half glass", [0.9, 0.9, 0.9], 0.0, 0.2, 0.5),
+    glass("blue glass", [0.6, 0.8, 1.0], 0.0, 0.3, 1.0),
+    glass("copper glass", [0.95, 0.64, 0.54], 0.5, 0.5, 0.8),
+]
+
 
 def sphere(centre, rings=24, segments=48):
     positions, normals, indices = [], [], []
@@ -50,7 +70,7 @@ def sphere(centre, rings=24, segments=48):
     return positions, normals, indices
 
 
-def main():
+def write(file_name, materials, extensions):
     buffer, views, accessors, meshes = b"", [], [], []
 
     def add(data, target, accessor):
@@ -78,15 +98,22 @@ def main():
         "scenes": [{"nodes": list(range(len(meshes)))}],
         "nodes": [{"name": m["name"], "mesh": i} for i, m in enumerate(meshes)],
         "meshes": meshes,
-        "materials": MATERIALS,
+        "materials": materials,
         "buffers": [{"byteLength": len(buffer),
                      "uri": "data:application/octet-stream;base64," + base64.b64encode(buffer).decode()}],
         "bufferViews": views,
         "accessors": accessors,
     }
-    with open(os.path.join(HERE, "balls.gltf"), "w") as f:
+    if extensions:
+        gltf["extensionsUsed"] = extensions
+    with open(os.path.join(HERE, file_name), "w") as f:
         json.dump(gltf, f, indent=1)
         f.write("\n")
+
+
+def main():
+    write("balls.gltf", MATERIALS, [])
+    write("glass_balls.gltf", GLASS_MATERIALS, GLASS_EXTENSIONS)
 
 
 if __name__ == "__main__":
