@@ -16,11 +16,12 @@ background or environment, max_depth) and turned into the same scene in Mitsuba:
     colour as diffuse_reflectance and int_ior the ior; its metal half `principled` with
     metallic=1 and the same roughness (GGX of Schlick's Fresnel from the base colour); between
     them a `blendbsdf` weighted by metallic; all two-sided. KHR_materials_transmission's share of
-    the dielectric half, t (1 - metallic), is a smooth `dielectric` (specular_transmittance the
-    base colour's square root: tinted by it over two crossings), blended with that two-sided
-    rest (whose metallic becomes metallic / (1 - t (1 - metallic))); in a blend, a `roughdielectric`
-    of alpha 1e-4, as blendbsdf mishandles a delta component (see metal_roughness_bsdf). The mesh
-    is read from the file's buffers with its normals (positions baked: no node transforms).
+    the dielectric half, t (1 - metallic), is a `roughdielectric` of GGX alpha roughness^2, or a
+    smooth `dielectric` below alpha 1e-3 (specular_transmittance the base colour's square root:
+    tinted by it over two crossings), blended with that two-sided rest (whose metallic becomes
+    metallic / (1 - t (1 - metallic))); smooth glass in a blend is a `roughdielectric` of alpha
+    1e-4, as blendbsdf mishandles a delta component (see metal_roughness_bsdf). The mesh is
+    read from the file's buffers with its normals (positions baked: no node transforms).
   * MTL's `norm` wraps that in a `normalmap` of the same image (raw, bilinear, repeating), with
     its shadowing function off (Mitsuba adds one by default; the normal-mapped surface itself,
     ours, and the direct-light integral have none).
@@ -258,14 +259,18 @@ def metal_roughness_bsdf(path, material):
         # Tinted by the base colour over two crossings: its square root at each.
         tint = {"type": "rgb", "value": [math.sqrt(c) for c in base["value"]]}
         dielectric = {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0, "specular_transmittance": tint}
+        if roughness * roughness >= 1e-3:  # as rough as the rest of the surface, as ours
+            dielectric = dict(dielectric, type="roughdielectric", distribution="ggx", alpha=roughness * roughness)
         if glass >= 1:
             return dielectric
-        # Mitsuba 3.9's blendbsdf weighs a sample of a delta component (its discrete probability)
-        # against the other component's density in the same direction, which dims the glass's
-        # reflection (to 4% of it for a coat of alpha 0.04 here): a GGX roughdielectric of alpha
-        # 1e-4, smooth for every purpose here, has a density and blends correctly.
-        nearly_smooth = dict(dielectric, type="roughdielectric", distribution="ggx", alpha=1e-4)
-        bsdf = {"type": "blendbsdf", "weight": glass, "rest": bsdf, "glass": nearly_smooth}
+        if dielectric["type"] == "dielectric":
+            # Mitsuba 3.9's blendbsdf weighs a sample of a delta component (its discrete
+            # probability) against the other component's density in the same direction, which
+            # dims the glass's reflection (to 4% of it under a coat of alpha 0.04): a GGX
+            # roughdielectric of alpha 1e-4, smooth for every purpose here, has a density and
+            # blends correctly.
+            dielectric = dict(dielectric, type="roughdielectric", distribution="ggx", alpha=1e-4)
+        bsdf = {"type": "blendbsdf", "weight": glass, "rest": bsdf, "glass": dielectric}
     return bsdf
 
 

@@ -61,13 +61,14 @@ struct Material {
   // Shininess this high means a perfect mirror (docs/architecture.md, "Conventions").
   bool is_mirror() const { return shininess >= 1000.0f; }
 
-  // The share of the surface that is smooth glass (docs/architecture.md, §8.2): its transmission
+  // The share of the surface that is glass (docs/architecture.md, §8.2): its transmission
   // (with an ior above 1), less glTF's metallic part, since metals let nothing through. The
   // engines shade the rest as they would the same material without transmission.
   float transmitted_share() const {
     if (!(transmission > 0.0f && ior > 1.0f)) return 0.0f;
     const float t = std::min(transmission, 1.0f);
-    return metal_roughness ? t * (1.0f - std::clamp(metal_roughness->metallic, 0.0f, 1.0f)) : t;
+    if (!metal_roughness) return t;
+    return t * (1.0f - glm::clamp(metal_roughness->metallic, 0.0f, 1.0f));
   }
   // What light passing through that glass keeps at each crossing: glTF tints it by the base
   // colour, which a ray through a closed object gets over its two crossings; Phong glass is clear.

@@ -14,6 +14,37 @@ namespace {
 
 float max_component(const glm::vec3& v) { return std::max({v.x, v.y, v.z}); }
 
+// The GGX alpha from which glTF's glass is rough rather than smooth.
+constexpr float kRoughGlassAlpha = 1e-3f;
+
+// Rough glass is worked out with wo above the surface: a pair of directions with wo below is
+// mirrored through the surface's plane, where the indices swap (an isotropic microfacet surface
+// looks the same from below, mirrored). `eta`: the index below over the index above.
+struct SeenFromAbove {
+  glm::vec3 wo, wi;
+  float eta;
+};
+SeenFromAbove seen_from_above(const glm::vec3& wo, const glm::vec3& wi, float ior) {
+  if (wo.z >= 0.0f) return {wo, wi, ior};
+  return {{wo.x, wo.y, -wo.z}, {wi.x, wi.y, -wi.z}, 1.0f / ior};
+}
+
+// The microfacet normal that turns wo into wi (wo above): their half vector for a reflection, the
+// generalised one, -(wo + eta wi), for a refraction; on the upper side. None (z 0) where no
+// facet facing both directions the right way does it.
+glm::vec3 turning_normal(const SeenFromAbove& d) {
+  const bool reflected = d.wi.z > 0.0f;
+  glm::vec3 m = reflected ? d.wo + d.wi : d.wo + d.eta * d.wi;
+  const float length = glm::length(m);
+  if (!(length > 0.0f)) return glm::vec3(0.0f);
+  m /= length;
+  if (m.z < 0.0f) m = -m;
+  // wo on the facet's front; wi on its front for a reflection, its back for a refraction.
+  const float o = glm::dot(d.wo, m), i = glm::dot(d.wi, m);
+  if (o <= 0.0f || (reflected ? i <= 0.0f : i >= 0.0f)) return glm::vec3(0.0f);
+  return m;
+}
+
 // Cosine-weighted hemisphere direction (Malley's method).
 glm::vec3 cosine_hemisphere(float u1, float u2) {
   const float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
@@ -26,11 +57,21 @@ float Bsdf::roughness_from_shininess(float shininess) {
   return std::clamp(std::sqrt(2.0f / (std::max(shininess, 0.0f) + 2.0f)), 1e-3f, 1.0f);
 }
 
+// Out of line: inlined into callers whose material has no metal-roughness values, GCC 12 warns
+// that the empty optional's metallic "may be used uninitialized" in transmitted_share.
+Bsdf::Bsdf(const Material& m) : Bsdf(m, m.transmitted_share() > 0.0f) {}
+
 Bsdf::Bsdf(const Material& m, bool transmitted) {
   if (transmitted) {
     kind_ = Kind::Dielectric;
     ior_ = m.ior;
     tint_ = m.transmission_tint();
+    // glTF's glass is as rough as the rest of its surface; below alpha 1e-3 it is smooth for every
+    // purpose (and Phong glass always is).
+    if (m.metal_roughness && m.metal_roughness->roughness * m.metal_roughness->roughness >= kRoughGlassAlpha) {
+      kind_ = Kind::RoughDielectric;
+      alpha_ = std::min(m.metal_roughness->roughness * m.metal_roughness->roughness, 1.0f);
+    }
     return;
   }
   if (const std::optional<MetalRoughness>& mr = m.metal_roughness) {
@@ -100,6 +141,66 @@ float Bsdf::metal_roughness_specular_probability(const glm::vec3& wo) const {
   return s + d > 0.0f ? s / (s + d) : 1.0f;
 }
 
+// Walter et al. 2007: F D G / (4 |cos_o cos_i|) reflected; refracted, for radiance,
+// (1 - F) D G |wi.m| |wo.m| / (|cos_o cos_i| (wo.m + eta wi.m)^2), which carries the (1 / eta)^2
+// compression of radiance entering a denser medium, times the tint.
+glm::vec3 Bsdf::eval_rough_dielectric(const glm::vec3& wo_any, const glm::vec3& wi_any) const {
+  const SeenFromAbove d = seen_from_above(wo_any, wi_any, ior_);
+  if (d.wo.z == 0.0f || d.wi.z == 0.0f) return glm::vec3(0.0f);
+  const glm::vec3 m = turning_normal(d);
+  if (m.z == 0.0f) return glm::vec3(0.0f);
+  const float o = glm::dot(d.wo, m), i = glm::dot(d.wi, m);
+  const float fresnel = fresnel_dielectric(o, 1.0f, d.eta);
+  const float dg = ggx::distribution(m, alpha_) * ggx::smith_g2(d.wo, d.wi, alpha_);
+  const float cosines = d.wo.z * std::fabs(d.wi.z);
+  if (d.wi.z > 0.0f) return glm::vec3(fresnel * dg / (4.0f * cosines));
+  const float spread = o + d.eta * i;
+  return tint_ * ((1.0f - fresnel) * dg * std::fabs(i) * o / (cosines * spread * spread));
+}
+
+// The visible normal's density, times the Fresnel odds of the lobe taken, times the Jacobian
+// from the normal to the direction it turns wo into.
+float Bsdf::pdf_rough_dielectric(const glm::vec3& wo_any, const glm::vec3& wi_any) const {
+  const SeenFromAbove d = seen_from_above(wo_any, wi_any, ior_);
+  if (d.wo.z == 0.0f || d.wi.z == 0.0f) return 0.0f;
+  const glm::vec3 m = turning_normal(d);
+  if (m.z == 0.0f) return 0.0f;
+  const float o = glm::dot(d.wo, m), i = glm::dot(d.wi, m);
+  const float fresnel = fresnel_dielectric(o, 1.0f, d.eta);
+  const float visible = ggx::visible_normal_pdf(d.wo, m, alpha_);
+  if (d.wi.z > 0.0f) return fresnel * visible / (4.0f * o);
+  const float spread = o + d.eta * i;
+  return (1.0f - fresnel) * visible * d.eta * d.eta * std::fabs(i) / (spread * spread);
+}
+
+std::optional<BsdfSample> Bsdf::sample_rough_dielectric(const glm::vec3& wo_any, float u_lobe, float u1,
+                                                       float u2) const {
+  const bool below = wo_any.z < 0.0f;
+  const SeenFromAbove d = seen_from_above(wo_any, glm::vec3(0.0f), ior_);
+  if (d.wo.z == 0.0f) return std::nullopt;
+  const glm::vec3 m = ggx::sample_visible_normal(d.wo, alpha_, u1, u2);
+  const float o = glm::dot(d.wo, m);
+  if (!(o > 0.0f)) return std::nullopt;
+  glm::vec3 wi;
+  if (u_lobe < fresnel_dielectric(o, 1.0f, d.eta)) {
+    wi = ggx::reflect_about(d.wo, m);
+    if (wi.z <= 0.0f) return std::nullopt;  // reflected into the surface: lost
+  } else {
+    // Snell's law about the facet, from the index above (1) into the one below (eta).
+    const float sin2_t = (1.0f - o * o) / (d.eta * d.eta);
+    if (sin2_t >= 1.0f) return std::nullopt;  // total internal reflection: Fresnel took this branch
+    wi = glm::normalize(-d.wo / d.eta + (o / d.eta - std::sqrt(1.0f - sin2_t)) * m);
+    if (wi.z >= 0.0f) return std::nullopt;  // refracted back out above: lost
+  }
+  if (below) wi.z = -wi.z;
+  BsdfSample s;
+  s.wi = wi;
+  s.pdf = pdf_rough_dielectric(wo_any, wi);
+  if (!(s.pdf > 0.0f)) return std::nullopt;
+  s.weight = eval_rough_dielectric(wo_any, wi) * std::fabs(wi.z) / s.pdf;
+  return s;
+}
+
 float Bsdf::mixture_pdf(const glm::vec3& wo, const glm::vec3& wi, float specular_probability) const {
   if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
   float pdf = (1.0f - specular_probability) * wi.z / kPi;
@@ -131,6 +232,7 @@ glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Layered: return eval_layered(wo, wi);
     case Kind::MetalRoughness: return eval_metal_roughness(wo, wi);
+    case Kind::RoughDielectric: return eval_rough_dielectric(wo, wi);
     default: return glm::vec3(0.0f);
   }
 }
@@ -139,6 +241,7 @@ float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Layered: return mixture_pdf(wo, wi, specular_probability_);
     case Kind::MetalRoughness: return mixture_pdf(wo, wi, metal_roughness_specular_probability(wo));
+    case Kind::RoughDielectric: return pdf_rough_dielectric(wo, wi);
     default: return 0.0f;
   }
 }
@@ -177,6 +280,8 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
       s.pdf = 1.0f - reflectance;
       return s;
     }
+
+    case Kind::RoughDielectric: return sample_rough_dielectric(wo, u_lobe, u1, u2);
 
     case Kind::Layered:
       return sample_mixture(wo, u_lobe, u1, u2, specular_probability_,

@@ -3,6 +3,9 @@
 //   smooth dielectric  the glass part of a material (Material::transmitted_share: Fresnel
 //                      reflection and refraction, tinted by transmission_tint at each crossing);
 //                      a partly transmissive material is this part or the rest, picked per hit
+//   rough dielectric   that glass part of a glTF material whose roughness is above about 0.03:
+//                      GGX microfacets of alpha roughness^2, each a smooth boundary of the ior,
+//                      reflecting and refracting (Walter et al. 2007), visible normals sampled
 //   metal-roughness    glTF's materials (Material::metal_roughness): GGX of alpha roughness^2
 //                      with Schlick's Fresnel from the base colour, weighed by metallic, over a
 //                      diffuse base under a rough dielectric coat of index ior (DielectricCoat),
@@ -35,7 +38,7 @@ class Bsdf {
   // transmitted_share(), so that on average it sees the whole.
   Bsdf(const Material& material, bool transmitted);
   // A material that is wholly one or the other; a partly transmissive one gets its glass part.
-  explicit Bsdf(const Material& material) : Bsdf(material, material.transmitted_share() > 0.0f) {}
+  explicit Bsdf(const Material& material);
 
   // f(wo, wi) of the non-delta lobes (without the cosine).
   glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi) const;
@@ -52,13 +55,17 @@ class Bsdf {
   static float roughness_from_shininess(float shininess);
 
  private:
-  enum class Kind { Layered, MetalRoughness, Mirror, Dielectric };
+  enum class Kind { Layered, MetalRoughness, Mirror, Dielectric, RoughDielectric };
 
   glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
   glm::vec3 eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const;
   // MetalRoughness: the chance of sampling GGX's visible normals rather than the cosine lobe,
   // seen from wo (Layered's is the constant specular_probability_).
   float metal_roughness_specular_probability(const glm::vec3& wo) const;
+  // RoughDielectric, from either side of the surface.
+  glm::vec3 eval_rough_dielectric(const glm::vec3& wo, const glm::vec3& wi) const;
+  float pdf_rough_dielectric(const glm::vec3& wo, const glm::vec3& wi) const;
+  std::optional<BsdfSample> sample_rough_dielectric(const glm::vec3& wo, float u_lobe, float u1, float u2) const;
   // Density of that mixture of the two sampling strategies, and a direction drawn from it
   // weighted by `eval`.
   float mixture_pdf(const glm::vec3& wo, const glm::vec3& wi, float specular_probability) const;
@@ -72,7 +79,7 @@ class Bsdf {
   glm::vec3 multiple_scattering_{0.0f};  // ks / (pi (1 - E_avg))
   float alpha_ = 1.0f;        // GGX roughness
   float ior_ = 1.5f;
-  glm::vec3 tint_{1.0f};      // Dielectric: what refraction keeps
+  glm::vec3 tint_{1.0f};      // Dielectric, RoughDielectric: what refraction keeps
   float specular_probability_ = 0.0f;  // Layered: chance of sampling GGX visible normals
   // MetalRoughness: the base colour as ks above, metallic, and the coat with its diffuse base
   // (kd / (pi eta^2 (1 - R_int)) in diffuse_).

@@ -253,10 +253,11 @@ TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
       });
 }
 
-// KHR_materials_transmission against Mitsuba's blend of that mapping with a smooth `dielectric`
-// (tools/mitsuba_reference.py): a grey dielectric half glass (transmission 0.5), a blue-tinted
-// glass (1), and a half-metallic copper 80% transmissive, whose glass is 40% of it. Each ball's
-// middle, where the camera sees through the glass, and the whole image with the caustics.
+// KHR_materials_transmission against Mitsuba's blend of that mapping with a `roughdielectric`
+// (tools/mitsuba_reference.py): a grey dielectric half glass (transmission 0.5, roughness 0.2),
+// a blue-tinted glass (1, 0.3), and a half-metallic copper 80% transmissive (0.5), whose glass is
+// 40% of it. Each ball's middle, where the camera sees through the glass, and the whole image
+// with the caustics.
 TEST(MitsubaReference, GlassBallsMatchInMeanByAZTest) {
   expect_means_match_by_z_test(
       "tests/data/metal_roughness/glass_balls.json", "tests/data/reference/glass_balls_mitsuba.exr", [](int w, int h) {
