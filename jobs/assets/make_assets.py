@@ -270,9 +270,9 @@ def write_showcase():
     to make from the uvs), standing on a ground whose checker repeats four times by
     KHR_texture_transform, before a panel that glows through an emissive texture at
     KHR_materials_emissive_strength 3, between a fence whose slats are cut out of a quad by the
-    lattice texture's alpha (alphaMode MASK) and a pane of blue glaze a third opaque (BLEND). The
-    images lie beside the model, so a submission sends
-    them as the model's files."""
+    lattice texture's alpha (alphaMode MASK) and a pane of blue glaze a third opaque (BLEND), with a
+    bead of faintly green, slightly rough glass in front (KHR_materials_transmission and _ior).
+    The images lie beside the model, so a submission sends them as the model's files."""
     side = 64
 
     def image(name, texel):
@@ -359,18 +359,22 @@ def write_showcase():
     add_mesh("panel", *quad([(-1.5, -1, 0), (1.5, -1, 0), (1.5, 1, 0), (-1.5, 1, 0)], (0, 0, 1)), 2)
     add_mesh("fence", *quad([(-2.2, -1, 1.0), (-1.1, -1, 1.3), (-1.1, 0.5, 1.3), (-2.2, 0.5, 1.0)], (0, 0, 1)), 3)
     add_mesh("pane", *quad([(1.1, -1, 1.3), (2.1, -1, 1.0), (2.1, 0.3, 1.0), (1.1, 0.3, 1.3)], (0, 0, 1)), 4)
+    # The glass bead: the ball's sphere, a third the size, in front of the ball's left.
+    bead = lambda p: tuple(c * 0.3 + o for c, o in zip(p, (-0.75, -0.7, 1.35)))
+    add_mesh("bead", [bead(p) for p in positions], normals, uvs, indices, 5)
 
     texture = lambda index, **extra: dict({"index": index}, **extra)
     buffer = b"".join(chunks)
     gltf = {
         "asset": {"version": "2.0", "generator": "farm jobs/assets/make_assets.py"},
-        "extensionsUsed": ["KHR_texture_transform", "KHR_materials_emissive_strength"],
+        "extensionsUsed": ["KHR_texture_transform", "KHR_materials_emissive_strength", "KHR_materials_transmission",
+                           "KHR_materials_ior"],
         "scene": 0,
-        "scenes": [{"nodes": [0, 1, 2, 3, 4]}],
+        "scenes": [{"nodes": [0, 1, 2, 3, 4, 5]}],
         "nodes": [{"name": "ball", "mesh": 0, "rotation": [0.0, 0.3826834, 0.0, 0.9238795]},
                   {"name": "ground", "mesh": 1},
                   {"name": "panel", "mesh": 2, "translation": [0.4, 0.6, -2.6]},
-                  {"name": "fence", "mesh": 3}, {"name": "pane", "mesh": 4}],
+                  {"name": "fence", "mesh": 3}, {"name": "pane", "mesh": 4}, {"name": "bead", "mesh": 5}],
         "meshes": meshes,
         "materials": [
             {"name": "ball", "pbrMetallicRoughness": {
@@ -387,7 +391,11 @@ def write_showcase():
              "pbrMetallicRoughness": {"baseColorTexture": texture(6), "metallicFactor": 0.0, "roughnessFactor": 0.8}},
             {"name": "pane", "alphaMode": "BLEND", "doubleSided": True,
              "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.5, 0.9, 0.35], "metallicFactor": 0.0,
-                                      "roughnessFactor": 0.15}}],
+                                      "roughnessFactor": 0.15}},
+            {"name": "bead", "pbrMetallicRoughness": {"baseColorFactor": [0.75, 0.95, 0.85, 1.0],
+                                                      "metallicFactor": 0.0, "roughnessFactor": 0.12},
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                            "KHR_materials_ior": {"ior": 1.5}}}],
         "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}],
         "images": [{"uri": name} for name in ("showcase_base.png", "showcase_mr.png", "showcase_normal.png",
                                                "showcase_occlusion.png", "showcase_ground.png", "showcase_glow.png",

@@ -1,6 +1,6 @@
 // Environment-lit jobs through a real farm: `farm submit --wait` uploads the job's map with its
 // model (the map is a file the job names, not one a model names) and the images a glTF names
-// (jobs/showcase.json: six PNGs), a worker decodes them, and the image is the one `farm render`
+// (jobs/showcase.json: seven PNGs), a worker decodes them, and the image is the one `farm render`
 // makes, bit for bit, for each engine.
 #include <gtest/gtest.h>
 
