@@ -7,6 +7,7 @@
 #include "renderer/job/job_limits.h"
 #include "server/bench/farm_bench.h"
 #include "server/bench/flip_bench.h"
+#include "server/bench/dispatch_bench.h"
 #include "server/bench/frames_bench.h"
 #include "server/bench/grade_bench.h"
 #include "server/bench/path_bench.h"
@@ -185,6 +186,22 @@ void add_frames_bench(CLI::App& bench, CommandTable& commands) {
   add_runner(commands, frames, o, run_frames_bench);
 }
 
+void add_dispatch_bench(CLI::App& bench, CommandTable& commands) {
+  auto o = std::make_shared<DispatchBenchOptions>();
+  CLI::App* dispatch = bench.add_subcommand(
+      "dispatch", "The scheduler's choice of the next batch: claims timed on a SQLite store of 100 and of 10,000 "
+                  "queued one-unit jobs of 50 owners");
+  dispatch->add_option("--queued", o->queued, "Queue lengths, one run each")
+      ->check(CLI::Range(1, 1000000))
+      ->delimiter(',')
+      ->capture_default_str();
+  dispatch->add_option("--claims", o->claims, "Timed claims a run")->check(CLI::Range(1, 1000000))->capture_default_str();
+  dispatch->add_option("--owners", o->owners, "The jobs' owners, round robin")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  add_runner(commands, dispatch, o, run_dispatch_bench);
+}
+
 void add_regress_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<RegressBenchOptions>();
   CLI::App* regress = bench.add_subcommand(
@@ -239,6 +256,7 @@ void add_bench_command(CLI::App& app, CommandTable& commands) {
   add_render_bench(*bench, commands);
   add_regress_bench(*bench, commands);
   add_frames_bench(*bench, commands);
+  add_dispatch_bench(*bench, commands);
   add_flip_bench(*bench, commands);
   add_grade_bench(*bench, commands);
 }

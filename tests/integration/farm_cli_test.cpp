@@ -1,12 +1,15 @@
 // Drives the real `farm` binary as a user would and checks exit codes, messages and files.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include <ImfChannelList.h>
 #include <ImfHeader.h>
@@ -268,6 +271,22 @@ TEST_F(FarmCliTest, BenchPathReportsThroughputAndRaysPerSample) {
   // Nearly every camera ray hits the room, then traces a shadow ray and a bounce at least.
   EXPECT_GE(rays_per_sample, 2.0) << r.output;
   EXPECT_NEAR(mrays / msamples, rays_per_sample, 0.02 * rays_per_sample);
+}
+
+// The dispatch benchmark claims every queued job once, in queue order (it stops with an error
+// naming the claim otherwise), as many as asked or as are queued.
+TEST_F(FarmCliTest, BenchDispatchClaimsEachQueuedJobOnceInQueueOrder) {
+  const auto r = run_command(farm("bench dispatch --queued 3,40 --claims 25 --owners 4"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const auto& [queued, claims] : {std::pair{3, 3}, std::pair{40, 25}}) {
+    const auto row = r.output.find(fmt::format("\n{:>8} {:>8} ", queued, claims));
+    ASSERT_NE(row, std::string::npos) << queued << "\n" << r.output;
+    double fill = 0, median = 0, p99 = 0, mean = 0, per_second = 0;
+    ASSERT_EQ(std::sscanf(r.output.c_str() + row, " %*d %*d %lf %lf %lf %lf %lf", &fill, &median, &p99, &mean,
+                          &per_second), 5) << r.output;
+    EXPECT_GT(median, 0.0);
+    EXPECT_GE(p99, median);
+  }
 }
 
 }  // namespace
