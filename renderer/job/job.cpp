@@ -359,6 +359,23 @@ std::string parse_name(const JsonValue& v) {
   return name;
 }
 
+WorkerRequirements parse_requirements(const JsonValue& v) {
+  const JsonObject obj = v.object({"tags", "min_threads"});
+  WorkerRequirements r;
+  if (auto x = obj.get("tags")) {
+    const std::vector<JsonValue> items = x->array();
+    if (items.size() > kMaxWorkerTags) x->fail(fmt::format("{} tags; at most {}", items.size(), kMaxWorkerTags));
+    for (const JsonValue& item : items) {
+      std::string tag = item.string();
+      if (const std::optional<std::string> problem = worker_tag_problem(tag)) item.fail(*problem);
+      r.tags.push_back(std::move(tag));
+    }
+    sort_worker_tags(r.tags);
+  }
+  if (auto x = obj.get("min_threads")) r.min_threads = x->int32(0, kMaxRequiredThreads);
+  return r;
+}
+
 std::string default_name(const fs::path& job_path) {
   std::string stem = job_path.stem().string();
   return stem.empty() ? "job" : stem;
@@ -373,7 +390,8 @@ Job parse_job(const std::string& json_text, const fs::path& path, const JobLoadO
 Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const JobLoadOptions& options) {
   const std::string file = path.string();
   const JsonObject top(JsonValue(doc, "", file),
-                       {"version", "name", "frames", "animate", "scene", "render", "output", "validate"});
+                       {"version", "name", "frames", "animate", "scene", "render", "output", "validate",
+                        "requirements"});
 
   // The version decides which keys exist, so it is checked before any of them.
   const JsonValue version = top.require("version");
@@ -411,6 +429,7 @@ Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const Jo
   job.output.image = fs::path("out") / (job.name + numbered + ".exr");
   job.output.preview = fs::path("out") / (job.name + numbered + ".png");
   if (auto x = top.get("output")) parse_output(*x, job);
+  if (auto x = top.get("requirements")) job.requirements = parse_requirements(*x);
   if (auto x = top.get("validate")) {
     const JsonObject obj = x->object({"embree_rays"});
     if (auto rays = obj.get("embree_rays")) job.embree_rays = rays->integer(0, kMaxEmbreeRays);

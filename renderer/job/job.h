@@ -12,6 +12,7 @@
 
 #include "renderer/job/frame_range.h"
 #include "renderer/job/render_settings.h"
+#include "renderer/job/worker_requirements.h"
 #include "renderer/scene/camera.h"
 #include "renderer/scene/light.h"
 #include "renderer/scene/material.h"
@@ -73,6 +74,7 @@ struct Job {
   RenderSettings render;          // includes the output AOVs
   JobOutput output;
   std::int64_t embree_rays = 0;   // validate.embree_rays
+  WorkerRequirements requirements;  // where a farm may render it (farm render ignores them)
   // The job's frames; absent: one still (frame 0). A Job is always one frame's still: the values
   // above, output included, are those of `frame` (the first frame rendered, as parsed; any other
   // through job_at_frame()). `output_patterns` keeps the names with their '#' runs.

@@ -36,6 +36,8 @@ int run_submit(const SubmitOptions& o) {
   fmt::print("{}\n", job.job_id());
   fmt::print(stderr, "submitted '{}' to {}: {} units, {} of {} assets uploaded\n", job.name(), client.address(),
              job.tiles_total(), uploaded, submission.spec.assets_size());
+  // It waits for a worker that does not exist yet: said now, not left to a silent --wait.
+  if (!job.unplaceable().empty()) fmt::print(stderr, "waiting: {}\n", job.unplaceable());
   if (!o.wait) return 0;
   const v1::Job last = follow(client, job.job_id());
   if (last.state() != v1::JOB_STATE_SUCCEEDED) return exit_code_of(last);

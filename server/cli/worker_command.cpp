@@ -12,6 +12,7 @@
 #include "proto/farm.grpc.pb.h"
 
 #include "renderer/job/job_limits.h"
+#include "renderer/job/worker_requirements.h"
 #include "renderer/job/render_settings.h"
 #include "renderer/util/input_error.h"
 #include "server/cli/log_level_option.h"
@@ -35,6 +36,10 @@ constexpr int kMaxRequestBytes = 1 << 30;
 
 int run_worker_command(const WorkerCommandOptions& command) {
   WorkerOptions options = command.worker;
+  sort_worker_tags(options.tags);
+  if (options.tags.size() > kMaxWorkerTags) {
+    throw InputError(fmt::format("--tag: {} tags; at most {}", options.tags.size(), kMaxWorkerTags));
+  }
   if (options.cache_dir.empty()) {
     options.cache_dir = std::filesystem::temp_directory_path() / "farm-worker-cache";
   }
@@ -59,14 +64,15 @@ int run_worker_command(const WorkerCommandOptions& command) {
 
   print_security_warnings(security);
   fmt::print("worker listening on {}:{}\n", host_of(options.listen), port);
-  fmt::print("  {} render threads, cache {} (at most {} scenes, ~{} MiB){}\n", service.threads(),
+  fmt::print("  {} render threads, cache {} (at most {} scenes, ~{} MiB){}{}\n", service.threads(),
              options.cache_dir.string(), options.max_scenes, options.cache_memory_mb,
-             options.schedulers.empty() ? "" : ", serving scheduler " + fmt::format("{}", fmt::join(options.schedulers, ", ")));
+             options.schedulers.empty() ? "" : ", serving scheduler " + fmt::format("{}", fmt::join(options.schedulers, ", ")),
+             options.tags.empty() ? "" : fmt::format(", tags {}", fmt::join(options.tags, ", ")));
   std::fflush(stdout);
   std::vector<std::unique_ptr<WorkerRegistration>> registrations;
   for (const std::string& scheduler : options.schedulers) {
     registrations.push_back(std::make_unique<WorkerRegistration>(
-        scheduler, security.outgoing, advertised_worker_address(options.listen, port), service.threads(),
+        scheduler, security.outgoing, advertised_worker_address(options.listen, port), service.threads(), options.tags,
         [&service, scheduler](const std::string& id) { service.scheduler_registered(id, scheduler); }));
   }
 
@@ -104,6 +110,13 @@ void add_worker_command(CLI::App& app, CommandTable& commands) {
                      "registers nowhere (give it to `farm scheduler --worker`) and a job whose "
                      "assets are not in the cache fails with FAILED_PRECONDITION")
       ->delimiter(',');
+  worker->add_option("--tag", o->tags,
+                     "A tag this worker offers the schedulers it registers with (big-mem, course-cg, ...): a job "
+                     "whose requirements.tags name tags goes only to workers with every one; repeated or "
+                     "comma-separated, at most 16, each letters, digits, '.', '_' and '-'")
+      ->delimiter(',')
+      ->check(CLI::Validator(
+          [](std::string& tag) { return worker_tag_problem(tag).value_or(""); }, "TAG", "worker tag"));
   worker->add_option("--cache-dir", o->cache_dir,
                      "Folder for fetched assets (blobs/<sha256>) and laid-out scenes "
                      "(scenes/<scene hash>/) (default: <temp>/farm-worker-cache)");

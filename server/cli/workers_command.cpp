@@ -2,6 +2,7 @@
 #include "server/common/job_eta.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
 #include <memory>
@@ -61,6 +62,7 @@ int run_workers(const WorkersOptions& o) {
     if (w.current_size() > 1) current += fmt::format(" (+{} more)", w.current_size() - 1);
     fmt::print(kRow, w.address(), state_of(w), w.threads() > 0 ? std::to_string(w.threads()) : "-",
                engines.empty() ? "-" : engines, w.units_done(), w.units_failed(), heartbeat_of(w), current);
+    if (!w.tags().empty()) fmt::print("    tags: {}\n", fmt::join(w.tags(), ", "));
     if (!w.quarantine_reason().empty()) fmt::print("    quarantined: {}\n", w.quarantine_reason());
     if (w.state() == v1::WORKER_STATE_BACKED_OFF) {
       const double until = static_cast<double>(w.backed_off_until().seconds()) + w.backed_off_until().nanos() * 1e-9;

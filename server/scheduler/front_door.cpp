@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "renderer/job/job_limits.h"
+#include "renderer/job/worker_requirements.h"
 #include "renderer/util/input_error.h"
 #include "renderer/util/utf8_text.h"
 #include "server/common/hex.h"
@@ -48,6 +49,9 @@ WorkerFacts facts_of(const v1::RegisterWorkerRequest& r) {
   for (int i = 0; i < std::min(r.engines_size(), kMaxEngines); ++i) f.engines.push_back(utf8_prefix(r.engines(i), kMaxText));
   f.hostname = utf8_prefix(r.hostname(), 255);
   f.version = utf8_prefix(r.version(), kMaxText);
+  // Checked by register_worker; sorted, each once, for the jobs' requirements to be matched.
+  f.tags.assign(r.tags().begin(), r.tags().end());
+  sort_worker_tags(f.tags);
   return f;
 }
 
@@ -85,7 +89,9 @@ void SchedulerFrontDoor::check_priority(const Principal& who, int priority, cons
 v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::JobSpec& spec, int priority) {
   AccessControl::check(who, kJobSubmitters, "SubmitJob");
   check_priority(who, priority, "submit");
-  return core_.submit(core_.check(spec), priority, nullptr, who.name);
+  v1::Job job = core_.submit(core_.check(spec), priority, nullptr, who.name);
+  core_.explain_placement(job);
+  return job;
 }
 
 v1::Job SchedulerFrontDoor::get_job(const Principal& who, const std::string& job_id) const {
@@ -120,7 +126,10 @@ v1::ListJobsResponse SchedulerFrontDoor::list_jobs(const Principal& who, const v
   filter.id_prefix = request.id_prefix();
   auto [jobs, next] = core_.store().jobs().list_jobs(filter, size, before);
   v1::ListJobsResponse response;
-  for (v1::Job& job : jobs) *response.add_jobs() = std::move(job);
+  for (v1::Job& job : jobs) {
+    core_.explain_placement(job);
+    *response.add_jobs() = std::move(job);
+  }
   if (next > 0) response.set_next_page_token(std::to_string(next));
   return response;
 }
@@ -282,6 +291,14 @@ v1::RegisterWorkerResponse SchedulerFrontDoor::register_worker(const Principal& 
   }
   if (request.threads() < 0 || request.threads() > kMaxThreads) {
     throw InputError(fmt::format("RegisterWorker: threads {}: give 0 (not known) to {}", request.threads(), kMaxThreads));
+  }
+  if (static_cast<std::size_t>(request.tags_size()) > kMaxWorkerTags) {
+    throw InputError(fmt::format("RegisterWorker: {} tags; at most {}", request.tags_size(), kMaxWorkerTags));
+  }
+  for (const std::string& tag : request.tags()) {
+    if (const std::optional<std::string> problem = worker_tag_problem(tag)) {
+      throw InputError(fmt::format("RegisterWorker: tag: {}", *problem));
+    }
   }
   std::string old;
   {

@@ -10,6 +10,7 @@
 #include "renderer/render_frame.h"
 #include "server/common/job_state.h"
 #include "server/common/service_error.h"
+#include "server/scheduler/workers/placement.h"
 
 namespace farm {
 
@@ -168,6 +169,7 @@ v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::s
   job.frames = job_frames(*info->job);
   if (info->job->frames) job.frame_step = info->job->frames->step;
   job.passes = pass_count(r);
+  job.requirements = info->job->requirements;
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
   v1::Job added;
@@ -188,7 +190,15 @@ v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::s
 }
 
 std::optional<v1::Job> SchedulerCore::get_job(const std::string& job_id) const {
-  return store_.jobs().get_job(job_id);
+  std::optional<v1::Job> job = store_.jobs().get_job(job_id);
+  if (job) explain_placement(*job);
+  return job;
+}
+
+void SchedulerCore::explain_placement(v1::Job& job) const {
+  if (is_final(job.state()) || (job.required_tags().empty() && job.min_threads() == 0)) return;
+  const WorkerRequirements needs{{job.required_tags().begin(), job.required_tags().end()}, job.min_threads()};
+  job.set_unplaceable(unplaceable_reason(needs, workers()));
 }
 
 v1::Job SchedulerCore::cancel(const std::string& job_id, const std::string& by) {

@@ -13,9 +13,10 @@
 namespace farm {
 
 WorkerRegistration::WorkerRegistration(const std::string& scheduler, const ClientIdentity& identity,
-                                       std::string address, int threads,
+                                       std::string address, int threads, std::vector<std::string> tags,
                                        std::function<void(const std::string& scheduler_id)> registered)
-    : scheduler_(scheduler), address_(std::move(address)), threads_(threads), registered_(std::move(registered)),
+    : scheduler_(scheduler), address_(std::move(address)), threads_(threads), tags_(std::move(tags)),
+      registered_(std::move(registered)),
       stub_(v1::Scheduler::NewStub(open_channel(scheduler, identity))),
       thread_([this] { loop(); }) {}
 
@@ -60,6 +61,7 @@ void WorkerRegistration::loop() {
       request.set_address(address_);
       request.set_threads(threads_);
       for (std::string_view e : kEngineNames) request.add_engines(std::string(e));
+      for (const std::string& tag : tags_) request.add_tags(tag);
       char host[256] = {};
       ::gethostname(host, sizeof host - 1);
       request.set_hostname(host);

@@ -11,6 +11,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 #include <thread>
 
 #include "proto/farm.grpc.pb.h"
@@ -21,9 +22,9 @@ namespace farm {
 class WorkerRegistration {
  public:
   // Starts registering `address` (where the scheduler reaches this worker) with `threads` render
-  // threads; `registered` is told the scheduler's id at each registration.
+  // threads and `tags`; `registered` is told the scheduler's id at each registration.
   WorkerRegistration(const std::string& scheduler, const ClientIdentity& identity, std::string address, int threads,
-                     std::function<void(const std::string& scheduler_id)> registered);
+                     std::vector<std::string> tags, std::function<void(const std::string& scheduler_id)> registered);
   // Stops at once: a call in flight is cancelled rather than waited for to its deadline.
   ~WorkerRegistration();
   WorkerRegistration(const WorkerRegistration&) = delete;
@@ -35,6 +36,7 @@ class WorkerRegistration {
 
   std::string scheduler_, address_;
   int threads_;
+  std::vector<std::string> tags_;
   std::function<void(const std::string&)> registered_;
   std::unique_ptr<v1::Scheduler::Stub> stub_;
   std::mutex mutex_;

@@ -23,6 +23,9 @@ struct WorkerOptions {
   int threads = 0;                     // render threads; 0 = all hardware threads
   // host:port of each scheduler it serves: registered with, assets fetched from; none: none.
   std::vector<std::string> schedulers;
+  // What it offers the schedulers it registers with (--tag): jobs whose requirements name tags
+  // go only to workers with all of them.
+  std::vector<std::string> tags;
   std::filesystem::path cache_dir;     // blobs/ and scenes/ live here
   std::size_t max_scenes = 8;          // prepared scenes kept in memory
   std::uint64_t cache_memory_mb = 4096;  // approximate memory budget of the prepared scenes

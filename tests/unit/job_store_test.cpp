@@ -39,6 +39,36 @@ NewJob make_job(const std::string& id, int priority, int tiles) {
   return j;
 }
 
+// A job's requirements travel with it, and its units are claimed only for a worker that meets
+// them: an older tagged job is passed over for a worker without the tag or with too few
+// threads, and nothing is claimed for one that meets no job.
+TEST_P(JobStoreTest, UnitsAreClaimedOnlyForWorkersThatMeetTheirJobsRequirements) {
+  JobStore store(connect());
+  NewJob tagged = make_job("t", 0, 2);
+  tagged.requirements = {{"big-mem"}, 4};
+  const v1::Job added = store.jobs().add_job(tagged, 1000);
+  ASSERT_EQ(added.required_tags_size(), 1);
+  EXPECT_EQ(added.required_tags(0), "big-mem");
+  EXPECT_EQ(added.min_threads(), 4);
+  const auto claim = [&](const std::string& worker, WorkerOffer offer) {
+    return store.units().claim_next_batch(worker, 2000, {}, 1024, {}, offer);
+  };
+  EXPECT_FALSE(claim("thin", {{"big-mem"}, 2})) << "too few threads";
+  EXPECT_FALSE(claim("untagged", {{"course-cg"}, 8})) << "without the tag";
+  EXPECT_FALSE(claim("static", {})) << "a worker that says nothing";
+  store.jobs().add_job(make_job("p", 0, 1), 1001);
+  const auto plain = claim("untagged", {{"course-cg"}, 8});
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->job_id, "p");
+  const auto big = claim("big", {{"big-mem", "gpu"}, 4});
+  ASSERT_TRUE(big);
+  EXPECT_EQ(big->job_id, "t");
+  // Kept across a reopen.
+  const std::optional<v1::Job> again = JobStore(connect()).jobs().get_job("t");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->min_threads(), 4);
+}
+
 TEST_P(JobStoreTest, JobsAndTilesPersistAndRunningTilesAreQueuedAgainOnReopen) {
   {
     JobStore store(connect());
@@ -213,7 +243,8 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
     // Back to what version 1 had: no part column, no owner.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
+                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -241,7 +272,8 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     // Back to what version 2 had: no owner column, no lost_attempts.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
+                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -275,7 +307,8 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
+                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -295,13 +328,13 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
     EXPECT_TRUE(store.units().batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
     EXPECT_EQ(store.units().tiles("a")[0].lost_attempts, 1);
   }
-  // Upgraded once: it opens as version 8 from now on.
+  // Upgraded once: it opens as version 9 from now on.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* s = nullptr;
   ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(s, 0), 8);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 9);
   sqlite3_finalize(s);
   sqlite3_close(db);
 }
@@ -322,7 +355,8 @@ TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZ
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
+                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
                             "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
                             "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
                             "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
@@ -400,7 +434,8 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
+                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
                             "UPDATE schema_version SET version = 5"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
@@ -434,7 +469,8 @@ TEST(SqliteStoreUpgradeTest, AVersion6StoreIsUpgradedAndItsRunningTilesAreQueued
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
+    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
+                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
                             "UPDATE tiles SET state = 1 WHERE idx = 0", "UPDATE schema_version SET version = 6"}) {
       EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }

@@ -80,6 +80,32 @@ bool contains(const std::string& haystack, const std::string& needle) {
 
 // ---- valid jobs ----------------------------------------------------------------------------
 
+// Worker requirements (issue #36): tags sorted and each once, a thread minimum; none by default;
+// each bad value named by its place.
+TEST_F(JobFiles, RequirementsAreReadAndCheckedWhereTheyStand) {
+  EXPECT_TRUE(parse(job_with_keys(R"("name": "plain")")).requirements.empty());
+  const Job job = parse(job_with_keys(R"("requirements": {"tags": ["gpu", "big-mem", "gpu"], "min_threads": 8})"));
+  EXPECT_EQ(job.requirements.tags, (std::vector<std::string>{"big-mem", "gpu"}));
+  EXPECT_EQ(job.requirements.min_threads, 8);
+  EXPECT_TRUE(job.requirements.met_by({"a", "big-mem", "gpu"}, 8));
+  EXPECT_FALSE(job.requirements.met_by({"big-mem", "gpu"}, 7));
+  EXPECT_FALSE(job.requirements.met_by({"gpu"}, 16));
+  EXPECT_EQ(job.requirements.lacking({"gpu"}, 0), "the tag big-mem and 8 threads (it did not say how many it has)");
+  EXPECT_EQ(job.requirements.describe(), "the tags big-mem, gpu and 8 threads");
+
+  const std::string bad_tag = error_of(job_with_keys(R"("requirements": {"tags": ["ok", "no spaces"]})"));
+  EXPECT_TRUE(contains(bad_tag, "requirements.tags[1]")) << bad_tag;
+  EXPECT_TRUE(contains(bad_tag, "letters, digits")) << bad_tag;
+  const std::string threads = error_of(job_with_keys(R"("requirements": {"min_threads": 5000})"));
+  EXPECT_TRUE(contains(threads, "requirements.min_threads")) << threads;
+  const std::string unknown = error_of(job_with_keys(R"("requirements": {"memory": 64})"));
+  EXPECT_TRUE(contains(unknown, "memory")) << unknown;
+  std::string many = R"("requirements": {"tags": [)";
+  for (int i = 0; i < 17; ++i) many += (i ? ", " : "") + std::string("\"t") + std::to_string(i) + "\"";
+  const std::string too_many = error_of(job_with_keys(many + "]}"));
+  EXPECT_TRUE(contains(too_many, "17 tags; at most 16")) << too_many;
+}
+
 TEST_F(JobFiles, JobParse_FullJobKeepsEveryField) {
   const Job job = parse(R"({
     "version": 1,

@@ -44,15 +44,16 @@ v1::Job JobRecords::add_job(const NewJob& j, std::int64_t now_ms) {
   {
     Query insert(db_->prepared(
         "INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, state, submitted_ms, "
-        "tiles_total, owner, frame_first, frame_last, frame_step, frames_total, passes) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING seq"));
+        "tiles_total, owner, frame_first, frame_last, frame_step, frames_total, passes, required_tags, min_threads) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING seq"));
     insert.bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
         .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
         .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
         .bind(11, static_cast<std::int64_t>(j.tiles.size() * j.frames.size() * static_cast<std::size_t>(j.passes)))
         .bind(12, j.owner)
         .bind(13, j.frames.front()).bind(14, j.frames.back()).bind(15, j.frame_step)
-        .bind(16, static_cast<std::int64_t>(j.frames.size())).bind(17, j.passes);
+        .bind(16, static_cast<std::int64_t>(j.frames.size())).bind(17, j.passes)
+        .bind(18, join_worker_tags(j.requirements.tags)).bind(19, j.requirements.min_threads);
     if (!insert.step()) throw std::runtime_error("job store: INSERT INTO jobs returned no seq");
     seq = insert.i64(0);
   }

@@ -6,7 +6,7 @@
 // lost with the process) and keeps done tiles done (their data is on disk, written before they
 // were marked).
 //
-// Schema (version 8; a SQLite store of version 1 to 7 is upgraded in place, a PostgreSQL store,
+// Schema (version 9; a SQLite store of version 1 to 8 is upgraded in place, a PostgreSQL store,
 // which began at 6 in PostgreSQL's types, from 6):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
@@ -18,7 +18,8 @@
 //        frame_last, frame_step, frames_total, frames_done (version 5: the frames it renders and
 //        how many are merged; a still is frame 0 alone), passes (version 6: sample passes a
 //        frame is rendered in, 1 without), paused (version 8: an operator paused it: none of
-//        its units is claimed))
+//        its units is claimed), required_tags (version 9: the worker tags it needs, comma-joined),
+//        min_threads (version 9: the fewest threads a worker of it must have; 0 any))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart

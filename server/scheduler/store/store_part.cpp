@@ -11,7 +11,8 @@ namespace farm {
 const char* const kJobColumns =
     "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
     "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
-    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done, passes, paused";
+    "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done, passes, paused, "
+    "required_tags, min_threads";
 
 const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
@@ -51,6 +52,8 @@ v1::Job job_from_row(const Query& s) {
   job.set_frames_done(static_cast<std::uint32_t>(s.i64(24)));
   job.set_passes(static_cast<std::uint32_t>(s.i64(25)));
   job.set_paused(s.i64(26) != 0);
+  for (std::string& tag : split_worker_tags(s.text(27))) job.add_required_tags(std::move(tag));
+  job.set_min_threads(s.i32(28));
   return job;
 }
 

@@ -10,6 +10,7 @@
 
 #include "proto/farm.pb.h"
 #include "renderer/image/tile_buffer.h"
+#include "renderer/job/worker_requirements.h"
 #include "server/common/job_state.h"
 
 namespace farm {
@@ -29,6 +30,7 @@ struct NewJob {
   int frame_step = 1;
   int passes = 1;              // sample passes of each frame (pass_count of its settings)
   std::vector<Rect> tiles;     // one frame's grid: every frame has these tiles
+  WorkerRequirements requirements;  // the workers that may render it
 };
 
 struct UnitRecord {
@@ -74,6 +76,13 @@ inline std::string describe(const UnitBatch& batch) { return describe_units(batc
 // How many tiles the next batch of `job_id` may hold, given how many of its tiles are queued
 // (counted only up to claim_next_batch's `count_up_to`).
 using BatchSize = std::function<int(const std::string& job_id, int queued_tiles)>;
+
+// What the worker a claim is for offers (its registration's tags and threads): units of a job
+// whose requirements it does not meet are not claimed for it.
+struct WorkerOffer {
+  std::vector<std::string> tags = {};
+  int threads = 0;  // 0: not known
+};
 
 // Which jobs ListJobs returns; each part left empty keeps every job.
 struct JobFilter {

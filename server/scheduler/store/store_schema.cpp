@@ -14,7 +14,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 8;
+constexpr int kSchemaVersion = 9;
 
 // The tables, written once for both stores: {integer}, {blob} and {key} are each dialect's types
 // (PostgreSQL's integers all bigint, as the store binds them), {empty_blob} its empty blob.
@@ -48,7 +48,9 @@ CREATE TABLE IF NOT EXISTS jobs (
   frames_total {integer} NOT NULL DEFAULT 1,
   frames_done {integer} NOT NULL DEFAULT 0,
   passes {integer} NOT NULL DEFAULT 1,
-  paused {integer} NOT NULL DEFAULT 0
+  paused {integer} NOT NULL DEFAULT 0,
+  required_tags TEXT NOT NULL DEFAULT '',
+  min_threads {integer} NOT NULL DEFAULT 0
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
 CREATE TABLE IF NOT EXISTS tiles (
@@ -131,7 +133,7 @@ class StoreSchema {
  private:
   int stored_version();                       // the schema's; a new store's recorded as this one's
   [[noreturn]] void refuse_version(int version) const;  // a version this farm cannot read
-  void open_sqlite();    // the schema made, or upgraded from versions 1 to 7
+  void open_sqlite();    // the schema made, or upgraded from versions 1 to 8
   void open_postgres();  // the schema made, under a lock that other schedulers wait on
   bool postgres_schema_current();  // the store already at this version: no DDL to run
   void upgrade_from_6(int version);           // the upgrades written for both stores
@@ -243,6 +245,12 @@ void StoreSchema::upgrade_from_6(int version) {
     // Version 8: operators pause jobs, and each job keeps its event log (the job_log table the
     // schema made). No older job is paused.
     db_->exec(fmt::format("ALTER TABLE jobs ADD COLUMN paused {} NOT NULL DEFAULT 0",
+                          db_->dialect() == SqlDialect::PostgreSQL ? "BIGINT" : "INTEGER"));
+  }
+  if (version <= 8) {
+    // Version 9: a job's worker requirements (the job file's `requirements`). No older job has any.
+    db_->exec("ALTER TABLE jobs ADD COLUMN required_tags TEXT NOT NULL DEFAULT ''");
+    db_->exec(fmt::format("ALTER TABLE jobs ADD COLUMN min_threads {} NOT NULL DEFAULT 0",
                           db_->dialect() == SqlDialect::PostgreSQL ? "BIGINT" : "INTEGER"));
   }
   db_->exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion));

@@ -35,7 +35,8 @@ std::vector<UnitRecord> UnitQueue::tiles(const std::string& id) const {
 
 std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                                     const BatchSize& batch_size, int count_up_to,
-                                                    const std::function<bool(const std::string&)>& skip_job) {
+                                                    const std::function<bool(const std::string&)>& skip_job,
+                                                    const WorkerOffer& offer) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_, kRedoable);
   UnitBatch batch;
@@ -44,14 +45,21 @@ std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, 
     // The active jobs in queue order, each asked for its first queued tile through tiles_by_state
     // (one seek a job): a join sorted over every queued tile would cost each claim as much as the
     // queue is long, and a job of many frames queues tens of thousands.
-    Query jobs(db_->prepared(fmt::format("SELECT seq, id FROM jobs WHERE state IN {} AND paused = 0 "
-                                         "ORDER BY priority DESC, seq ASC",
+    Query jobs(db_->prepared(fmt::format("SELECT seq, id, required_tags, min_threads FROM jobs WHERE state IN {} "
+                                         "AND paused = 0 ORDER BY priority DESC, seq ASC",
                                         kActiveSql)));
+    // Whether the worker may render the job of the current row.
+    const auto offer_meets = [&] {
+      const std::string tags = jobs.text(2);
+      const int min_threads = jobs.i32(3);
+      if (tags.empty() && min_threads == 0) return true;
+      return WorkerRequirements{split_worker_tags(tags), min_threads}.met_by(offer.tags, offer.threads);
+    };
     Query first(db_->prepared("SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame, pass FROM tiles "
                              "WHERE state = 0 AND job_seq = ? ORDER BY idx LIMIT 1"));
     bool found = false;
     while (!found && jobs.step()) {
-      if (skip_job && skip_job(jobs.text(1))) continue;
+      if (!offer_meets() || (skip_job && skip_job(jobs.text(1)))) continue;
       first.reset();
       first.bind(1, jobs.i64(0));
       if (!first.step()) continue;

@@ -29,10 +29,13 @@ class UnitQueue : public StorePart {
   // on the first claim).
   // Queued tiles are counted for `batch_size` up to `count_up_to` (a count past what changes its
   // answer costs every claim as much as the queue is long).
-  // Jobs for which `skip_job(job_id)` is true are passed over (the worker is kept off them).
+  // Jobs for which `skip_job(job_id)` is true are passed over (the worker is kept off them), and
+  // so are jobs whose requirements `offer` does not meet (the default offer, no tags and threads
+  // not known, meets only jobs without requirements).
   std::optional<UnitBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                             const BatchSize& batch_size = {}, int count_up_to = 1024,
-                                            const std::function<bool(const std::string&)>& skip_job = {});
+                                            const std::function<bool(const std::string&)>& skip_job = {},
+                                            const WorkerOffer& offer = {});
 
   // The batch operations below act only on tiles running on `worker` (the id claim_next_batch was
   // given; empty: any), so that a late answer from a worker whose tiles were taken back never

@@ -19,6 +19,7 @@ v1::WorkerInfo worker_info_of(const WorkerStatus& s) {
   w.set_registered(s.registered);
   w.set_threads(s.facts.threads);
   for (const std::string& e : s.facts.engines) w.add_engines(e);
+  for (const std::string& t : s.facts.tags) w.add_tags(t);
   w.set_hostname(s.facts.hostname);
   w.set_version(s.facts.version);
   w.set_units_done(s.units_done);

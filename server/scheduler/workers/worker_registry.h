@@ -44,6 +44,7 @@ namespace farm {
 struct WorkerFacts {
   int threads = 0;
   std::vector<std::string> engines = {};
+  std::vector<std::string> tags = {};  // sorted, each once: what jobs' requirements may ask for
   std::string hostname = {};
   std::string version = {};
 };
