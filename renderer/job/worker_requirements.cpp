@@ -25,6 +25,15 @@ void sort_worker_tags(std::vector<std::string>& tags) {
   tags.erase(std::unique(tags.begin(), tags.end()), tags.end());
 }
 
+namespace {
+
+// "the tag a" or "the tags a, b".
+std::string tags_in_words(const std::vector<std::string>& tags) {
+  return fmt::format("the tag{} {}", tags.size() == 1 ? "" : "s", fmt::join(tags, ", "));
+}
+
+}  // namespace
+
 bool WorkerRequirements::met_by(const std::vector<std::string>& worker_tags, int threads) const {
   if (min_threads > 0 && threads < min_threads) return false;
   return std::all_of(tags.begin(), tags.end(), [&](const std::string& tag) {
@@ -38,9 +47,7 @@ std::string WorkerRequirements::lacking(const std::vector<std::string>& worker_t
     if (std::find(worker_tags.begin(), worker_tags.end(), tag) == worker_tags.end()) missing.push_back(tag);
   }
   std::string out;
-  if (!missing.empty()) {
-    out = fmt::format("the tag{} {}", missing.size() == 1 ? "" : "s", fmt::join(missing, ", "));
-  }
+  if (!missing.empty()) out = tags_in_words(missing);
   if (min_threads > 0 && threads < min_threads) {
     if (!out.empty()) out += " and ";
     out += threads > 0 ? fmt::format("{} threads (it has {})", min_threads, threads)
@@ -51,7 +58,7 @@ std::string WorkerRequirements::lacking(const std::vector<std::string>& worker_t
 
 std::string WorkerRequirements::describe() const {
   std::string out;
-  if (!tags.empty()) out = fmt::format("the tag{} {}", tags.size() == 1 ? "" : "s", fmt::join(tags, ", "));
+  if (!tags.empty()) out = tags_in_words(tags);
   if (min_threads > 0) out += fmt::format("{}{} threads", out.empty() ? "" : " and ", min_threads);
   return out.empty() ? "nothing" : out;
 }

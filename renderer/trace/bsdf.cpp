@@ -143,34 +143,23 @@ float Bsdf::metal_roughness_specular_probability(const glm::vec3& wo) const {
 
 // Walter et al. 2007: F D G / (4 |cos_o cos_i|) reflected; refracted, for radiance,
 // (1 - F) D G |wi.m| |wo.m| / (|cos_o cos_i| (wo.m + eta wi.m)^2), which carries the (1 / eta)^2
-// compression of radiance entering a denser medium, times the tint.
-glm::vec3 Bsdf::eval_rough_dielectric(const glm::vec3& wo_any, const glm::vec3& wi_any) const {
+// compression of radiance entering a denser medium, times the tint. The density: the visible
+// normal's, times the Fresnel odds of the lobe taken, times the Jacobian from the normal to the
+// direction it turns wo into.
+Bsdf::Evaluated Bsdf::rough_dielectric(const glm::vec3& wo_any, const glm::vec3& wi_any) const {
   const SeenFromAbove d = seen_from_above(wo_any, wi_any, ior_);
-  if (d.wo.z == 0.0f || d.wi.z == 0.0f) return glm::vec3(0.0f);
+  if (d.wo.z == 0.0f || d.wi.z == 0.0f) return {};
   const glm::vec3 m = turning_normal(d);
-  if (m.z == 0.0f) return glm::vec3(0.0f);
+  if (m.z == 0.0f) return {};
   const float o = glm::dot(d.wo, m), i = glm::dot(d.wi, m);
   const float fresnel = fresnel_dielectric(o, 1.0f, d.eta);
   const float dg = ggx::distribution(m, alpha_) * ggx::smith_g2(d.wo, d.wi, alpha_);
   const float cosines = d.wo.z * std::fabs(d.wi.z);
-  if (d.wi.z > 0.0f) return glm::vec3(fresnel * dg / (4.0f * cosines));
-  const float spread = o + d.eta * i;
-  return tint_ * ((1.0f - fresnel) * dg * std::fabs(i) * o / (cosines * spread * spread));
-}
-
-// The visible normal's density, times the Fresnel odds of the lobe taken, times the Jacobian
-// from the normal to the direction it turns wo into.
-float Bsdf::pdf_rough_dielectric(const glm::vec3& wo_any, const glm::vec3& wi_any) const {
-  const SeenFromAbove d = seen_from_above(wo_any, wi_any, ior_);
-  if (d.wo.z == 0.0f || d.wi.z == 0.0f) return 0.0f;
-  const glm::vec3 m = turning_normal(d);
-  if (m.z == 0.0f) return 0.0f;
-  const float o = glm::dot(d.wo, m), i = glm::dot(d.wi, m);
-  const float fresnel = fresnel_dielectric(o, 1.0f, d.eta);
   const float visible = ggx::visible_normal_pdf(d.wo, m, alpha_);
-  if (d.wi.z > 0.0f) return fresnel * visible / (4.0f * o);
+  if (d.wi.z > 0.0f) return {glm::vec3(fresnel * dg / (4.0f * cosines)), fresnel * visible / (4.0f * o)};
   const float spread = o + d.eta * i;
-  return (1.0f - fresnel) * visible * d.eta * d.eta * std::fabs(i) / (spread * spread);
+  return {tint_ * ((1.0f - fresnel) * dg * std::fabs(i) * o / (cosines * spread * spread)),
+          (1.0f - fresnel) * visible * d.eta * d.eta * std::fabs(i) / (spread * spread)};
 }
 
 std::optional<BsdfSample> Bsdf::sample_rough_dielectric(const glm::vec3& wo_any, float u_lobe, float u1,
@@ -193,11 +182,12 @@ std::optional<BsdfSample> Bsdf::sample_rough_dielectric(const glm::vec3& wo_any,
     if (wi.z >= 0.0f) return std::nullopt;  // refracted back out above: lost
   }
   if (below) wi.z = -wi.z;
+  const Evaluated e = rough_dielectric(wo_any, wi);
+  if (!(e.pdf > 0.0f)) return std::nullopt;
   BsdfSample s;
   s.wi = wi;
-  s.pdf = pdf_rough_dielectric(wo_any, wi);
-  if (!(s.pdf > 0.0f)) return std::nullopt;
-  s.weight = eval_rough_dielectric(wo_any, wi) * std::fabs(wi.z) / s.pdf;
+  s.pdf = e.pdf;
+  s.weight = e.f * std::fabs(wi.z) / e.pdf;
   return s;
 }
 
@@ -232,7 +222,7 @@ glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Layered: return eval_layered(wo, wi);
     case Kind::MetalRoughness: return eval_metal_roughness(wo, wi);
-    case Kind::RoughDielectric: return eval_rough_dielectric(wo, wi);
+    case Kind::RoughDielectric: return rough_dielectric(wo, wi).f;
     default: return glm::vec3(0.0f);
   }
 }
@@ -241,7 +231,7 @@ float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Layered: return mixture_pdf(wo, wi, specular_probability_);
     case Kind::MetalRoughness: return mixture_pdf(wo, wi, metal_roughness_specular_probability(wo));
-    case Kind::RoughDielectric: return pdf_rough_dielectric(wo, wi);
+    case Kind::RoughDielectric: return rough_dielectric(wo, wi).pdf;
     default: return 0.0f;
   }
 }

@@ -62,9 +62,14 @@ class Bsdf {
   // MetalRoughness: the chance of sampling GGX's visible normals rather than the cosine lobe,
   // seen from wo (Layered's is the constant specular_probability_).
   float metal_roughness_specular_probability(const glm::vec3& wo) const;
-  // RoughDielectric, from either side of the surface.
-  glm::vec3 eval_rough_dielectric(const glm::vec3& wo, const glm::vec3& wi) const;
-  float pdf_rough_dielectric(const glm::vec3& wo, const glm::vec3& wi) const;
+  // RoughDielectric, from either side of the surface: f and the density of sampling wi, worked
+  // out together (they share the facet, its Fresnel and its distribution); zero for a pair no
+  // facet joins.
+  struct Evaluated {
+    glm::vec3 f{0.0f};
+    float pdf = 0.0f;
+  };
+  Evaluated rough_dielectric(const glm::vec3& wo, const glm::vec3& wi) const;
   std::optional<BsdfSample> sample_rough_dielectric(const glm::vec3& wo, float u_lobe, float u1, float u2) const;
   // Density of that mixture of the two sampling strategies, and a direction drawn from it
   // weighted by `eval`.

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <ctime>
 
-#include "renderer/job/worker_requirements.h"
 #include "server/cli/progress_bar.h"
 #include "server/common/job_state.h"
 
@@ -99,8 +98,7 @@ void print_job(const v1::Job& job) {
   fmt::print("  submitted {}{}, started {}, finished {}\n", local_time(job.submitted_at()),
              job.owner().empty() ? "" : " by " + job.owner(), local_time(job.started_at()),
              local_time(job.finished_at()));
-  if (!job.required_tags().empty() || job.min_threads() > 0) {
-    const WorkerRequirements needs{{job.required_tags().begin(), job.required_tags().end()}, job.min_threads()};
+  if (const WorkerRequirements needs = requirements_of(job); !needs.empty()) {
     fmt::print("  runs on workers with {}\n", needs.describe());
   }
   if (!job.unplaceable().empty()) fmt::print("  waiting: {}\n", job.unplaceable());

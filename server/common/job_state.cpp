@@ -15,6 +15,10 @@ std::string describe_units(std::uint32_t first, std::uint32_t count) {
   return count > 1 ? fmt::format("units {}-{}", first, first + count - 1) : fmt::format("unit {}", first);
 }
 
+WorkerRequirements requirements_of(const v1::Job& job) {
+  return {{job.required_tags().begin(), job.required_tags().end()}, job.min_threads()};
+}
+
 std::int64_t unix_ms_now() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
              std::chrono::system_clock::now().time_since_epoch())

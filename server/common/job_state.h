@@ -4,6 +4,7 @@
 #include <string>
 
 #include "proto/farm.pb.h"
+#include "renderer/job/worker_requirements.h"
 
 namespace farm {
 
@@ -12,6 +13,8 @@ bool is_final(v1::JobState state);
 std::string to_string(v1::JobState state);  // "queued", "running", ...
 // "tile 7" or "tiles 7-9", for messages about a batch.
 std::string describe_units(std::uint32_t first, std::uint32_t count);
+// The workers a job may run on, as its Job message carries them.
+WorkerRequirements requirements_of(const v1::Job& job);
 // Wall-clock time as the store and the proto keep it.
 std::int64_t unix_ms_now();
 

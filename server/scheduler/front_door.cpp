@@ -90,7 +90,7 @@ v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::JobSpec& spec
   AccessControl::check(who, kJobSubmitters, "SubmitJob");
   check_priority(who, priority, "submit");
   v1::Job job = core_.submit(core_.check(spec), priority, nullptr, who.name);
-  core_.explain_placement(job);
+  core_.explain_placement({&job, 1});
   return job;
 }
 
@@ -126,10 +126,8 @@ v1::ListJobsResponse SchedulerFrontDoor::list_jobs(const Principal& who, const v
   filter.id_prefix = request.id_prefix();
   auto [jobs, next] = core_.store().jobs().list_jobs(filter, size, before);
   v1::ListJobsResponse response;
-  for (v1::Job& job : jobs) {
-    core_.explain_placement(job);
-    *response.add_jobs() = std::move(job);
-  }
+  core_.explain_placement(jobs);
+  for (v1::Job& job : jobs) *response.add_jobs() = std::move(job);
   if (next > 0) response.set_next_page_token(std::to_string(next));
   return response;
 }

@@ -191,14 +191,18 @@ v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::s
 
 std::optional<v1::Job> SchedulerCore::get_job(const std::string& job_id) const {
   std::optional<v1::Job> job = store_.jobs().get_job(job_id);
-  if (job) explain_placement(*job);
+  if (job) explain_placement({&*job, 1});
   return job;
 }
 
-void SchedulerCore::explain_placement(v1::Job& job) const {
-  if (is_final(job.state()) || (job.required_tags().empty() && job.min_threads() == 0)) return;
-  const WorkerRequirements needs{{job.required_tags().begin(), job.required_tags().end()}, job.min_threads()};
-  job.set_unplaceable(unplaceable_reason(needs, workers()));
+void SchedulerCore::explain_placement(std::span<v1::Job> jobs) const {
+  std::optional<std::vector<WorkerStatus>> known;
+  for (v1::Job& job : jobs) {
+    const WorkerRequirements needs = requirements_of(job);
+    if (is_final(job.state()) || needs.empty()) continue;
+    if (!known) known = workers();
+    job.set_unplaceable(unplaceable_reason(needs, *known));
+  }
 }
 
 v1::Job SchedulerCore::cancel(const std::string& job_id, const std::string& by) {

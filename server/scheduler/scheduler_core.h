@@ -37,6 +37,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -104,8 +105,9 @@ class SchedulerCore {
   v1::Job submit(ValidatedJob job, int priority = 0, const std::shared_ptr<JobEventQueue>& watcher = nullptr,
                  const std::string& owner = {});
   std::optional<v1::Job> get_job(const std::string& job_id) const;
-  // An active job with requirements no worker meets gets `unplaceable` set, saying why.
-  void explain_placement(v1::Job& job) const;
+  // Each active job with requirements no worker meets gets `unplaceable` set, saying why (the
+  // workers read once for all of them).
+  void explain_placement(std::span<v1::Job> jobs) const;
   // Drops the job's queued tiles and cancels its calls in flight. ServiceError NOT_FOUND.
   // `by`: who asked (the caller's token name), said in the job's log and its watchers' events.
   v1::Job cancel(const std::string& job_id, const std::string& by = {});

@@ -236,6 +236,15 @@ TEST(MitsubaReference, EnvironmentLitYardMatchesInMeanByAZTest) {
       });
 }
 
+// The whole image and the middles of make_balls.py's three balls, left to right, at w x h: their
+// centres and radii in pixels at 128 x 128 (camera at z 3.9, 40 degrees), scaled.
+std::vector<MeanRegion> image_and_three_balls(int w, int h, const char* left, const char* middle, const char* right) {
+  const auto ball = [&](const char* name, int x, int y) {
+    return MeanRegion{name, {x * w / 128 - 9, y * h / 128 - 9, x * w / 128 + 9, y * h / 128 + 9}};
+  };
+  return {{"image", {0, 0, w, h}}, ball(left, 35, 96), ball(middle, 64, 93), ball(right, 93, 96)};
+}
+
 // glTF's metal-roughness material in the path tracer against Mitsuba's counterpart
 // (tools/mitsuba_reference.py writes the mapping down): a rough gold conductor (metallic 1,
 // roughness 0.35: principled), a half-metallic copper (0.5, 0.5: a blend of the two) and a rough
@@ -244,12 +253,7 @@ TEST(MitsubaReference, EnvironmentLitYardMatchesInMeanByAZTest) {
 TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
   expect_means_match_by_z_test(
       "tests/data/metal_roughness/balls.json", "tests/data/reference/metal_roughness_mitsuba.exr", [](int w, int h) {
-        // The balls' centres and radii in pixels at 128 x 128 (camera at z 3.9, 40 degrees).
-        const auto ball = [&](const char* name, int x, int y) {
-          return MeanRegion{name, {x * w / 128 - 9, y * h / 128 - 9, x * w / 128 + 9, y * h / 128 + 9}};
-        };
-        return std::vector<MeanRegion>{{"image", {0, 0, w, h}}, ball("rough gold", 35, 96),
-                                       ball("half copper", 64, 93), ball("red plastic", 93, 96)};
+        return image_and_three_balls(w, h, "rough gold", "half copper", "red plastic");
       });
 }
 
@@ -261,11 +265,7 @@ TEST(MitsubaReference, MetalRoughnessBallsMatchInMeanByAZTest) {
 TEST(MitsubaReference, GlassBallsMatchInMeanByAZTest) {
   expect_means_match_by_z_test(
       "tests/data/metal_roughness/glass_balls.json", "tests/data/reference/glass_balls_mitsuba.exr", [](int w, int h) {
-        const auto ball = [&](const char* name, int x, int y) {
-          return MeanRegion{name, {x * w / 128 - 9, y * h / 128 - 9, x * w / 128 + 9, y * h / 128 + 9}};
-        };
-        return std::vector<MeanRegion>{{"image", {0, 0, w, h}}, ball("half glass", 35, 96),
-                                       ball("blue glass", 64, 93), ball("copper glass", 93, 96)};
+        return image_and_three_balls(w, h, "half glass", "blue glass", "copper glass");
       });
 }
 
