@@ -140,6 +140,12 @@ void check_ply_counts(const PlyHeader& header, std::uint64_t file_bytes, const s
   const std::uint64_t body = file_bytes > header.header_bytes ? file_bytes - header.header_bytes : 0;
   std::uint64_t needed = 0;
   for (const PlyElement& e : header.elements) {
+    // An element of no properties takes no bytes, so no file size bounds its count, and every
+    // reader (ours below, Assimp's) walks it one element at a time: 4.5e18 of them never end.
+    if (e.properties.empty() && e.count > 0) {
+      throw InputError(file + ": the PLY header declares " + std::to_string(e.count) + " '" + e.name +
+                       "' elements of no properties (an element holds at least one value)");
+    }
     // Checked arithmetic: a count near 2^64 must not wrap into something small.
     const bool too_many = e.min_bytes > 0 && e.count > (std::numeric_limits<std::uint64_t>::max() - needed) / e.min_bytes;
     if (!too_many) needed += e.count * e.min_bytes;

@@ -85,6 +85,19 @@ TEST(PlyHeader, CountsThatWouldOverflowAreRefused) {
   EXPECT_THROW(parse_ply_header(ascii_triangle("-1"), "t.ply"), InputError);
 }
 
+// Found by the fuzzer: an element of no properties takes no bytes, so its count escaped the size
+// check and the body check walked 4.5e18 of them; an empty one of count 0 is harmless.
+TEST(PlyHeader, AnElementOfNoPropertiesIsRefusedUnlessItIsEmpty) {
+  TempDir dir;
+  const std::string head = "ply\nformat binary_little_endian 1.0\nelement vertex 4569078768296817094\n";
+  const std::string error = load_error(dir.write("empty.ply", head + "end_header\n\0\0"));
+  EXPECT_NE(error.find("empty.ply"), std::string::npos) << error;
+  EXPECT_NE(error.find("4569078768296817094 'vertex' elements of no properties"), std::string::npos) << error;
+  std::string triangle = binary_triangle();
+  triangle.insert(triangle.find("element vertex"), "element note 0\n");
+  EXPECT_EQ(load_model(dir.write("noted.ply", triangle)).meshes.at(0).triangles.size(), 1u);
+}
+
 // Found by the fuzzer: Assimp's ASCII reader looped for ever on a NUL among the numbers, and on
 // data that shared the end_header line, and allocated for whatever list length a face gave.
 TEST(PlyHeader, AnAsciiBodyThatDoesNotFitItsHeaderIsRefusedNamingThePlace) {
