@@ -376,6 +376,14 @@ WorkerRequirements parse_requirements(const JsonValue& v) {
   return r;
 }
 
+JobCaps parse_limits(const JsonValue& v) {
+  const JsonObject obj = v.object({"max_workers", "max_units_in_flight"});
+  JobCaps caps;
+  if (auto x = obj.get("max_workers")) caps.max_workers = x->int32(0, kMaxJobCap);
+  if (auto x = obj.get("max_units_in_flight")) caps.max_units_in_flight = x->int32(0, kMaxJobCap);
+  return caps;
+}
+
 std::string default_name(const fs::path& job_path) {
   std::string stem = job_path.stem().string();
   return stem.empty() ? "job" : stem;
@@ -391,7 +399,7 @@ Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const Jo
   const std::string file = path.string();
   const JsonObject top(JsonValue(doc, "", file),
                        {"version", "name", "frames", "animate", "scene", "render", "output", "validate",
-                        "requirements"});
+                        "requirements", "limits"});
 
   // The version decides which keys exist, so it is checked before any of them.
   const JsonValue version = top.require("version");
@@ -430,6 +438,7 @@ Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const Jo
   job.output.preview = fs::path("out") / (job.name + numbered + ".png");
   if (auto x = top.get("output")) parse_output(*x, job);
   if (auto x = top.get("requirements")) job.requirements = parse_requirements(*x);
+  if (auto x = top.get("limits")) job.caps = parse_limits(*x);
   if (auto x = top.get("validate")) {
     const JsonObject obj = x->object({"embree_rays"});
     if (auto rays = obj.get("embree_rays")) job.embree_rays = rays->integer(0, kMaxEmbreeRays);

@@ -75,6 +75,7 @@ struct Job {
   JobOutput output;
   std::int64_t embree_rays = 0;   // validate.embree_rays
   WorkerRequirements requirements;  // where a farm may render it (farm render ignores them)
+  JobCaps caps;                     // how much of a farm it may hold at once (likewise)
   // The job's frames; absent: one still (frame 0). A Job is always one frame's still: the values
   // above, output included, are those of `frame` (the first frame rendered, as parsed; any other
   // through job_at_frame()). `output_patterns` keeps the names with their '#' runs.

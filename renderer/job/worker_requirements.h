@@ -36,6 +36,15 @@ struct WorkerRequirements {
   bool operator==(const WorkerRequirements&) const = default;
 };
 
+// How much of a farm a job may hold at once (the job file's `limits`; docs/architecture.md,
+// "Scheduling"): a studio farm's machine limit. 0: no cap.
+inline constexpr int kMaxJobCap = 1'000'000;
+struct JobCaps {
+  int max_workers = 0;          // workers rendering its units at once
+  int max_units_in_flight = 0;  // its units handed out and not yet back
+  bool operator==(const JobCaps&) const = default;
+};
+
 // Tags as the store keeps them: joined by commas (tags hold none), and split back.
 std::string join_worker_tags(const std::vector<std::string>& tags);
 std::vector<std::string> split_worker_tags(std::string_view joined);

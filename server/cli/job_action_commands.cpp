@@ -1,11 +1,15 @@
 #include "server/cli/job_action_commands.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <functional>
+#include <optional>
+#include <vector>
 #include <memory>
 #include <string>
 
+#include "renderer/job/worker_requirements.h"
 #include "server/cli/job_display.h"
 #include "server/cli/scheduler_target.h"
 #include "server/client/scheduler_client.h"
@@ -19,6 +23,24 @@ struct PriorityOptions {
   JobOnScheduler target;
   int priority = 0;
 };
+
+struct LimitsOptions {
+  JobOnScheduler target;
+  std::optional<std::uint32_t> max_workers, max_units_in_flight;
+};
+
+struct DependOptions {
+  JobOnScheduler target;
+  std::vector<std::string> after, after_any;
+};
+
+// "max 1 worker, max 8 units in flight", or "no caps".
+std::string caps_of(const v1::Job& job) {
+  std::vector<std::string> caps;
+  if (job.max_workers() > 0) caps.push_back(fmt::format("max {} worker{}", job.max_workers(), job.max_workers() == 1 ? "" : "s"));
+  if (job.max_units_in_flight() > 0) caps.push_back(fmt::format("max {} units in flight", job.max_units_in_flight()));
+  return caps.empty() ? "no caps" : fmt::format("{}", fmt::join(caps, ", "));
+}
 
 void print_state(const v1::Job& job, const std::string& what) {
   fmt::print("job {}: {}{} ({}, priority {})\n", job.job_id(), what.empty() ? "" : what + ", ", state_label(job),
@@ -72,6 +94,36 @@ void add_job_action_commands(CLI::App& app, CommandTable& commands) {
   commands.add(priority, [p] {
     SchedulerClient client(resolve_scheduler_connection(p->target.scheduler));
     print_state(client.set_priority(client.resolve_job_id(p->target.job_id), p->priority), "");
+    return 0;
+  });
+
+  auto l = std::make_shared<LimitsOptions>();
+  CLI::App* limits = app.add_subcommand(
+      "limits", "Change a job's caps while it runs: how many workers, and how many of its units, it may hold at once");
+  add_job_on_scheduler_options(*limits, l->target);
+  limits->add_option("--max-workers", l->max_workers, "At most this many workers at once (0: no cap)")
+      ->check(CLI::Range(0, kMaxJobCap));
+  limits->add_option("--max-units-in-flight", l->max_units_in_flight, "At most this many units out at once (0: no cap)")
+      ->check(CLI::Range(0, kMaxJobCap));
+  commands.add(limits, [l] {
+    SchedulerClient client(resolve_scheduler_connection(l->target.scheduler));
+    const v1::Job job = client.set_limits(client.resolve_job_id(l->target.job_id), l->max_workers, l->max_units_in_flight);
+    print_state(job, caps_of(job));
+    return 0;
+  });
+
+  auto d = std::make_shared<DependOptions>();
+  CLI::App* depend = app.add_subcommand(
+      "depend", "Make a job that has not started wait for other jobs too (as farm submit --after / --after-any)");
+  add_job_on_scheduler_options(*depend, d->target);
+  depend->add_option("--after", d->after, "Jobs it waits for to succeed (comma-separated ids or unique starts)")
+      ->delimiter(',');
+  depend->add_option("--after-any", d->after_any, "Jobs it waits for to end, however they end")->delimiter(',');
+  commands.add(depend, [d] {
+    SchedulerClient client(resolve_scheduler_connection(d->target.scheduler));
+    const v1::Job job = client.add_dependencies(client.resolve_job_id(d->target.job_id),
+                                                client.resolve_job_ids(d->after), client.resolve_job_ids(d->after_any));
+    print_state(job, describe_dependencies(job));
     return 0;
   });
 }

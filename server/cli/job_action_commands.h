@@ -1,6 +1,7 @@
 #pragma once
-// The operator's actions on one job: `farm cancel`, `pause`, `resume`, `priority`, `retry` and
-// `delete`, each taking a job id or any unique start of one.
+// The operator's actions on one job: `farm cancel`, `pause`, `resume`, `priority`, `retry`,
+// `delete`, `limits` (its caps) and `depend` (more jobs to wait for), each taking a job id or any
+// unique start of one.
 #include "server/cli/command_table.h"
 
 namespace farm {

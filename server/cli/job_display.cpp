@@ -2,6 +2,7 @@
 #include "server/common/job_eta.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -102,6 +103,15 @@ void print_job(const v1::Job& job) {
     fmt::print("  runs on workers with {}\n", needs.describe());
   }
   if (!job.unplaceable().empty()) fmt::print("  waiting: {}\n", job.unplaceable());
+  if (const std::string waits = describe_dependencies(job); !waits.empty()) {
+    fmt::print("  {}: {}\n", job.state() == v1::JOB_STATE_WAITING ? "waiting" : "dependencies", waits);
+  }
+  if (job.dependents_size() > 0) fmt::print("  waited for by: {}\n", fmt::join(job.dependents(), ", "));
+  if (job.max_workers() > 0 || job.max_units_in_flight() > 0) {
+    fmt::print("  caps: {} workers, {} units in flight at once\n",
+               job.max_workers() > 0 ? std::to_string(job.max_workers()) : "any",
+               job.max_units_in_flight() > 0 ? std::to_string(job.max_units_in_flight()) : "any");
+  }
   if (job.tile_failures() > 0) fmt::print("  unit retries: {}\n", job.tile_failures());
   if (!job.failure_reason().empty()) fmt::print("  failure: {}\n", job.failure_reason());
   const v1::TileStats& s = job.stats();

@@ -31,17 +31,9 @@ std::vector<v1::JobState> parse_states(const std::string& list) {
   std::istringstream in(list);
   for (std::string name; std::getline(in, name, ',');) {
     if (name.empty()) continue;
-    bool known = false;
-    for (int s = v1::JobState_MIN; s <= v1::JobState_MAX; ++s) {
-      if (v1::JobState_IsValid(s) && s != v1::JOB_STATE_UNSPECIFIED && to_string(static_cast<v1::JobState>(s)) == name) {
-        out.push_back(static_cast<v1::JobState>(s));
-        known = true;
-      }
-    }
-    if (!known) {
-      throw InputError(fmt::format("--state: '{}' is not a job state (queued, running, succeeded, failed, cancelled)",
-                                   name));
-    }
+    const std::optional<v1::JobState> state = job_state_named(name);
+    if (!state) throw InputError(fmt::format("--state: '{}' is not a job state ({})", name, kJobStateNames));
+    out.push_back(*state);
   }
   return out;
 }
@@ -110,8 +102,7 @@ void add_status_command(CLI::App& app, CommandTable& commands) {
   CLI::App* status = app.add_subcommand("status", "List the scheduler's jobs, or show one");
   status->add_option("id", o->target.job_id, "Job id, or any unique start of it (default: list jobs)");
   status->add_option("--state", o->states,
-                     "List only jobs in these states, comma-separated: queued, running, succeeded, failed, "
-                     "cancelled");
+                     std::string("List only jobs in these states, comma-separated: ") + kJobStateNames);
   status->add_option("--name", o->name, "List only jobs whose name matches this glob (* and ?; case-insensitive)");
   status->add_option("--limit", o->limit, "List at most the newest N (0 = all)")->capture_default_str();
   status->add_flag("--json", o->json, "Print the job, or the list, as JSON (the fields of farm.v1.Job)");

@@ -111,8 +111,12 @@ std::size_t SchedulerClient::upload_missing(const JobSubmission& submission) {
 
 v1::Job SchedulerClient::submit(const JobSubmission& submission, int priority) {
   v1::SubmitJobRequest request;
-  *request.mutable_job() = submission.spec;
   request.set_priority(priority);
+  return submit(submission, std::move(request));
+}
+
+v1::Job SchedulerClient::submit(const JobSubmission& submission, v1::SubmitJobRequest request) {
+  *request.mutable_job() = submission.spec;
   return call<v1::SubmitJobResponse>(&v1::Scheduler::Stub::SubmitJob, request, "SubmitJob").job();
 }
 
@@ -165,6 +169,12 @@ std::string SchedulerClient::resolve_job_id(const std::string& id_or_prefix) {
                                more ? " and more" : ""));
 }
 
+std::vector<std::string> SchedulerClient::resolve_job_ids(const std::vector<std::string>& ids_or_prefixes) {
+  std::vector<std::string> ids;
+  for (const std::string& id : ids_or_prefixes) ids.push_back(resolve_job_id(id));
+  return ids;
+}
+
 v1::Job SchedulerClient::watch(const std::string& job_id,
                                const std::function<void(const v1::JobEvent&)>& on_event) {
   v1::WatchJobRequest request;
@@ -206,6 +216,24 @@ v1::Job SchedulerClient::set_priority(const std::string& job_id, int priority) {
   request.set_job_id(job_id);
   request.set_priority(priority);
   return call<v1::SetPriorityResponse>(&v1::Scheduler::Stub::SetPriority, request, "SetPriority").job();
+}
+
+v1::Job SchedulerClient::set_limits(const std::string& job_id, std::optional<std::uint32_t> max_workers,
+                                    std::optional<std::uint32_t> max_units_in_flight) {
+  v1::SetJobLimitsRequest request;
+  request.set_job_id(job_id);
+  if (max_workers) request.set_max_workers(*max_workers);
+  if (max_units_in_flight) request.set_max_units_in_flight(*max_units_in_flight);
+  return call<v1::SetJobLimitsResponse>(&v1::Scheduler::Stub::SetJobLimits, request, "SetJobLimits").job();
+}
+
+v1::Job SchedulerClient::add_dependencies(const std::string& job_id, const std::vector<std::string>& after,
+                                          const std::vector<std::string>& after_any) {
+  v1::AddDependenciesRequest request;
+  request.set_job_id(job_id);
+  for (const std::string& id : after) request.add_after(id);
+  for (const std::string& id : after_any) request.add_after_any(id);
+  return call<v1::AddDependenciesResponse>(&v1::Scheduler::Stub::AddDependencies, request, "AddDependencies").job();
 }
 
 v1::RetryJobResponse SchedulerClient::retry(const std::string& job_id) {

@@ -34,6 +34,8 @@ class SchedulerClient {
   // Uploads the files the scheduler lacks (HasAssets first); returns how many were sent.
   std::size_t upload_missing(const JobSubmission& submission);
   v1::Job submit(const JobSubmission& submission, int priority);
+  // With the rest of the request (priority, dependencies, caps) as `request` has it.
+  v1::Job submit(const JobSubmission& submission, v1::SubmitJobRequest request);
   v1::Job get(const std::string& job_id);
   // The jobs `listing` asks for, newest first; `more` (when given) says whether others beyond
   // its limit match too.
@@ -41,12 +43,18 @@ class SchedulerClient {
   // The id of the one job whose id starts with `id_or_prefix` (a whole id is its own prefix).
   // ServiceError NOT_FOUND when none does; InputError naming a few when several do.
   std::string resolve_job_id(const std::string& id_or_prefix);
+  std::vector<std::string> resolve_job_ids(const std::vector<std::string>& ids_or_prefixes);
   // Streams the job's events to `on_event` until it reaches a final state; returns that job.
   v1::Job watch(const std::string& job_id, const std::function<void(const v1::JobEvent&)>& on_event);
   v1::Job cancel(const std::string& job_id);
   // Job management (PauseJob, SetPriority, RetryJob, DeleteJob, GetJobLog, ListWorkers).
   v1::Job pause(const std::string& job_id, bool paused);
   v1::Job set_priority(const std::string& job_id, int priority);
+  // SetJobLimits: each cap given replaces the job's (0: none).
+  v1::Job set_limits(const std::string& job_id, std::optional<std::uint32_t> max_workers,
+                     std::optional<std::uint32_t> max_units_in_flight);
+  v1::Job add_dependencies(const std::string& job_id, const std::vector<std::string>& after,
+                           const std::vector<std::string>& after_any);
   v1::RetryJobResponse retry(const std::string& job_id);
   v1::DeleteJobResponse remove(const std::string& job_id);
   // The job's whole event log, page after page.

@@ -16,6 +16,21 @@ namespace {
 constexpr std::size_t kMaxNameLength = 64;
 constexpr std::size_t kMaxTokenFileBytes = 1 << 20;
 
+// "weight=2.5" as 2500 thousandths, from 0.001 to 1000.
+std::int64_t parse_share_weight(const std::string& text, const std::string& where) {
+  const auto fail = [&] {
+    throw InputError(fmt::format("{}: '{}': the fourth field is the owner's fair-share weight, weight=W with W "
+                                 "from 0.001 to 1000 (default 1)",
+                                 where, text.substr(0, 40)));
+  };
+  if (text.rfind("weight=", 0) != 0) fail();
+  const std::string number = text.substr(7);
+  char* end = nullptr;
+  const double w = std::strtod(number.c_str(), &end);
+  if (number.empty() || end != number.c_str() + number.size() || !(w >= 0.001 && w <= 1000)) fail();
+  return static_cast<std::int64_t>(w * 1000 + 0.5);
+}
+
 }  // namespace
 
 bool is_principal_name(std::string_view s) {
@@ -53,12 +68,13 @@ TokenTable TokenTable::load(const std::filesystem::path& file) {
     }
     if (const std::size_t hash = line.find('#'); hash != std::string::npos) line.erase(hash);
     std::istringstream fields(line);
-    std::string digest, name, roles_text, extra;
+    std::string digest, name, roles_text, weight_text, extra;
     if (!(fields >> digest)) continue;  // blank or comment
     const std::string where = fmt::format("{}:{}", file.string(), number);
-    if (!(fields >> name >> roles_text) || (fields >> extra)) {
-      throw InputError(fmt::format("{}: expected '<sha256 of the token> <name> <roles>'", where));
+    if (!(fields >> name >> roles_text) || ((fields >> weight_text) && (fields >> extra))) {
+      throw InputError(fmt::format("{}: expected '<sha256 of the token> <name> <roles> [weight=W]'", where));
     }
+    const std::int64_t weight_milli = weight_text.empty() ? kDefaultShareWeightMilli : parse_share_weight(weight_text, where);
     if (!is_sha256_hex(digest)) {
       throw InputError(fmt::format("{}: the first field must be the token's SHA-256 as 64 "
                                    "lowercase hex digits (the file never holds the token itself)",
@@ -70,7 +86,7 @@ TokenTable TokenTable::load(const std::filesystem::path& file) {
     }
     const Roles roles = parse_roles(roles_text, where);
     if (!names.insert(name).second) throw InputError(fmt::format("{}: name '{}' is listed twice", where, name));
-    if (!table.by_hash_.emplace(digest, Principal{name, roles}).second) {
+    if (!table.by_hash_.emplace(digest, Principal{name, roles, weight_milli}).second) {
       throw InputError(fmt::format("{}: the same token is listed twice", where));
     }
   }

@@ -6,9 +6,15 @@
 //   3f1c...e0  alice      submit
 //   77ab...19  ci         submit,read
 //   0d5e...4c  render-01  worker
+//   9a2c...71  course-cg  submit  weight=4
+//
+// The optional fourth field is the owner's weight in fair share (default 1; docs/architecture.md,
+// "Scheduling"): among jobs of equal priority, an owner of weight 4 gets four times the units of
+// an owner of weight 1 while both have work queued.
 //
 // `farm token NAME --roles ROLES` makes a token and prints the line to add. Tokens are compared
 // by their hashes, never logged, never echoed in an error.
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -20,9 +26,11 @@
 namespace farm {
 
 // Who a request comes from once authenticated.
+inline constexpr std::int64_t kDefaultShareWeightMilli = 1000;  // weight 1
 struct Principal {
   std::string name;
   Roles roles;
+  std::int64_t share_weight_milli = kDefaultShareWeightMilli;  // in thousandths
 };
 
 class TokenTable {

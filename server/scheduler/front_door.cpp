@@ -86,12 +86,47 @@ void SchedulerFrontDoor::check_priority(const Principal& who, int priority, cons
   }
 }
 
-v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::JobSpec& spec, int priority) {
+void SchedulerFrontDoor::check_dependencies(const Principal& who, const std::vector<std::string>& ids) const {
+  if (ids.size() > kMaxDependencies) {
+    throw InputError(fmt::format("a job may wait for at most {} jobs, not {}", kMaxDependencies, ids.size()));
+  }
+  for (const std::string& id : ids) visible_job(who, id, kAllJobReaders, "wait for");
+}
+
+namespace {
+
+JobCaps caps_of(std::uint32_t max_workers, std::uint32_t max_units_in_flight) {
+  for (std::uint32_t n : {max_workers, max_units_in_flight}) {
+    if (n > static_cast<std::uint32_t>(kMaxJobCap)) throw InputError(fmt::format("a cap of {}: at most {}", n, kMaxJobCap));
+  }
+  return {static_cast<int>(max_workers), static_cast<int>(max_units_in_flight)};
+}
+
+}  // namespace
+
+v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::SubmitJobRequest& request) {
   AccessControl::check(who, kJobSubmitters, "SubmitJob");
-  check_priority(who, priority, "submit");
-  v1::Job job = core_.submit(core_.check(spec), priority, nullptr, who.name);
+  check_priority(who, request.priority(), "submit");
+  QueueTerms terms;
+  terms.after.assign(request.after().begin(), request.after().end());
+  terms.after_any.assign(request.after_any().begin(), request.after_any().end());
+  terms.after_frames = request.after_frames();
+  std::vector<std::string> waited = terms.after;
+  waited.insert(waited.end(), terms.after_any.begin(), terms.after_any.end());
+  check_dependencies(who, waited);
+  if (!terms.after_frames.empty()) check_dependencies(who, {terms.after_frames});
+  terms.caps = caps_of(request.max_workers(), request.max_units_in_flight());
+  terms.owner_weight_milli = who.share_weight_milli;
+  v1::Job job = core_.submit(core_.check(request.job()), request.priority(), nullptr, who.name, terms);
   core_.explain_placement({&job, 1});
   return job;
+}
+
+v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::JobSpec& spec, int priority) {
+  v1::SubmitJobRequest request;
+  *request.mutable_job() = spec;
+  request.set_priority(priority);
+  return submit(who, request);
 }
 
 v1::Job SchedulerFrontDoor::get_job(const Principal& who, const std::string& job_id) const {
@@ -172,6 +207,27 @@ v1::Job SchedulerFrontDoor::set_priority(const Principal& who, const std::string
   visible_job(who, job_id, Role::admin, "re-prioritise");
   check_priority(who, priority, "re-prioritise");
   return core_.set_priority(job_id, priority, who.name);
+}
+
+v1::Job SchedulerFrontDoor::set_job_limits(const Principal& who, const v1::SetJobLimitsRequest& request) {
+  AccessControl::check(who, kJobSubmitters, "SetJobLimits");
+  visible_job(who, request.job_id(), Role::admin, "change the caps of");
+  const JobCaps caps = caps_of(request.max_workers(), request.max_units_in_flight());
+  return core_.set_caps(request.job_id(),
+                        request.has_max_workers() ? std::optional<int>(caps.max_workers) : std::nullopt,
+                        request.has_max_units_in_flight() ? std::optional<int>(caps.max_units_in_flight) : std::nullopt,
+                        who.name);
+}
+
+v1::Job SchedulerFrontDoor::add_dependencies(const Principal& who, const v1::AddDependenciesRequest& request) {
+  AccessControl::check(who, kJobSubmitters, "AddDependencies");
+  visible_job(who, request.job_id(), Role::admin, "add dependencies to");
+  const std::vector<std::string> after(request.after().begin(), request.after().end());
+  const std::vector<std::string> after_any(request.after_any().begin(), request.after_any().end());
+  std::vector<std::string> waited = after;
+  waited.insert(waited.end(), after_any.begin(), after_any.end());
+  check_dependencies(who, waited);
+  return core_.add_dependencies(request.job_id(), after, after_any, who.name);
 }
 
 v1::RetryJobResponse SchedulerFrontDoor::retry_job(const Principal& who, const std::string& job_id) {

@@ -13,7 +13,8 @@
 //   live_preview, job_log
 //   list_jobs, watch_every_job                 submit (lists and hears only its own jobs), read, admin
 //   cancel_job, pause_job, set_priority,       submit (own jobs), admin
-//   retry_job, delete_job
+//   retry_job, delete_job, set_job_limits,
+//   add_dependencies (and the jobs waited for: read by the caller)
 //   list_workers, metrics                      read, admin
 //   register_worker, heartbeat                 worker (only for the workers it registered), admin
 //   asset_file                                 worker (assets of the calls it has been given), admin
@@ -82,7 +83,9 @@ class SchedulerFrontDoor {
   std::chrono::milliseconds upload_idle_timeout() const;
 
   // ---- Jobs ------------------------------------------------------------------------------------
-  // SchedulerCore::submit, the job recorded as the caller's.
+  // SchedulerCore::submit, the job recorded as the caller's, weighted in fair share by its token's
+  // weight. Each job it waits for (after, after_any, after_frames) must be one the caller may see.
+  v1::Job submit(const Principal& who, const v1::SubmitJobRequest& request);
   v1::Job submit(const Principal& who, const v1::JobSpec& spec, int priority);
   v1::Job get_job(const Principal& who, const std::string& job_id) const;
   v1::ListJobsResponse list_jobs(const Principal& who, const v1::ListJobsRequest& request) const;
@@ -95,6 +98,8 @@ class SchedulerFrontDoor {
   v1::Job cancel_job(const Principal& who, const std::string& job_id);
   v1::Job pause_job(const Principal& who, const std::string& job_id, bool paused);
   v1::Job set_priority(const Principal& who, const std::string& job_id, int priority);
+  v1::Job set_job_limits(const Principal& who, const v1::SetJobLimitsRequest& request);
+  v1::Job add_dependencies(const Principal& who, const v1::AddDependenciesRequest& request);
   v1::RetryJobResponse retry_job(const Principal& who, const std::string& job_id);
   v1::DeleteJobResponse delete_job(const Principal& who, const std::string& job_id);
   v1::GetJobLogResponse job_log(const Principal& who, const v1::GetJobLogRequest& request) const;
@@ -133,6 +138,9 @@ class SchedulerFrontDoor {
   v1::Job visible(const Principal& who, std::optional<v1::Job> job, const std::string& job_id, Roles any_job,
                   const char* action) const;
   // Refuses a caller without admin a priority above max_priority (`what`: the action, for the message).
+  // The jobs a job is to wait for, each one the caller may see (NOT_FOUND or PERMISSION_DENIED
+  // naming it) and at most kMaxDependencies.
+  void check_dependencies(const Principal& who, const std::vector<std::string>& ids) const;
   void check_priority(const Principal& who, int priority, const char* what) const;
 
   struct Registered {

@@ -105,11 +105,20 @@ SchedulerCore::SchedulerCore(SchedulerOptions options)
                    v1::JobState_Name(event.state_changed().to()));
       }
       dispatcher_.job_ended_elsewhere(event.job().job_id());
+      if (release_) release_->wake();
       finisher_.release(event.job().job_id(), event.state_changed().to() != v1::JOB_STATE_SUCCEEDED);
     });
   }
   // Jobs interrupted between their last tile and their merge.
   finish_active_jobs();
+  // Jobs waiting for others: looked at when a job ends here, and every second for the ends of
+  // other schedulers' jobs. A merged frame may free a job following it frame by frame.
+  release_ = std::make_unique<DependencyRelease>(store_, *log_, options_.dependency_sweep,
+                                                 [this](const std::vector<ReleasedJob>& jobs) { settled(jobs); });
+  events_.listen([this](const v1::JobEvent& event) {
+    if (event.has_state_changed() && is_final(event.state_changed().to())) release_->wake();
+    if (event.has_frame_finished()) dispatcher_.work_queued();
+  });
   if (options_.keep_finished.count() > 0) {
     retention_ = std::make_unique<RetentionSweeper>(
         options_.keep_finished, *log_, [this](std::int64_t before_ms) { return remove_finished_before(before_ms); });
@@ -132,7 +141,8 @@ void SchedulerCore::finish_active_jobs() {
 void SchedulerCore::stop() {
   // The registry first: slots waiting for a worker to come up return, and no worker is dropped
   // while the dispatcher cancels and joins.
-  if (retention_) retention_->stop();  // first: it deletes through the finisher
+  if (release_) release_->stop();  // first: it announces through the dispatcher and the finisher
+  if (retention_) retention_->stop();  // likewise: it deletes through the finisher
   if (relay_) relay_->stop();  // its thread calls the dispatcher and the finisher
   workers_.stop();
   pause_.stop();
@@ -144,7 +154,7 @@ void SchedulerCore::stop() {
 // ---- Jobs ----------------------------------------------------------------------------------------
 
 v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::shared_ptr<JobEventQueue>& watcher,
-                              const std::string& owner) {
+                              const std::string& owner, const QueueTerms& terms) {
   if (!validated.job) throw std::invalid_argument("SchedulerCore::submit: no job");
   auto info = std::make_shared<JobInfo>();
   info->spec = std::make_shared<const v1::JobSpec>(std::move(validated.spec));
@@ -170,29 +180,64 @@ v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::s
   if (info->job->frames) job.frame_step = info->job->frames->step;
   job.passes = pass_count(r);
   job.requirements = info->job->requirements;
+  job.caps = info->job->caps;
+  if (terms.caps.max_workers > 0) job.caps.max_workers = terms.caps.max_workers;
+  if (terms.caps.max_units_in_flight > 0) job.caps.max_units_in_flight = terms.caps.max_units_in_flight;
+  job.after = terms.after;
+  job.after_any = terms.after_any;
+  job.after_frames = terms.after_frames;
+  if (terms.owner_weight_milli) job.owner_weight_milli = *terms.owner_weight_milli;
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
   v1::Job added;
   try {
     added = store_.jobs().add_job(job, unix_ms_now());
   } catch (...) {
-    // Not queued (a full store: DiskFull): nothing of it is kept.
+    // Not queued (a full store: DiskFull; a dependency that names no job): nothing of it is kept.
     jobs_.forget(job.id);
     if (watcher) events_.unsubscribe(job.id, watcher);
-    throw;
+    try {
+      throw;
+    } catch (const DependencyError& e) {
+      throw ServiceError(grpc::StatusCode::INVALID_ARGUMENT, e.what());
+    }
   }
-  log_->info("job {} '{}' queued: {} {}x{}, {} frame(s), {} units, priority {}{}", added.job_id(), added.name(),
-             added.engine(), added.width(), added.height(), added.frames_total(), added.tiles_total(), priority,
-             owner.empty() ? "" : ", owner " + owner);
+  store_.dependencies().describe(added);
+  log_->info("job {} '{}' {}: {} {}x{}, {} frame(s), {} units, priority {}{}{}", added.job_id(), added.name(),
+             to_string(added.state()), added.engine(), added.width(), added.height(), added.frames_total(),
+             added.tiles_total(), priority, owner.empty() ? "" : ", owner " + owner,
+             added.state() == v1::JOB_STATE_WAITING || !added.after_frames().empty() ? ", " + describe_dependencies(added) : "");
   events_.publish_state(added, v1::JOB_STATE_UNSPECIFIED);  // its first log entry: submitted
+  if (added.state() == v1::JOB_STATE_WAITING) release_->wake();  // its dependencies may have ended
   dispatcher_.work_queued();
   return added;
 }
 
 std::optional<v1::Job> SchedulerCore::get_job(const std::string& job_id) const {
   std::optional<v1::Job> job = store_.jobs().get_job(job_id);
-  if (job) explain_placement({&*job, 1});
+  if (job) {
+    explain_placement({&*job, 1});
+    store_.dependencies().describe(*job);
+  }
   return job;
+}
+
+void SchedulerCore::settled(const std::vector<ReleasedJob>& jobs) {
+  bool queued = false;
+  for (const ReleasedJob& r : jobs) {
+    const v1::Job& job = r.job;
+    if (job.state() == v1::JOB_STATE_FAILED) {
+      log_->info("job {} failed: {}", job.job_id(), job.failure_reason());
+      // One following another frame by frame may have units out: they stop, as a cancel's do.
+      if (r.from != v1::JOB_STATE_WAITING) dispatcher_.job_ended_elsewhere(job.job_id());
+      finisher_.release(job.job_id(), true);
+    } else {
+      log_->info("job {} queued: the jobs it waits for have ended", job.job_id());
+      queued = true;
+    }
+    events_.publish_state(job, r.from);
+  }
+  if (queued) dispatcher_.work_queued();
 }
 
 void SchedulerCore::explain_placement(std::span<v1::Job> jobs) const {
@@ -252,6 +297,48 @@ v1::Job SchedulerCore::set_priority(const std::string& job_id, int priority, con
   return after;
 }
 
+v1::Job SchedulerCore::set_caps(const std::string& job_id, std::optional<int> max_workers,
+                                std::optional<int> max_units_in_flight, const std::string& by) {
+  std::optional<v1::Job> before = store_.jobs().get_job(job_id);
+  if (!before) no_job(job_id);
+  if (is_final(before->state())) {
+    throw ServiceError(grpc::StatusCode::FAILED_PRECONDITION,
+                       fmt::format("{}: only an unfinished job's caps can change", describe_state(*before)));
+  }
+  const v1::Job after = *store_.jobs().set_caps(job_id, max_workers, max_units_in_flight);
+  const auto cap = [](std::uint32_t n) { return n == 0 ? std::string("none") : std::to_string(n); };
+  std::string change;
+  if (after.max_workers() != before->max_workers()) {
+    change = fmt::format("max_workers {} -> {}", cap(before->max_workers()), cap(after.max_workers()));
+  }
+  if (after.max_units_in_flight() != before->max_units_in_flight()) {
+    change += fmt::format("{}max_units_in_flight {} -> {}", change.empty() ? "" : ", ",
+                          cap(before->max_units_in_flight()), cap(after.max_units_in_flight()));
+  }
+  if (!change.empty()) {
+    announce(job_id, change, by);
+    dispatcher_.work_queued();  // a cap raised or lifted lets more out now
+  }
+  return after;
+}
+
+v1::Job SchedulerCore::add_dependencies(const std::string& job_id, const std::vector<std::string>& after,
+                                        const std::vector<std::string>& after_any, const std::string& by) {
+  std::optional<v1::Job> job;
+  try {
+    job = store_.dependencies().add(job_id, after, after_any);
+  } catch (const DependencyError& e) {
+    throw ServiceError(e.kind == DependencyError::Kind::Started ? grpc::StatusCode::FAILED_PRECONDITION
+                                                                : grpc::StatusCode::INVALID_ARGUMENT,
+                       e.what());
+  }
+  if (!job) no_job(job_id);
+  store_.dependencies().describe(*job);
+  announce(job_id, "waits: " + describe_dependencies(*job), by);
+  release_->wake();
+  return *job;
+}
+
 RetriedJob SchedulerCore::retry(const std::string& job_id, const std::string& by) {
   const std::optional<v1::Job> before = store_.jobs().get_job(job_id);
   std::optional<RetriedJob> r = store_.jobs().retry_job(job_id);
@@ -267,8 +354,10 @@ RetriedJob SchedulerCore::retry(const std::string& job_id, const std::string& by
     e.mutable_state_changed()->set_from(before ? before->state() : v1::JOB_STATE_FAILED);
     e.mutable_state_changed()->set_to(e.job().state());
   });
-  // A job whose units were all done (it failed at its end: its check, its video) ends again now.
+  // A job whose units were all done (it failed at its end: its check, its video) ends again now;
+  // one with dependencies waits for them to settle it again.
   finisher_.finish_if_complete(job_id);
+  if (r->job.state() == v1::JOB_STATE_WAITING) release_->wake();
   dispatcher_.work_queued();
   return *r;
 }

@@ -22,6 +22,8 @@
 //   EventRelay      likewise: the jobs' events to and from the other schedulers (event_relay.h)
 //   RetentionSweeper  final jobs deleted with their files once older than --keep-finished
 //                   (retention.h)
+//   DependencyRelease  waiting jobs queued, or failed, as the jobs they wait for end
+//                   (dependency_release.h)
 //
 // Locks: each part has its own mutex, and its header says what it guards. A part holds its lock
 // while it calls another only along these arrows (A -> B: B is taken while A is held):
@@ -52,6 +54,7 @@
 #include "server/scheduler/dispatch/dispatcher.h"
 #include "server/scheduler/events/event_relay.h"
 #include "server/scheduler/events/job_events.h"
+#include "server/scheduler/jobs/dependency_release.h"
 #include "server/scheduler/jobs/disk_full_pause.h"
 #include "server/scheduler/jobs/finisher.h"
 #include "server/scheduler/jobs/frame_assembly.h"
@@ -71,6 +74,16 @@ namespace farm {
 // A new scheduler id, "HOST:PID:RANDOM": unique among the schedulers of one store, and says which
 // machine and process in the store and the logs.
 std::string make_scheduler_id();
+
+// How a submitted job takes its place in the queue besides its priority (SubmitJobRequest): the
+// jobs it waits for, caps over the job file's, and its owner's fair-share weight.
+struct QueueTerms {
+  std::vector<std::string> after = {};
+  std::vector<std::string> after_any = {};
+  std::string after_frames = {};
+  JobCaps caps = {};  // each nonzero one replaces the job file's
+  std::optional<std::int64_t> owner_weight_milli = {};  // the tokens file's weight; none: as it was
+};
 
 class SchedulerCore {
  public:
@@ -102,8 +115,11 @@ class SchedulerCore {
   // (nothing of it is kept). A `watcher` is subscribed to the job before it is queued, so it sees
   // every event of the job (pass it to unwatch() when done). `owner` is recorded with the job:
   // the name of the caller's token.
+  // `terms`: its dependencies (ServiceError INVALID_ARGUMENT for one that names no job), caps
+  // and owner's weight.
   v1::Job submit(ValidatedJob job, int priority = 0, const std::shared_ptr<JobEventQueue>& watcher = nullptr,
-                 const std::string& owner = {});
+                 const std::string& owner = {}, const QueueTerms& terms = {});
+  // The job with its dependencies and dependents (Job.after, ..., dependents).
   std::optional<v1::Job> get_job(const std::string& job_id) const;
   // Each active job with requirements no worker meets gets `unplaceable` set, saying why (the
   // workers read once for all of them).
@@ -116,6 +132,12 @@ class SchedulerCore {
   // for one whose state the action does not apply to (proto/farm.proto says which).
   v1::Job pause(const std::string& job_id, bool paused, const std::string& by = {});
   v1::Job set_priority(const std::string& job_id, int priority, const std::string& by = {});
+  v1::Job set_caps(const std::string& job_id, std::optional<int> max_workers, std::optional<int> max_units_in_flight,
+                   const std::string& by = {});
+  // More jobs for a job that has not started to wait for (JobDependencies::add): INVALID_ARGUMENT
+  // for an unknown id or a cycle, FAILED_PRECONDITION for a job that has started.
+  v1::Job add_dependencies(const std::string& job_id, const std::vector<std::string>& after,
+                           const std::vector<std::string>& after_any, const std::string& by = {});
   // A FAILED or CANCELLED job's units that are not done rendered again (JobRecords::retry_job).
   RetriedJob retry(const std::string& job_id, const std::string& by = {});
   // A final job gone from the store with its files; returns the bytes freed.
@@ -172,6 +194,8 @@ class SchedulerCore {
   void finish_active_jobs();
   // An operator's action on the job logged and announced to its watchers (JobUpdated).
   void announce(const std::string& job_id, const std::string& change, const std::string& by);
+  // Jobs the release settled: announced, and a failed one's units in flight stopped.
+  void settled(const std::vector<ReleasedJob>& jobs);
 
   // Declared in the order they are built: each part is given the ones above it.
   SchedulerOptions options_;
@@ -195,6 +219,7 @@ class SchedulerCore {
   std::unique_ptr<SchedulerLease> lease_;  // on a shared store (PostgreSQL) only
   std::unique_ptr<EventRelay> relay_;      // likewise: WatchJob's events to and from the others
   std::unique_ptr<RetentionSweeper> retention_;  // with options_.keep_finished
+  std::unique_ptr<DependencyRelease> release_;
 };
 
 }  // namespace farm

@@ -55,7 +55,7 @@ bool stream_file(const std::filesystem::path& file, grpc::ServerWriter<Chunk>* w
 grpc::Status SchedulerService::SubmitJob(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
                                          v1::SubmitJobResponse* response) {
   return guarded([&] {
-    *response->mutable_job() = front_door_.submit(caller(*context), request->job(), request->priority());
+    *response->mutable_job() = front_door_.submit(caller(*context), *request);
     return grpc::Status::OK;
   });
 }
@@ -116,6 +116,22 @@ grpc::Status SchedulerService::SetPriority(grpc::ServerContext* context, const v
                                            v1::SetPriorityResponse* response) {
   return guarded([&] {
     *response->mutable_job() = front_door_.set_priority(caller(*context), request->job_id(), request->priority());
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::SetJobLimits(grpc::ServerContext* context, const v1::SetJobLimitsRequest* request,
+                                            v1::SetJobLimitsResponse* response) {
+  return guarded([&] {
+    *response->mutable_job() = front_door_.set_job_limits(caller(*context), *request);
+    return grpc::Status::OK;
+  });
+}
+
+grpc::Status SchedulerService::AddDependencies(grpc::ServerContext* context, const v1::AddDependenciesRequest* request,
+                                               v1::AddDependenciesResponse* response) {
+  return guarded([&] {
+    *response->mutable_job() = front_door_.add_dependencies(caller(*context), *request);
     return grpc::Status::OK;
   });
 }

@@ -26,6 +26,9 @@ class SchedulerService final : public v1::Scheduler::Service {
                          grpc::ServerWriter<v1::FileChunk>*) override;
   grpc::Status PauseJob(grpc::ServerContext*, const v1::PauseJobRequest*, v1::PauseJobResponse*) override;
   grpc::Status SetPriority(grpc::ServerContext*, const v1::SetPriorityRequest*, v1::SetPriorityResponse*) override;
+  grpc::Status SetJobLimits(grpc::ServerContext*, const v1::SetJobLimitsRequest*, v1::SetJobLimitsResponse*) override;
+  grpc::Status AddDependencies(grpc::ServerContext*, const v1::AddDependenciesRequest*,
+                               v1::AddDependenciesResponse*) override;
   grpc::Status RetryJob(grpc::ServerContext*, const v1::RetryJobRequest*, v1::RetryJobResponse*) override;
   grpc::Status DeleteJob(grpc::ServerContext*, const v1::DeleteJobRequest*, v1::DeleteJobResponse*) override;
   grpc::Status GetJobLog(grpc::ServerContext*, const v1::GetJobLogRequest*, v1::GetJobLogResponse*) override;

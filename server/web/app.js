@@ -21,6 +21,9 @@ const farm = (() => {
 
   const FINAL = ['JOB_STATE_SUCCEEDED', 'JOB_STATE_FAILED', 'JOB_STATE_CANCELLED'];
   const isFinal = (job) => FINAL.includes(job.state);
+  // None of its units handed out yet: it may still be given jobs to wait for (AddDependencies).
+  const notStarted = (job) => job.state === 'JOB_STATE_WAITING' ||
+    (job.state === 'JOB_STATE_QUEUED' && (!job.started_at || job.started_at.startsWith('1970')));
   const stateName = (state) => String(state).replace('JOB_STATE_', '').toLowerCase();
   const stateOf = (job) => (job.paused && !isFinal(job) ? 'paused' : stateName(job.state));
   const units = () => 'units';  // one word for the scheduler's piece of work everywhere
@@ -84,8 +87,16 @@ const farm = (() => {
     return 'event';
   }
 
-  // The job actions, as buttons: each posts and hands the reply to `done`.
-  function actionButtons(job, done, fail) {
+  // A cap typed in: a whole number from 0 (0: none).
+  function capOf(text, what) {
+    const n = Number(text.trim());
+    if (text.trim() === '' || !Number.isInteger(n) || n < 0) throw new Error(`${what}: a whole number from 0, not '${text}'`);
+    return n;
+  }
+
+  // The job actions, as buttons: each posts and hands the reply to `done`. `all`: also the caps
+  // and the dependencies, which only the job page offers (the jobs table stays narrow).
+  function actionButtons(job, done, fail, all = false) {
     const span = document.createElement('span');
     span.className = 'actions';
     const active = !isFinal(job);
@@ -114,6 +125,19 @@ const farm = (() => {
     });
     add('delete', 'Delete', !active, () => (confirm(`Delete job ${job.name} and its files?`)
       ? post(base + 'delete') : Promise.resolve(null)));
+    if (!all) return span;
+    add('limits', 'Caps', active, () => {
+      const w = prompt(`Most workers rendering ${job.name} at once (0: no cap)`, String(job.max_workers || 0));
+      if (w === null) return Promise.resolve(null);
+      const u = prompt(`Most units of ${job.name} out at once (0: no cap)`, String(job.max_units_in_flight || 0));
+      if (u === null) return Promise.resolve(null);
+      return post(base + 'limits', { maxWorkers: capOf(w, 'max workers'), maxUnitsInFlight: capOf(u, 'max units in flight') });
+    });
+    add('dependencies', 'Wait for', notStarted(job), () => {
+      const ids = prompt(`Jobs ${job.name} is to wait for to succeed (whole ids, separated by spaces or commas)`, '');
+      const after = (ids || '').split(/[\s,]+/).filter(Boolean);
+      return after.length ? post(base + 'dependencies', { after }) : Promise.resolve(null);
+    });
     return span;
   }
 

@@ -38,13 +38,34 @@
     dl.replaceChildren();
     const add = (name, value, className) => {
       dl.append(farm.text(document.createElement('dt'), name));
-      const dd = farm.text(document.createElement('dd'), value);
+      const dd = document.createElement('dd');
+      if (value instanceof Node) dd.append(value); else dd.textContent = value;
       if (className) dd.className = className;
       dl.append(dd);
     };
+    // Other jobs, each a link to its page, with a note ("any end") where one says how it is waited for.
+    const jobLinks = (entries) => {
+      const span = document.createElement('span');
+      entries.forEach(([other, note], i) => {
+        if (i) span.append(', ');
+        const a = farm.text(document.createElement('a'), other);
+        a.href = '/job.html?id=' + encodeURIComponent(other);
+        a.className = 'id';
+        span.append(a);
+        if (note) span.append(` (${note})`);
+      });
+      return span;
+    };
+    const cap = (n) => (Number(n) ? String(n) : 'none');
     add('State', farm.stateOf(job), 'state ' + farm.stateOf(job));
     add('Progress', farm.progressText(job), 'progress');
     add('Priority', String(job.priority), 'priority');
+    const waits = [...(job.after || []).map((j) => [j, '']), ...(job.after_any || []).map((j) => [j, 'any end'])];
+    if (job.after_frames) waits.push([job.after_frames, 'frame by frame']);
+    if (waits.length) add('Waits for', jobLinks(waits), 'after');
+    if ((job.dependents || []).length) add('Waited for by', jobLinks(job.dependents.map((j) => [j, ''])), 'dependents');
+    add('Max workers', cap(job.max_workers), 'max-workers');
+    add('Max units in flight', cap(job.max_units_in_flight), 'max-units-in-flight');
     add('Owner', job.owner || '-');
     add('Engine', `${job.engine}, ${job.width}x${job.height}` + (job.passes > 1 ? `, ${job.passes} passes` : ''));
     if (farm.isAnimation(job)) add('Frames', `${job.frame_first} to ${job.frame_last} by ${job.frame_step}`);
@@ -65,7 +86,7 @@
       if (!reply) return;
       if (reply.bytes_freed !== undefined) { location.href = '/'; return; }
       update(reply.job || reply);
-    }, show));
+    }, show, true));
   }
 
   function thumbs() {
@@ -135,8 +156,15 @@
     if (job.state === 'JOB_STATE_SUCCEEDED') link(`/api/v1/jobs/${id}/file?kind=video`, 'video (if the job made one)');
   }
 
-  function update(now) {
+  // Only GetJob fills a job's dependencies; the events' jobs and most actions' replies leave them
+  // empty, so those keep the ones last read (an `updated` event, which adding some sends, reads
+  // the job again).
+  const LINKS = ['after', 'after_any', 'after_frames', 'dependents'];
+  const reread = () => farm.api(`/api/v1/jobs/${id}`).then((j) => update(j, true));
+
+  function update(now, full = false) {
     const merged = job ? job.frames_done : 0;
+    if (!full && job) for (const k of LINKS) now[k] = job[k];
     job = now;
     document.getElementById('title').textContent = `${job.name} (${job.job_id})`;
     document.title = `farm: ${job.name}`;
@@ -168,7 +196,7 @@
   async function start() {
     farm.header('');
     try {
-      update(await farm.api(`/api/v1/jobs/${id}`));
+      update(await farm.api(`/api/v1/jobs/${id}`), true);
       performance.mark('farm-job-shown');
       thumbs();
       downloads();
@@ -182,7 +210,8 @@
       if (event.pass_finished) refreshImage(event.pass_finished.frame);
       if (event.frame_finished) { refreshImage(event.frame_finished.frame); frameMerged(event.frame_finished.frame); }
       if (!event.tile_finished) loadLog().catch(show);  // the log numbers its entries: read them from it
-    }, () => farm.api(`/api/v1/jobs/${id}`).then(update).then(loadLog).catch(show));
+      if (event.updated) reread().catch(show);
+    }, () => reread().then(loadLog).catch(show));
   }
   live.addEventListener('error', () => { /* nothing rendered yet: the next event tries again */ });
   start();

@@ -82,6 +82,12 @@ int differing_pixels(const TileBuffer& a, const TileBuffer& b) {
   return differing;
 }
 
+// The last line of `output` that is a JSON object (the Python checks print their result last).
+nlohmann::json last_json_line(const std::string& output) {
+  const std::size_t line = output.rfind("\n{");
+  return nlohmann::json::parse(output.substr(line == std::string::npos ? 0 : line + 1));
+}
+
 class FarmSchedulerTest : public ::testing::Test {
  protected:
   // A worker whose cache already holds the Cornell box's files (so a static --worker needs no
@@ -456,6 +462,69 @@ TEST_F(FarmSchedulerOnPostgresTest, KillingOneOfTwoSchedulersMidJobLeavesTheOthe
   EXPECT_EQ(final_job->tile_failures(), 0u);
   EXPECT_EQ(final_job->tiles_rendered(), final_job->tiles_total());  // none rendered twice
   EXPECT_EQ(differing_pixels(fetch_exr(final_job->job_id()), render_locally(spec)), 0);
+}
+
+// A scheduler killed -9 in the middle of a dependency release (FARM_FAILPOINT stops it after its
+// changes, before their commit; server/common/failpoint.h) leaves the waiting job waiting: the
+// next scheduler on the store releases it, once, and renders it (issue #36).
+TEST_F(FarmSchedulerOnPostgresTest, ASchedulerKilledDuringADependencyReleaseLeavesItToTheNextOnce) {
+  const std::vector<std::string> workers = start_shared_workers();
+  ::setenv("FARM_FAILPOINT", "dependency-release", 1);
+  auto a = start_scheduler(workers);
+  ::unsetenv("FARM_FAILPOINT");
+  ASSERT_TRUE(stub_);
+  const v1::JobSpec spec = cornell("raster", 48, 32, 1, 16);
+  const v1::Job first = submit_ok(spec);
+  // Held while the second is queued after it, so that a's release comes after both answers.
+  {
+    grpc::ClientContext context;
+    v1::PauseJobRequest pause;
+    pause.set_job_id(first.job_id());
+    pause.set_paused(true);
+    v1::PauseJobResponse paused;
+    ASSERT_TRUE(stub_->PauseJob(&context, pause, &paused).ok());
+  }
+  v1::SubmitJobRequest request;
+  *request.mutable_job() = spec;
+  request.add_after(first.job_id());
+  v1::SubmitJobResponse second;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(stub_->SubmitJob(&context, request, &second).ok());
+  }
+  ASSERT_EQ(second.job().state(), v1::JOB_STATE_WAITING);
+  {
+    grpc::ClientContext context;
+    v1::PauseJobRequest resume;
+    resume.set_job_id(first.job_id());
+    v1::PauseJobResponse resumed;
+    static_cast<void>(stub_->PauseJob(&context, resume, &resumed));  // its answer may be cut off by the kill
+  }
+  ASSERT_TRUE(a->process().wait_exit(60s)) << "the scheduler never reached its failpoint:\n" << a->process().output();
+  EXPECT_EQ(a->process().output().find("the jobs it waits for have ended"), std::string::npos) << a->process().output();
+
+  auto b = start_scheduler(workers);  // stub_ talks to b from here on
+  ASSERT_TRUE(stub_);
+  const auto done_job = test::wait_for_job(*stub_, second.job().job_id(), done, 90s);
+  ASSERT_TRUE(done_job);
+  ASSERT_EQ(done_job->state(), v1::JOB_STATE_SUCCEEDED) << done_job->failure_reason() << b->process().output();
+  EXPECT_EQ(test::get_job(*stub_, first.job_id())->state(), v1::JOB_STATE_SUCCEEDED);
+  // Released once (one waiting -> queued in its log), started once.
+  grpc::ClientContext context;
+  v1::GetJobLogRequest log_request;
+  log_request.set_job_id(second.job().job_id());
+  v1::GetJobLogResponse log;
+  ASSERT_TRUE(stub_->GetJobLog(&context, log_request, &log).ok());
+  int released = 0, started = 0;
+  for (const v1::JobLogEntry& e : log.entries()) {
+    if (!e.event().has_state_changed()) continue;
+    const v1::JobStateChanged& c = e.event().state_changed();
+    released += c.from() == v1::JOB_STATE_WAITING && c.to() == v1::JOB_STATE_QUEUED;
+    started += c.to() == v1::JOB_STATE_RUNNING;
+  }
+  EXPECT_EQ(released, 1);
+  EXPECT_EQ(started, 1);
+  EXPECT_EQ(done_job->tiles_rendered(), done_job->tiles_total());
 }
 
 // Two schedulers on one PostgreSQL store and data dir, both sending units to the same two workers,
@@ -1228,7 +1297,7 @@ TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFe
   EXPECT_NE(refused.output.find("UNAUTHENTICATED"), std::string::npos) << refused.output;
   const test::CommandResult r = test::run_command(command + " --token-file " + test::shell_quote(token_file.string()));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json result = nlohmann::json::parse(r.output.substr(r.output.rfind('{')));
+  const nlohmann::json result = last_json_line(r.output);
   EXPECT_EQ(result["state"], "SUCCEEDED") << r.output;
   EXPECT_EQ(result["uploaded"], 2) << r.output;  // the model and its material library, found by the scheduler
   EXPECT_TRUE(result["listed"].get<bool>()) << r.output;
@@ -1246,7 +1315,7 @@ TEST_F(FarmSchedulerTest, PythonClientPackageInstalledWithPipSubmitsWatchesAndFe
         test::shell_quote((dir_ / "python-out-2").string()) + " --token-file " + test::shell_quote(token_file.string()) +
         options);
     EXPECT_EQ(run.exit_code, 0) << run.output;
-    return nlohmann::json::parse(run.output.substr(run.output.rfind('{')));
+    return last_json_line(run.output);
   };
   const fs::path textured = dir_ / "textured";
   fs::create_directories(textured / "assets/tex");

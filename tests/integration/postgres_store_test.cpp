@@ -9,6 +9,7 @@
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/store/postgres_connection.h"
 #include "tests/support/postgres_server.h"
+#include "tests/support/store_downgrade.h"
 #include "tests/support/store_locations.h"
 
 namespace farm {
@@ -134,17 +135,15 @@ TEST(PostgresStoreTest, AVersion6StoreIsUpgradedInPlace) {
     ASSERT_TRUE(store.units().claim_next_batch("w", 3));  // running when the version went back
   }
   PGconn* c = PQconnectdb(where.location().c_str());
-  for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                          "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
-                          "UPDATE schema_version SET version = 6"}) {
-    PGresult* r = PQexec(c, sql);
+  for (const std::string& sql : test::back_to_version(6)) {
+    PGresult* r = PQexec(c, sql.c_str());
     EXPECT_EQ(PQresultStatus(r), PGRES_COMMAND_OK) << sql << ": " << PQerrorMessage(c);
     PQclear(r);
   }
   JobStore store(connect_store(where.location()));
   PGresult* r = PQexec(c, "SELECT version FROM schema_version");
   ASSERT_EQ(PQresultStatus(r), PGRES_TUPLES_OK) << PQerrorMessage(c);
-  EXPECT_STREQ(PQgetvalue(r, 0, 0), "9");
+  EXPECT_STREQ(PQgetvalue(r, 0, 0), "10");
   PQclear(r);
   PQfinish(c);
   const std::vector<UnitRecord> tiles = store.units().tiles("a");

@@ -4,6 +4,8 @@
 // (postgres_server.h) that the test process starts once, at the first test that asks, and stops
 // at exit. Store tests are written once and run on both (INSTANTIATE_TEST_SUITE_P over
 // kBothStores).
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <ostream>
 #include <string>
@@ -44,6 +46,16 @@ class StoreLocation {
   TempDir dir_;
   std::string location_, problem_;
   PostgresServer* server_ = nullptr;
+};
+
+// The fixture of a store test written once for both stores (INSTANTIATE_TEST_SUITE_P over
+// kBothStores): each test gets a fresh store of its parameter's kind.
+class StoreTest : public ::testing::TestWithParam<SqlDialect> {
+ protected:
+  void SetUp() override { ASSERT_TRUE(where_.problem().empty()) << where_.problem(); }
+  std::unique_ptr<SqlConnection> connect() const { return connect_store(where_.location()); }
+
+  StoreLocation where_{GetParam()};
 };
 
 }  // namespace farm::test

@@ -30,7 +30,7 @@ TEST(TokenTable, FindsATokenByItsHashWithItsNameAndRoles) {
   test::TempDir dir;
   const TokenTable table = TokenTable::load(dir.write(
       "tokens", "# comment\n\n" + sha256_hex(kToken) + "  alice  submit,read  # trailing comment\n" +
-                    sha256_hex("another-token-0123456") + " bob admin\n"));
+                    sha256_hex("another-token-0123456") + " bob admin weight=2.5\n"));
   EXPECT_EQ(table.size(), 2u);
   const auto alice = table.find(kToken);
   ASSERT_TRUE(alice);
@@ -39,6 +39,8 @@ TEST(TokenTable, FindsATokenByItsHashWithItsNameAndRoles) {
   EXPECT_TRUE(alice->roles.has(Role::read));
   EXPECT_FALSE(alice->roles.has(Role::admin));
   EXPECT_EQ(to_string(alice->roles), "submit,read");
+  EXPECT_EQ(alice->share_weight_milli, 1000);  // no weight: 1
+  EXPECT_EQ(table.find("another-token-0123456")->share_weight_milli, 2500);
   EXPECT_FALSE(table.find(sha256_hex(kToken)));  // the hash itself is no token
   EXPECT_FALSE(table.find(kToken + "x"));
 }
@@ -47,8 +49,12 @@ TEST(TokenTable, BadFilesNameTheLineAndNeverHoldTokens) {
   const std::string hash = sha256_hex(kToken);
   EXPECT_NE(load_error("\n" + kToken + " alice submit\n").find("tokens:2: the first field must be the token's SHA-256"),
             std::string::npos);
-  EXPECT_NE(load_error(hash + " alice\n").find("tokens:1: expected '<sha256 of the token> <name> <roles>'"),
+  EXPECT_NE(load_error(hash + " alice\n").find("tokens:1: expected '<sha256 of the token> <name> <roles> [weight=W]'"),
             std::string::npos);
+  EXPECT_NE(load_error(hash + " alice submit 2\n").find("tokens:1: '2': the fourth field is the owner's fair-share weight"),
+            std::string::npos);
+  EXPECT_NE(load_error(hash + " alice submit weight=0\n").find("weight=W with W from 0.001 to 1000"), std::string::npos);
+  EXPECT_NE(load_error(hash + " alice submit weight=1 extra\n").find("tokens:1: expected"), std::string::npos);
   EXPECT_NE(load_error(hash + " alice root\n").find("tokens:1: unknown role 'root'"), std::string::npos);
   EXPECT_NE(load_error(hash + " al/ice submit\n").find("tokens:1: name 'al/ice'"), std::string::npos);
   EXPECT_NE(load_error(hash + " alice submit\n" + hash + " bob submit\n").find("tokens:2: the same token is listed twice"),

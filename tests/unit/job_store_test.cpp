@@ -11,19 +11,14 @@
 #include <thread>
 
 #include "tests/support/store_locations.h"
+#include "tests/support/store_downgrade.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
 
 // Each test of the fixture runs on a fresh SQLite file and on a fresh PostgreSQL database.
-class JobStoreTest : public ::testing::TestWithParam<SqlDialect> {
- protected:
-  void SetUp() override { ASSERT_TRUE(where_.problem().empty()) << where_.problem(); }
-  std::unique_ptr<SqlConnection> connect() const { return connect_store(where_.location()); }
-
-  test::StoreLocation where_{GetParam()};
-};
+class JobStoreTest : public test::StoreTest {};
 
 NewJob make_job(const std::string& id, int priority, int tiles) {
   NewJob j;
@@ -243,14 +238,8 @@ TEST(SqliteStoreUpgradeTest, AVersion1StoreIsUpgradedAndItsDoneTilesKeepTheirFil
     // Back to what version 1 had: no part column, no owner.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
-                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
-                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
-                            "ALTER TABLE jobs DROP COLUMN passes", "ALTER TABLE tiles DROP COLUMN part", "ALTER TABLE jobs DROP COLUMN owner",
-                            "ALTER TABLE tiles DROP COLUMN lost_attempts", "UPDATE schema_version SET version = 1"}) {
-      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    for (const std::string& sql : test::back_to_version(1)) {
+      EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
   }
@@ -272,14 +261,8 @@ TEST(SqliteStoreUpgradeTest, AVersion2StoreIsUpgradedAndJobsGetOwners) {
     // Back to what version 2 had: no owner column, no lost_attempts.
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
-                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
-                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
-                            "ALTER TABLE jobs DROP COLUMN passes", "ALTER TABLE jobs DROP COLUMN owner", "ALTER TABLE tiles DROP COLUMN lost_attempts",
-                            "UPDATE schema_version SET version = 2"}) {
-      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    for (const std::string& sql : test::back_to_version(2)) {
+      EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
   }
@@ -307,14 +290,8 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
-                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
-                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
-                            "ALTER TABLE jobs DROP COLUMN passes", "ALTER TABLE tiles DROP COLUMN lost_attempts",
-                            "UPDATE schema_version SET version = 3"}) {
-      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    for (const std::string& sql : test::back_to_version(3)) {
+      EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
   }
@@ -328,13 +305,13 @@ TEST(SqliteStoreUpgradeTest, AVersion3StoreIsUpgradedAndItsTilesCountLostWorkers
     EXPECT_TRUE(store.units().batch_lost("a", 0, 1, "worker w: UNAVAILABLE", 2, 5).will_retry);
     EXPECT_EQ(store.units().tiles("a")[0].lost_attempts, 1);
   }
-  // Upgraded once: it opens as version 9 from now on.
+  // Upgraded once: it opens as version 10 from now on.
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
   sqlite3_stmt* s = nullptr;
   ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT version FROM schema_version", -1, &s, nullptr), SQLITE_OK);
   ASSERT_EQ(sqlite3_step(s), SQLITE_ROW);
-  EXPECT_EQ(sqlite3_column_int(s, 0), 9);
+  EXPECT_EQ(sqlite3_column_int(s, 0), 10);
   sqlite3_finalize(s);
   sqlite3_close(db);
 }
@@ -355,13 +332,8 @@ TEST(SqliteStoreUpgradeTest, AVersion4StoreIsUpgradedAndItsJobsAreStillsOfFrameZ
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "DROP INDEX tiles_by_frame", "DROP TABLE frames", "ALTER TABLE tiles DROP COLUMN frame",
-                            "ALTER TABLE jobs DROP COLUMN frame_first", "ALTER TABLE jobs DROP COLUMN frame_last",
-                            "ALTER TABLE jobs DROP COLUMN frame_step", "ALTER TABLE jobs DROP COLUMN frames_total",
-                            "ALTER TABLE jobs DROP COLUMN frames_done", "ALTER TABLE tiles DROP COLUMN pass",
-                            "ALTER TABLE jobs DROP COLUMN passes", "UPDATE schema_version SET version = 4"}) {
-      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    for (const std::string& sql : test::back_to_version(4)) {
+      EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
   }
@@ -434,10 +406,8 @@ TEST(SqliteStoreUpgradeTest, AVersion5StoreIsUpgradedAndItsJobsAreOnePass) {
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers", "ALTER TABLE tiles DROP COLUMN pass", "ALTER TABLE jobs DROP COLUMN passes",
-                            "UPDATE schema_version SET version = 5"}) {
-      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    for (const std::string& sql : test::back_to_version(5)) {
+      EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
   }
@@ -469,10 +439,12 @@ TEST(SqliteStoreUpgradeTest, AVersion6StoreIsUpgradedAndItsRunningTilesAreQueued
   {
     sqlite3* db = nullptr;
     ASSERT_EQ(sqlite3_open((dir / "jobs.db").c_str(), &db), SQLITE_OK);
-    for (const char* sql : {"ALTER TABLE jobs DROP COLUMN required_tags", "ALTER TABLE jobs DROP COLUMN min_threads",
-                            "ALTER TABLE jobs DROP COLUMN paused", "DROP TABLE job_log", "ALTER TABLE tiles DROP COLUMN scheduler", "DROP TABLE schedulers",
-                            "UPDATE tiles SET state = 1 WHERE idx = 0", "UPDATE schema_version SET version = 6"}) {
-      EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    for (const std::string& sql : [] {
+           std::vector<std::string> s = test::back_to_version(6);
+           s.insert(s.begin(), "UPDATE tiles SET state = 1 WHERE idx = 0");  // running at the downgrade
+           return s;
+         }()) {
+      EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
     }
     sqlite3_close(db);
   }

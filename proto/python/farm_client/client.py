@@ -61,8 +61,15 @@ def _job_state(value) -> int:
     try:
         return pb.JobState.Value(name)
     except ValueError:
-        raise FarmInputError(f"unknown job state '{value}' (expected queued, running, succeeded, "
-                             "failed or cancelled)") from None
+        raise FarmInputError(f"unknown job state '{value}' (expected waiting, queued, running, "
+                             "succeeded, failed or cancelled)") from None
+
+
+def _cap(value, name: str) -> int:
+    """A job cap (uint32 on the wire): a whole number from 0; refused here rather than by protobuf."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 1 << 32:
+        raise FarmInputError(f"{name} must be a whole number from 0 (0: no cap), not {value!r}")
+    return value
 
 
 def _well_formed_token(token: str) -> bool:
@@ -163,6 +170,12 @@ class Farm:
             return job.job_id
         return self.resolve_job_id(job)
 
+    def _ids(self, jobs) -> list:
+        """Ids of a list of jobs; one job alone (an id, a Job) is a list of one, not of characters."""
+        if isinstance(jobs, (str, pb.Job)):
+            jobs = [jobs]
+        return [self._id(j) for j in jobs or ()]
+
     # ---- jobs ----------------------------------------------------------------------------------
 
     def prepare(self, job_file, asset_root=None) -> JobSubmission:
@@ -246,10 +259,23 @@ class Farm:
         finally:
             os.close(fd)
 
-    def submit(self, job, asset_root=None, priority: int = 0) -> pb.Job:
+    def submit(self, job, asset_root=None, priority: int = 0, after=(), after_any=(), after_frames=None,
+               max_workers: int = 0, max_units_in_flight: int = 0) -> pb.Job:
         """Sends a job: `job` is a job file (prepared: its files found with the scheduler, hashed,
-        and the missing ones uploaded) or a JobSubmission from prepare(). Returns the queued Job;
-        the submission's `uploaded` says how many files were sent."""
+        and the missing ones uploaded) or a JobSubmission from prepare(). Returns the Job, QUEUED,
+        or WAITING when it waits for others; the submission's `uploaded` says how many files were
+        sent.
+
+        after         jobs it waits for to succeed (FAILED, naming the job, if one does not).
+        after_any     jobs it waits for to end, whatever their end.
+        after_frames  a job of frames it follows frame by frame (its frame N once that job's is merged).
+        max_workers, max_units_in_flight   caps over the job file's `limits`; 0: the file's."""
+        # The jobs it waits for are found first: a wrong id fails before anything is uploaded.
+        dependencies = {"after": self._ids(after), "after_any": self._ids(after_any),
+                        "after_frames": self._id(after_frames)
+                        if isinstance(after_frames, pb.Job) or after_frames else ""}
+        caps = {"max_workers": _cap(max_workers, "max_workers"),
+                "max_units_in_flight": _cap(max_units_in_flight, "max_units_in_flight")}
         submission = job if isinstance(job, JobSubmission) else self.prepare(job, asset_root)
         try:
             spec = pb.JobSpec(job_json=submission.job_json, file_name=submission.file_name)
@@ -260,7 +286,7 @@ class Farm:
             raise FarmInputError(f"{submission.job_file}: cannot be sent: {err}") from None
         if submission.uploaded is None:
             self.upload_missing(submission)
-        request = pb.SubmitJobRequest(job=spec, priority=priority)
+        request = pb.SubmitJobRequest(job=spec, priority=priority, **dependencies, **caps)
         return self._call("SubmitJob", request).job
 
     def get(self, job) -> pb.Job:
@@ -268,8 +294,8 @@ class Farm:
 
     def list(self, states=None, name: str | None = None, id_prefix: str | None = None,
              limit: int | None = 50) -> list:
-        """Jobs, newest first: those in `states` (any of queued, running, succeeded, failed,
-        cancelled), whose name matches the glob `name` (`*`, `?`; case-insensitive) and whose id
+        """Jobs, newest first: those in `states` (any of waiting, queued, running, succeeded,
+        failed, cancelled), whose name matches the glob `name` (`*`, `?`; case-insensitive) and whose id
         starts with `id_prefix`; at most `limit` (None or 0: every one)."""
         return self._list(states, name, id_prefix, limit)[0]
 
@@ -362,6 +388,25 @@ class Farm:
 
     def set_priority(self, job, priority: int) -> pb.Job:
         return self._call("SetPriority", pb.SetPriorityRequest(job_id=self._id(job), priority=priority)).job
+
+    def set_limits(self, job, max_workers: int | None = None,
+                   max_units_in_flight: int | None = None) -> pb.Job:
+        """The job's caps from now on: each one given replaces the job's (0 lifts it), one left
+        None stays as it is; units already out finish. FarmInputError for a job that has ended."""
+        request = pb.SetJobLimitsRequest(job_id=self._id(job))
+        if max_workers is not None:
+            request.max_workers = _cap(max_workers, "max_workers")
+        if max_units_in_flight is not None:
+            request.max_units_in_flight = _cap(max_units_in_flight, "max_units_in_flight")
+        return self._call("SetJobLimits", request).job
+
+    def add_dependencies(self, job, after=(), after_any=()) -> pb.Job:
+        """More jobs for a job none of whose units has been handed out to wait for, as submit's
+        `after` and `after_any`; it is WAITING until they end. FarmInputError: FAILED_PRECONDITION
+        for a job that has started or ended, INVALID_ARGUMENT for a cycle (named)."""
+        request = pb.AddDependenciesRequest(job_id=self._id(job), after=self._ids(after),
+                                            after_any=self._ids(after_any))
+        return self._call("AddDependencies", request).job
 
     def retry(self, job):
         """A FAILED or CANCELLED job's units that are not done queued again: RetryJobResponse

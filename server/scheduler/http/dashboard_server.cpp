@@ -122,15 +122,9 @@ std::vector<v1::JobState> states_param(const std::string& text) {
   while (!rest.empty()) {
     const std::size_t comma = rest.find(',');
     const std::string name(rest.substr(0, comma));
-    bool known = false;
-    for (v1::JobState s : {v1::JOB_STATE_QUEUED, v1::JOB_STATE_RUNNING, v1::JOB_STATE_SUCCEEDED,
-                           v1::JOB_STATE_FAILED, v1::JOB_STATE_CANCELLED}) {
-      if (to_string(s) == name) {
-        states.push_back(s);
-        known = true;
-      }
-    }
-    if (!known) throw InputError(fmt::format("state={}: not a job state", name.substr(0, 20)));
+    const std::optional<v1::JobState> state = job_state_named(name);
+    if (!state) throw InputError(fmt::format("state={}: not a job state", name.substr(0, 20)));
+    states.push_back(*state);
     if (comma == std::string_view::npos) break;
     rest.remove_prefix(comma + 1);
   }
@@ -382,7 +376,7 @@ void DashboardServer::routes() {
     log.set_after(static_cast<std::uint32_t>(std::max(0, int_param(request, "after", 0))));
     reply_message(response, front_door_.job_log(caller(request), log));
   }));
-  s.Post(std::string(kJobRoute) + "/(cancel|pause|resume|retry|delete|priority)",
+  s.Post(std::string(kJobRoute) + "/(cancel|pause|resume|retry|delete|priority|limits|dependencies)",
          guarded([this](const httplib::Request& request, httplib::Response& response) {
            check_post(request);
            const Principal who = caller(request);
@@ -395,6 +389,16 @@ void DashboardServer::routes() {
              reply_message(response, front_door_.retry_job(who, id));
            } else if (action == "delete") {
              reply_message(response, front_door_.delete_job(who, id));
+           } else if (action == "limits") {
+             v1::SetJobLimitsRequest limits;
+             parse_json(request.body, limits, "limits");
+             limits.set_job_id(id);
+             reply_message(response, front_door_.set_job_limits(who, limits));
+           } else if (action == "dependencies") {
+             v1::AddDependenciesRequest dependencies;
+             parse_json(request.body, dependencies, "dependencies");
+             dependencies.set_job_id(id);
+             reply_message(response, front_door_.add_dependencies(who, dependencies));
            } else {
              v1::SetPriorityRequest priority;
              parse_json(request.body, priority, "priority");

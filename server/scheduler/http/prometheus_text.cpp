@@ -22,8 +22,7 @@ std::string prometheus_text(const SchedulerMetrics& metrics) {
   const UnitMetrics::Snapshot& units = metrics.units;
   std::string out;
   header(out, "farm_jobs", "gauge", "Jobs in the store by state.");
-  for (v1::JobState s : {v1::JOB_STATE_QUEUED, v1::JOB_STATE_RUNNING, v1::JOB_STATE_SUCCEEDED, v1::JOB_STATE_FAILED,
-                         v1::JOB_STATE_CANCELLED}) {
+  for (v1::JobState s : kJobStates) {
     const auto it = counts.jobs.find(s);
     out += fmt::format("farm_jobs{{state=\"{}\"}} {}\n", to_string(s), it == counts.jobs.end() ? 0 : it->second);
   }

@@ -27,6 +27,9 @@ struct SchedulerOptions {
   // Final jobs older than this (since they ended) are deleted with their files (retention.h);
   // 0: kept for ever.
   std::chrono::milliseconds keep_finished{0};
+  // How often waiting jobs are looked at besides when a job ends here (dependency_release.h): how
+  // long a job waits after its dependency ended on another scheduler of a shared store.
+  std::chrono::milliseconds dependency_sweep = std::chrono::seconds(1);
   int max_attempts = 3;            // failed attempts of one tile before its job fails
   // Workers a tile may lose while rendering it (their process died: the call ended UNAVAILABLE;
   // or they stopped heartbeating) before its job fails. Counted apart from max_attempts, since a

@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "server/scheduler/store/job_dependencies.h"
+#include "server/scheduler/store/owner_shares.h"
+
 namespace farm {
 
 namespace {
@@ -38,22 +41,32 @@ std::string like_pattern_of_glob(const std::string& glob) {
 v1::Job JobRecords::add_job(const NewJob& j, std::int64_t now_ms) {
   if (j.frames.empty()) throw std::invalid_argument("job store: a job with no frames");
   if (j.passes < 1) throw std::invalid_argument("job store: a job of no sample pass");
+  if (j.after.size() + j.after_any.size() > kMaxDependencies) {
+    throw DependencyError(DependencyError::Kind::UnknownJob,
+                          fmt::format("a job may wait for at most {} jobs", kMaxDependencies));
+  }
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_);
+  // What it waits for, each checked to exist (a new job cannot close a cycle: nothing names it yet).
+  const std::vector<std::int64_t> after = dependency_seqs(*db_, j.after), after_any = dependency_seqs(*db_, j.after_any);
+  const std::int64_t frames_seq = j.after_frames.empty() ? 0 : dependency_seqs(*db_, {j.after_frames}).front();
+  const bool waits = !after.empty() || !after_any.empty();
   std::int64_t seq = 0;
   {
     Query insert(db_->prepared(
         "INSERT INTO jobs (id, name, spec, scene_hash, engine, width, height, priority, state, submitted_ms, "
-        "tiles_total, owner, frame_first, frame_last, frame_step, frames_total, passes, required_tags, min_threads) "
-        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING seq"));
+        "tiles_total, owner, frame_first, frame_last, frame_step, frames_total, passes, required_tags, min_threads, "
+        "max_workers, max_units_in_flight, after_frames_seq) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING seq"));
     insert.bind(1, j.id).bind(2, j.name).bind_blob(3, j.spec.SerializeAsString()).bind(4, j.scene_hash)
         .bind(5, j.engine).bind(6, j.width).bind(7, j.height).bind(8, j.priority)
-        .bind(9, static_cast<int>(v1::JOB_STATE_QUEUED)).bind(10, now_ms)
+        .bind(9, static_cast<int>(waits ? v1::JOB_STATE_WAITING : v1::JOB_STATE_QUEUED)).bind(10, now_ms)
         .bind(11, static_cast<std::int64_t>(j.tiles.size() * j.frames.size() * static_cast<std::size_t>(j.passes)))
         .bind(12, j.owner)
         .bind(13, j.frames.front()).bind(14, j.frames.back()).bind(15, j.frame_step)
         .bind(16, static_cast<std::int64_t>(j.frames.size())).bind(17, j.passes)
-        .bind(18, join_worker_tags(j.requirements.tags)).bind(19, j.requirements.min_threads);
+        .bind(18, join_worker_tags(j.requirements.tags)).bind(19, j.requirements.min_threads)
+        .bind(20, j.caps.max_workers).bind(21, j.caps.max_units_in_flight).bind(22, frames_seq);
     if (!insert.step()) throw std::runtime_error("job store: INSERT INTO jobs returned no seq");
     seq = insert.i64(0);
   }
@@ -90,6 +103,10 @@ v1::Job JobRecords::add_job(const NewJob& j, std::int64_t now_ms) {
     }
     insert.run();
   }
+  insert_dependencies(*db_, seq, after, false);
+  insert_dependencies(*db_, seq, after_any, true);
+  // Its owner's row last, as every transaction takes it (job_dependencies.cpp).
+  enter_owner(*db_, j.owner, j.owner_weight_milli);
   t.commit();
   return load_job_locked(j.id);
 }
@@ -176,14 +193,14 @@ v1::Job JobRecords::finish_job(const std::string& id, v1::JobState state, const 
 v1::Job JobRecords::cancel_job(const std::string& id, std::int64_t now_ms) {
   std::lock_guard lock(mutex_);
   Query(db_->prepared(fmt::format("UPDATE jobs SET state = ?, finished_ms = ? WHERE id = ? AND state IN {}",
-                                 kActiveSql)))
+                                 kUnfinishedSql)))
       .bind(1, static_cast<int>(v1::JOB_STATE_CANCELLED)).bind(2, now_ms).bind(3, id).run();
   return load_job_locked(id);
 }
 
 std::optional<v1::Job> JobRecords::set_paused(const std::string& id, bool paused) {
   std::lock_guard lock(mutex_);
-  Query(db_->prepared(fmt::format("UPDATE jobs SET paused = ? WHERE id = ? AND state IN {}", kActiveSql)))
+  Query(db_->prepared(fmt::format("UPDATE jobs SET paused = ? WHERE id = ? AND state IN {}", kUnfinishedSql)))
       .bind(1, paused ? 1 : 0).bind(2, id).run();
   return find_job_locked(id);
 }
@@ -191,6 +208,21 @@ std::optional<v1::Job> JobRecords::set_paused(const std::string& id, bool paused
 std::optional<v1::Job> JobRecords::set_priority(const std::string& id, int priority) {
   std::lock_guard lock(mutex_);
   Query(db_->prepared("UPDATE jobs SET priority = ? WHERE id = ?")).bind(1, priority).bind(2, id).run();
+  return find_job_locked(id);
+}
+
+std::optional<v1::Job> JobRecords::set_caps(const std::string& id, std::optional<int> max_workers,
+                                            std::optional<int> max_units_in_flight) {
+  std::lock_guard lock(mutex_);
+  if (max_workers) {
+    Query(db_->prepared(fmt::format("UPDATE jobs SET max_workers = ? WHERE id = ? AND state IN {}", kUnfinishedSql)))
+        .bind(1, *max_workers).bind(2, id).run();
+  }
+  if (max_units_in_flight) {
+    Query(db_->prepared(fmt::format("UPDATE jobs SET max_units_in_flight = ? WHERE id = ? AND state IN {}",
+                                    kUnfinishedSql)))
+        .bind(1, *max_units_in_flight).bind(2, id).run();
+  }
   return find_job_locked(id);
 }
 
@@ -220,10 +252,13 @@ std::optional<RetriedJob> JobRecords::retry_job(const std::string& id) {
   out.units_queued = static_cast<std::uint32_t>(requeue.changes());
   // Who merges a frame or ends the job is decided again, by whichever scheduler gets there.
   Query(db_->prepared("DELETE FROM claims WHERE job_seq = ?")).bind(1, seq).run();
-  Query(db_->prepared("UPDATE jobs SET state = CASE WHEN tiles_done > 0 THEN ? ELSE ? END, finished_ms = 0, "
-                      "failure_reason = '', validation = '', paused = 0 WHERE seq = ?"))
-      .bind(1, static_cast<int>(v1::JOB_STATE_RUNNING)).bind(2, static_cast<int>(v1::JOB_STATE_QUEUED))
-      .bind(3, seq).run();
+  // A job with dependencies waits again for them to settle it (release_waiting): one that failed
+  // because a dependency did runs once that has been retried and has succeeded.
+  Query(db_->prepared("UPDATE jobs SET state = CASE WHEN EXISTS (SELECT 1 FROM dependencies WHERE job_seq = ?1) THEN ?2 "
+                      "WHEN tiles_done > 0 THEN ?3 ELSE ?4 END, finished_ms = 0, "
+                      "failure_reason = '', validation = '', paused = 0 WHERE seq = ?1"))
+      .bind(1, seq).bind(2, static_cast<int>(v1::JOB_STATE_WAITING)).bind(3, static_cast<int>(v1::JOB_STATE_RUNNING))
+      .bind(4, static_cast<int>(v1::JOB_STATE_QUEUED)).run();
   t.commit();
   out.job = load_job_locked(id);
   out.retried = true;
@@ -243,7 +278,8 @@ std::optional<bool> JobRecords::delete_job(const std::string& id) {
     seq = s.i64(0);
   }
   // The rows that name the job first: they reference it.
-  for (const char* table : {"tiles", "frames", "claims", "parts", "job_log"}) {
+  // Rows of jobs that wait for it stay: they name it, and find it gone (release_waiting).
+  for (const char* table : {"tiles", "frames", "claims", "parts", "job_log", "dependencies"}) {
     Query(db_->prepared(fmt::format("DELETE FROM {} WHERE job_seq = ?", table))).bind(1, seq).run();
   }
   Query(db_->prepared("DELETE FROM jobs WHERE seq = ?")).bind(1, seq).run();

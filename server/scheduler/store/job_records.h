@@ -18,7 +18,9 @@ class JobRecords : public StorePart {
  public:
   explicit JobRecords(StoreSession& session) : StorePart(session) {}
 
-  // Inserts the job (QUEUED) and its queued tiles. Returns it as v1::Job.
+  // Inserts the job (QUEUED, or WAITING when it waits for other jobs), its dependencies and its
+  // queued tiles, and enters its owner for fair share (owner_shares.h). Returns it as v1::Job.
+  // DependencyError (nothing kept) when a dependency names no job.
   v1::Job add_job(const NewJob& job, std::int64_t now_ms);
 
   std::optional<v1::Job> get_job(const std::string& id) const;
@@ -30,7 +32,8 @@ class JobRecords : public StorePart {
   // Jobs QUEUED or RUNNING, in submission order.
   std::vector<std::string> active_jobs() const;
 
-  // Final states. Each is a no-op (returns the job as it is) when the job is already final, and
+  // Final states. Each is a no-op (returns the job as it is) when the job is already final (and
+  // finish_job when it is WAITING: release_waiting ends those), and
   // SUCCEEDED also when not every tile is done (quarantine_worker took some back) or not every
   // frame is merged.
   v1::Job finish_job(const std::string& id, v1::JobState state, const std::string& reason,
@@ -42,6 +45,9 @@ class JobRecords : public StorePart {
   // active job is paused or resumed (a final one is returned unchanged).
   std::optional<v1::Job> set_paused(const std::string& id, bool paused);
   std::optional<v1::Job> set_priority(const std::string& id, int priority);
+  // The caps given replaced (0: none) on a job that has not ended (a final one is returned as is).
+  std::optional<v1::Job> set_caps(const std::string& id, std::optional<int> max_workers,
+                                  std::optional<int> max_units_in_flight);
   // A FAILED or CANCELLED job active again: its units not done queued with no attempt counted,
   // done units and merged frames kept, its claims dropped, its failure reason cleared, not paused.
   // RUNNING when some unit is done, else QUEUED. One transaction.

@@ -13,7 +13,8 @@ JobStore::JobStore(std::unique_ptr<SqlConnection> db)
       units_(*session_),
       frames_(*session_),
       leases_(*session_),
-      log_(*session_) {
+      log_(*session_),
+      dependencies_(*session_) {
   SqlConnection& sql = *session_->db;
   open_store_schema(sql);
   // Units in flight when the last scheduler stopped: their results died with it. A SQLite store

@@ -6,7 +6,7 @@
 // lost with the process) and keeps done tiles done (their data is on disk, written before they
 // were marked).
 //
-// Schema (version 9; a SQLite store of version 1 to 8 is upgraded in place, a PostgreSQL store,
+// Schema (version 10; a SQLite store of version 1 to 9 is upgraded in place, a PostgreSQL store,
 // which began at 6 in PostgreSQL's types, from 6):
 //   schema_version(version)
 //   jobs(seq INTEGER PRIMARY KEY   -- submission order
@@ -19,7 +19,9 @@
 //        how many are merged; a still is frame 0 alone), passes (version 6: sample passes a
 //        frame is rendered in, 1 without), paused (version 8: an operator paused it: none of
 //        its units is claimed), required_tags (version 9: the worker tags it needs, comma-joined),
-//        min_threads (version 9: the fewest threads a worker of it must have; 0 any))
+//        min_threads (version 9: the fewest threads a worker of it must have; 0 any),
+//        max_workers, max_units_in_flight (version 10: its caps; 0 none), after_frames_seq
+//        (version 10: the job it follows frame by frame; 0 none))
 //   tiles(job_seq, idx, x0, y0, x1, y1, state (0 queued, 1 running, 2 done, 3 failed), attempts,
 //         last_error, worker, part (done tiles: the first tile of the batch whose result file
 //         holds them), lost_attempts (version 4: renderings lost with their worker, counted apart
@@ -33,6 +35,9 @@
 //   frames(job_seq, frame; PRIMARY KEY (job_seq, frame))  -- version 5: the frames merged
 //   job_log(job_seq, n, at_ms, event BLOB (farm.v1.JobEvent); PRIMARY KEY (job_seq, n))  -- version
 //         8: the job's events, numbered from 1 (append_log)
+//   dependencies(job_seq, on_seq, on_id, any_end; PRIMARY KEY (job_seq, on_seq))  -- version 10:
+//         the jobs a job waits for (any_end: whatever their end), kept by id when they are deleted
+//   owners(owner TEXT PRIMARY KEY, pass, weight_milli)  -- version 10: fair share (owner_shares.h)
 // A job's tiles (its units) are numbered frame after frame and, within a frame, pass after pass:
 // idx = (k * passes + pass) * (tiles of a frame's grid) + tile, k the frame's place among the
 // job's frames, so that the queue hands out a frame's passes in order.
@@ -45,7 +50,8 @@
 //
 // The store is split by concern (docs/architecture.md, "Stores"), each part one class over the
 // shared connection: jobs() (JobRecords), units() (UnitQueue: claims and what becomes of a batch),
-// frames() (FrameRecords), leases() (SchedulerLeases) and log() (EventLog); the schema and its
+// frames() (FrameRecords), leases() (SchedulerLeases), log() (EventLog) and dependencies()
+// (JobDependencies; fair share's rows are owner_shares.h's); the schema and its
 // upgrades are store_schema.cpp's.
 #include <filesystem>
 #include <memory>
@@ -53,6 +59,7 @@
 
 #include "server/scheduler/store/event_log.h"
 #include "server/scheduler/store/frame_records.h"
+#include "server/scheduler/store/job_dependencies.h"
 #include "server/scheduler/store/job_records.h"
 #include "server/scheduler/store/scheduler_leases.h"
 #include "server/scheduler/store/store_part.h"
@@ -87,6 +94,8 @@ class JobStore {
   const SchedulerLeases& leases() const { return leases_; }
   EventLog& log() { return log_; }
   const EventLog& log() const { return log_; }
+  JobDependencies& dependencies() { return dependencies_; }
+  const JobDependencies& dependencies() const { return dependencies_; }
 
  private:
   std::unique_ptr<StoreSession> session_;  // before the parts, which hold references into it
@@ -95,6 +104,7 @@ class JobStore {
   FrameRecords frames_;
   SchedulerLeases leases_;
   EventLog log_;
+  JobDependencies dependencies_;
 };
 
 }  // namespace farm

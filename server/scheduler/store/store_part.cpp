@@ -12,11 +12,14 @@ const char* const kJobColumns =
     "seq, id, name, scene_hash, engine, width, height, priority, state, submitted_ms, started_ms, "
     "finished_ms, failure_reason, tiles_total, tiles_done, tile_failures, tiles_rendered, stats, "
     "validation, owner, frame_first, frame_last, frame_step, frames_total, frames_done, passes, paused, "
-    "required_tags, min_threads";
+    "required_tags, min_threads, max_workers, max_units_in_flight";
 
 const std::string kActiveSql =
     fmt::format("({}, {})", static_cast<int>(v1::JOB_STATE_QUEUED),
                 static_cast<int>(v1::JOB_STATE_RUNNING));
+const std::string kUnfinishedSql =
+    fmt::format("({}, {}, {})", static_cast<int>(v1::JOB_STATE_QUEUED), static_cast<int>(v1::JOB_STATE_RUNNING),
+                static_cast<int>(v1::JOB_STATE_WAITING));
 
 google::protobuf::Timestamp timestamp(std::int64_t ms) {
   return google::protobuf::util::TimeUtil::MillisecondsToTimestamp(ms);
@@ -54,6 +57,8 @@ v1::Job job_from_row(const Query& s) {
   job.set_paused(s.i64(26) != 0);
   for (std::string& tag : split_worker_tags(s.text(27))) job.add_required_tags(std::move(tag));
   job.set_min_threads(s.i32(28));
+  job.set_max_workers(static_cast<std::uint32_t>(s.i64(29)));
+  job.set_max_units_in_flight(static_cast<std::uint32_t>(s.i64(30)));
   return job;
 }
 

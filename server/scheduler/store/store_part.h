@@ -33,6 +33,8 @@ inline constexpr SqlTransaction::Commit kRedoable = SqlTransaction::Commit::Unfl
 extern const char* const kJobColumns;
 // "(QUEUED, RUNNING)" as numbers, for `state IN ...`.
 extern const std::string kActiveSql;
+// "(QUEUED, RUNNING, WAITING)": the states a job can still leave.
+extern const std::string kUnfinishedSql;
 
 google::protobuf::Timestamp timestamp(std::int64_t ms);
 // A row of `SELECT kJobColumns FROM jobs` as the wire's Job.

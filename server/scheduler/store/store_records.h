@@ -31,6 +31,28 @@ struct NewJob {
   int passes = 1;              // sample passes of each frame (pass_count of its settings)
   std::vector<Rect> tiles;     // one frame's grid: every frame has these tiles
   WorkerRequirements requirements;  // the workers that may render it
+  JobCaps caps;                     // 0: no cap
+  // Its dependencies (job ids, SubmitJobRequest.after, after_any, after_frames): with any in
+  // `after` or `after_any` it is queued WAITING. Each must name a job in the store.
+  std::vector<std::string> after, after_any;
+  std::string after_frames;
+  // Fair share: the weight of the owner's share (the tokens file's), in thousandths (1000: 1).
+  std::int64_t owner_weight_milli = 1000;
+};
+
+// A dependency that cannot be recorded: no such job, a cycle, or a job that has already started.
+// The message names the job ids.
+struct DependencyError : std::runtime_error {
+  enum class Kind { UnknownJob, Cycle, Started };
+  DependencyError(Kind k, const std::string& what) : std::runtime_error(what), kind(k) {}
+  Kind kind;
+};
+
+// A job whose dependencies settled it (JobDependencies::release_waiting): WAITING -> QUEUED, or
+// FAILED naming the dependency; `job` as it is now.
+struct ReleasedJob {
+  v1::Job job;
+  v1::JobState from = v1::JOB_STATE_WAITING;
 };
 
 struct UnitRecord {

@@ -14,7 +14,7 @@ namespace farm {
 
 namespace {
 
-constexpr int kSchemaVersion = 9;
+constexpr int kSchemaVersion = 10;
 
 // The tables, written once for both stores: {integer}, {blob} and {key} are each dialect's types
 // (PostgreSQL's integers all bigint, as the store binds them), {empty_blob} its empty blob.
@@ -50,9 +50,25 @@ CREATE TABLE IF NOT EXISTS jobs (
   passes {integer} NOT NULL DEFAULT 1,
   paused {integer} NOT NULL DEFAULT 0,
   required_tags TEXT NOT NULL DEFAULT '',
-  min_threads {integer} NOT NULL DEFAULT 0
+  min_threads {integer} NOT NULL DEFAULT 0,
+  max_workers {integer} NOT NULL DEFAULT 0,
+  max_units_in_flight {integer} NOT NULL DEFAULT 0,
+  after_frames_seq {integer} NOT NULL DEFAULT 0
 );
 CREATE INDEX IF NOT EXISTS jobs_by_state ON jobs (state, priority, seq);
+CREATE TABLE IF NOT EXISTS dependencies (
+  job_seq {integer} NOT NULL REFERENCES jobs (seq),
+  on_seq {integer} NOT NULL,
+  on_id TEXT NOT NULL,
+  any_end {integer} NOT NULL DEFAULT 0,
+  PRIMARY KEY (job_seq, on_seq)
+);
+CREATE INDEX IF NOT EXISTS dependencies_by_target ON dependencies (on_seq);
+CREATE TABLE IF NOT EXISTS owners (
+  owner TEXT PRIMARY KEY,
+  pass {integer} NOT NULL DEFAULT 0,
+  weight_milli {integer} NOT NULL DEFAULT 1000
+);
 CREATE TABLE IF NOT EXISTS tiles (
   job_seq {integer} NOT NULL REFERENCES jobs (seq),
   idx {integer} NOT NULL,
@@ -112,6 +128,12 @@ std::string schema(SqlDialect dialect) {
 // A frame's tiles, found by the checks for a complete frame after every batch. Made after an
 // upgrade, which adds the column to an older SQLite store.
 constexpr const char* kTilesByFrame = "CREATE INDEX IF NOT EXISTS tiles_by_frame ON tiles (job_seq, frame, state)";
+// An owner's active jobs, found when a job of theirs is queued (fair share's starting point).
+// Made after an upgrade, as above.
+// And the jobs that follow a job frame by frame, listed on its page.
+constexpr const char* kJobsByOwner =
+    "CREATE INDEX IF NOT EXISTS jobs_by_owner ON jobs (owner, state); "
+    "CREATE INDEX IF NOT EXISTS jobs_by_frames_followed ON jobs (after_frames_seq)";
 
 
 // pg_advisory_xact_lock's key for making the schema: any number no other user of the database
@@ -133,7 +155,7 @@ class StoreSchema {
  private:
   int stored_version();                       // the schema's; a new store's recorded as this one's
   [[noreturn]] void refuse_version(int version) const;  // a version this farm cannot read
-  void open_sqlite();    // the schema made, or upgraded from versions 1 to 8
+  void open_sqlite();    // the schema made, or upgraded from versions 1 to 9
   void open_postgres();  // the schema made, under a lock that other schedulers wait on
   bool postgres_schema_current();  // the store already at this version: no DDL to run
   void upgrade_from_6(int version);           // the upgrades written for both stores
@@ -200,6 +222,7 @@ void StoreSchema::open_sqlite() {
     refuse_version(version);
   }
   db_->exec(kTilesByFrame);
+  db_->exec(kJobsByOwner);
 }
 
 void StoreSchema::open_postgres() {
@@ -223,6 +246,7 @@ void StoreSchema::open_postgres() {
   } else if (version != kSchemaVersion) {
     refuse_version(version);
   }
+  db_->exec(kJobsByOwner);
   t.commit();
 }
 
@@ -252,6 +276,15 @@ void StoreSchema::upgrade_from_6(int version) {
     db_->exec("ALTER TABLE jobs ADD COLUMN required_tags TEXT NOT NULL DEFAULT ''");
     db_->exec(fmt::format("ALTER TABLE jobs ADD COLUMN min_threads {} NOT NULL DEFAULT 0",
                           db_->dialect() == SqlDialect::PostgreSQL ? "BIGINT" : "INTEGER"));
+  }
+  if (version <= 9) {
+    // Version 10: dependencies (the dependencies table the schema made), caps, and fair share
+    // between owners (the owners table: every owner of an older job starts even).
+    for (const char* column : {"max_workers", "max_units_in_flight", "after_frames_seq"}) {
+      db_->exec(fmt::format("ALTER TABLE jobs ADD COLUMN {} {} NOT NULL DEFAULT 0", column,
+                            db_->dialect() == SqlDialect::PostgreSQL ? "BIGINT" : "INTEGER"));
+    }
+    db_->exec("INSERT INTO owners (owner) SELECT DISTINCT owner FROM jobs WHERE true ON CONFLICT (owner) DO NOTHING");
   }
   db_->exec(fmt::format("UPDATE schema_version SET version = {}", kSchemaVersion));
 }

@@ -1,9 +1,12 @@
 #include "server/common/job_state.h"
 #include "server/scheduler/store/unit_queue.h"
 
+#include "server/scheduler/store/owner_shares.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace farm {
@@ -41,13 +44,18 @@ std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, 
   SqlTransaction t(*db_, kRedoable);
   UnitBatch batch;
   std::int64_t seq = 0;
+  std::string owner;
+  int room = std::numeric_limits<int>::max();  // units the job's max_units_in_flight still allows
   {
-    // The active jobs in queue order, each asked for its first queued tile through tiles_by_state
-    // (one seek a job): a join sorted over every queued tile would cost each claim as much as the
-    // queue is long, and a job of many frames queues tens of thousands.
-    Query jobs(db_->prepared(fmt::format("SELECT seq, id, required_tags, min_threads FROM jobs WHERE state IN {} "
-                                         "AND paused = 0 ORDER BY priority DESC, seq ASC",
-                                        kActiveSql)));
+    // The active jobs in queue order (priority, then fair share: the owner served least so far,
+    // owner_shares.h; then submission), each asked for its first queued tile through
+    // tiles_by_state (one seek a job): a join sorted over every queued tile would cost each claim
+    // as much as the queue is long, and a job of many frames queues tens of thousands.
+    Query jobs(db_->prepared(fmt::format(
+        "SELECT j.seq, j.id, j.required_tags, j.min_threads, j.max_workers, j.max_units_in_flight, "
+        "j.after_frames_seq, j.owner FROM jobs j LEFT JOIN owners o ON o.owner = j.owner WHERE j.state IN {} "
+        "AND j.paused = 0 ORDER BY j.priority DESC, COALESCE(o.pass, 0) ASC, j.seq ASC",
+        kActiveSql)));
     // Whether the worker may render the job of the current row.
     const auto offer_meets = [&] {
       const std::string tags = jobs.text(2);
@@ -57,29 +65,54 @@ std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, 
     };
     Query first(db_->prepared("SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame, pass FROM tiles "
                              "WHERE state = 0 AND job_seq = ? ORDER BY idx LIMIT 1"));
+    // A job that follows another frame by frame: its first queued tile of a frame that job has
+    // merged, or does not render.
+    Query first_following(db_->prepared(
+        "SELECT idx, x0, y0, x1, y1, attempts, lost_attempts, frame, pass FROM tiles t WHERE t.state = 0 AND "
+        "t.job_seq = ?1 AND (EXISTS (SELECT 1 FROM frames f WHERE f.job_seq = ?2 AND f.frame = t.frame) OR NOT "
+        "EXISTS (SELECT 1 FROM tiles d WHERE d.job_seq = ?2 AND d.frame = t.frame)) ORDER BY t.idx LIMIT 1"));
+    // The job's first tile this worker may have now, read into `batch`; false for none.
+    const auto first_tile = [&](std::int64_t job_seq, std::int64_t followed_seq) {
+      Query& q = followed_seq ? first_following : first;
+      q.reset();
+      q.bind(1, job_seq);
+      if (followed_seq) q.bind(2, followed_seq);
+      if (!q.step()) return false;
+      batch.first = static_cast<std::uint32_t>(q.i64(0));
+      batch.rect = {q.i32(1), q.i32(2), q.i32(3), q.i32(4)};
+      batch.attempts = q.i32(5);
+      batch.lost_attempts = q.i32(6);
+      batch.frame = q.i32(7);
+      batch.pass = q.i32(8);
+      return true;
+    };
+    Query out(db_->prepared("SELECT COUNT(*), COUNT(DISTINCT worker), COALESCE(SUM(CASE WHEN worker = ? THEN 1 "
+                            "ELSE 0 END), 0) FROM tiles WHERE state = 1 AND job_seq = ?"));
     bool found = false;
     while (!found && jobs.step()) {
       if (!offer_meets() || (skip_job && skip_job(jobs.text(1)))) continue;
-      first.reset();
-      first.bind(1, jobs.i64(0));
-      if (!first.step()) continue;
+      const std::int64_t job_seq = jobs.i64(0), followed_seq = jobs.i64(6);
+      if (!first_tile(job_seq, followed_seq)) continue;
       // Another scheduler may be claiming from the same job: once this one holds the job, its
-      // first queued tile is read again (PostgreSQL's next statement sees what the other committed).
+      // first queued tile and its units out are read again (PostgreSQL's next statement sees
+      // what the other committed).
       if (db_->dialect() == SqlDialect::PostgreSQL) {
-        if (!lock_job_locked(jobs.i64(0))) continue;
-        first.reset();
-        first.bind(1, jobs.i64(0));
-        if (!first.step()) continue;
+        if (!lock_job_locked(job_seq) || !first_tile(job_seq, followed_seq)) continue;
+      }
+      const int max_workers = jobs.i32(4), max_units = jobs.i32(5);
+      if (max_workers > 0 || max_units > 0) {
+        out.reset();
+        out.bind(1, worker).bind(2, job_seq);
+        if (!out.step()) continue;
+        const int units_out = out.i32(0), workers_on_it = out.i32(1), mine = out.i32(2);
+        if (max_units > 0 && units_out >= max_units) continue;
+        if (max_workers > 0 && mine == 0 && workers_on_it >= max_workers) continue;
+        if (max_units > 0) room = max_units - units_out;
       }
       found = true;
-      seq = jobs.i64(0);
+      seq = job_seq;
       batch.job_id = jobs.text(1);
-      batch.first = static_cast<std::uint32_t>(first.i64(0));
-      batch.rect = {first.i32(1), first.i32(2), first.i32(3), first.i32(4)};
-      batch.attempts = first.i32(5);
-      batch.lost_attempts = first.i32(6);
-      batch.frame = first.i32(7);
-      batch.pass = first.i32(8);
+      owner = jobs.text(7);
     }
     if (!found) return std::nullopt;
   }
@@ -94,7 +127,7 @@ std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, 
       count.bind(1, seq).bind(2, std::max(1, count_up_to));
       if (count.step()) queued = count.i32(0);
     }
-    const int wanted = batch_size(batch.job_id, queued);
+    const int wanted = std::min(room, batch_size(batch.job_id, queued));
     if (wanted > 1) {
       // The following tiles while they continue the same row of the frame's grid in the same pass:
       // the batch's union is then one rectangle of one frame's pass, rendered in one call.
@@ -123,6 +156,8 @@ std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, 
         .bind(4, static_cast<int>(v1::JOB_STATE_QUEUED));
     batch.started_job = start.step();
   }
+  // The owner's row last, as every transaction takes it (job_dependencies.cpp).
+  charge_owner(*db_, owner, batch.count);
   t.commit();
   return batch;
 }

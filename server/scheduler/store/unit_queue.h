@@ -22,8 +22,8 @@ class UnitQueue : public StorePart {
   // A job's units, in index order (its tiles of every frame and pass).
   std::vector<UnitRecord> tiles(const std::string& id) const;
 
-  // The next queued tile of an active job (highest priority, then earliest submission, then tile
-  // index) and, when `batch_size` allows more than one, the queued tiles that follow it in the
+  // The next queued tile of an active job (highest priority, then the owner with the least fair
+  // share so far (owner_shares.h), then earliest submission, then tile index) and, when `batch_size` allows more than one, the queued tiles that follow it in the
   // same grid row, never one that failed before (a tile that failed goes alone). Without
   // `batch_size`, one tile. Marks them running on `worker` and the job RUNNING (started_at set
   // on the first claim).
@@ -31,7 +31,11 @@ class UnitQueue : public StorePart {
   // answer costs every claim as much as the queue is long).
   // Jobs for which `skip_job(job_id)` is true are passed over (the worker is kept off them), and
   // so are jobs whose requirements `offer` does not meet (the default offer, no tags and threads
-  // not known, meets only jobs without requirements).
+  // not known, meets only jobs without requirements), jobs at their caps (max_units_in_flight
+  // units out; max_workers other workers rendering them), and, for a job that follows another
+  // frame by frame, tiles of frames that job renders and has not merged. A batch holds no more
+  // units than the job's max_units_in_flight leaves room for. The claimed units are charged to
+  // the job's owner.
   std::optional<UnitBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                             const BatchSize& batch_size = {}, int count_up_to = 1024,
                                             const std::function<bool(const std::string&)>& skip_job = {},
