@@ -10,6 +10,7 @@
 #include <string>
 
 #include "server/common/job_state.h"
+#include "tests/support/eventually.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/run_command.h"
 #include "tests/support/scheduler_client.h"
@@ -72,7 +73,12 @@ TEST(FarmSchedulingCli, SubmitAfterLimitsDependAndCancelSayWhatWaitsForWhat) {
   ASSERT_TRUE(failed);
   EXPECT_EQ(failed->state(), v1::JOB_STATE_FAILED);
   EXPECT_EQ(failed->failure_reason(), "dependency " + z_id + " was cancelled");
-  const test::CommandResult log = farm_run("log " + b_id);
+  // The log has it once the change is announced, just after the store has it.
+  test::CommandResult log;
+  EXPECT_TRUE(test::eventually([&] {
+    log = farm_run("log " + b_id);
+    return log.output.find("waiting -> failed") != std::string::npos;
+  }));
   EXPECT_NE(log.output.find("max_units_in_flight none -> 3"), std::string::npos) << log.output;
   EXPECT_NE(log.output.find("waiting -> failed (0/1 units): dependency " + z_id + " was cancelled"), std::string::npos)
       << log.output;

@@ -15,11 +15,14 @@
 #include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
+#include "tests/support/eventually.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
+
+using test::eventually;
 
 using namespace std::chrono_literals;
 
@@ -49,15 +52,6 @@ class NamedWorker final : public TileWorker {
   Check before_;
   Done after_;
 };
-
-bool eventually(const std::function<bool()>& done) {
-  const auto end = std::chrono::steady_clock::now() + 120s;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(10ms);
-  }
-  return true;
-}
 
 class SchedulerDependenciesTest : public ::testing::Test {
  protected:
@@ -114,7 +108,7 @@ TEST_F(SchedulerDependenciesTest, AThreeJobChainWhoseMiddleFailsFailsTheLastNami
     return request.job_id() == b.job_id() ? grpc::Status(grpc::StatusCode::INTERNAL, "b cannot be rendered")
                                           : grpc::Status::OK;
   }));
-  ASSERT_TRUE(eventually([&] { return ended(c.job_id()); }));
+  ASSERT_TRUE(eventually([&] { return ended(c.job_id()); }, std::chrono::minutes(2)));
   EXPECT_EQ(job(a.job_id()).state(), v1::JOB_STATE_SUCCEEDED);
   EXPECT_EQ(job(b.job_id()).state(), v1::JOB_STATE_FAILED);
   const v1::Job last = job(c.job_id());
@@ -122,14 +116,16 @@ TEST_F(SchedulerDependenciesTest, AThreeJobChainWhoseMiddleFailsFailsTheLastNami
   EXPECT_EQ(last.failure_reason().rfind("dependency " + b.job_id() + " failed: ", 0), 0u) << last.failure_reason();
   EXPECT_EQ(calls_for_c.load(), 0) << "nothing of c was handed out";
   EXPECT_EQ(last.tiles_done(), 0u);
-  // The log says it: submitted waiting, then failed from waiting naming b.
-  bool failed_from_waiting = false;
-  for (const v1::JobLogEntry& e : core_->store().log().job_log(c.job_id(), 0, 100, nullptr)) {
-    if (!e.event().has_state_changed()) continue;
-    const v1::JobStateChanged& change = e.event().state_changed();
-    if (change.from() == v1::JOB_STATE_WAITING && change.to() == v1::JOB_STATE_FAILED) failed_from_waiting = true;
-  }
-  EXPECT_TRUE(failed_from_waiting);
+  // The log says it: failed from waiting (logged as the change is announced, just after the store
+  // has it).
+  const auto failed_from_waiting = [&] {
+    for (const v1::JobLogEntry& e : core_->store().log().job_log(c.job_id(), 0, 100, nullptr)) {
+      const v1::JobStateChanged& change = e.event().state_changed();
+      if (change.from() == v1::JOB_STATE_WAITING && change.to() == v1::JOB_STATE_FAILED) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(eventually(failed_from_waiting));
   const v1::Job middle = job(b.job_id());
   EXPECT_EQ(std::vector<std::string>(middle.dependents().begin(), middle.dependents().end()),
             std::vector<std::string>{c.job_id()});
@@ -158,7 +154,7 @@ TEST_F(SchedulerDependenciesTest, AJobCappedToOneWorkerIsRenderedByOneWorkerAtAT
           rendering.erase(rendering.find(name));
         }));
   }
-  ASSERT_TRUE(eventually([&] { return ended(capped.job_id()); }));
+  ASSERT_TRUE(eventually([&] { return ended(capped.job_id()); }, std::chrono::minutes(2)));
   ASSERT_EQ(job(capped.job_id()).state(), v1::JOB_STATE_SUCCEEDED) << job(capped.job_id()).failure_reason();
   EXPECT_EQ(calls, 16);
   EXPECT_EQ(most_at_once, 1u) << "the cap held it to one worker at a time";
@@ -179,7 +175,7 @@ TEST_F(SchedulerDependenciesTest, AFollowersFrameNeverStartsBeforeTheLeadersFram
       return grpc::Status::OK;
     }));
   }
-  ASSERT_TRUE(eventually([&] { return ended(follower.job_id()) && ended(leader.job_id()); }));
+  ASSERT_TRUE(eventually([&] { return ended(follower.job_id()) && ended(leader.job_id()); }, std::chrono::minutes(2)));
   EXPECT_EQ(job(follower.job_id()).state(), v1::JOB_STATE_SUCCEEDED) << job(follower.job_id()).failure_reason();
   EXPECT_EQ(follower_calls.load(), 16);  // one call a unit: every frame's four tiles
   EXPECT_EQ(early.load(), 0) << "a frame of the follower started before the leader's was merged";

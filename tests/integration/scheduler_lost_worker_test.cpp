@@ -21,6 +21,7 @@
 #include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
+#include "tests/support/eventually.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/pixel_diff.h"
 #include "tests/support/run_command.h"
@@ -29,16 +30,9 @@
 namespace farm {
 namespace {
 
-using namespace std::chrono_literals;
+using test::eventually;
 
-bool eventually(const std::function<bool()>& done) {
-  const auto end = std::chrono::steady_clock::now() + 60s;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
-}
+using namespace std::chrono_literals;
 
 // A worker whose process dies under its first `losses` calls (every call when negative): they end
 // UNAVAILABLE unrendered, as a call does when the connection to a crashed worker goes. The calls

@@ -16,12 +16,15 @@
 #include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
+#include "tests/support/eventually.h"
 #include "tests/support/fake_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
+
+using test::eventually;
 
 using namespace std::chrono_literals;
 
@@ -45,15 +48,6 @@ class LyingWorker final : public TileWorker {
   TileRenderer renderer_;
   test::Lie lie_;
 };
-
-bool eventually(const std::function<bool()>& done) {
-  const auto end = std::chrono::steady_clock::now() + 60s;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(10ms);
-  }
-  return true;
-}
 
 TEST(SchedulerQuarantineTest, AWorkerWhoseRepliesBreakTheRulesIsQuarantinedAndItsStateSaysWhy) {
   test::TempDir dir;

@@ -23,6 +23,7 @@
 
 #include "renderer/image/exr_io.h"
 #include "server/common/asset_store.h"
+#include "tests/support/eventually.h"
 #include "tests/support/background_process.h"
 #include "tests/support/fake_worker.h"
 #include "tests/support/farm_cli_fixture.h"
@@ -34,6 +35,8 @@
 namespace farm {
 namespace {
 
+using test::eventually;
+
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
@@ -43,15 +46,6 @@ bool final_state(const v1::Job& job) {
 }
 
 // Waits (bounded) until `done()`; false when it never came.
-bool eventually(const std::function<bool()>& done, std::chrono::milliseconds timeout = 60s) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(10ms);
-  }
-  return true;
-}
-
 bool same_bits(const void* a, const void* b, std::size_t n) { return std::memcmp(a, b, n) == 0; }
 
 // Pixels whose bits differ in any channel; -1 when the images do not even cover the same rect.
