@@ -226,6 +226,7 @@ v1::Job SchedulerFrontDoor::add_dependencies(const Principal& who, const v1::Add
   const std::vector<std::string> after_any(request.after_any().begin(), request.after_any().end());
   std::vector<std::string> waited = after;
   waited.insert(waited.end(), after_any.begin(), after_any.end());
+  if (waited.empty()) throw InputError("AddDependencies: name the jobs to wait for (after, after_any)");
   check_dependencies(who, waited);
   return core_.add_dependencies(request.job_id(), after, after_any, who.name);
 }

@@ -62,6 +62,9 @@ TEST(FarmSchedulingCli, SubmitAfterLimitsDependAndCancelSayWhatWaitsForWhat) {
   const test::CommandResult limits = farm_run("limits " + b_id + " --max-units-in-flight 3");
   ASSERT_EQ(limits.exit_code, 0) << limits.output;
   EXPECT_NE(limits.output.find("max 1 worker, max 3 units in flight"), std::string::npos) << limits.output;
+  const test::CommandResult nothing = farm_run("depend " + b_id);
+  EXPECT_NE(nothing.exit_code, 0) << nothing.output;
+  EXPECT_NE(nothing.output.find("name the jobs to wait for"), std::string::npos) << nothing.output;
   const test::CommandResult cycle = farm_run("depend " + z_id + " --after " + b_id);
   EXPECT_NE(cycle.exit_code, 0) << cycle.output;
   EXPECT_NE(cycle.output.find("cannot wait for " + b_id + ": that would be a cycle"), std::string::npos) << cycle.output;
