@@ -8,6 +8,11 @@
 #include <glm/trigonometric.hpp>
 #include <numbers>
 #include <optional>
+#include <string>
+#include <stdexcept>
+#include <thread>
+#include <functional>
+#include <memory>
 #include <vector>
 
 #include "renderer/accel/prepared_scene.h"
@@ -16,6 +21,7 @@
 #include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
 #include "server/bench/bench_support.h"
+#include "server/bench/embree_direct.h"
 
 namespace farm {
 namespace {
@@ -69,29 +75,48 @@ std::vector<Ray> incoherent_rays(const AABB& bounds, std::uint64_t count) {
 }
 
 struct RayRates {
-  double closest = 0.0, any = 0.0;  // Mrays/s, single thread
+  double closest = 0.0, any = 0.0;  // Mrays/s over all threads
+  std::uint64_t closest_hits = 0;    // rays with a closest hit: the structures must agree on them
 };
 
-RayRates measure(const SceneIntersector& intersector, const std::vector<Ray>& rays) {
-  RayRates r;
+// Each query of `rays` timed on `threads` threads, each its contiguous share (std::thread: the
+// bench measures the structure, not the farm's pool).
+RayRates measure(const std::vector<Ray>& rays, int threads, const std::function<bool(const Ray&)>& closest,
+                 const std::function<bool(const Ray&)>& any) {
   std::uint64_t hits = 0;
-  Clock::time_point t = Clock::now();
-  for (const Ray& ray : rays) {
-    SurfaceHit hit;
-    hits += intersector.closest_hit(ray, hit) ? 1 : 0;
-  }
-  r.closest = static_cast<double>(rays.size()) / seconds_since(t) / 1e6;
-  t = Clock::now();
-  for (const Ray& ray : rays) hits += intersector.occluded(ray) ? 1 : 0;
-  r.any = static_cast<double>(rays.size()) / seconds_since(t) / 1e6;
-  if (hits == std::uint64_t(-1)) fmt::print("");  // keeps the loops from being optimised away
+  const auto run = [&](const std::function<bool(const Ray&)>& query) {
+    std::vector<std::uint64_t> counts(static_cast<std::size_t>(threads), 0);
+    const Clock::time_point t = Clock::now();
+    std::vector<std::thread> pool;
+    for (int k = 0; k < threads; ++k) {
+      pool.emplace_back([&, k] {
+        const std::size_t n = rays.size(), share = static_cast<std::size_t>(threads);
+        const std::size_t begin = n * static_cast<std::size_t>(k) / share, end = n * static_cast<std::size_t>(k + 1) / share;
+        std::uint64_t c = 0;
+        for (std::size_t i = begin; i < end; ++i) c += query(rays[i]) ? 1 : 0;
+        counts[static_cast<std::size_t>(k)] = c;
+      });
+    }
+    for (std::thread& thread : pool) thread.join();
+    const double mrays = static_cast<double>(rays.size()) / seconds_since(t) / 1e6;
+    hits = 0;
+    for (std::uint64_t c : counts) hits += c;
+    return mrays;
+  };
+  RayRates r;
+  r.closest = run(closest);
+  r.closest_hits = hits;
+  r.any = run(any);
   return r;
 }
 
-struct Row {
-  AccelKind accel;
+// One structure under test: its queries, built once and timed at every thread count.
+struct Subject {
+  std::string name;
   double build_ms = 0.0;
-  RayRates primary, incoherent;
+  std::uint64_t rays = 0;
+  std::function<bool(const Ray&)> closest, any;
+  std::shared_ptr<void> keep;  // what the queries use
 };
 
 void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, bool with_naive) {
@@ -99,37 +124,74 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
   const AABB bounds = world_bounds(prepared);
   std::vector<AccelKind> accels{AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Embree};
   if (with_naive) accels.push_back(AccelKind::Naive);
-
-  std::vector<Row> rows;
+  std::vector<Subject> subjects;
   for (AccelKind accel : accels) {
-    const std::uint64_t n = accel == AccelKind::Naive ? o.naive_rays : o.rays;
-    const std::vector<Ray> primary = primary_rays(bounds, n), incoherent = incoherent_rays(bounds, n);
-    Row row;
-    row.accel = accel;
+    Subject s;
+    s.name = to_string(accel);
+    s.rays = accel == AccelKind::Naive ? o.naive_rays : o.rays;
     const Clock::time_point t = Clock::now();
-    const auto intersector = build_scene_intersector(prepared, accel);
-    row.build_ms = seconds_since(t) * 1e3;
-    row.primary = measure(*intersector, primary);
-    row.incoherent = measure(*intersector, incoherent);
-    rows.push_back(row);
+    std::shared_ptr<SceneIntersector> intersector = build_scene_intersector(prepared, accel);
+    s.build_ms = seconds_since(t) * 1e3;
+    s.closest = [intersector](const Ray& ray) {
+      SurfaceHit hit;
+      return intersector->closest_hit(ray, hit);
+    };
+    s.any = [intersector](const Ray& ray) { return intersector->occluded(ray); };
+    subjects.push_back(std::move(s));
   }
+  {
+    // The anchor: Embree as its users call it (embree_direct.h).
+    Subject s;
+    s.name = "embree-direct";
+    s.rays = o.rays;
+    const Clock::time_point t = Clock::now();
+    auto direct = std::make_shared<const EmbreeDirect>(prepared);
+    s.build_ms = seconds_since(t) * 1e3;
+    s.closest = [direct](const Ray& ray) { return direct->closest_hit(ray); };
+    s.any = [direct](const Ray& ray) { return direct->occluded(ray); };
+    subjects.push_back(std::move(s));
+  }
+  const std::vector<Ray> primary = primary_rays(bounds, o.rays), incoherent = incoherent_rays(bounds, o.rays);
+  const std::vector<Ray> few_primary = primary_rays(bounds, o.naive_rays), few_incoherent = incoherent_rays(bounds, o.naive_rays);
 
-  fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), 1 thread, Mrays/s\n",
-             name, prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays);
-  fmt::print("{:<18} {:>9} {:>16} {:>12} {:>19} {:>15}\n", "accel", "build ms", "primary closest",
-             "primary any", "incoherent closest", "incoherent any");
-  for (const Row& r : rows) {
-    fmt::print("{:<18} {:>9.2f} {:>16.2f} {:>12.2f} {:>19.2f} {:>15.2f}\n", to_string(r.accel),
-               r.build_ms, r.primary.closest, r.primary.any, r.incoherent.closest, r.incoherent.any);
-  }
-  const Row& embree = rows[2];
-  for (const Row& r : rows) {
-    if (r.accel == AccelKind::Embree) continue;
-    fmt::print("{:<18} {:>9} {:>15.2f}x {:>11.2f}x {:>18.2f}x {:>14.2f}x\n",
-               fmt::format("{}/embree", to_string(r.accel)), "",
-               r.primary.closest / embree.primary.closest, r.primary.any / embree.primary.any,
-               r.incoherent.closest / embree.incoherent.closest,
-               r.incoherent.any / embree.incoherent.any);
+  for (int threads : o.threads) {
+    std::vector<std::pair<RayRates, RayRates>> rates;  // primary, incoherent
+    for (const Subject& s : subjects) {
+      const bool few = s.rays != o.rays;
+      rates.emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any),
+                         measure(few ? few_incoherent : incoherent, threads, s.closest, s.any));
+    }
+    fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), {} thread{}, Mrays/s\n", name,
+               prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays, threads,
+               threads == 1 ? "" : "s");
+    fmt::print("{:<24} {:>9} {:>16} {:>12} {:>19} {:>15}\n", "accel", "build ms", "primary closest",
+               "primary any", "incoherent closest", "incoherent any");
+    for (std::size_t i = 0; i < subjects.size(); ++i) {
+      const auto& [p, n] = rates[i];
+      fmt::print("{:<24} {:>9.2f} {:>16.2f} {:>12.2f} {:>19.2f} {:>15.2f}\n", subjects[i].name, subjects[i].build_ms,
+                 p.closest, p.any, n.closest, n.any);
+    }
+    // Ours against the farm's Embree adapter (index 2), and against Embree called directly (last).
+    const std::size_t direct = subjects.size() - 1;
+    for (const std::size_t anchor : {std::size_t{2}, direct}) {
+      for (std::size_t i = 0; i < 2; ++i) {
+        const auto& [p, n] = rates[i];
+        const auto& [ap, an] = rates[anchor];
+        fmt::print("{:<24} {:>9} {:>15.2f}x {:>11.2f}x {:>18.2f}x {:>14.2f}x\n",
+                   subjects[i].name + "/" + subjects[anchor].name, "", p.closest / ap.closest, p.any / ap.any,
+                   n.closest / an.closest, n.any / an.any);
+      }
+    }
+    // The anchor traced the same scene: its hits are ours, to Embree's agreement tests' tolerance.
+    const auto agree = [](std::uint64_t a, std::uint64_t b, std::uint64_t rays) {
+      return static_cast<double>(a > b ? a - b : b - a) <= 1e-4 * static_cast<double>(rays) + 1.0;
+    };
+    if (!agree(rates[0].first.closest_hits, rates[direct].first.closest_hits, o.rays) ||
+        !agree(rates[0].second.closest_hits, rates[direct].second.closest_hits, o.rays)) {
+      throw std::runtime_error(fmt::format("{}: embree-direct hit {} and {} rays, bvh {} and {}: not the same scene",
+                                           name, rates[direct].first.closest_hits, rates[direct].second.closest_hits,
+                                           rates[0].first.closest_hits, rates[0].second.closest_hits));
+    }
   }
 }
 

@@ -1,9 +1,12 @@
 #pragma once
 // `farm bench rt`: our BVHs against Embree on the lab's models and the 100-cow grid: build time
-// and single-thread ray throughput for coherent (primary) and incoherent rays, closest-hit and
-// any-hit, side by side in one run.
+// and ray throughput on 1 or more threads for coherent (primary) and incoherent rays, closest-hit
+// and any-hit, side by side in one run. Embree is timed twice: through the farm's adapter (an
+// instance level and the full surface hit, as the renderer uses it) and called directly
+// (embree_direct.h: one level, rtcIntersect1/rtcOccluded1), the anchor issue #37 measures against.
 #include <cstdint>
 #include <filesystem>
+#include <vector>
 
 namespace farm {
 
@@ -11,6 +14,7 @@ struct RtBenchOptions {
   std::filesystem::path assets;       // folder with dae/cow.dae, dae/bunny.dae, dae/CBbunny.dae
   std::uint64_t rays = 1'000'000;     // per ray set
   std::uint64_t naive_rays = 20'000;  // `naive` tests every triangle: fewer rays, same Mrays/s
+  std::vector<int> threads = {1};     // a table for each count
 };
 
 void run_rt_bench(const RtBenchOptions& options);

@@ -81,11 +81,13 @@ void add_raster_bench(CLI::App& bench, CommandTable& commands) {
 void add_rt_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<RtBenchOptions>();
   CLI::App* rt = bench.add_subcommand(
-      "rt", "Our BVHs against Embree: build time and single-thread Mrays/s (primary and incoherent, "
-            "closest and any hit) on cow, bunny, CBbunny and the 100-cow grid");
+      "rt", "Our BVHs against Embree (through the farm's adapter, and called directly): build time and Mrays/s "
+            "(primary and incoherent, closest and any hit) on cow, bunny, CBbunny and the 100-cow grid");
   rt->add_option("--assets", o->assets, "The lab's assets folder (default ../shared/assets)");
   rt->add_option("--rays", o->rays, "Rays per set")
       ->check(CLI::Range(1000, 100'000'000))
+      ->capture_default_str();
+  add_thread_counts_option(*rt, o->threads, "Thread counts, comma-separated: a table each (e.g. 1,2,4,8,16)")
       ->capture_default_str();
   add_runner(commands, rt, o, run_rt_bench);
 }

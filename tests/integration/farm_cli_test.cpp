@@ -8,6 +8,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -274,9 +276,31 @@ TEST_F(FarmCliTest, BenchPathReportsThroughputAndRaysPerSample) {
   EXPECT_NEAR(mrays / msamples, rays_per_sample, 0.02 * rays_per_sample);
 }
 
-// The dispatch benchmark claims every queued job once, in queue order (it stops with an error
-// naming the claim otherwise), as many as asked or as are queued.
-// Plain, every job claimed in queue order (the bench checks it, exit 1 otherwise); in play, the
+// The ray benchmark at every thread count asked for: a table each, with Embree called directly
+// beside the farm's adapter, and the direct Embree's closest hits equal to our BVH's (the bench
+// stops with an error otherwise: the anchor must trace the same scene).
+TEST_F(FarmCliTest, BenchRtTimesEmbreeDirectlyAtEachThreadCountOnTheSameScene) {
+  const auto r = run_command(farm("bench rt --rays 2000 --threads 1,2 --assets " + shell_quote(FARM_SHARED_ASSETS)));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::set<std::string> tables;  // "scene, N thread(s)"
+  int direct = 0, ratios = 0;
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);) {
+    for (const char* threads : {" 1 thread,", " 2 threads,"}) {
+      if (line.find(" rays per set") != std::string::npos && line.find(threads) != std::string::npos) {
+        tables.insert(line.substr(0, line.find(':')) + threads);
+      }
+    }
+    direct += line.rfind("embree-direct ", 0) == 0;
+    ratios += line.rfind("bvh/embree-direct ", 0) == 0;
+  }
+  EXPECT_EQ(tables.size(), 8u) << r.output;  // four scenes, two thread counts
+  EXPECT_EQ(direct, 8) << r.output;
+  EXPECT_EQ(ratios, 8) << r.output;
+}
+
+// The dispatch benchmark claims every queued job once, as many as asked or as are queued (it
+// stops with an error naming the claim otherwise). Plain, every job claimed in queue order (the bench checks it, exit 1 otherwise); in play, the
 // jobs that need a tag the bench worker lacks are never claimed: 1 of 3, 4 of 40.
 TEST_F(FarmCliTest, BenchDispatchClaimsEachQueuedJobOnceInQueueOrder) {
   const auto r = run_command(farm("bench dispatch --queued 3,40 --claims 25 --owners 4"));
