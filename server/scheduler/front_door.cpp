@@ -86,11 +86,15 @@ void SchedulerFrontDoor::check_priority(const Principal& who, int priority, cons
   }
 }
 
-void SchedulerFrontDoor::check_dependencies(const Principal& who, const std::vector<std::string>& ids) const {
-  if (ids.size() > kMaxDependencies) {
-    throw InputError(fmt::format("a job may wait for at most {} jobs, not {}", kMaxDependencies, ids.size()));
+void SchedulerFrontDoor::check_dependencies(const Principal& who, const std::vector<std::string>& after,
+                                            const std::vector<std::string>& after_any) const {
+  if (after.size() + after_any.size() > kMaxDependencies) {
+    throw InputError(fmt::format("a job may wait for at most {} jobs, not {}", kMaxDependencies,
+                                 after.size() + after_any.size()));
   }
-  for (const std::string& id : ids) visible_job(who, id, kAllJobReaders, "wait for");
+  for (const std::vector<std::string>* ids : {&after, &after_any}) {
+    for (const std::string& id : *ids) visible_job(who, id, kAllJobReaders, "wait for");
+  }
 }
 
 namespace {
@@ -111,10 +115,8 @@ v1::Job SchedulerFrontDoor::submit(const Principal& who, const v1::SubmitJobRequ
   terms.after.assign(request.after().begin(), request.after().end());
   terms.after_any.assign(request.after_any().begin(), request.after_any().end());
   terms.after_frames = request.after_frames();
-  std::vector<std::string> waited = terms.after;
-  waited.insert(waited.end(), terms.after_any.begin(), terms.after_any.end());
-  check_dependencies(who, waited);
-  if (!terms.after_frames.empty()) check_dependencies(who, {terms.after_frames});
+  check_dependencies(who, terms.after, terms.after_any);
+  if (!terms.after_frames.empty()) check_dependencies(who, {terms.after_frames}, {});
   terms.caps = caps_of(request.max_workers(), request.max_units_in_flight());
   terms.owner_weight_milli = who.share_weight_milli;
   v1::Job job = core_.submit(core_.check(request.job()), request.priority(), nullptr, who.name, terms);
@@ -224,10 +226,10 @@ v1::Job SchedulerFrontDoor::add_dependencies(const Principal& who, const v1::Add
   visible_job(who, request.job_id(), Role::admin, "add dependencies to");
   const std::vector<std::string> after(request.after().begin(), request.after().end());
   const std::vector<std::string> after_any(request.after_any().begin(), request.after_any().end());
-  std::vector<std::string> waited = after;
-  waited.insert(waited.end(), after_any.begin(), after_any.end());
-  if (waited.empty()) throw InputError("AddDependencies: name the jobs to wait for (after, after_any)");
-  check_dependencies(who, waited);
+  if (after.empty() && after_any.empty()) {
+    throw InputError("AddDependencies: name the jobs to wait for (after, after_any)");
+  }
+  check_dependencies(who, after, after_any);
   return core_.add_dependencies(request.job_id(), after, after_any, who.name);
 }
 

@@ -140,7 +140,8 @@ class SchedulerFrontDoor {
   // Refuses a caller without admin a priority above max_priority (`what`: the action, for the message).
   // The jobs a job is to wait for, each one the caller may see (NOT_FOUND or PERMISSION_DENIED
   // naming it) and at most kMaxDependencies.
-  void check_dependencies(const Principal& who, const std::vector<std::string>& ids) const;
+  void check_dependencies(const Principal& who, const std::vector<std::string>& after,
+                          const std::vector<std::string>& after_any) const;
   void check_priority(const Principal& who, int priority, const char* what) const;
 
   struct Registered {

@@ -29,6 +29,14 @@ std::string describe_state(const v1::Job& job) {
   return fmt::format("job {} is {}", job.job_id(), to_string(job.state()));
 }
 
+// A dependency the store refused, as the caller is told: a job that has started is the job's
+// state, anything else (no such job, too many, a cycle) the request's.
+[[noreturn]] void refuse(const DependencyError& e) {
+  throw ServiceError(e.kind == DependencyError::Kind::Started ? grpc::StatusCode::FAILED_PRECONDITION
+                                                              : grpc::StatusCode::INVALID_ARGUMENT,
+                     e.what());
+}
+
 [[noreturn]] void no_job(const std::string& job_id) {
   throw ServiceError(grpc::StatusCode::NOT_FOUND, fmt::format("no job '{}'", job_id));
 }
@@ -189,24 +197,26 @@ v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::s
   if (terms.owner_weight_milli) job.owner_weight_milli = *terms.owner_weight_milli;
   if (watcher) events_.subscribe(job.id, watcher);
   jobs_.add(job.id, std::move(info));
+  // Not queued (a full store: DiskFull; a dependency that names no job): nothing of it is kept.
+  const auto forget = [&] {
+    jobs_.forget(job.id);
+    if (watcher) events_.unsubscribe(job.id, watcher);
+  };
   v1::Job added;
   try {
     added = store_.jobs().add_job(job, unix_ms_now());
+  } catch (const DependencyError& e) {
+    forget();
+    refuse(e);
   } catch (...) {
-    // Not queued (a full store: DiskFull; a dependency that names no job): nothing of it is kept.
-    jobs_.forget(job.id);
-    if (watcher) events_.unsubscribe(job.id, watcher);
-    try {
-      throw;
-    } catch (const DependencyError& e) {
-      throw ServiceError(grpc::StatusCode::INVALID_ARGUMENT, e.what());
-    }
+    forget();
+    throw;
   }
   store_.dependencies().describe(added);
+  const std::string waits = describe_dependencies(added);
   log_->info("job {} '{}' {}: {} {}x{}, {} frame(s), {} units, priority {}{}{}", added.job_id(), added.name(),
              to_string(added.state()), added.engine(), added.width(), added.height(), added.frames_total(),
-             added.tiles_total(), priority, owner.empty() ? "" : ", owner " + owner,
-             added.state() == v1::JOB_STATE_WAITING || !added.after_frames().empty() ? ", " + describe_dependencies(added) : "");
+             added.tiles_total(), priority, owner.empty() ? "" : ", owner " + owner, waits.empty() ? "" : ", " + waits);
   events_.publish_state(added, v1::JOB_STATE_UNSPECIFIED);  // its first log entry: submitted
   if (added.state() == v1::JOB_STATE_WAITING) release_->wake();  // its dependencies may have ended
   dispatcher_.work_queued();
@@ -328,9 +338,7 @@ v1::Job SchedulerCore::add_dependencies(const std::string& job_id, const std::ve
   try {
     job = store_.dependencies().add(job_id, after, after_any);
   } catch (const DependencyError& e) {
-    throw ServiceError(e.kind == DependencyError::Kind::Started ? grpc::StatusCode::FAILED_PRECONDITION
-                                                                : grpc::StatusCode::INVALID_ARGUMENT,
-                       e.what());
+    refuse(e);
   }
   if (!job) no_job(job_id);
   store_.dependencies().describe(*job);

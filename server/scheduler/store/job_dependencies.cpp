@@ -145,7 +145,7 @@ std::optional<v1::Job> JobDependencies::add(const std::string& job_id, const std
     if (s.step()) existing = static_cast<std::size_t>(s.i64(0));
   }
   if (existing + strict.size() + any.size() > kMaxDependencies) {
-    throw DependencyError(DependencyError::Kind::UnknownJob,
+    throw DependencyError(DependencyError::Kind::TooMany,
                           fmt::format("job {} would wait for {} jobs; at most {}", job_id,
                                       existing + strict.size() + any.size(), kMaxDependencies));
   }

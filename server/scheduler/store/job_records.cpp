@@ -42,7 +42,7 @@ v1::Job JobRecords::add_job(const NewJob& j, std::int64_t now_ms) {
   if (j.frames.empty()) throw std::invalid_argument("job store: a job with no frames");
   if (j.passes < 1) throw std::invalid_argument("job store: a job of no sample pass");
   if (j.after.size() + j.after_any.size() > kMaxDependencies) {
-    throw DependencyError(DependencyError::Kind::UnknownJob,
+    throw DependencyError(DependencyError::Kind::TooMany,
                           fmt::format("a job may wait for at most {} jobs", kMaxDependencies));
   }
   std::lock_guard lock(mutex_);

@@ -40,10 +40,10 @@ struct NewJob {
   std::int64_t owner_weight_milli = 1000;
 };
 
-// A dependency that cannot be recorded: no such job, a cycle, or a job that has already started.
-// The message names the job ids.
+// A dependency that cannot be recorded: no such job, too many, a cycle, or a job that has already
+// started. The message names the job ids.
 struct DependencyError : std::runtime_error {
-  enum class Kind { UnknownJob, Cycle, Started };
+  enum class Kind { UnknownJob, TooMany, Cycle, Started };
   DependencyError(Kind k, const std::string& what) : std::runtime_error(what), kind(k) {}
   Kind kind;
 };
