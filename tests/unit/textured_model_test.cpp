@@ -10,12 +10,17 @@
 #include <iterator>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "renderer/accel/prepared_scene.h"
 #include "renderer/image/png_writer.h"
+#include "renderer/job/job.h"
+#include "renderer/job/scene_builder.h"
+#include "renderer/render_frame.h"
 #include "renderer/scene/model.h"
 #include "renderer/texture/material_textures.h"
 #include "renderer/texture/texture_cache.h"
@@ -144,6 +149,48 @@ TEST(TexturedModel, AHundredModelsNamingOneTextureDecodeItOnce) {
   std::set<const Texture*> distinct;
   for (const Model& m : models) distinct.insert(m.materials.at(m.meshes[0].material).textures->base_colour.texture.get());
   EXPECT_EQ(distinct.size(), 1u);
+}
+
+// The figure, through a job as `farm render` builds it: a hundred objects, each its own
+// model file, all naming one 4096x4096 texture. The texture is decoded once, every object's
+// material points at that one copy, and rendering reads it without decoding it again.
+TEST(TexturedModel, AHundredObjectJobSharingOne4096TextureDecodesItOnceAndHoldsOneCopy) {
+  TempDir dir;
+  constexpr int kSide = 4096;
+  std::vector<std::uint8_t> pixels(std::size_t{kSide} * kSide * 3, 0);
+  for (std::size_t i = 0; i < pixels.size(); i += 3) pixels[i] = ((i / 3 / 64) % 2) ? 255 : 0;
+  write_rgb_png(dir / "shared.png", kSide, kSide, std::move(pixels));
+  dir.write("m.mtl", mtl_with_map("shared.png"));
+  nlohmann::json objects = nlohmann::json::array();
+  for (int i = 0; i < 100; ++i) {
+    const std::string name = "tri" + std::to_string(i) + ".obj";
+    dir.write(name, kTexturedObj);
+    objects.push_back({{"file", name}, {"translate", {0.01 * i, 0, 0}}});
+  }
+  const nlohmann::json doc = {{"version", 1},
+                              {"scene", {{"objects", objects}, {"camera", {{"position", {0.5, 0.5, 3}}, {"target", {0.5, 0.5, 0}}}}}},
+                              {"render", {{"engine", "raster"}, {"width", 16}, {"height", 16}}}};
+  const std::uint64_t before = TextureCache::process().decodes();
+  const Job job = parse_job(doc.dump(), dir / "job.json");
+  const PreparedScene scene(build_scene(job));
+  EXPECT_EQ(TextureCache::process().decodes() - before, 1u);
+  std::set<const Texture*> distinct;
+  for (const SceneObject& object : scene.scene().objects) {
+    for (const Material& m : object.materials) {
+      if (m.textures && m.textures->base_colour) distinct.insert(m.textures->base_colour.texture.get());
+    }
+  }
+  ASSERT_EQ(distinct.size(), 1u);
+  const Texture& texture = **distinct.begin();
+  EXPECT_EQ(texture.width(), kSide);
+  EXPECT_GE(texture.memory_bytes(), std::size_t{kSide} * kSide * sizeof(glm::vec4));  // one real copy
+  const TileBuffer image = render_frame(scene, job.render);
+  EXPECT_EQ(TextureCache::process().decodes() - before, 1u);
+  bool red = false, dark = false;  // both stripes are seen, so the texture was read
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 16; ++x) (image.rgba(x, y).x > 0.05f ? red : dark) = true;
+  }
+  EXPECT_TRUE(red && dark);
 }
 
 // PLY's per-vertex u, v (and s, t) are its texture coordinates, v pointing up as in OBJ.
