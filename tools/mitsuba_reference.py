@@ -496,6 +496,9 @@ def main():
     parser.add_argument("--variant", default="scalar_rgb")
     parser.add_argument("--half", action="store_true", help="write the EXR as half floats (smaller)")
     parser.add_argument("--bench", action="store_true", help="print throughput as one JSON line")
+    parser.add_argument("--warmup", action="store_true",
+                        help="render once untimed first (a JIT variant compiles its kernels then) and report "
+                             "how long that took apart")
     args = parser.parse_args()
 
     import mitsuba as mi
@@ -518,13 +521,22 @@ def main():
         except RefusedScene as e:
             print(f"{args.job}: {e}", file=sys.stderr)
             return 2
+        warmup_seconds = 0.0
+        if args.warmup:
+            start = time.perf_counter()
+            dr.eval(mi.render(scene, spp=spp, seed=args.seed))
+            dr.sync_thread()
+            warmup_seconds = time.perf_counter() - start
         start = time.perf_counter()
         image = mi.render(scene, spp=spp, seed=args.seed)
+        dr.eval(image)  # a JIT variant's render returns before its kernels have run
+        dr.sync_thread()
         seconds = time.perf_counter() - start
     samples = width * height * spp
     if args.bench:
         print(json.dumps({"renderer": f"mitsuba {mi.__version__} {args.variant}", "threads": dr.thread_count(),
                           "width": width, "height": height, "spp": spp, "seconds": seconds,
+                          "warmup_seconds": warmup_seconds,
                           "msamples_per_s": samples / seconds / 1e6}))
     else:
         print(f"mitsuba {mi.__version__} {args.variant}: {width}x{height}, {spp} spp, "

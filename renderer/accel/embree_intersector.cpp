@@ -73,6 +73,7 @@ class EmbreeIntersector final : public SceneIntersector {
   EmbreeIntersector(const PreparedScene& scene, const CancelFlag& cancel);
 
   bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const override;
+  bool find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const override;
   bool occluded(const Ray& ray, TraversalStats* stats) const override;
 
  private:
@@ -211,7 +212,13 @@ void to_embree(const Ray& ray, RTCRay& out) {
   out.flags = 0;
 }
 
-bool EmbreeIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats*) const {
+bool EmbreeIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const {
+  if (!find_closest(ray, hit, stats)) return false;
+  complete_surface_hit(prepared_, ray, hit);
+  return true;
+}
+
+bool EmbreeIntersector::find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats*) const {
   // Embree's behaviour on NaN or infinite rays is undefined unless built to ignore them.
   if (!finite(ray.origin) || !finite(ray.direction)) return false;
   RTCRayHit query;
@@ -233,7 +240,6 @@ bool EmbreeIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalSt
   hit.triangle = query.hit.primID;
   hit.u = query.hit.u;
   hit.v = query.hit.v;
-  complete_surface_hit(prepared_, ray, hit);
   return true;
 }
 

@@ -60,6 +60,8 @@ InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind a
     for (const PreparedObject& object : objects) bounds.push_back(world_bounds(object));
     // One instance per leaf: an instance test is a whole bottom-level traversal.
     top_ = Bvh::build(bounds, Bvh::Options{BvhSplit::Sah, 1, &cancel});
+    one_object_ = objects.size() == 1;
+    one_object_untransformed_ = one_object_ && objects[0].world_to_model == glm::mat4(1.0f);
   }
 }
 
@@ -74,6 +76,12 @@ bool InstanceIntersector::any_in_object(std::uint32_t o, const Ray& world_ray,
 }
 
 bool InstanceIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const {
+  if (!find_closest(ray, hit, stats)) return false;
+  complete_surface_hit(scene_, ray, hit);
+  return true;
+}
+
+bool InstanceIntersector::find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const {
   TriangleHit nearest;
   std::uint32_t nearest_object = 0;
   bool found = false;
@@ -85,7 +93,11 @@ bool InstanceIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, Traversal
     t_max = h.t;
     return true;
   };
-  if (top_) {
+  if (one_object_untransformed_) {
+    found = object_accel_[0]->closest_hit(ray, nearest, stats);
+  } else if (one_object_) {
+    found = closest_in_object(0, ray, ray.t_max, nearest, stats);
+  } else if (top_) {
     found = top_->closest(ray, test, stats);
   } else {
     float t_max = ray.t_max;
@@ -98,12 +110,13 @@ bool InstanceIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, Traversal
   hit.triangle = nearest.triangle;
   hit.u = nearest.u;
   hit.v = nearest.v;
-  complete_surface_hit(scene_, ray, hit);
   return true;
 }
 
 bool InstanceIntersector::occluded(const Ray& ray, TraversalStats* stats) const {
   auto test = [&](std::uint32_t o) { return any_in_object(o, ray, stats); };
+  if (one_object_untransformed_) return object_accel_[0]->any_hit(ray, stats);
+  if (one_object_) return test(0);
   if (top_) return top_->any(ray, test, stats);
   for (std::uint32_t o = 0; o < object_accel_.size(); ++o) {
     if (test(o)) return true;

@@ -33,6 +33,7 @@ class InstanceIntersector final : public SceneIntersector {
                       const CancelFlag& cancel = CancelFlag::never());
 
   bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const override;
+  bool find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const override;
   bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const override;
 
   // Structures built: one MeshAccel per distinct model.
@@ -57,6 +58,10 @@ class InstanceIntersector final : public SceneIntersector {
   std::vector<std::shared_ptr<const MeshAccel>> mesh_accels_;
   std::vector<const MeshAccel*> object_accel_;           // per object
   std::optional<Bvh> top_;
+  // A scene of one object is queried without the top level (a tree of one leaf), and without
+  // carrying the ray into model space when its transform is the identity.
+  bool one_object_ = false;
+  bool one_object_untransformed_ = false;
 };
 
 std::unique_ptr<InstanceIntersector> build_instance_intersector(

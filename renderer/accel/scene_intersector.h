@@ -36,6 +36,12 @@ class SceneIntersector {
   virtual ~SceneIntersector() = default;
   // Nearest hit with t in (ray.t_min, ray.t_max), completed into a SurfaceHit.
   virtual bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const = 0;
+  // The nearest hit as the structure finds it: t, object, triangle, u and v, the rest of `hit`
+  // default (closest_hit is this and complete_surface_hit). What a caller needing no more than
+  // the hit asks; farm bench rt times it against Embree called directly, which does no more.
+  virtual bool find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const {
+    return closest_hit(ray, hit, stats);
+  }
   // Whether anything blocks the ray within (ray.t_min, ray.t_max): shadow rays.
   virtual bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const = 0;
 };

@@ -228,7 +228,15 @@ Bvh Bvh::build(std::span<const AABB> primitive_bounds, const Options& options) {
 // (by surface area, the likeliest to be entered) until it has four.
 void Bvh::build_wide() {
   wide_.clear();
+  leaves_.clear();
   if (nodes_.empty()) return;
+  // Leaves numbered depth-first, as they lie in nodes_ (and so in order()).
+  std::vector<std::uint32_t> leaf_number(nodes_.size(), 0);
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    if (nodes_[i].count == 0) continue;
+    leaf_number[i] = static_cast<std::uint32_t>(leaves_.size());
+    leaves_.push_back({nodes_[i].offset, nodes_[i].count});
+  }
   struct Pending {
     std::uint32_t binary;  // binary node whose children the wide node holds
     std::uint32_t wide;    // the wide node to fill
@@ -282,7 +290,7 @@ void Bvh::build_wide() {
       }
       node.count[k] = static_cast<std::uint8_t>(n.count);
       if (n.count != 0) {
-        node.child[k] = n.offset;
+        node.child[k] = leaf_number[slots[k]];
       } else {
         node.child[k] = static_cast<std::uint32_t>(wide_.size());
         wide_.emplace_back();

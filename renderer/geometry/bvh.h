@@ -4,7 +4,8 @@
 // heuristic over binned centroids, or by splitting at the median of the longest axis (the
 // lab's build); stored as one flat array, depth-first, the first child right after its parent.
 // Traversal runs over a 4-wide collapse of the tree (WideBvhNode), visiting nearer children
-// first and skipping nodes farther than the closest hit so far.
+// first and skipping nodes farther than the closest hit so far. Leaves are numbered in the order
+// of order(), so that a caller may keep a leaf's primitives together (mesh_accel's Triangle4s).
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -29,9 +30,21 @@ struct BvhNode {
 // whose boxes are stored axis by axis so that one SSE instruction tests all four.
 struct alignas(16) WideBvhNode {
   float bounds[6][4];        // min x, y, z then max x, y, z, per child
-  std::uint32_t child[4];    // inner child: its WideBvhNode index; leaf child: first order() entry
+  std::uint32_t child[4];    // inner child: its WideBvhNode index; leaf child: its number in leaves()
   std::uint8_t count[4];     // leaf child: primitives; 0: an inner child
   std::uint8_t children = 0; // slots in use
+};
+
+// A leaf: entries [first, first + count) of Bvh::order().
+struct BvhLeaf {
+  std::uint32_t first = 0;
+  std::uint32_t count = 0;
+};
+
+// What a leaf test is handed: the leaf's number in Bvh::leaves() and its primitive count.
+struct BvhLeafRef {
+  std::uint32_t number = 0;
+  std::uint32_t count = 0;
 };
 
 class Bvh {
@@ -56,6 +69,8 @@ class Bvh {
   const std::vector<BvhNode>& nodes() const { return nodes_; }
   // Leaf entries: primitive indices in the order leaves refer to them.
   const std::vector<std::uint32_t>& order() const { return order_; }
+  // The leaves, depth-first (so in the order of their entries in order(), each covered once).
+  const std::vector<BvhLeaf>& leaves() const { return leaves_; }
   // The deepest level (a lone root leaf: 0; no nodes at all: -1).
   int depth() const { return depth_; }
 
@@ -65,12 +80,13 @@ class Bvh {
 
   // Closest-hit traversal. `test(primitive, t_max)` intersects one primitive and, on a hit
   // nearer than t_max, lowers t_max and returns true. Returns whether anything was hit. A test
-  // may also take (primitive, leaf_entry, t_max), leaf_entry being the index into order().
+  // may also take (primitive, leaf_entry, t_max), leaf_entry being the index into order(); or
+  // test a whole leaf at once as test(BvhLeafRef, t_max), lowering t_max to its nearest hit.
   template <typename Test>
   bool closest(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
   // Any-hit traversal: stops at the first primitive for which test(primitive) (or
-  // test(primitive, leaf_entry)) is true.
+  // test(primitive, leaf_entry), or test(BvhLeafRef) for a whole leaf) is true.
   template <typename Test>
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
@@ -82,6 +98,7 @@ class Bvh {
   std::vector<BvhNode> nodes_;
   std::vector<WideBvhNode> wide_;  // what closest() and any() walk; nodes_ is for drawing
   std::vector<std::uint32_t> order_;
+  std::vector<BvhLeaf> leaves_;
   int depth_ = -1;
 };
 

@@ -49,6 +49,8 @@ bool call_primitive_test(Test& test, std::uint32_t primitive, std::uint32_t leaf
 template <bool kAnyHit, typename Test>
 bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
   if (wide_.empty()) return false;
+  constexpr bool kLeafTest = kAnyHit ? std::is_invocable_r_v<bool, Test&, const BvhLeafRef&>
+                                     : std::is_invocable_r_v<bool, Test&, const BvhLeafRef&, float&>;
   // Per axis, the plane a ray enters a slab by depends only on the direction's sign, so it is
   // picked once per ray: entry = (near plane - o) / d, exit = (far plane - o) / d, no min/max
   // needed. A zero component gives +-inf, and 0 * inf = NaN for a ray lying in a slab's plane;
@@ -65,10 +67,12 @@ bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
   const __m128 origin[3] = {_mm_set1_ps(ray.origin.x), _mm_set1_ps(ray.origin.y),
                             _mm_set1_ps(ray.origin.z)};
   // Far distances are widened by a few ulps so rounding never culls a hit on a box boundary
-  // (pbrt's 1 + 2 gamma(3)).
+  // (pbrt's 1 + 2 gamma(3), which covers the four roundings of (far - o) * (inv * widen): the
+  // widening goes into the reciprocal once per ray instead of into every distance).
   constexpr float kWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
                                       (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
-  const __m128 widen = _mm_set1_ps(kWiden);
+  const __m128 inv_far[3] = {_mm_mul_ps(inv[0], _mm_set1_ps(kWiden)), _mm_mul_ps(inv[1], _mm_set1_ps(kWiden)),
+                             _mm_mul_ps(inv[2], _mm_set1_ps(kWiden))};
   const __m128 t_min4 = _mm_set1_ps(ray.t_min);
   float t_max = ray.t_max;
   bool hit = false;
@@ -86,9 +90,9 @@ bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
     __m128 t_near = t_min4, t_far = _mm_set1_ps(t_max);
     for (int a = 0; a < 3; ++a) {
       const __m128 enter = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[near_plane[a]]), origin[a]), inv[a]);
-      const __m128 leave = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[far_plane[a]]), origin[a]), inv[a]);
+      const __m128 leave = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[far_plane[a]]), origin[a]), inv_far[a]);
       t_near = _mm_max_ps(enter, t_near);
-      t_far = _mm_min_ps(_mm_mul_ps(leave, widen), t_far);
+      t_far = _mm_min_ps(leave, t_far);
     }
     alignas(16) float entry[4];
     _mm_store_ps(entry, t_near);
@@ -115,15 +119,26 @@ bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
     for (int k = 0; k < n; ++k) {
       const auto c = static_cast<std::size_t>(order[static_cast<std::size_t>(k)]);
       if (node.count[c] == 0 || entry[c] > t_max) continue;
-      for (std::uint32_t i = node.child[c]; i < node.child[c] + node.count[c]; ++i) {
-        ++primitives_tested;
+      if constexpr (kLeafTest) {
+        primitives_tested += node.count[c];
+        const BvhLeafRef leaf{node.child[c], node.count[c]};
         if constexpr (kAnyHit) {
-          if (call_primitive_test(test, order_[i], i)) {
-            hit = true;
-            break;
+          hit = test(leaf);
+        } else if (test(leaf, t_max)) {
+          hit = true;
+        }
+      } else {
+        const std::uint32_t first = leaves_[node.child[c]].first;
+        for (std::uint32_t i = first; i < first + node.count[c]; ++i) {
+          ++primitives_tested;
+          if constexpr (kAnyHit) {
+            if (call_primitive_test(test, order_[i], i)) {
+              hit = true;
+              break;
+            }
+          } else {
+            if (call_primitive_test(test, order_[i], i, t_max)) hit = true;
           }
-        } else {
-          if (call_primitive_test(test, order_[i], i, t_max)) hit = true;
         }
       }
       if (kAnyHit && hit) break;

@@ -49,13 +49,18 @@ Throughput measure(const PreparedScene& scene, RenderSettings settings, int thre
   return t;
 }
 
-// Runs tools/mitsuba_reference.py --bench on `job` and reads its one JSON line; a Mitsuba that
-// has not answered in 15 minutes is stopped.
+// The Mitsuba variants timed beside ours: the scalar one, and the vectorised JIT one on LLVM
+// (Mitsuba's fastest on a CPU), which compiles its kernels in an untimed first render.
+constexpr std::array<const char*, 2> kMitsubaVariants = {"scalar_rgb", "llvm_ad_rgb"};
+
+// Runs tools/mitsuba_reference.py --bench --warmup on `job` in `variant` and reads its one JSON
+// line; a Mitsuba that has not answered in 15 minutes is stopped. `warmup_seconds`: the untimed
+// first render's time.
 std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, const std::filesystem::path& job, int threads,
-                                          std::string& renderer) {
-  const std::string command =
-      fmt::format("timeout 900 '{}' '{}' '{}' --width {} --height {} --spp {} --threads {} --bench 2>&1", o.mitsuba_python,
-                  o.mitsuba_script.string(), job.string(), o.width, o.height, o.spp, threads);
+                                          const char* variant, std::string& renderer, double& warmup_seconds) {
+  const std::string command = fmt::format(
+      "timeout 900 '{}' '{}' '{}' --width {} --height {} --spp {} --threads {} --variant {} --bench --warmup 2>&1",
+      o.mitsuba_python, o.mitsuba_script.string(), job.string(), o.width, o.height, o.spp, threads, variant);
   std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
   if (!pipe) return std::nullopt;
   std::string output;
@@ -68,6 +73,7 @@ std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, const std::
     return std::nullopt;
   }
   renderer = parsed.value("renderer", "mitsuba");
+  warmup_seconds = parsed.value("warmup_seconds", 0.0);
   Throughput t;
   t.seconds = parsed["seconds"].get<double>();
   t.samples = static_cast<double>(o.width) * o.height * o.spp;
@@ -94,11 +100,14 @@ void bench_scene(const std::string& name, const PreparedScene& scene, RenderSett
                t.seconds, t.msamples_per_s(), t.mrays_per_s(), t.rays / t.samples,
                single > 0.0 ? t.msamples_per_s() / single : 0.0);
     if (mitsuba_job.empty() || o.mitsuba_python.empty()) continue;
-    std::string renderer;
-    if (const auto m = measure_mitsuba(o, mitsuba_job, threads, renderer)) {
-      fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9} {:>11} {:>8}   farm/mitsuba {:.2f}x\n", renderer,
-                 threads, m->seconds, m->msamples_per_s(), "-", "-", "-",
-                 t.msamples_per_s() / m->msamples_per_s());
+    for (const char* variant : kMitsubaVariants) {
+      std::string renderer;
+      double warmup = 0.0;
+      if (const auto m = measure_mitsuba(o, mitsuba_job, threads, variant, renderer, warmup)) {
+        fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9} {:>11} {:>8}   farm/mitsuba {:.2f}x (untimed warm-up {:.2f} s)\n",
+                   renderer, threads, m->seconds, m->msamples_per_s(), "-", "-", "-",
+                   t.msamples_per_s() / m->msamples_per_s(), warmup);
+      }
     }
   }
 }

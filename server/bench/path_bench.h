@@ -3,7 +3,8 @@
 // (lit by its ceiling lamp made emissive) at 512x512: Msamples/s and Mrays/s on one thread and on
 // all of them; the textured Cornell box's cost per sample against the plain one's; the yard lit
 // only by a sky map (jobs/environment.json); and, given a Python with Mitsuba 3, Mitsuba's
-// scalar_rgb on the same Cornell box and sky-lit yard and thread counts in the same run.
+// scalar_rgb and its JIT variant llvm_ad_rgb (compiled in an untimed first render, whose time is
+// printed) on the same Cornell box and sky-lit yard and thread counts in the same run.
 #include <filesystem>
 #include <string>
 #include <vector>

@@ -134,7 +134,7 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
     s.build_ms = seconds_since(t) * 1e3;
     s.closest = [intersector](const Ray& ray) {
       SurfaceHit hit;
-      return intersector->closest_hit(ray, hit);
+      return intersector->find_closest(ray, hit);  // the hit alone, as embree-direct finds it
     };
     s.any = [intersector](const Ray& ray) { return intersector->occluded(ray); };
     subjects.push_back(std::move(s));

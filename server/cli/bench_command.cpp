@@ -96,7 +96,7 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<PathBenchOptions>();
   CLI::App* path = bench.add_subcommand(
       "path", "Path tracer Msamples/s and Mrays/s on the Cornell box, a yard lit by a sky map and CBbunny at "
-              "512x512, on one thread and all; with --mitsuba, Mitsuba 3 scalar_rgb on the same Cornell box and "
+              "512x512, on one thread and all; with --mitsuba, Mitsuba 3 scalar_rgb and llvm_ad_rgb (its JIT warm-up untimed, printed) on the same Cornell box and "
               "yard beside it");
   path->add_option("--job", o->cornell_job, "The Cornell box job")->capture_default_str();
   path->add_option("--assets", o->assets,
@@ -115,7 +115,7 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
       ->capture_default_str();
   path->add_option("--mitsuba", o->mitsuba_python,
                    "A Python with the mitsuba package (see tools/requirements-mitsuba.txt): "
-                   "time Mitsuba 3 scalar_rgb on the Cornell box and the sky-lit yard too");
+                   "time Mitsuba 3 scalar_rgb and llvm_ad_rgb on the Cornell box and the sky-lit yard too");
   path->add_option("--mitsuba-script", o->mitsuba_script,
                    "The script that renders a job with Mitsuba")
       ->capture_default_str();
