@@ -7,6 +7,7 @@
 #include "renderer/accel/cutout_intersector.h"
 #include "renderer/accel/embree_intersector.h"
 #include "renderer/accel/prepared_scene.h"
+#include "renderer/geometry/ray_hit_order.h"
 
 namespace farm {
 namespace {
@@ -85,12 +86,16 @@ bool InstanceIntersector::find_closest(const Ray& ray, SurfaceHit& hit, Traversa
   TriangleHit nearest;
   std::uint32_t nearest_object = 0;
   bool found = false;
+  // ray_hit_order.h's rule across objects: after a hit at t, objects are asked up to and
+  // including t, and an equal t is taken from a lower object index only.
   auto test = [&](std::uint32_t o, float& t_max) {
     TriangleHit h;
     if (!closest_in_object(o, ray, t_max, h, stats)) return false;
+    if (found && !nearer_hit(h.t, o, nearest.t, nearest_object)) return false;
     nearest = h;
     nearest_object = o;
-    t_max = h.t;
+    found = true;
+    t_max = limit_through(h.t);
     return true;
   };
   if (one_object_untransformed_) {
@@ -98,10 +103,10 @@ bool InstanceIntersector::find_closest(const Ray& ray, SurfaceHit& hit, Traversa
   } else if (one_object_) {
     found = closest_in_object(0, ray, ray.t_max, nearest, stats);
   } else if (top_) {
-    found = top_->closest(ray, test, stats);
+    top_->closest(ray, test, stats);
   } else {
     float t_max = ray.t_max;
-    for (std::uint32_t o = 0; o < object_accel_.size(); ++o) found = test(o, t_max) || found;
+    for (std::uint32_t o = 0; o < object_accel_.size(); ++o) test(o, t_max);
   }
   if (!found) return false;
   hit = SurfaceHit{};

@@ -38,6 +38,7 @@ class Builder {
       : boxes_(boxes),
         split_(options.split),
         max_leaf_(static_cast<std::uint32_t>(std::clamp(options.max_leaf_size, 1, 255))),
+        group_(static_cast<std::uint32_t>(std::clamp(options.test_group, 1, 255))),
         nodes_(nodes),
         order_(order),
         poll_(options.cancel ? *options.cancel : CancelFlag::never(), kPrimitivesPerPoll),
@@ -173,7 +174,7 @@ class Builder {
       for (int b = bin_count - 1; b > 0; --b) {
         right.grow(bins[a][b].bounds);
         right_count += bins[a][b].count;
-        right_cost[b - 1] = right.half_area() * static_cast<float>(right_count);
+        right_cost[b - 1] = right.half_area() * groups(right_count);
       }
       AABB left;
       std::uint32_t left_count = 0;
@@ -181,7 +182,7 @@ class Builder {
         left.grow(bins[a][b].bounds);
         left_count += bins[a][b].count;
         if (left_count == 0 || left_count == n) continue;
-        const float cost = left.half_area() * static_cast<float>(left_count) + right_cost[b];
+        const float cost = left.half_area() * groups(left_count) + right_cost[b];
         if (cost < best_cost) {
           best_cost = cost;
           best_axis = a;
@@ -192,7 +193,7 @@ class Builder {
     if (best_axis < 0) return false;
     // Leaf cost n against kTraversalCost + (A_L n_L + A_R n_R) / A, without the division so a
     // flat (zero-area) node compares sensibly too.
-    if (n <= max_leaf_ && kTraversalCost * parent_area + best_cost >= static_cast<float>(n) * parent_area) {
+    if (n <= max_leaf_ && kTraversalCost * parent_area + best_cost >= groups(n) * parent_area) {
       return false;
     }
     axis = best_axis;
@@ -205,9 +206,13 @@ class Builder {
     return mid > task.begin && mid < task.end;  // cannot fail: both sides were counted non-empty
   }
 
+  // What testing `count` primitives costs: a test per group of leaf_group (tested at once).
+  float groups(std::uint32_t count) const { return static_cast<float>((count + group_ - 1) / group_); }
+
   std::span<const AABB> boxes_;
   BvhSplit split_;
   std::uint32_t max_leaf_;
+  std::uint32_t group_;
   std::vector<BvhNode>& nodes_;
   std::vector<std::uint32_t>& order_;
   CancelPoll poll_;  // counts the primitives each node's split goes over

@@ -59,6 +59,10 @@ class Bvh {
     // Polled as the build goes (every few tens of thousands of primitives split): a stop throws
     // RenderStopped. Null: never stops.
     const CancelFlag* cancel = nullptr;
+    // How many of a leaf's primitives one test takes at once (mesh leaves: a Triangle4): the
+    // surface area heuristic counts a leaf's cost in such tests, so it fills them. Clamped to
+    // [1, 255].
+    int test_group = 1;
   };
 
   // Primitive i has bounds primitive_bounds[i]. Empty boxes (e.g. objects without triangles)

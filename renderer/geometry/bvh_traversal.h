@@ -97,6 +97,14 @@ bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
     alignas(16) float entry[4];
     _mm_store_ps(entry, t_near);
     int mask = _mm_movemask_ps(_mm_cmple_ps(t_near, t_far)) & ((1 << node.children) - 1);
+    // One inner child met, the commonest case: entered at once, without the stack.
+    if (mask != 0 && (mask & (mask - 1)) == 0) {
+      const int only = __builtin_ctz(static_cast<unsigned>(mask));
+      if (node.count[only] == 0) {
+        index = node.child[only];
+        continue;
+      }
+    }
 
     // Visit the children that the ray meets, nearest first.
     std::array<int, 4> order{};

@@ -93,12 +93,18 @@ inline int intersect_triangle4(const Triangle4Ray& ray, const Triangle4& tri, fl
 }
 
 // Of the lanes in `mask` (not empty), the one of least t (t_out of intersect_triangle4, +inf
-// in the lanes missed), the first of equals: what testing the lanes in order and keeping a hit
-// only when it is strictly nearer would keep.
-inline int nearest_lane(int mask, __m128 t) {
+// in the lanes missed), and of equals the one of least id: the nearest hit by the same rule
+// whichever order the triangles were tested in (ray_hit_order.h).
+inline int nearest_lane(int mask, __m128 t, const std::uint32_t* ids) {
   __m128 least = _mm_min_ps(t, _mm_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)));
   least = _mm_min_ps(least, _mm_shuffle_ps(least, least, _MM_SHUFFLE(1, 0, 3, 2)));
-  return __builtin_ctz(static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(t, least)) & mask));
+  unsigned at_least = static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(t, least)) & mask);
+  int lane = __builtin_ctz(at_least);
+  for (at_least &= at_least - 1; at_least != 0; at_least &= at_least - 1) {  // a tie: rare
+    const int other = __builtin_ctz(at_least);
+    if (ids[other] < ids[lane]) lane = other;
+  }
+  return lane;
 }
 
 }  // namespace farm

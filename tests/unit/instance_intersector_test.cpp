@@ -391,6 +391,58 @@ TEST(InstanceIntersector, VisitsTopLevelAndPerObjectBoxesForDrawing) {
   EXPECT_EQ(none, 0u);
 }
 
+// Objects in the same place (a model placed twice, as a job's copy-paste leaves it) are hit at
+// the same t: the lowest object index wins under every accel, whatever the top-level tree's
+// order (ray_hit_order.h), and within it the lowest triangle.
+TEST(InstanceIntersector, CoincidentObjectsGoToTheLowestObjectIndexUnderEveryAccel) {
+  const auto sphere = std::make_shared<const Model>(test::make_sphere(8, 16));
+  // The same sphere with a speck far off: its box is larger, so rays enter it first and the
+  // top level meets the higher index first.
+  Model with_speck = test::make_sphere(8, 16);
+  Mesh speck;
+  speck.positions = {{-4.0f, -4.0f, -4.0f}, {-3.99f, -4.0f, -4.0f}, {-4.0f, -3.99f, -4.0f}};
+  speck.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+  speck.triangles = {{0, 1, 2}};
+  with_speck.meshes.push_back(speck);
+  const auto specked = std::make_shared<const Model>(std::move(with_speck));
+  Scene s;
+  for (int i = 0; i < 12; ++i) {
+    // Pairs 2k and 2k+1 coincide where the sphere is; the pairs lie apart, so the top-level tree
+    // is not a list.
+    const glm::vec3 at{static_cast<float>(i / 2) * 2.5f, 0.0f, 0.0f};
+    s.objects.push_back(instance(i % 2 ? specked : sphere,
+                                 placed(at, {0, 1, 0}, 10.0f * static_cast<float>(i / 2), {1, 1, 1}),
+                                 static_cast<float>(i) / 12.0f));
+  }
+  const PreparedScene scene(std::move(s));
+  AABB bounds;
+  world_triangles(scene, bounds);
+  const std::vector<Ray> rays = test::random_rays(bounds, 3000 / kRayDivisor, 17);
+  const std::uint32_t speck_index = static_cast<std::uint32_t>(scene.objects()[1].triangles->size() - 1);
+  std::size_t hits = 0;
+  std::vector<std::vector<SurfaceHit>> by_accel;
+  for (const AccelKind kind : {AccelKind::Naive, AccelKind::Bvh, AccelKind::BvhMedian}) {
+    const auto ours = build_scene_intersector(scene, kind);
+    std::vector<SurfaceHit> found(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      if (!ours->find_closest(rays[i], found[i])) continue;
+      if (kind == AccelKind::Naive) ++hits;
+      if (found[i].object % 2 == 1) {  // only its speck, which the other lacks
+        EXPECT_EQ(found[i].triangle, speck_index) << to_string(kind) << " ray " << i << ": object " << found[i].object;
+      }
+    }
+    by_accel.push_back(std::move(found));
+  }
+  for (std::size_t k = 1; k < by_accel.size(); ++k) {
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const SurfaceHit &a = by_accel[0][i], &b = by_accel[k][i];
+      EXPECT_TRUE(a.object == b.object && a.triangle == b.triangle && a.t == b.t && a.u == b.u && a.v == b.v)
+          << "accel " << k << " ray " << i;
+    }
+  }
+  EXPECT_GT(hits, rays.size() / 10);
+}
+
 TEST(InstanceIntersector, EmptySceneIsNeverHit) {
   const PreparedScene scene{Scene{}};
   for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {

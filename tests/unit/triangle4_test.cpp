@@ -17,6 +17,8 @@ namespace {
 
 std::uint32_t bits(float f) { return std::bit_cast<std::uint32_t>(f); }
 
+constexpr std::uint32_t kLaneIds[4] = {0, 1, 2, 3};  // the ids in lane order: a tie goes to the first
+
 struct Corners {
   glm::vec3 a, b, c;
 };
@@ -98,7 +100,7 @@ TEST(Triangle4, EveryLaneGivesTheBitsOfTheScalarTestAndTheNearestLaneIsTheScalar
       }
     }
     if (mask != 0) {
-      EXPECT_EQ(nearest_lane(mask, t4), picked) << "trial " << trial;
+      EXPECT_EQ(nearest_lane(mask, t4, kLaneIds), picked) << "trial " << trial;
     }
   }
   // The cases were all met: hits, misses and ties.
