@@ -68,6 +68,7 @@ class BvhAccel final : public MeshAccel {
     ids_.resize(bvh_.leaves().size());
     for (std::size_t k = 0; k < bvh_.leaves().size(); ++k) {
       const BvhLeaf& leaf = bvh_.leaves()[k];
+      if (leaf.count > kLeafSize) throw std::logic_error("BvhAccel: a leaf larger than one Triangle4");
       for (std::uint32_t lane = 0; lane < leaf.count; ++lane) {
         const std::uint32_t t = order[leaf.first + lane];
         const glm::uvec3& tri = triangles.triangles[t];

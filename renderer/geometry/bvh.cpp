@@ -208,7 +208,7 @@ class Builder {
     return mid > task.begin && mid < task.end;  // cannot fail: both sides were counted non-empty
   }
 
-  // What testing `count` primitives costs: a test per group of leaf_group (tested at once).
+  // What testing `count` primitives costs: one test per group of Options::test_group.
   float groups(std::uint32_t count) const { return static_cast<float>((count + group_ - 1) / group_); }
 
   std::span<const AABB> boxes_;

@@ -1,9 +1,10 @@
 #pragma once
 // `farm bench rt`: our BVHs against Embree on the lab's models and the 100-cow grid: build time
 // and ray throughput on 1 or more threads for coherent (primary) and incoherent rays, closest-hit
-// and any-hit, side by side in one run. Embree is timed twice: through the farm's adapter (an
-// instance level and the full surface hit, as the renderer uses it) and called directly
-// (embree_direct.h: one level, rtcIntersect1/rtcOccluded1), the anchor issue #37 measures against.
+// and any-hit, side by side in one run; a closest hit as found (SceneIntersector::find_closest),
+// not completed into a surface hit. Embree is timed twice: through the farm's adapter (an
+// instance level) and called directly (embree_direct.h: one level, rtcIntersect1/rtcOccluded1),
+// the anchor issue #37 measures against.
 #include <cstdint>
 #include <filesystem>
 #include <vector>
