@@ -232,7 +232,7 @@ Bvh Bvh::build(std::span<const AABB> primitive_bounds, const Options& options) {
 }
 
 // Each wide node takes a binary node's two children and keeps opening its largest inner child
-// (by surface area, the likeliest to be entered) until it has four.
+// (by surface area, the likeliest to be entered) until it has kWideBvhWidth.
 void Bvh::build_wide() {
   wide_.clear();
   leaves_.clear();
@@ -254,14 +254,14 @@ void Bvh::build_wide() {
   while (!work.empty()) {
     const Pending p = work.back();
     work.pop_back();
-    std::array<std::uint32_t, 4> slots{};
+    std::array<std::uint32_t, kWideBvhWidth> slots{};
     int used = 0;
     if (nodes_[p.binary].count != 0) {
       slots[used++] = p.binary;  // a root that is a leaf
     } else {
       slots[used++] = p.binary + 1;
       slots[used++] = nodes_[p.binary].offset;
-      while (used < 4) {
+      while (used < kWideBvhWidth) {
         int widest = -1;
         float widest_area = -1.0f;
         for (int i = 0; i < used; ++i) {
@@ -279,7 +279,7 @@ void Bvh::build_wide() {
     }
     WideBvhNode node;
     node.children = static_cast<std::uint8_t>(used);
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < kWideBvhWidth; ++i) {
       const auto k = static_cast<std::size_t>(i);
       if (i >= used) {
         for (int a = 0; a < 3; ++a) {

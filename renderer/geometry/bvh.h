@@ -3,7 +3,7 @@
 // bottom level) or object instances (the top level). Built top-down by the surface area
 // heuristic over binned centroids, or by splitting at the median of the longest axis (the
 // lab's build); stored as one flat array, depth-first, the first child right after its parent.
-// Traversal runs over a 4-wide collapse of the tree (WideBvhNode), visiting nearer children
+// Traversal runs over an 8-wide collapse of the tree (WideBvhNode), visiting nearer children
 // first and skipping nodes farther than the closest hit so far. Leaves are numbered in the order
 // of order(), so that a caller may keep a leaf's primitives together (mesh_accel's Triangle4s).
 #include <cstdint>
@@ -12,6 +12,7 @@
 
 #include "renderer/geometry/aabb.h"
 #include "renderer/geometry/ray.h"
+#include "renderer/geometry/traversal_isa.h"
 #include "renderer/geometry/traversal_stats.h"
 #include "renderer/util/cancel_flag.h"
 
@@ -26,13 +27,16 @@ struct BvhNode {
   std::uint8_t axis = 0;     // inner: the split axis, which decides the near child
 };
 
-// The traversal form of a Bvh: the binary tree collapsed into nodes of up to four children,
-// whose boxes are stored axis by axis so that one SSE instruction tests all four.
-struct alignas(16) WideBvhNode {
-  float bounds[6][4];        // min x, y, z then max x, y, z, per child
-  std::uint32_t child[4];    // inner child: its WideBvhNode index; leaf child: its number in leaves()
-  std::uint8_t count[4];     // leaf child: primitives; 0: an inner child
-  std::uint8_t children = 0; // slots in use
+// Children of a wide node.
+inline constexpr int kWideBvhWidth = 8;
+
+// The traversal form of a Bvh: the binary tree collapsed into nodes of up to kWideBvhWidth
+// children, whose boxes are stored axis by axis so that SIMD instructions test four at a time.
+struct alignas(32) WideBvhNode {
+  float bounds[6][kWideBvhWidth];        // min x, y, z then max x, y, z, per child
+  std::uint32_t child[kWideBvhWidth];    // inner child: its WideBvhNode index; leaf child: its number in leaves()
+  std::uint8_t count[kWideBvhWidth];     // leaf child: primitives; 0: an inner child
+  std::uint8_t children = 0;             // slots in use
 };
 
 // A leaf: entries [first, first + count) of Bvh::order().
@@ -95,8 +99,11 @@ class Bvh {
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
  private:
+  // The traversal for any x86-64 and for AVX2 (bvh_traversal.h).
   template <bool kAnyHit, typename Test>
-  bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
+  bool traverse_sse(const Ray& ray, Test& test, TraversalStats* stats) const;
+  template <bool kAnyHit, typename Test>
+  bool traverse_avx2(const Ray& ray, Test& test, TraversalStats* stats) const;
   void build_wide();
 
   std::vector<BvhNode> nodes_;

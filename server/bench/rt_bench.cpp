@@ -17,6 +17,7 @@
 
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/accel/scene_intersector.h"
+#include "renderer/geometry/traversal_isa.h"
 #include "renderer/trace/sampler.h"
 #include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
@@ -117,6 +118,7 @@ struct Subject {
   std::uint64_t rays = 0;
   std::function<bool(const Ray&)> closest, any;
   std::shared_ptr<void> keep;  // what the queries use
+  std::optional<TraversalIsa> isa;  // our BVH's traversal forced to this build; none: the CPU's
 };
 
 void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, bool with_naive) {
@@ -124,7 +126,7 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
   const AABB bounds = world_bounds(prepared);
   std::vector<AccelKind> accels{AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Embree};
   if (with_naive) accels.push_back(AccelKind::Naive);
-  std::vector<Subject> subjects;
+  std::vector<Subject> subjects, extra_rows;
   for (AccelKind accel : accels) {
     Subject s;
     s.name = to_string(accel);
@@ -137,8 +139,15 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
       return intersector->find_closest(ray, hit);  // the hit alone, as embree-direct finds it
     };
     s.any = [intersector](const Ray& ray) { return intersector->occluded(ray); };
-    subjects.push_back(std::move(s));
+    subjects.push_back(s);
+    if (accel == AccelKind::Bvh && cpu_has_avx2()) {
+      // The same tree walked by the build for any x86-64, to show what AVX2 buys.
+      s.name = "bvh-sse";
+      s.isa = TraversalIsa::Sse;
+      extra_rows.push_back(std::move(s));
+    }
   }
+  subjects.insert(subjects.end(), extra_rows.begin(), extra_rows.end());
   {
     // The anchor: Embree as its users call it (embree_direct.h).
     Subject s;
@@ -158,8 +167,10 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
     std::vector<std::pair<RayRates, RayRates>> rates;  // primary, incoherent
     for (const Subject& s : subjects) {
       const bool few = s.rays != o.rays;
+      force_traversal_isa(s.isa);
       rates.emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any),
                          measure(few ? few_incoherent : incoherent, threads, s.closest, s.any));
+      force_traversal_isa(std::nullopt);
     }
     fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), {} thread{}, Mrays/s\n", name,
                prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays, threads,

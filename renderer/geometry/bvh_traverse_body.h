@@ -1,0 +1,155 @@
+// The body of Bvh's traversal, included twice by bvh_traversal.h (so no include guard): once
+// as traverse_sse for any x86-64, once as traverse_avx2 inside a region compiled for AVX2.
+// FARM_BVH_TRAVERSE names the member defined, FARM_BVH_AVX2 picks the slab test. The two slab
+// tests do the same operations on each child's box: the same bits, the same mask. Included
+// inside namespace farm.
+
+// Both traversals walk the wide nodes: the slab tests give the entry distances of all eight
+// children; leaf children are tested at once, nearest first, and inner ones are stacked so the
+// nearest is entered next. A stacked node is dropped when it starts beyond the closest hit found
+// since. `nodes` counts the wide nodes entered.
+// kAnyHit: stop at the first primitive hit (t_max never shrinks); otherwise keep the nearest.
+template <bool kAnyHit, typename Test>
+bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) const {
+  if (wide_.empty()) return false;
+  constexpr bool kLeafTest = kAnyHit ? std::is_invocable_r_v<bool, Test&, const BvhLeafRef&>
+                                     : std::is_invocable_r_v<bool, Test&, const BvhLeafRef&, float&>;
+  // Per axis, the plane a ray enters a slab by depends only on the direction's sign, so it is
+  // picked once per ray: entry = (near plane - o) / d, exit = (far plane - o) / d, no min/max
+  // needed. A zero component gives +-inf, and 0 * inf = NaN for a ray lying in a slab's plane;
+  // the max/min below keep their running value when handed a NaN first (SSE returns the second
+  // operand), so such a ray counts as inside the closed slab, as in AABB::intersect.
+  const glm::vec3 inv_dir = 1.0f / ray.direction;
+  int near_plane[3], far_plane[3];
+  for (int a = 0; a < 3; ++a) {
+    const bool negative = inv_dir[a] < 0.0f;
+    near_plane[a] = negative ? 3 + a : a;
+    far_plane[a] = negative ? a : 3 + a;
+  }
+  // Far distances are widened by a few ulps so rounding never culls a hit on a box boundary
+  // (pbrt's 1 + 2 gamma(3), which covers the four roundings of (far - o) * (inv * widen): the
+  // widening goes into the reciprocal once per ray instead of into every distance).
+  constexpr float kWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
+                                      (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
+  const glm::vec3 inv_far_dir = inv_dir * kWiden;
+#if FARM_BVH_AVX2
+  const __m256 inv[3] = {_mm256_set1_ps(inv_dir.x), _mm256_set1_ps(inv_dir.y), _mm256_set1_ps(inv_dir.z)};
+  const __m256 inv_far[3] = {_mm256_set1_ps(inv_far_dir.x), _mm256_set1_ps(inv_far_dir.y),
+                             _mm256_set1_ps(inv_far_dir.z)};
+  const __m256 origin[3] = {_mm256_set1_ps(ray.origin.x), _mm256_set1_ps(ray.origin.y), _mm256_set1_ps(ray.origin.z)};
+  const __m256 t_min_lanes = _mm256_set1_ps(ray.t_min);
+#else
+  const __m128 inv[3] = {_mm_set1_ps(inv_dir.x), _mm_set1_ps(inv_dir.y), _mm_set1_ps(inv_dir.z)};
+  const __m128 inv_far[3] = {_mm_set1_ps(inv_far_dir.x), _mm_set1_ps(inv_far_dir.y), _mm_set1_ps(inv_far_dir.z)};
+  const __m128 origin[3] = {_mm_set1_ps(ray.origin.x), _mm_set1_ps(ray.origin.y), _mm_set1_ps(ray.origin.z)};
+  const __m128 t_min_lanes = _mm_set1_ps(ray.t_min);
+#endif
+  float t_max = ray.t_max;
+  bool hit = false;
+  std::uint64_t nodes_visited = 0, primitives_tested = 0;
+  struct Pending {
+    std::uint32_t index;
+    float t_entry;
+  };
+  std::array<Pending, (kWideBvhWidth - 1) * kMaxDepth> stack;
+  int top = 0;
+  std::uint32_t index = 0;
+  for (;;) {
+    const WideBvhNode& node = wide_[index];
+    ++nodes_visited;
+    alignas(32) float entry[kWideBvhWidth];
+    int mask = 0;
+#if FARM_BVH_AVX2
+    {
+      __m256 t_near = t_min_lanes, t_far = _mm256_set1_ps(t_max);
+      for (int a = 0; a < 3; ++a) {
+        const __m256 enter = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node.bounds[near_plane[a]]), origin[a]), inv[a]);
+        const __m256 leave =
+            _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node.bounds[far_plane[a]]), origin[a]), inv_far[a]);
+        t_near = _mm256_max_ps(enter, t_near);  // the second operand on a NaN, as SSE's max
+        t_far = _mm256_min_ps(leave, t_far);
+      }
+      _mm256_store_ps(entry, t_near);
+      mask = _mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OS));  // cmple_ps's predicate
+    }
+#else
+    for (int h = 0; h < kWideBvhWidth; h += 4) {
+      __m128 t_near = t_min_lanes, t_far = _mm_set1_ps(t_max);
+      for (int a = 0; a < 3; ++a) {
+        const __m128 enter = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[near_plane[a]] + h), origin[a]), inv[a]);
+        const __m128 leave = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[far_plane[a]] + h), origin[a]), inv_far[a]);
+        t_near = _mm_max_ps(enter, t_near);
+        t_far = _mm_min_ps(leave, t_far);
+      }
+      _mm_store_ps(entry + h, t_near);
+      mask |= _mm_movemask_ps(_mm_cmple_ps(t_near, t_far)) << h;
+    }
+#endif
+    mask &= (1 << node.children) - 1;
+    // One inner child met, the commonest case: entered at once, without the stack.
+    if (mask != 0 && (mask & (mask - 1)) == 0) {
+      const int only = __builtin_ctz(static_cast<unsigned>(mask));
+      if (node.count[only] == 0) {
+        index = node.child[only];
+        continue;
+      }
+    }
+
+    // Visit the children that the ray meets, nearest first.
+    std::array<int, kWideBvhWidth> order{};
+    int n = 0;
+    while (mask) {
+      const int i = __builtin_ctz(static_cast<unsigned>(mask));
+      mask &= mask - 1;
+      int j = n++;
+      while (j > 0 && entry[order[static_cast<std::size_t>(j - 1)]] > entry[i]) {
+        order[static_cast<std::size_t>(j)] = order[static_cast<std::size_t>(j - 1)];
+        --j;
+      }
+      order[static_cast<std::size_t>(j)] = i;
+    }
+    // Inner children go on the stack farthest first, so the nearest is popped next.
+    for (int k = n - 1; k >= 0; --k) {
+      const auto c = static_cast<std::size_t>(order[static_cast<std::size_t>(k)]);
+      if (node.count[c] == 0) stack[top++] = {node.child[c], entry[c]};
+    }
+    for (int k = 0; k < n; ++k) {
+      const auto c = static_cast<std::size_t>(order[static_cast<std::size_t>(k)]);
+      if (node.count[c] == 0 || entry[c] > t_max) continue;
+      if constexpr (kLeafTest) {
+        primitives_tested += node.count[c];
+        const BvhLeafRef leaf{node.child[c], node.count[c]};
+        if constexpr (kAnyHit) {
+          hit = test(leaf);
+        } else if (test(leaf, t_max)) {
+          hit = true;
+        }
+      } else {
+        const std::uint32_t first = leaves_[node.child[c]].first;
+        for (std::uint32_t i = first; i < first + node.count[c]; ++i) {
+          ++primitives_tested;
+          if constexpr (kAnyHit) {
+            if (call_primitive_test(test, order_[i], i)) {
+              hit = true;
+              break;
+            }
+          } else {
+            if (call_primitive_test(test, order_[i], i, t_max)) hit = true;
+          }
+        }
+      }
+      if (kAnyHit && hit) break;
+    }
+    if (kAnyHit && hit) break;
+    // Next: the nearest pending node that still starts before the closest hit.
+    while (top > 0 && stack[top - 1].t_entry > t_max) --top;
+    if (top == 0) break;
+    index = stack[--top].index;
+  }
+  if (stats) {
+    stats->nodes += nodes_visited;
+    stats->triangles += primitives_tested;
+  }
+  return hit;
+}
+
