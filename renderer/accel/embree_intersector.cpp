@@ -1,11 +1,5 @@
 #include "renderer/accel/embree_intersector.h"
 
-// Embree 4 (Ubuntu 24.04) renamed the header and dropped the intersect context argument.
-#if __has_include(<embree4/rtcore.h>)
-#include <embree4/rtcore.h>
-#else
-#include <embree3/rtcore.h>
-#endif
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -20,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "renderer/accel/embree_ray.h"
 #include "renderer/accel/prepared_scene.h"
 
 namespace farm {
@@ -196,22 +191,6 @@ bool finite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-void to_embree(const Ray& ray, RTCRay& out) {
-  out.org_x = ray.origin.x;
-  out.org_y = ray.origin.y;
-  out.org_z = ray.origin.z;
-  out.dir_x = ray.direction.x;
-  out.dir_y = ray.direction.y;
-  out.dir_z = ray.direction.z;
-  // Embree requires the segment to start at or after the origin.
-  out.tnear = std::max(ray.t_min, 0.0f);
-  out.tfar = ray.t_max;
-  out.time = 0.0f;
-  out.mask = ~0u;
-  out.id = 0;
-  out.flags = 0;
-}
-
 bool EmbreeIntersector::closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats) const {
   if (!find_closest(ray, hit, stats)) return false;
   complete_surface_hit(prepared_, ray, hit);
@@ -222,16 +201,7 @@ bool EmbreeIntersector::find_closest(const Ray& ray, SurfaceHit& hit, TraversalS
   // Embree's behaviour on NaN or infinite rays is undefined unless built to ignore them.
   if (!finite(ray.origin) || !finite(ray.direction)) return false;
   RTCRayHit query;
-  to_embree(ray, query.ray);
-  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-#if RTC_VERSION_MAJOR >= 4
-  rtcIntersect1(scene_.get(), &query);
-#else
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  rtcIntersect1(scene_.get(), &context, &query);
-#endif
+  embree_intersect1(scene_.get(), ray, query);
   if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
 
   hit = SurfaceHit{};
@@ -245,16 +215,7 @@ bool EmbreeIntersector::find_closest(const Ray& ray, SurfaceHit& hit, TraversalS
 
 bool EmbreeIntersector::occluded(const Ray& ray, TraversalStats*) const {
   if (!finite(ray.origin) || !finite(ray.direction)) return false;
-  RTCRay query;
-  to_embree(ray, query);
-#if RTC_VERSION_MAJOR >= 4
-  rtcOccluded1(scene_.get(), &query);
-#else
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  rtcOccluded1(scene_.get(), &context, &query);
-#endif
-  return query.tfar == -std::numeric_limits<float>::infinity();
+  return embree_occluded1(scene_.get(), ray);
 }
 
 }  // namespace

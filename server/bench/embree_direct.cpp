@@ -1,15 +1,9 @@
 #include "server/bench/embree_direct.h"
 
-#if __has_include(<embree4/rtcore.h>)
-#include <embree4/rtcore.h>
-#else
-#include <embree3/rtcore.h>
-#endif
-
-#include <algorithm>
-#include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "renderer/accel/embree_ray.h"
 
 namespace farm {
 
@@ -57,51 +51,12 @@ EmbreeDirect::EmbreeDirect(const PreparedScene& prepared) : handles_(std::make_u
 
 EmbreeDirect::~EmbreeDirect() = default;
 
-namespace {
-
-void set_ray(const Ray& in, RTCRay& out) {
-  out.org_x = in.origin.x;
-  out.org_y = in.origin.y;
-  out.org_z = in.origin.z;
-  out.dir_x = in.direction.x;
-  out.dir_y = in.direction.y;
-  out.dir_z = in.direction.z;
-  out.tnear = std::max(in.t_min, 0.0f);
-  out.tfar = in.t_max;
-  out.time = 0.0f;
-  out.mask = ~0u;
-  out.id = 0;
-  out.flags = 0;
-}
-
-}  // namespace
-
 bool EmbreeDirect::closest_hit(const Ray& ray) const {
   RTCRayHit query;
-  set_ray(ray, query.ray);
-  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-#if RTC_VERSION_MAJOR >= 4
-  rtcIntersect1(handles_->scene, &query);
-#else
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  rtcIntersect1(handles_->scene, &context, &query);
-#endif
+  embree_intersect1(handles_->scene, ray, query);
   return query.hit.geomID != RTC_INVALID_GEOMETRY_ID;
 }
 
-bool EmbreeDirect::occluded(const Ray& ray) const {
-  RTCRay query;
-  set_ray(ray, query);
-#if RTC_VERSION_MAJOR >= 4
-  rtcOccluded1(handles_->scene, &query);
-#else
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  rtcOccluded1(handles_->scene, &context, &query);
-#endif
-  return query.tfar == -std::numeric_limits<float>::infinity();
-}
+bool EmbreeDirect::occluded(const Ray& ray) const { return embree_occluded1(handles_->scene, ray); }
 
 }  // namespace farm
