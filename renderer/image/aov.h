@@ -16,6 +16,7 @@ std::optional<Aov> aov_from_string(std::string_view name);
 
 struct AovSet {
   bool depth = false, normal = false, albedo = false, bvh_cost = false, variance = false;
+  bool operator==(const AovSet&) const = default;
 
   bool has(Aov a) const {
     switch (a) {

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "renderer/util/cancel_flag.h"
+#include "renderer/util/thread_pool.h"
 
 namespace farm {
 
@@ -30,23 +31,28 @@ class FrameCache {
     for (;;) {
       std::promise<std::shared_ptr<const void>> promise;
       std::shared_future<std::shared_ptr<const void>> future;
+      const void* tag = nullptr;  // the entry: its build's loops carry it (thread_pool.h)
       {
         std::lock_guard lock(mutex_);
         for (auto it = entries_.begin(); it != entries_.end(); ++it) {
           if (it->first == key) {
             entries_.splice(entries_.begin(), entries_, it);  // most recently used first
             future = it->second;
+            tag = &*it;
             break;
           }
         }
         if (!future.valid()) {
           entries_.emplace_front(key, promise.get_future().share());
+          tag = &entries_.front();
           if (entries_.size() > capacity_) entries_.pop_back();
         }
       }
       if (future.valid()) {
-        while (future.wait_for(kWaitPoll) != std::future_status::ready) {
+        // A pool thread helps with the build's own loops meanwhile (thread_pool.h).
+        while (future.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
           if (cancel.stop_requested()) throw RenderStopped(cancel.reason());
+          if (!ThreadPool::help_while_waiting(tag, kHelpWait)) future.wait_for(kWaitPoll);
         }
         try {
           return std::static_pointer_cast<const T>(future.get());
@@ -55,7 +61,11 @@ class FrameCache {
         }
       }
       try {
-        std::shared_ptr<const T> value = build();
+        std::shared_ptr<const T> value;
+        {
+          const ThreadPool::LoopTag loops(tag);  // waiters may help with the build's loops
+          value = build();
+        }
         promise.set_value(value);
         return value;
       } catch (...) {
@@ -75,6 +85,8 @@ class FrameCache {
   static constexpr std::size_t kDefaultCapacity = 4;
   const std::size_t capacity_;
   static constexpr std::chrono::milliseconds kWaitPoll{5};
+  // A helping pool thread looks at the future this often when no loop is queued.
+  static constexpr std::chrono::milliseconds kHelpWait{1};
   std::mutex mutex_;
   std::list<std::pair<std::string, std::shared_future<std::shared_ptr<const void>>>> entries_;
 };

@@ -1,6 +1,7 @@
 #include "renderer/util/thread_pool.h"
 
 #include <algorithm>
+#include <utility>
 
 namespace farm {
 
@@ -8,8 +9,10 @@ namespace {
 
 // Which pool, if any, the current thread belongs to, and its index there: a pool thread that
 // starts a loop works on it instead of blocking one of the threads the loop needs.
-thread_local const ThreadPool* t_pool = nullptr;
+thread_local ThreadPool* t_pool = nullptr;
 thread_local int t_index = -1;
+// The LoopTag in force on this thread.
+thread_local const void* t_tag = nullptr;
 
 }  // namespace
 
@@ -22,25 +25,34 @@ ThreadPool::Work::Work(std::size_t count, std::size_t grain, Body body)
     : count_(count),
       grain_(std::max<std::size_t>(1, grain)),
       chunks_((count + grain_ - 1) / grain_),
-      body_(std::move(body)) {}
+      body_(std::move(body)),
+      tag_(t_tag) {}
+
+ThreadPool::LoopTag::LoopTag(const void* tag) : previous_(std::exchange(t_tag, tag)) {}
+
+ThreadPool::LoopTag::~LoopTag() { t_tag = previous_; }
 
 void ThreadPool::Work::run_chunks(int worker) {
-  for (;;) {
-    const std::size_t begin = next_.fetch_add(grain_);
-    if (begin >= count_) return;
-    std::exception_ptr failure;
-    if (!cancelled_.load(std::memory_order_relaxed)) {
-      try {
-        body_(begin, std::min(count_, begin + grain_), worker);
-      } catch (...) {
-        failure = std::current_exception();
-        cancelled_ = true;  // the rest is skipped
-      }
-    }
-    std::lock_guard lock(mutex_);
-    if (failure && !failure_) failure_ = failure;
-    if (++chunks_done_ == chunks_) finished_.notify_all();
+  while (run_one(worker)) {
   }
+}
+
+bool ThreadPool::Work::run_one(int worker) {
+  const std::size_t begin = next_.fetch_add(grain_);
+  if (begin >= count_) return false;
+  std::exception_ptr failure;
+  if (!cancelled_.load(std::memory_order_relaxed)) {
+    try {
+      body_(begin, std::min(count_, begin + grain_), worker);
+    } catch (...) {
+      failure = std::current_exception();
+      cancelled_ = true;  // the rest is skipped
+    }
+  }
+  std::lock_guard lock(mutex_);
+  if (failure && !failure_) failure_ = failure;
+  if (++chunks_done_ == chunks_) finished_.notify_all();
+  return true;
 }
 
 bool ThreadPool::Work::wait_for(std::chrono::milliseconds timeout) {
@@ -96,6 +108,27 @@ void ThreadPool::parallel_for(std::size_t count, std::size_t grain, const Body& 
   if (t_pool == this) work->run_chunks(t_index);  // nested: help rather than block a thread
   work->wait();
   if (const std::exception_ptr failure = work->failure()) std::rethrow_exception(failure);
+}
+
+bool ThreadPool::help_while_waiting(const void* tag, std::chrono::milliseconds wait) {
+  if (t_pool == nullptr) return false;
+  t_pool->help(tag, t_index, wait);
+  return true;
+}
+
+void ThreadPool::help(const void* tag, int index, std::chrono::milliseconds wait) {
+  std::shared_ptr<Work> work;
+  {
+    std::unique_lock lock(mutex_);
+    const auto claimable = [&] {
+      const auto it = std::find_if(queue_.begin(), queue_.end(),
+                                   [&](const auto& w) { return w->tag_ == tag && !w->exhausted(); });
+      if (it != queue_.end()) work = *it;
+      return work != nullptr || stopping_;
+    };
+    if (!claimable()) wake_.wait_for(lock, wait, claimable);
+  }
+  if (work) work->run_one(index);  // the queue is tidied by the thread that finds it exhausted
 }
 
 void ThreadPool::thread_loop(int index) {

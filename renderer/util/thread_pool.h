@@ -47,10 +47,13 @@ class ThreadPool {
     friend class ThreadPool;
     // Claims and runs (or skips) chunks until none is left to claim.
     void run_chunks(int worker);
+    // Claims and runs (or skips) one chunk; false when none was left to claim.
+    bool run_one(int worker);
     bool exhausted() const { return next_.load() >= count_; }
 
     const std::size_t count_, grain_, chunks_;
     const Body body_;
+    const void* const tag_;  // the LoopTag of the thread that started it, or null
     std::atomic<std::size_t> next_{0};
     std::atomic<bool> cancelled_{false};
     mutable std::mutex mutex_;  // guards the two below
@@ -77,8 +80,34 @@ class ThreadPool {
   // start() and wait; rethrows the first exception a chunk threw, after the rest was skipped.
   void parallel_for(std::size_t count, std::size_t grain, const Body& body);
 
+  // Loops started on this thread while a LoopTag lives carry its tag (FrameCache: the loops of
+  // one frame's set-up, tagged by its entry).
+  class LoopTag {
+   public:
+    explicit LoopTag(const void* tag);
+    ~LoopTag();
+    LoopTag(const LoopTag&) = delete;
+    LoopTag& operator=(const LoopTag&) = delete;
+
+   private:
+    const void* previous_;
+  };
+
+  // For a thread that waits on something another thread's loops are making (FrameCache: a
+  // frame's set-up, built by another call): on a thread of a pool, runs one chunk of that pool's
+  // queued loops tagged `tag` and returns true, or waits up to `wait` for one and returns true;
+  // on any other thread returns false at once. Two calls of one frame used to start its set-up
+  // on both of a worker's two threads, the second blocked waiting for the first, which built the
+  // frame alone: 40 ms of the 100-cow grid's set-up on one thread. Only the tagged loops: the
+  // waiting thread may be inside a chunk of another loop holding that loop's per-thread scratch
+  // (render_frame's tile buffer of its worker index), which a chunk of the same loop run here
+  // would overwrite.
+  static bool help_while_waiting(const void* tag, std::chrono::milliseconds wait);
+
  private:
   void thread_loop(int index);
+  // help_while_waiting on one of this pool's threads.
+  void help(const void* tag, int index, std::chrono::milliseconds wait);
 
   std::mutex mutex_;  // guards the queue and stopping_
   std::condition_variable wake_;

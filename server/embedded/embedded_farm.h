@@ -26,6 +26,10 @@ struct EmbeddedFarmOptions {
   int threads = 0;                 // the in-process worker's render threads; 0 = all cores
   ExrPixelType exr_type = ExrPixelType::Half;
   std::chrono::milliseconds batch_target = SchedulerOptions{}.batch_target;
+  // Units of at least this many pixels a side (unit_grid.h): one process has no other worker to
+  // balance against, and a raster frame of 300 units of 32 px spent more on their bookkeeping
+  // than on its pixels. Its render threads still share a unit's job tiles (sub-tiles).
+  int min_unit_edge = 256;
 };
 
 struct EmbeddedResult {

@@ -10,6 +10,7 @@
 #include "renderer/render_frame.h"
 #include "server/common/job_state.h"
 #include "server/common/service_error.h"
+#include "server/scheduler/jobs/unit_grid.h"
 #include "server/scheduler/workers/placement.h"
 
 namespace farm {
@@ -183,7 +184,7 @@ v1::Job SchedulerCore::submit(ValidatedJob validated, int priority, const std::s
   job.height = r.height;
   job.priority = priority;
   job.owner = owner;
-  job.tiles = split_into_tiles(r.width, r.height, r.tile_size);
+  job.tiles = UnitGrid(r, options_.min_unit_edge).rects();
   job.frames = job_frames(*info->job);
   if (info->job->frames) job.frame_step = info->job->frames->step;
   job.passes = pass_count(r);

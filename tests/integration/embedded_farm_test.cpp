@@ -54,6 +54,30 @@ void expect_same_pixels(const TileBuffer& a, const TileBuffer& b, const std::str
   EXPECT_EQ(differing, 0) << what;
 }
 
+// `farm render`'s farm makes units of at least 256 pixels a side out of the job's 32 px tiles
+// (unit_grid.h): a 640x300 frame is 3 x 2 units, not 20 x 10, and its pixels are render_frame's
+// whichever way it was cut, the units going out in batches of whole rows.
+TEST(EmbeddedFarmTest, ItsUnitsAreGroupsOfTheJobsTilesAndThePixelsDoNotChange) {
+  test::TempDir dir;
+  for (const int min_unit_edge : {256, 0}) {
+    EmbeddedFarmOptions options;
+    options.data_dir = dir / ("farm" + std::to_string(min_unit_edge));
+    options.threads = 2;
+    options.exr_type = ExrPixelType::Float;
+    options.min_unit_edge = min_unit_edge;
+    EmbeddedFarm farm(options);
+    for (const auto& [path, file] : test::cornell_assets()) farm.add_asset_file(file);
+    for (const std::string engine : {"raster", "path"}) {
+      const v1::JobSpec spec = test::cornell_job_spec(engine, 640, 300, 2);
+      const EmbeddedResult result = farm.run(spec);
+      ASSERT_EQ(result.job.state(), v1::JOB_STATE_SUCCEEDED) << result.job.failure_reason();
+      EXPECT_EQ(result.job.tiles_total() / result.job.passes(), min_unit_edge == 256 ? 6u : 200u) << engine;
+      expect_same_pixels(read_exr(result.exr), render_locally(spec), engine + " with units of " +
+                                                                          std::to_string(min_unit_edge));
+    }
+  }
+}
+
 TEST(EmbeddedFarmTest, CornellThroughTheEmbeddedFarmIsBitIdenticalToRenderFrame) {
   test::TempDir dir;
   EmbeddedFarmOptions options;
@@ -94,9 +118,10 @@ TEST(EmbeddedFarmTest, CornellThroughTheEmbeddedFarmIsBitIdenticalToRenderFrame)
   }
 }
 
-// Tiles that take a fraction of a millisecond go out in row batches once the first are timed;
-// with batch_target 0, one tile a call. The job store's `part` of each tile says which call
-// rendered it; pixels are the same bits either way.
+// Tiles that take a fraction of a millisecond go out in batches (a row's run, or whole rows) once
+// the first are timed; with batch_target 0, one tile a call. Units of one tile each here
+// (min_unit_edge 0). The job store's `part` of each tile says which call rendered it; pixels are
+// the same bits either way.
 TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
   nlohmann::json job = nlohmann::json::parse(test::cornell_job_json("path", 96, 64, 2));
   job["render"]["tile_size"] = 8;  // a grid of 12 x 8 tiles
@@ -112,6 +137,7 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
       options.threads = 2;
       options.exr_type = ExrPixelType::Float;
       options.batch_target = std::chrono::milliseconds(batch_ms);
+      options.min_unit_edge = 0;
       EmbeddedFarm farm(options);
       for (const auto& [path, file] : test::cornell_assets()) farm.add_asset_file(file);
       const EmbeddedResult result = farm.run(spec);
@@ -124,11 +150,17 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
     std::map<std::uint32_t, std::vector<const UnitRecord*>> calls;
     for (const UnitRecord& t : tiles) calls[t.part].push_back(&t);
     for (const auto& [part, members] : calls) {
-      // A batch: consecutive tiles from its first on, all in one row of the grid.
+      // A batch: consecutive tiles from its first on, whose union is one rectangle.
+      Rect united = members[0]->rect;
+      std::int64_t area = 0;
       for (std::size_t i = 0; i < members.size(); ++i) {
         EXPECT_EQ(members[i]->index, part + i);
-        EXPECT_EQ(members[i]->rect.y0, members[0]->rect.y0);
+        const Rect& r = members[i]->rect;
+        united = {std::min(united.x0, r.x0), std::min(united.y0, r.y0), std::max(united.x1, r.x1),
+                  std::max(united.y1, r.y1)};
+        area += static_cast<std::int64_t>(r.width()) * r.height();
       }
+      EXPECT_EQ(static_cast<std::int64_t>(united.width()) * united.height(), area) << "part " << part;
     }
     if (batch_ms == 0) {
       EXPECT_EQ(calls.size(), 96u);

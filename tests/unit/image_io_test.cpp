@@ -7,10 +7,15 @@
 #include <ImfHeader.h>
 #include <glm/geometric.hpp>
 #include <ImfInputFile.h>
+#include <ImfFrameBuffer.h>
+#include <ImfOutputFile.h>
+#include <Imath/half.h>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <random>
+#include <vector>
 #include <iterator>
 #include <set>
 #include <stdexcept>
@@ -101,6 +106,127 @@ TEST_F(ImageIoTest, ExrOfATileKeepsItsPlaceInTheFrame) {
   EXPECT_EQ(back.rgba(35, 66), glm::vec4(1, 2, 3, 1));
 }
 
+// The same film written by OpenEXR's own C++ writer (ZIP at zlib level 1, the channels as
+// write_exr types them), as write_exr wrote it before it packed its chunks itself.
+void write_with_openexr(const TileBuffer& film, const fs::path& file) {
+  const Rect& r = film.rect();
+  const Imath::Box2i window({r.x0, r.y0}, {r.x1 - 1, r.y1 - 1});
+  Imf::Header header(window, window);
+  header.compression() = Imf::ZIP_COMPRESSION;
+  header.zipCompressionLevel() = 1;
+  Imf::FrameBuffer frame;
+  std::vector<std::vector<Imath::half>> halves;
+  std::vector<std::vector<float>> floats;
+  const auto add = [&](const char* name, bool as_float, auto value) {
+    const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(r.y0) * r.width() + r.x0;
+    header.channels().insert(name, Imf::Channel(as_float ? Imf::FLOAT : Imf::HALF));
+    if (as_float) {
+      std::vector<float>& plane = floats.emplace_back();
+      for (int y = r.y0; y < r.y1; ++y)
+        for (int x = r.x0; x < r.x1; ++x) plane.push_back(value(x, y));
+      frame.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(plane.data() - origin), sizeof(float),
+                                    sizeof(float) * static_cast<std::size_t>(r.width())));
+    } else {
+      std::vector<Imath::half>& plane = halves.emplace_back();
+      for (int y = r.y0; y < r.y1; ++y)
+        for (int x = r.x0; x < r.x1; ++x) plane.push_back(Imath::half(value(x, y)));
+      frame.insert(name, Imf::Slice(Imf::HALF, reinterpret_cast<char*>(plane.data() - origin), sizeof(Imath::half),
+                                    sizeof(Imath::half) * static_cast<std::size_t>(r.width())));
+    }
+  };
+  const char* rgba[] = {"R", "G", "B", "A"};
+  for (int c = 0; c < 4; ++c) add(rgba[c], false, [&](int x, int y) { return film.rgba(x, y)[c]; });
+  const AovSet& aovs = film.aovs();
+  if (aovs.depth) add("Z", true, [&](int x, int y) { return film.depth(x, y); });
+  const char* n[] = {"N.X", "N.Y", "N.Z"};
+  const char* a[] = {"albedo.R", "albedo.G", "albedo.B"};
+  const char* v[] = {"variance.R", "variance.G", "variance.B"};
+  for (int c = 0; c < 3; ++c) {
+    if (aovs.normal) add(n[c], false, [&](int x, int y) { return film.normal(x, y)[c]; });
+    if (aovs.albedo) add(a[c], false, [&](int x, int y) { return film.albedo(x, y)[c]; });
+    if (aovs.variance) add(v[c], true, [&](int x, int y) { return film.variance(x, y)[c]; });
+  }
+  if (aovs.bvh_cost) add("bvh_cost", true, [&](int x, int y) { return film.bvh_cost(x, y); });
+  Imf::OutputFile out(file.c_str(), header);
+  out.setFrameBuffer(frame);
+  out.writePixels(r.height());
+}
+
+// Each chunk's bytes as stored in the file (compressed, or raw when zlib did not shrink it).
+std::vector<std::string> raw_chunks(const fs::path& file) {
+  Imf::InputFile in(file.c_str());
+  const Imath::Box2i dw = in.header().dataWindow();
+  std::vector<std::string> chunks;
+  for (int y = dw.min.y; y <= dw.max.y; y += 16) {
+    const char* data = nullptr;
+    int size = 0;
+    in.rawPixelData(y, data, size);
+    chunks.emplace_back(data, static_cast<std::size_t>(size));
+  }
+  return chunks;
+}
+
+// write_exr packs its chunks itself (exr_zip_block.h): byte for byte what OpenEXR's own writer
+// stores, on films of every shape a frame has: all the AOVs, a height that is no multiple of the
+// chunk's 16 lines, an odd width, a film that does not start at the origin, and noise that zlib
+// cannot shrink (its chunks stored raw).
+TEST_F(ImageIoTest, ExrChunksAreByteForByteThoseOfOpenExrsOwnWriter) {
+  std::mt19937 rng(5);
+  // Random bit patterns of finite halves and of floats: nothing for zlib. (No NaNs: a signalling
+  // NaN is the one float whose half the F16C path and Imath's software tell apart.)
+  std::uniform_int_distribution<std::uint32_t> bits;
+  const auto noise = [&] {
+    auto h = static_cast<std::uint16_t>(bits(rng) & 0xFFFFu);
+    if ((h & 0x7C00u) == 0x7C00u) h = static_cast<std::uint16_t>(h & 0xFBFFu);
+    Imath::half value;
+    value.setBits(h);
+    return static_cast<float>(value);
+  };
+  const auto float_noise = [&] { return std::bit_cast<float>(bits(rng)); };
+  TileBuffer noisy(Rect{3, 40, 3 + 131, 40 + 37}, AovSet{.depth = true, .normal = false, .albedo = false,
+                                                          .bvh_cost = false, .variance = false});
+  TileBuffer smooth(Rect{0, 0, 257, 33}, AovSet{});
+  for (int y = 0; y < 37; ++y) {
+    for (int x = 0; x < 131; ++x) {
+      noisy.rgba(3 + x, 40 + y) = {noise(), noise(), noise(), noise()};
+      noisy.depth(3 + x, 40 + y) = float_noise();
+    }
+  }
+  for (int y = 0; y < 33; ++y)
+    for (int x = 0; x < 257; ++x) smooth.rgba(x, y) = {x / 257.0f, y / 33.0f, x > 100 ? 1.0f : 0.0f, 1.0f};
+  int raw_chunks_seen = 0;
+  for (const TileBuffer* film : {&noisy, &smooth}) {
+    const TileBuffer sample = sample_film();
+    for (const TileBuffer* f : {film, &sample}) {
+      const fs::path ours = dir_ / "ours.exr", theirs = dir_ / "theirs.exr";
+      write_exr(*f, ours);
+      write_with_openexr(*f, theirs);
+      const std::vector<std::string> a = raw_chunks(ours), b = raw_chunks(theirs);
+      ASSERT_EQ(a.size(), b.size());
+      const std::size_t line = static_cast<std::size_t>(f->rect().width()) *
+                               (8 + (f->aovs().depth ? 4 : 0) + (f->aovs().normal ? 6 : 0) + (f->aovs().albedo ? 6 : 0) +
+                                (f->aovs().bvh_cost ? 4 : 0) + (f->aovs().variance ? 12 : 0));
+      for (std::size_t c = 0; c < a.size(); ++c) {
+        EXPECT_EQ(a[c], b[c]) << "chunk " << c << " of " << a.size();
+        const std::size_t lines = std::min<std::size_t>(16, static_cast<std::size_t>(f->rect().height()) - 16 * c);
+        if (a[c].size() == line * lines) ++raw_chunks_seen;
+      }
+      // And the pixels read back are the film's, as the half channels round them.
+      const TileBuffer back = read_exr(ours);
+      ASSERT_EQ(back.rect(), f->rect());
+      for (int y = f->rect().y0; y < f->rect().y1; ++y) {
+        for (int x = f->rect().x0; x < f->rect().x1; ++x) {
+          for (int c = 0; c < 4; ++c) {
+            ASSERT_EQ(std::bit_cast<std::uint32_t>(back.rgba(x, y)[c]),
+                      std::bit_cast<std::uint32_t>(static_cast<float>(Imath::half(f->rgba(x, y)[c]))));
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(raw_chunks_seen, 0);  // the noise went in raw
+}
+
 TEST(Srgb, TransferFunctionMatchesTheStandardAndClamps) {
   EXPECT_EQ(linear_to_srgb(0.0f), 0.0f);
   EXPECT_NEAR(linear_to_srgb(1.0f), 1.0f, 1e-6f);
@@ -127,7 +253,9 @@ TEST(Srgb, PreviewEncodingIsToSrgb8ForEveryFloatAroundEachStep) {
     previous = bits;
   }
   for (float v : {1.0f, 2.0f, -0.5f, 0.0f, -0.0f, std::numeric_limits<float>::infinity(),
-                  -std::numeric_limits<float>::infinity(), std::nanf("")}) {
+                  -std::numeric_limits<float>::infinity(), std::nanf(""), -std::nanf(""),
+                  std::bit_cast<float>(0x7F800001u), std::bit_cast<float>(0x80000001u),
+                  std::numeric_limits<float>::max(), std::numeric_limits<float>::denorm_min()}) {
     values.push_back(v);
   }
   const int width = 1024;

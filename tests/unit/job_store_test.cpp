@@ -170,7 +170,7 @@ TEST_P(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlo
   EXPECT_EQ(b0->first, 0u);
   EXPECT_EQ(b0->count, 3u);
   EXPECT_EQ(b0->rect, (Rect{0, 0, 48, 16}));
-  // The row ends after one more tile: a batch never wraps to the next row.
+  // The row ends after one more tile: a batch that began within a row never wraps to the next.
   auto b1 = store.units().claim_next_batch("w", 2, three);
   ASSERT_TRUE(b1);
   EXPECT_EQ(asked_queued, 5);
@@ -208,6 +208,41 @@ TEST_P(JobStoreTest, BatchesAreRowSegmentsOfQueuedTilesAndATileThatFailedGoesAlo
   std::vector<std::uint32_t> parts;
   for (const UnitRecord& t : store.units().tiles("a")) parts.push_back(t.part);
   EXPECT_EQ(parts, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 4, 4, 4}));
+}
+
+TEST_P(JobStoreTest, ABatchThatBeginsARowTakesWholeRowsAfterItAndNeverPartOfOne) {
+  JobStore store(connect());
+  store.jobs().add_job(grid_job("a"), 1);
+  store.jobs().add_job(grid_job("b"), 2);
+  const auto size = [](int n) { return [n](const std::string&, int) { return n; }; };
+  // Six allowed: the first row's four, and not two of the second (the union would not be a
+  // rectangle).
+  auto a0 = store.units().claim_next_batch("w", 3, size(6), 1024, {}, {}, true);
+  ASSERT_TRUE(a0);
+  EXPECT_EQ(a0->first, 0u);
+  EXPECT_EQ(a0->count, 4u);
+  EXPECT_EQ(a0->rect, (Rect{0, 0, 64, 16}));
+  auto a1 = store.units().claim_next_batch("w", 3, size(6), 1024, {}, {}, true);
+  ASSERT_TRUE(a1);
+  EXPECT_EQ(a1->first, 4u);
+  EXPECT_EQ(a1->count, 4u);
+  EXPECT_EQ(a1->rect, (Rect{0, 16, 64, 32}));
+  // Eight allowed: both rows, the whole frame in one call.
+  auto b = store.units().claim_next_batch("w", 4, size(8), 1024, {}, {}, true);
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->job_id, "b");
+  EXPECT_EQ(b->first, 0u);
+  EXPECT_EQ(b->count, 8u);
+  EXPECT_EQ(b->rect, (Rect{0, 0, 64, 32}));
+  EXPECT_TRUE(store.units().batch_done("b", 0, 8, {}));
+  // Without whole rows (a farm's batches), a row at most.
+  store.jobs().add_job(grid_job("c"), 3);
+  auto c = store.units().claim_next_batch("w", 5, size(8));
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->job_id, "c");
+  EXPECT_EQ(c->count, 4u);
+  EXPECT_EQ(c->rect, (Rect{0, 0, 64, 16}));
+  EXPECT_EQ(store.jobs().get_job("b")->tiles_done(), 8u);
 }
 
 TEST_P(JobStoreTest, ARequeuedBatchIsQueuedAgainWithoutAnAttempt) {

@@ -2,9 +2,15 @@
 // abandoned. No sleeps: threads are held and released with promises.
 #include "renderer/util/thread_pool.h"
 
+#include "renderer/util/frame_cache.h"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <set>
 #include <future>
 #include <memory>
 #include <stdexcept>
@@ -65,6 +71,100 @@ TEST(ThreadPool, ALoopStartedFromAPoolThreadNestsWithoutDeadlock) {
     pool.parallel_for(50, 1, [&](std::size_t, std::size_t, int) { ++inner; });
   });
   EXPECT_EQ(inner.load(), 100);
+}
+
+// Two calls of one frame on a pool of two threads, each asking FrameCache for the frame's set-up
+// from pool work (as TileRenderer does): the one that waits for the other's build runs the build's
+// loop with it. Counted, not timed: each of the build's two chunks waits until both have started,
+// which happens only when both threads run them (without the help, the builder would run the
+// second chunk only after the first gave up waiting, and one thread would have run both).
+TEST(ThreadPool, APoolThreadWaitingForAFrameBuildHelpsRunIt) {
+  ThreadPool pool(2);
+  FrameCache cache;
+  CancelFlag never;
+  std::mutex mutex;
+  std::condition_variable both_started;
+  int started = 0;
+  std::set<int> builders;
+  int builds = 0;
+  const auto build = [&] {
+    ++builds;
+    pool.parallel_for(2, 1, [&](std::size_t, std::size_t, int worker) {
+      std::unique_lock lock(mutex);
+      builders.insert(worker);
+      ++started;
+      both_started.notify_all();
+      both_started.wait_for(lock, std::chrono::seconds(20), [&] { return started == 2; });
+    });
+    return std::make_shared<const int>(42);
+  };
+  std::atomic<int> answers{0};
+  const auto call = [&](std::size_t, std::size_t, int) {
+    if (*cache.get_or_build<int>("frame", never, build) == 42) ++answers;
+  };
+  const std::shared_ptr<ThreadPool::Work> first = pool.start(1, 1, call), second = pool.start(1, 1, call);
+  first->wait();
+  second->wait();
+  EXPECT_EQ(answers.load(), 2);
+  EXPECT_EQ(builds, 1);
+  EXPECT_EQ(builders, (std::set<int>{0, 1}));
+}
+
+// A helping thread runs chunks of the loops of the build it waits for (tagged) and of no other:
+// it may be inside a chunk of another loop, holding that loop's per-thread scratch, which a chunk
+// of the same loop run on it would overwrite (render_frame's tile buffers: a heap corruption).
+TEST(ThreadPool, AHelperRunsOnlyTheLoopsOfTheBuildItWaitsFor) {
+  ThreadPool pool(1);
+  int tag = 0;
+  std::mutex mutex;
+  std::condition_variable cv;
+  bool tagged_started = false, tagged_ran = false, tagged_ran_during_help = false, untagged_ran_during_help = false;
+  std::atomic<bool> second_item_ran{false};
+  std::shared_ptr<ThreadPool::Work> tagged;
+  const auto untagged = pool.start(2, 1, [&](std::size_t begin, std::size_t, int) {
+    if (begin == 1) {
+      second_item_ran = true;
+      return;
+    }
+    {
+      std::unique_lock lock(mutex);
+      cv.wait_for(lock, std::chrono::seconds(20), [&] { return tagged_started; });
+    }
+    // One pool thread, busy here: the other loops can run only if this call runs them.
+    for (int i = 0; i < 3; ++i) ThreadPool::help_while_waiting(&tag, std::chrono::milliseconds(1));
+    std::lock_guard lock(mutex);
+    untagged_ran_during_help = second_item_ran.load();
+    tagged_ran_during_help = tagged_ran;
+  });
+  {
+    const ThreadPool::LoopTag loops(&tag);
+    tagged = pool.start(1, 1, [&](std::size_t, std::size_t, int) {
+      std::lock_guard lock(mutex);
+      tagged_ran = true;
+    });
+  }
+  {
+    std::lock_guard lock(mutex);
+    tagged_started = true;
+  }
+  cv.notify_all();
+  untagged->wait();
+  tagged->wait();
+  EXPECT_TRUE(tagged_ran_during_help);
+  EXPECT_FALSE(untagged_ran_during_help);
+  EXPECT_TRUE(second_item_ran.load());
+}
+
+// Off the pool, a waiter has nothing to help with: it is told so at once.
+TEST(ThreadPool, HelpingIsOnlyForPoolThreads) {
+  int tag = 0;
+  EXPECT_FALSE(ThreadPool::help_while_waiting(&tag, std::chrono::milliseconds(1)));
+  ThreadPool pool(1);
+  std::atomic<bool> helped{false};
+  pool.parallel_for(1, 1, [&](std::size_t, std::size_t, int) {
+    helped = ThreadPool::help_while_waiting(&tag, std::chrono::milliseconds(1));
+  });
+  EXPECT_TRUE(helped.load());
 }
 
 TEST(ThreadPool, ConcurrentCallersEachGetTheirLoopDone) {

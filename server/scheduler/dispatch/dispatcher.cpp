@@ -275,7 +275,7 @@ std::shared_ptr<Dispatcher::InFlight> Dispatcher::claim(const WorkerEntry& w, bo
         w.id, unix_ms_now(), [this](const std::string& job_id, int queued) { return batch_size(job_id, queued); },
         2 * std::max(1, workers_.slots_up()) * kMaxBatch,
         [this, &w](const std::string& job_id) { return unit_failures_.blocked(w.id, job_id); },
-        WorkerOffer{w.facts.tags, w.facts.threads});
+        WorkerOffer{w.facts.tags, w.facts.threads}, options_.whole_row_batches);
     store_answered = true;
   } catch (const std::exception& e) {
     // A setback (the store full or away): nothing was claimed; the slot asks again after its wait.

@@ -54,7 +54,7 @@ bool SpotCheckRounds::hold(const WorkerEntry& w, const UnitBatch& batch, const R
   if (!chooser.enabled()) return false;
   std::optional<UnitSpan> span;
   if (const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id)) {
-    span = chooser.span(batch, job->tiles_total(), settings);
+    span = chooser.span(batch, job->tiles_total(), UnitGrid(settings, options_.min_unit_edge));
   }
   // With no other worker to ask, there is nobody to check against: kept as it is.
   if (!span || !workers_.any_available_except({w.id})) return false;

@@ -37,7 +37,7 @@ bool SpotCheckChooser::chosen(const std::string& job_id, std::uint32_t index, st
 }
 
 std::optional<UnitSpan> SpotCheckChooser::span(const UnitBatch& batch, std::uint32_t tiles,
-                                               const RenderSettings& settings) const {
+                                               const UnitGrid& grid) const {
   std::optional<std::uint32_t> first, last;
   for (std::uint32_t i = batch.first; i < batch.first + batch.count; ++i) {
     if (!chosen(batch.job_id, i, tiles)) continue;
@@ -45,17 +45,13 @@ std::optional<UnitSpan> SpotCheckChooser::span(const UnitBatch& batch, std::uint
     last = i;
   }
   if (!first) return std::nullopt;
-  // The grid of split_into_tiles: row by row, tile_size squares clipped to the image.
-  const int size = std::max(1, settings.tile_size);
-  const auto columns = static_cast<std::uint32_t>((settings.width + size - 1) / size);
-  const auto rows = static_cast<std::uint32_t>((settings.height + size - 1) / size);
-  const auto rect_of = [&](std::uint32_t i) {
-    i %= columns * rows;  // a job of several frames numbers its tiles on, frame after frame
-    const int x = static_cast<int>(i % columns) * size, y = static_cast<int>(i / columns) * size;
-    return Rect{x, y, std::min(x + size, settings.width), std::min(y + size, settings.height)};
-  };
-  const Rect a = rect_of(*first), b = rect_of(*last);
-  return UnitSpan{*first, *last - *first + 1, Rect{a.x0, a.y0, b.x1, b.y1}};
+  const Rect a = grid.rect_of(*first), b = grid.rect_of(*last);
+  if (a.y0 == b.y0) return UnitSpan{*first, *last - *first + 1, Rect{a.x0, a.y0, b.x1, b.y1}};
+  // Chosen units in different rows of a batch of whole rows: the span takes those rows whole,
+  // which keeps it one rectangle.
+  const std::uint32_t from = *first - grid.column_of(*first);
+  const std::uint32_t to = *last + (grid.columns() - 1 - grid.column_of(*last));
+  return UnitSpan{from, to - from + 1, Rect{batch.rect.x0, a.y0, batch.rect.x1, b.y1}};
 }
 
 Judgement judge(std::vector<Opinion>& opinions, Opinion next) {

@@ -22,6 +22,7 @@
 #include "proto/farm.pb.h"
 #include "renderer/image/tile_buffer.h"
 #include "renderer/job/render_settings.h"
+#include "server/scheduler/jobs/unit_grid.h"
 #include "server/scheduler/store/job_store.h"
 
 namespace farm {
@@ -42,8 +43,8 @@ class SpotCheckChooser {
   // Whether tile `index` of the job's `tiles` is checked.
   bool chosen(const std::string& job_id, std::uint32_t index, std::uint32_t tiles) const;
   // The part of `batch` to render again: its first chosen tile to its last; nullopt when it holds
-  // none. `settings` lay out the job's grid (split_into_tiles).
-  std::optional<UnitSpan> span(const UnitBatch& batch, std::uint32_t tiles, const RenderSettings& settings) const;
+  // none. `grid` lays out the job's units.
+  std::optional<UnitSpan> span(const UnitBatch& batch, std::uint32_t tiles, const UnitGrid& grid) const;
 
  private:
   double fraction_;

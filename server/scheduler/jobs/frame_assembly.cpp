@@ -122,12 +122,21 @@ void TileFileAssembly::read_parts(
 
 void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, const FramePart& part,
                            RenderedTiles& tiles) {
+  TileBuffer buffer = pixels_of(tiles);
+  check_fits(buffer, frame, job_id, part.part);
   std::shared_ptr<Film> f;
   {
     std::lock_guard lock(mutex_);
     std::shared_ptr<Film>& slot = films_[{job_id, frame.frame}];
     if (!slot) {
       slot = std::make_shared<Film>();
+      if (!frame.folded() && buffer.rect() == frame.image && buffer.aovs() == frame.aovs) {
+        // One batch is the whole frame (a small frame of the embedded farm's large units): its
+        // pixels become the film, neither copied nor the film allocated for them.
+        slot->film = std::move(buffer);
+        slot->parts.emplace_back(part.part, decode_stats(tiles.response.stats()));
+        return;
+      }
       // The batches cover the image exactly: no clearing needed.
       if (frame.folded()) {
         slot->fold.reset(frame.image, frame.aovs);
@@ -137,8 +146,6 @@ void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, 
     }
     f = slot;
   }
-  TileBuffer buffer = pixels_of(tiles);
-  check_fits(buffer, frame, job_id, part.part);
   if (!frame.folded()) {
     f->film.paste(buffer);  // batches are disjoint: concurrent pastes touch different pixels
     std::lock_guard lock(f->mutex);

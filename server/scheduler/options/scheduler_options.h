@@ -39,6 +39,13 @@ struct SchedulerOptions {
   int tiles_per_worker = 2;        // calls in flight per worker, so it never idles between calls
   // Rendering time a call aims at; 0 sends one tile per call.
   std::chrono::milliseconds batch_target = std::chrono::milliseconds(200);
+  // Units of at least this many pixels a side, each k x k of the job's tiles (unit_grid.h); 0:
+  // one tile a unit. The embedded farm's, whose units cost bookkeeping and balance nothing.
+  int min_unit_edge = 0;
+  // A batch that begins a grid row may go on with whole rows (UnitQueue::claim_next_batch). The
+  // embedded farm's, whose units are cheap and whose one worker has nobody to share them with; a
+  // farm keeps its batches within a row, so that more of its workers get a share of a small job.
+  bool whole_row_batches = false;
   std::chrono::milliseconds probe_interval = std::chrono::seconds(1);
   std::chrono::milliseconds heartbeat_interval = std::chrono::seconds(1);
   int missed_heartbeats = 3;       // a registered worker silent this many intervals is dropped

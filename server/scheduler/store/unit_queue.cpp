@@ -39,7 +39,7 @@ std::vector<UnitRecord> UnitQueue::tiles(const std::string& id) const {
 std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                                     const BatchSize& batch_size, int count_up_to,
                                                     const std::function<bool(const std::string&)>& skip_job,
-                                                    const WorkerOffer& offer) {
+                                                    const WorkerOffer& offer, bool whole_rows) {
   std::lock_guard lock(mutex_);
   SqlTransaction t(*db_, kRedoable);
   UnitBatch batch;
@@ -129,20 +129,36 @@ std::optional<UnitBatch> UnitQueue::claim_next_batch(const std::string& worker, 
     }
     const int wanted = std::min(room, batch_size(batch.job_id, queued));
     if (wanted > 1) {
-      // The following tiles while they continue the same row of the frame's grid in the same pass:
-      // the batch's union is then one rectangle of one frame's pass, rendered in one call.
+      // The following units of the same frame's pass while the batch stays one rectangle, rendered
+      // in one call: the rest of the first unit's row of the grid, and, with `whole_rows` when the
+      // batch began a row, whole rows after it (a row is taken only whole; numbered row by row, a
+      // unit that starts a new row at x = 0 means the row before ended at the image's edge).
       Query next(db_->prepared("SELECT idx, x0, y0, x1, y1, state, attempts + lost_attempts, frame, pass FROM tiles "
                               "WHERE job_seq = ? AND idx > ? AND idx < ? ORDER BY idx"));
       next.bind(1, seq).bind(2, batch.first).bind(3, static_cast<std::int64_t>(batch.first) + wanted);
+      whole_rows = whole_rows && batch.rect.x0 == 0;
+      Rect row = batch.rect;          // the row being added
+      std::uint32_t taken = batch.count;
       while (next.step()) {
         const Rect r{next.i32(1), next.i32(2), next.i32(3), next.i32(4)};
-        if (next.i64(0) != batch.first + batch.count || next.i32(5) != 0 || next.i32(6) != 0 ||
-            next.i32(7) != batch.frame || next.i32(8) != batch.pass || r.y0 != batch.rect.y0 ||
-            r.y1 != batch.rect.y1 || r.x0 != batch.rect.x1) {
+        if (next.i64(0) != batch.first + taken || next.i32(5) != 0 || next.i32(6) != 0 ||
+            next.i32(7) != batch.frame || next.i32(8) != batch.pass) {
           break;
         }
-        batch.rect.x1 = r.x1;
-        ++batch.count;
+        if (r.y0 == row.y0 && r.y1 == row.y1 && r.x0 == row.x1) {
+          row.x1 = r.x1;
+        } else if (whole_rows && r.x0 == 0 && r.y0 == row.y1 && row.x1 == batch.rect.x1) {
+          row = r;  // the row before is whole (as wide as the batch's first): a new one begins
+        } else {
+          break;
+        }
+        ++taken;
+        // The batch so far is a rectangle: within its first row, or ending a whole row.
+        if (row.y0 == batch.rect.y0 || row.x1 == batch.rect.x1) {
+          if (row.y0 == batch.rect.y0) batch.rect.x1 = row.x1;
+          batch.rect.y1 = row.y1;
+          batch.count = taken;
+        }
       }
     }
   }

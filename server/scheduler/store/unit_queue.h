@@ -35,11 +35,12 @@ class UnitQueue : public StorePart {
   // units out; max_workers other workers rendering them), and, for a job that follows another
   // frame by frame, tiles of frames that job renders and has not merged. A batch holds no more
   // units than the job's max_units_in_flight leaves room for. The claimed units are charged to
-  // the job's owner.
+  // the job's owner. With `whole_rows`, a batch whose first unit begins a grid row may go on with
+  // whole rows after it (SchedulerOptions::whole_row_batches).
   std::optional<UnitBatch> claim_next_batch(const std::string& worker, std::int64_t now_ms,
                                             const BatchSize& batch_size = {}, int count_up_to = 1024,
                                             const std::function<bool(const std::string&)>& skip_job = {},
-                                            const WorkerOffer& offer = {});
+                                            const WorkerOffer& offer = {}, bool whole_rows = false);
 
   // The batch operations below act only on tiles running on `worker` (the id claim_next_batch was
   // given; empty: any), so that a late answer from a worker whose tiles were taken back never

@@ -1,0 +1,74 @@
+#include "renderer/image/exr_zip_block.h"
+
+#include <zlib.h>
+
+#include <cstring>
+#include <stdexcept>
+
+#include "renderer/image/float_to_half.h"
+
+namespace farm {
+
+std::size_t exr_line_bytes(const std::vector<ExrChannel>& channels, int width) {
+  std::size_t bytes = 0;
+  for (const ExrChannel& c : channels) bytes += static_cast<std::size_t>(width) * (c.half ? 2 : 4);
+  return bytes;
+}
+
+std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels, int width, int y0, int y1,
+                                         int level, std::vector<std::uint8_t>& scratch) {
+  const std::size_t line = exr_line_bytes(channels, width);
+  const std::size_t n = line * static_cast<std::size_t>(y1 - y0);
+  scratch.resize(2 * n);
+  std::uint8_t* raw = scratch.data();
+  std::uint8_t* split = raw + n;
+  // The lines as the file lays them out: channel after channel, each a run of the line's values.
+  std::uint8_t* at = raw;
+  const auto w = static_cast<std::size_t>(width);
+  for (int y = y0; y < y1; ++y) {
+    for (const ExrChannel& c : channels) {
+      const char* first = c.first + static_cast<std::size_t>(y) * c.row_stride;
+      if (c.half) {
+        std::uint16_t halves[256];
+        // Through a small aligned buffer: the chunk's own bytes need not be aligned for uint16.
+        for (std::size_t x = 0; x < w; x += 256) {
+          const std::size_t count = std::min<std::size_t>(256, w - x);
+          floats_to_halves(first + x * c.stride, c.stride, count, halves);
+          std::memcpy(at, halves, count * 2);  // little-endian, as the file wants (x86-64)
+          at += count * 2;
+        }
+      } else {
+        for (std::size_t x = 0; x < w; ++x, at += 4) std::memcpy(at, first + x * c.stride, 4);
+      }
+    }
+  }
+  // Even bytes, then odd bytes; then each byte as its difference to the one before it.
+  const std::size_t half = (n + 1) / 2;
+  for (std::size_t i = 0; i < n / 2; ++i) {
+    split[i] = raw[2 * i];
+    split[half + i] = raw[2 * i + 1];
+  }
+  if (n % 2 != 0) split[half - 1] = raw[n - 1];
+  std::vector<std::uint8_t> out(compressBound(static_cast<uLong>(n)));
+  std::uint8_t* predicted = raw;  // the unpacked lines are no longer needed once split
+  if (n > 0) predicted[0] = split[0];
+  for (std::size_t i = 1; i < n; ++i) predicted[i] = static_cast<std::uint8_t>(split[i] - split[i - 1] + 128);
+  uLongf size = static_cast<uLongf>(out.size());
+  if (compress2(out.data(), &size, predicted, static_cast<uLong>(n), level) != Z_OK) {
+    throw std::runtime_error("zlib could not compress an EXR chunk");
+  }
+  if (size >= n) {
+    // Stored as it was, unsplit: the lines are built again (raw was overwritten by the prediction).
+    out.assign(n, 0);
+    for (std::size_t i = 0; i < n / 2; ++i) {
+      out[2 * i] = split[i];
+      out[2 * i + 1] = split[half + i];
+    }
+    if (n % 2 != 0) out[n - 1] = split[half - 1];
+    return out;
+  }
+  out.resize(size);
+  return out;
+}
+
+}  // namespace farm
