@@ -119,7 +119,8 @@ ThreadPool& chunk_pool() {
 
 }  // namespace
 
-void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPixelType type) {
+void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPixelType type,
+               const std::function<void(int y0, int y1)>& lines_packed) {
   const Rect& r = image.rect();
   if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
   const int width = r.width(), height = r.height();
@@ -140,8 +141,9 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
   chunk_pool().parallel_for(chunk_count, 1, [&](std::size_t begin, std::size_t end, int) {
     std::vector<std::uint8_t> scratch;
     for (std::size_t c = begin; c < end; ++c) {
-      const int y0 = static_cast<int>(c) * kExrZipLines;
-      chunks[c] = pack_zip_chunk(channels, width, y0, std::min(height, y0 + kExrZipLines), kZipLevel, scratch);
+      const int y0 = static_cast<int>(c) * kExrZipLines, y1 = std::min(height, y0 + kExrZipLines);
+      chunks[c] = pack_zip_chunk(channels, width, y0, y1, kZipLevel, scratch);
+      if (lines_packed) lines_packed(y0, y1);
     }
   });
 

@@ -17,7 +17,7 @@ constexpr int kQuality = 98;
 // Every libjpeg call that can fail happens in here, below the setjmp: a longjmp then skips only
 // libjpeg's own C frames and lands in a frame that holds nothing with a destructor. Returns false
 // after an error (its message is in the JpegError).
-bool encode(jpeg_compress_struct& cinfo, JpegError& error, const Rgb8Image& image, std::FILE* out) {
+bool encode(jpeg_compress_struct& cinfo, JpegError& error, const Rgb8Rows& image, std::FILE* out) {
   if (setjmp(error.jump) != 0) return false;
   jpeg_create_compress(&cinfo);
   jpeg_stdio_dest(&cinfo, out);
@@ -28,10 +28,9 @@ bool encode(jpeg_compress_struct& cinfo, JpegError& error, const Rgb8Image& imag
   jpeg_set_defaults(&cinfo);  // among them 4:2:0 chroma subsampling
   jpeg_set_quality(&cinfo, kQuality, TRUE);
   jpeg_start_compress(&cinfo, TRUE);
-  const std::size_t stride = static_cast<std::size_t>(image.width) * 3;
   while (cinfo.next_scanline < cinfo.image_height) {
     // libjpeg's API takes rows as non-const; compression only reads them.
-    JSAMPROW row = const_cast<JSAMPROW>(image.pixels.data() + cinfo.next_scanline * stride);
+    JSAMPROW row = const_cast<JSAMPROW>(image.row(static_cast<int>(cinfo.next_scanline)));
     jpeg_write_scanlines(&cinfo, &row, 1);
   }
   jpeg_finish_compress(&cinfo);
@@ -56,6 +55,10 @@ struct JpegCompressor {
 }  // namespace
 
 void write_jpeg(const Rgb8Image& image, std::FILE* out, const std::filesystem::path& name) {
+  write_jpeg(rows_of(image), out, name);
+}
+
+void write_jpeg(const Rgb8Rows& image, std::FILE* out, const std::filesystem::path& name) {
   JpegCompressor compressor;
   if (!encode(compressor.cinfo, compressor.error, image, out)) {
     throw std::runtime_error(fmt::format("{}: cannot write JPEG: {}", name.string(), compressor.error.message));

@@ -18,7 +18,7 @@ namespace {
 // Every libpng call that can fail happens in here, below the setjmp: a longjmp then skips only
 // libpng's own C frames and lands in a frame that holds nothing with a destructor. Returns false
 // after an error (its message is in the PngError).
-bool encode(png_structp png, png_infop info, const Rgb8Image& image, std::FILE* out) {
+bool encode(png_structp png, png_infop info, const Rgb8Rows& image, std::FILE* out) {
   if (setjmp(png_jmpbuf(png)) != 0) return false;
   png_init_io(png, out);
   png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), 8,
@@ -31,10 +31,7 @@ bool encode(png_structp png, png_infop info, const Rgb8Image& image, std::FILE* 
   png_set_compression_level(png, 1);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
   png_write_info(png, info);
-  const std::size_t stride = static_cast<std::size_t>(image.width) * 3;
-  for (std::size_t y = 0; y < static_cast<std::size_t>(image.height); ++y) {
-    png_write_row(png, image.pixels.data() + y * stride);
-  }
+  for (int y = 0; y < image.height; ++y) png_write_row(png, image.row(y));
   png_write_end(png, info);
   return true;
 }
@@ -61,6 +58,10 @@ class PngWriteStruct {
 }  // namespace
 
 void write_png(const Rgb8Image& image, std::FILE* out, const std::filesystem::path& name) {
+  write_png(rows_of(image), out, name);
+}
+
+void write_png(const Rgb8Rows& image, std::FILE* out, const std::filesystem::path& name) {
   PngError error;
   PngWriteStruct write(error);
   if (!write.created()) {

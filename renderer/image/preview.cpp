@@ -82,15 +82,12 @@ class Srgb8Table {
   std::array<std::uint8_t, (kOne >> 16) + 1> runs_{};
 };
 
-}  // namespace
-
-Rgb8Image to_srgb8_image(const TileBuffer& image) {
+// Rows [y0, y1) of the film (counted from its rect's top) into `out`, which holds the whole film.
+void convert_rows(const TileBuffer& image, int y0, int y1, Rgb8Image& out) {
   static const Srgb8Table encode;
   const Rect& r = image.rect();
-  Rgb8Image out{r.width(), r.height(), {}};
-  out.pixels.resize(static_cast<std::size_t>(r.width()) * static_cast<std::size_t>(r.height()) * 3);
-  std::uint8_t* at = out.pixels.data();
-  for (int y = r.y0; y < r.y1; ++y) {
+  std::uint8_t* at = out.pixels.data() + static_cast<std::size_t>(y0) * static_cast<std::size_t>(r.width()) * 3;
+  for (int y = r.y0 + y0; y < r.y0 + y1; ++y) {
     const glm::vec4* c = &image.rgba(r.x0, y);
     for (int x = r.x0; x < r.x1; ++x, ++c, at += 3) {
       at[0] = encode(c->x);
@@ -98,7 +95,82 @@ Rgb8Image to_srgb8_image(const TileBuffer& image) {
       at[2] = encode(c->z);
     }
   }
+}
+
+Rgb8Image sized_for(const TileBuffer& image) {
+  const Rect& r = image.rect();
+  Rgb8Image out{r.width(), r.height(), {}};
+  out.pixels.resize(static_cast<std::size_t>(r.width()) * static_cast<std::size_t>(r.height()) * 3);
   return out;
+}
+
+// The format `file`'s extension names, checked before anything is converted: the error names it.
+PreviewFormat checked_format(const TileBuffer& image, const std::filesystem::path& file) {
+  if (image.rect().empty()) {
+    throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
+  }
+  const std::optional<PreviewFormat> format = preview_format(file);
+  if (!format) {
+    throw std::runtime_error(fmt::format("{}: cannot write preview: no image writer for '{}' files "
+                                         "(PNG: .png, JPEG: .jpg or .jpeg)",
+                                         file.string(), file.extension().string()));
+  }
+  return *format;
+}
+
+// The preview's rows to `file`, atomically.
+void write_rows(const Rgb8Rows& rows, PreviewFormat format, const std::filesystem::path& file) {
+  write_c_file_atomically(file, [&](std::FILE* out) {
+    if (format == PreviewFormat::Png) {
+      write_png(rows, out, file);
+    } else {
+      write_jpeg(rows, out, file);
+    }
+  });
+}
+
+}  // namespace
+
+Rgb8Image to_srgb8_image(const TileBuffer& image) {
+  Rgb8Image out = sized_for(image);
+  convert_rows(image, 0, image.rect().height(), out);
+  return out;
+}
+
+StreamedPreview::StreamedPreview(const TileBuffer& film)
+    : film_(film), image_(sized_for(film)), ready_(static_cast<std::size_t>(film.rect().height()), false) {}
+
+void StreamedPreview::convert(int y0, int y1) {
+  convert_rows(film_, y0, y1, image_);
+  {
+    std::lock_guard lock(mutex_);
+    for (int y = y0; y < y1; ++y) ready_[static_cast<std::size_t>(y)] = true;
+    while (leading_ < static_cast<int>(ready_.size()) && ready_[static_cast<std::size_t>(leading_)]) ++leading_;
+  }
+  row_ready_.notify_all();
+}
+
+void StreamedPreview::abandon() {
+  {
+    std::lock_guard lock(mutex_);
+    abandoned_ = true;
+  }
+  row_ready_.notify_all();
+}
+
+void StreamedPreview::write(const std::filesystem::path& file) {
+  const PreviewFormat format = checked_format(film_, file);
+  const std::size_t stride = static_cast<std::size_t>(image_.width) * 3;
+  write_rows({image_.width, image_.height,
+              [&](int y) {
+                std::unique_lock lock(mutex_);
+                row_ready_.wait(lock, [&] { return y < leading_ || abandoned_; });
+                if (y >= leading_) {
+                  throw std::runtime_error(fmt::format("{}: the preview's rows never came", file.string()));
+                }
+                return image_.pixels.data() + static_cast<std::size_t>(y) * stride;
+              }},
+             format, file);
 }
 
 float linear_to_srgb(float linear) {
@@ -114,23 +186,9 @@ std::uint8_t to_srgb8(float linear) {
 bool preview_format_supported(const std::filesystem::path& file) { return preview_format(file).has_value(); }
 
 void write_preview(const TileBuffer& image, const std::filesystem::path& file) {
-  if (image.rect().empty()) {
-    throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
-  }
-  const std::optional<PreviewFormat> format = preview_format(file);
-  if (!format) {
-    throw std::runtime_error(fmt::format("{}: cannot write preview: no image writer for '{}' files "
-                                         "(PNG: .png, JPEG: .jpg or .jpeg)",
-                                         file.string(), file.extension().string()));
-  }
+  const PreviewFormat format = checked_format(image, file);
   const Rgb8Image pixels = to_srgb8_image(image);
-  write_c_file_atomically(file, [&](std::FILE* out) {
-    if (*format == PreviewFormat::Png) {
-      write_png(pixels, out, file);
-    } else {
-      write_jpeg(pixels, out, file);
-    }
-  });
+  write_rows(rows_of(pixels), format, file);
 }
 
 }  // namespace farm

@@ -1,19 +1,28 @@
 // The PNG and JPEG writers' error paths: a libpng or libjpeg error becomes an exception that
 // names the file, rather than a longjmp into nowhere or libjpeg's exit(). Their output is read
-// back with OpenImageIO in tests/oiio/.
+// back with OpenImageIO in tests/oiio/. And a preview streamed row by row (StreamedPreview) is the
+// same file as one written whole.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <thread>
+#include <utility>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "renderer/image/jpeg_writer.h"
 #include "renderer/image/png_writer.h"
+#include "renderer/image/preview.h"
 #include "renderer/image/rgb8_image.h"
+#include "tests/support/temp_dir.h"
 
 namespace farm {
 namespace {
@@ -79,6 +88,75 @@ TEST_P(PreviewWriters, AFullDiskIsAnExceptionNamingTheFile) {
 INSTANTIATE_TEST_SUITE_P(PngAndJpeg, PreviewWriters,
                          ::testing::Values(Writer{"PNG", write_png}, Writer{"JPEG", write_jpeg}),
                          [](const ::testing::TestParamInfo<Writer>& p) { return std::string(p.param.format); });
+
+}  // namespace
+}  // namespace farm
+
+namespace farm {
+namespace {
+
+std::string file_bytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TileBuffer gradient_film(const Rect& rect) {
+  TileBuffer film(rect, AovSet{});
+  for (int y = rect.y0; y < rect.y1; ++y) {
+    for (int x = rect.x0; x < rect.x1; ++x) {
+      film.rgba(x, y) = {static_cast<float>(x) / 97.0f, static_cast<float>(y % 13) / 13.0f, x % 7 == 0 ? 2.0f : 0.1f, 1.0f};
+    }
+  }
+  return film;
+}
+
+// Rows converted out of order, by several threads, in pieces of any size (as the EXR's chunk
+// packers hand them over) make the same file, byte for byte, as write_preview, for both formats,
+// also for a film that does not start at the origin.
+TEST(StreamedPreview, RowsConvertedInAnyOrderByManyThreadsMakeWritePreviewsFile) {
+  test::TempDir dir;
+  const TileBuffer film = gradient_film(Rect{5, 9, 5 + 203, 9 + 150});
+  for (const std::string name : {"p.png", "p.jpg"}) {
+    write_preview(film, dir / ("whole-" + name));
+    StreamedPreview streamed(film);
+    std::thread writer([&] { streamed.write(dir / ("streamed-" + name)); });
+    // Pieces of 16 lines (the last short), from the bottom up, two threads taking turns.
+    std::vector<std::pair<int, int>> pieces;
+    for (int y = 0; y < 150; y += 16) pieces.emplace_back(y, std::min(150, y + 16));
+    std::reverse(pieces.begin(), pieces.end());
+    std::thread a([&] {
+      for (std::size_t i = 0; i < pieces.size(); i += 2) streamed.convert(pieces[i].first, pieces[i].second);
+    });
+    std::thread b([&] {
+      for (std::size_t i = 1; i < pieces.size(); i += 2) streamed.convert(pieces[i].first, pieces[i].second);
+    });
+    a.join();
+    b.join();
+    writer.join();
+    EXPECT_EQ(file_bytes(dir / ("streamed-" + name)), file_bytes(dir / ("whole-" + name))) << name;
+  }
+}
+
+// Rows that never come (the EXR beside it failed): the writer stops, throws, and leaves no file.
+TEST(StreamedPreview, AnAbandonedPreviewThrowsAndLeavesNoFile) {
+  test::TempDir dir;
+  const TileBuffer film = gradient_film(Rect{0, 0, 64, 48});
+  StreamedPreview streamed(film);
+  streamed.convert(0, 16);
+  std::exception_ptr failure;
+  std::thread writer([&] {
+    try {
+      streamed.write(dir / "p.png");
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  });
+  streamed.abandon();
+  writer.join();
+  ASSERT_TRUE(failure);
+  EXPECT_THROW(std::rethrow_exception(failure), std::runtime_error);
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+}
 
 }  // namespace
 }  // namespace farm
