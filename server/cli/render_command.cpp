@@ -25,6 +25,7 @@
 #include "server/client/job_submission.h"
 #include "server/common/video_encoder.h"
 #include "server/embedded/embedded_farm.h"
+#include "server/scheduler/jobs/unit_grid.h"
 
 namespace farm {
 namespace {
@@ -157,9 +158,12 @@ void run_render_command(const RenderCommandOptions& options) {
   }
   const std::string passes =
       result.job.passes() > 1 ? fmt::format(" in {} sample passes", result.job.passes()) : std::string();
-  fmt::print("time: job {:.1f} ms, load models+render+merge+write {:.1f} ms ({} tiles of {} px{}, {} threads), "
-             "{}total {:.1f} ms\n",
-             load_ms, render_ms, result.job.tiles_total(), r.tile_size, passes, resolve_thread_count(r.threads),
+  // The units the embedded farm cut the frames into: k x k of the job's tiles (unit_grid.h).
+  const int unit_edge = UnitGrid(r, farm_options.min_unit_edge).edge();
+  fmt::print("time: job {:.1f} ms, load models+render+merge+write {:.1f} ms ({} units of {} px in tiles of {} px{}, "
+             "{} threads), {}total {:.1f} ms\n",
+             load_ms, render_ms, result.job.tiles_total(), unit_edge, r.tile_size, passes,
+             resolve_thread_count(r.threads),
              options.overrides.show_bvh ? fmt::format("BVH overlay {:.1f} ms, ", overlay_ms) : std::string(),
              ms_since(t_start));
   if (!result.job.validation().empty()) fmt::print("{}\n", result.job.validation());
