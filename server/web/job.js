@@ -160,7 +160,18 @@
   // empty, so those keep the ones last read (an `updated` event, which adding some sends, reads
   // the job again).
   const LINKS = ['after', 'after_any', 'after_frames', 'dependents'];
-  const reread = () => farm.api(`/api/v1/jobs/${id}`).then((j) => update(j, true));
+  // A reread's reply may be older than events that came while it was on its way (the animation's
+  // last merge and its success among them): then only its links are taken, since every change of
+  // the job's state comes as an event of its own, in order, after the one shown.
+  let eventsSeen = 0;
+  const reread = () => {
+    const asked = eventsSeen;
+    return farm.api(`/api/v1/jobs/${id}`).then((j) => {
+      if (eventsSeen === asked) { update(j, true); return; }
+      for (const k of LINKS) job[k] = j[k];
+      facts();
+    });
+  };
 
   function update(now, full = false) {
     const merged = job ? job.frames_done : 0;
@@ -205,6 +216,7 @@
       await loadLog();  // its merges ask for their frames' thumbnails
     } catch (e) { show(e); return; }
     farm.events(id, (event) => {
+      ++eventsSeen;
       update(event.job);
       if (event.tile_finished) refreshImage(event.tile_finished.frame);
       if (event.pass_finished) refreshImage(event.pass_finished.frame);
