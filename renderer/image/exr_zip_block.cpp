@@ -49,22 +49,15 @@ std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels
     split[half + i] = raw[2 * i + 1];
   }
   if (n % 2 != 0) split[half - 1] = raw[n - 1];
+  // Predicted in place, from the end, so that the unpacked lines stay for a chunk stored raw.
+  for (std::size_t i = n; i-- > 1;) split[i] = static_cast<std::uint8_t>(split[i] - split[i - 1] + 128);
   std::vector<std::uint8_t> out(compressBound(static_cast<uLong>(n)));
-  std::uint8_t* predicted = raw;  // the unpacked lines are no longer needed once split
-  if (n > 0) predicted[0] = split[0];
-  for (std::size_t i = 1; i < n; ++i) predicted[i] = static_cast<std::uint8_t>(split[i] - split[i - 1] + 128);
   uLongf size = static_cast<uLongf>(out.size());
-  if (compress2(out.data(), &size, predicted, static_cast<uLong>(n), level) != Z_OK) {
+  if (compress2(out.data(), &size, split, static_cast<uLong>(n), level) != Z_OK) {
     throw std::runtime_error("zlib could not compress an EXR chunk");
   }
   if (size >= n) {
-    // Stored as it was, unsplit: the lines are built again (raw was overwritten by the prediction).
-    out.assign(n, 0);
-    for (std::size_t i = 0; i < n / 2; ++i) {
-      out[2 * i] = split[i];
-      out[2 * i + 1] = split[half + i];
-    }
-    if (n % 2 != 0) out[n - 1] = split[half - 1];
+    out.assign(raw, raw + n);  // zlib could not shrink it: stored as the lines, unsplit
     return out;
   }
   out.resize(size);
