@@ -1,11 +1,9 @@
 #include "renderer/image/exr_zip_block.h"
 
-#include <zlib.h>
-
 #include <cstring>
-#include <stdexcept>
 
 #include "renderer/image/float_to_half.h"
+#include "renderer/image/zlib_stream.h"
 
 namespace farm {
 
@@ -51,16 +49,9 @@ std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels
   if (n % 2 != 0) split[half - 1] = raw[n - 1];
   // Predicted in place, from the end, so that the unpacked lines stay for a chunk stored raw.
   for (std::size_t i = n; i-- > 1;) split[i] = static_cast<std::uint8_t>(split[i] - split[i - 1] + 128);
-  std::vector<std::uint8_t> out(compressBound(static_cast<uLong>(n)));
-  uLongf size = static_cast<uLongf>(out.size());
-  if (compress2(out.data(), &size, split, static_cast<uLong>(n), level) != Z_OK) {
-    throw std::runtime_error("zlib could not compress an EXR chunk");
-  }
-  if (size >= n) {
-    out.assign(raw, raw + n);  // zlib could not shrink it: stored as the lines, unsplit
-    return out;
-  }
-  out.resize(size);
+  std::vector<std::uint8_t> out;
+  // Only a stream shorter than the lines is kept (a reader tells the two apart by the size).
+  if (n == 0 || !zlib_compress({split, n}, level, out, n - 1)) out.assign(raw, raw + n);
   return out;
 }
 
