@@ -139,10 +139,9 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
   const std::size_t chunk_count = static_cast<std::size_t>((height + kExrZipLines - 1) / kExrZipLines);
   std::vector<std::vector<std::uint8_t>> chunks(chunk_count);
   chunk_pool().parallel_for(chunk_count, 1, [&](std::size_t begin, std::size_t end, int) {
-    std::vector<std::uint8_t> scratch;
     for (std::size_t c = begin; c < end; ++c) {
       const int y0 = static_cast<int>(c) * kExrZipLines, y1 = std::min(height, y0 + kExrZipLines);
-      chunks[c] = pack_zip_chunk(channels, width, y0, y1, kZipLevel, scratch);
+      chunks[c] = pack_zip_chunk(channels, width, y0, y1, kZipLevel);
       if (lines_packed) lines_packed(y0, y1);
     }
   });

@@ -36,8 +36,7 @@ std::size_t exr_line_bytes(const std::vector<ExrChannel>& channels, int width);
 
 // The chunk of lines [y0, y1) (counted from the image's first line) of `width` pixels, channels
 // in the file's order, compressed by zlib at `level`, or unpacked when that is not smaller.
-// `scratch` is reused between calls (two unpacked chunks' worth).
 std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels, int width, int y0, int y1,
-                                         int level, std::vector<std::uint8_t>& scratch);
+                                         int level);
 
 }  // namespace farm

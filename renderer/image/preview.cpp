@@ -82,11 +82,11 @@ class Srgb8Table {
   std::array<std::uint8_t, (kOne >> 16) + 1> runs_{};
 };
 
-// Rows [y0, y1) of the film (counted from its rect's top) into `out`, which holds the whole film.
-void convert_rows(const TileBuffer& image, int y0, int y1, Rgb8Image& out) {
+// Rows [y0, y1) of the film (counted from its rect's top) into `pixels`, which holds the whole film.
+void convert_rows(const TileBuffer& image, int y0, int y1, std::uint8_t* pixels) {
   static const Srgb8Table encode;
   const Rect& r = image.rect();
-  std::uint8_t* at = out.pixels.data() + static_cast<std::size_t>(y0) * static_cast<std::size_t>(r.width()) * 3;
+  std::uint8_t* at = pixels + static_cast<std::size_t>(y0) * static_cast<std::size_t>(r.width()) * 3;
   for (int y = r.y0 + y0; y < r.y0 + y1; ++y) {
     const glm::vec4* c = &image.rgba(r.x0, y);
     for (int x = r.x0; x < r.x1; ++x, ++c, at += 3) {
@@ -133,21 +133,88 @@ void write_rows(const Rgb8Rows& rows, PreviewFormat format, const std::filesyste
 
 Rgb8Image to_srgb8_image(const TileBuffer& image) {
   Rgb8Image out = sized_for(image);
-  convert_rows(image, 0, image.rect().height(), out);
+  convert_rows(image, 0, image.rect().height(), out.pixels.data());
   return out;
 }
 
-StreamedPreview::StreamedPreview(const TileBuffer& film)
-    : film_(film), image_(sized_for(film)), ready_(static_cast<std::size_t>(film.rect().height()), false) {}
+StreamedPreview::StreamedPreview(const TileBuffer& film, std::filesystem::path file)
+    : film_(film),
+      file_(std::move(file)),
+      png_(checked_format(film, file_) == PreviewFormat::Png),
+      width_(film.rect().width()),
+      height_(film.rect().height()) {
+  pixels_.allocate(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_) * 3);
+  if (png_) {
+    strips_.emplace(width_, height_, file_);
+    strip_rows_ready_.assign(static_cast<std::size_t>(strips_->strips()), 0);
+    return;
+  }
+  ready_.assign(static_cast<std::size_t>(height_), false);
+  const std::size_t stride = static_cast<std::size_t>(width_) * 3;
+  jpeg_encoder_ = std::thread([this, stride] {
+    try {
+      write_rows({width_, height_,
+                  [this, stride](int y) {
+                    std::unique_lock lock(mutex_);
+                    changed_.wait(lock, [&] { return y < leading_ || abandoned_; });
+                    if (y >= leading_) {
+                      throw std::runtime_error(fmt::format("{}: the preview's rows never came", file_.string()));
+                    }
+                    return pixels_.begin() + static_cast<std::size_t>(y) * stride;
+                  }},
+                 PreviewFormat::Jpeg, file_);
+    } catch (...) {
+      jpeg_failure_ = std::current_exception();
+    }
+  });
+}
+
+StreamedPreview::~StreamedPreview() {
+  if (jpeg_encoder_.joinable()) {
+    abandon();
+    jpeg_encoder_.join();
+  }
+}
 
 void StreamedPreview::convert(int y0, int y1) {
-  convert_rows(film_, y0, y1, image_);
+  convert_rows(film_, y0, y1, pixels_.begin());
+  if (!png_) {
+    {
+      std::lock_guard lock(mutex_);
+      for (int y = y0; y < y1; ++y) ready_[static_cast<std::size_t>(y)] = true;
+      while (leading_ < static_cast<int>(ready_.size()) && ready_[static_cast<std::size_t>(leading_)]) ++leading_;
+    }
+    changed_.notify_all();
+    return;
+  }
+  // The strips these rows complete are compressed here, while their rows are in this core's cache.
+  std::vector<int> complete;
   {
     std::lock_guard lock(mutex_);
-    for (int y = y0; y < y1; ++y) ready_[static_cast<std::size_t>(y)] = true;
-    while (leading_ < static_cast<int>(ready_.size()) && ready_[static_cast<std::size_t>(leading_)]) ++leading_;
+    for (int y = y0; y < y1; ++y) {
+      const int strip = y / PngStrips::kRows;
+      int& ready = strip_rows_ready_[static_cast<std::size_t>(strip)];
+      if (++ready == strips_->end_row(strip) - strips_->first_row(strip)) complete.push_back(strip);
+    }
   }
-  row_ready_.notify_all();
+  const std::size_t stride = static_cast<std::size_t>(width_) * 3;
+  for (int strip : complete) {
+    try {
+      strips_->compress(strip, [&](int y) { return pixels_.begin() + static_cast<std::size_t>(y) * stride; });
+    } catch (...) {
+      {
+        std::lock_guard lock(mutex_);
+        if (!strip_failure_) strip_failure_ = std::current_exception();
+      }
+      changed_.notify_all();
+      throw;
+    }
+    {
+      std::lock_guard lock(mutex_);
+      ++strips_done_;
+    }
+    changed_.notify_all();
+  }
 }
 
 void StreamedPreview::abandon() {
@@ -155,22 +222,29 @@ void StreamedPreview::abandon() {
     std::lock_guard lock(mutex_);
     abandoned_ = true;
   }
-  row_ready_.notify_all();
+  changed_.notify_all();
 }
 
-void StreamedPreview::write(const std::filesystem::path& file) {
-  const PreviewFormat format = checked_format(film_, file);
-  const std::size_t stride = static_cast<std::size_t>(image_.width) * 3;
-  write_rows({image_.width, image_.height,
-              [&](int y) {
-                std::unique_lock lock(mutex_);
-                row_ready_.wait(lock, [&] { return y < leading_ || abandoned_; });
-                if (y >= leading_) {
-                  throw std::runtime_error(fmt::format("{}: the preview's rows never came", file.string()));
-                }
-                return image_.pixels.data() + static_cast<std::size_t>(y) * stride;
-              }},
-             format, file);
+std::exception_ptr StreamedPreview::failure_locked() const {
+  if (strip_failure_) return strip_failure_;
+  if (abandoned_) {
+    return std::make_exception_ptr(std::runtime_error(fmt::format("{}: the preview's rows never came", file_.string())));
+  }
+  return nullptr;
+}
+
+void StreamedPreview::finish() {
+  if (!png_) {
+    jpeg_encoder_.join();
+    if (jpeg_failure_) std::rethrow_exception(jpeg_failure_);
+    return;
+  }
+  {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return strips_done_ == strips_->strips() || failure_locked(); });
+    if (strips_done_ < strips_->strips()) std::rethrow_exception(failure_locked());
+  }
+  write_c_file_atomically(file_, [&](std::FILE* out) { strips_->write(out); });
 }
 
 float linear_to_srgb(float linear) {

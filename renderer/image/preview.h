@@ -2,13 +2,18 @@
 // 8-bit previews (PNG or JPEG, chosen by extension) of a linear film: RGB clamped to [0, 1] and
 // sRGB-encoded.
 #include <condition_variable>
+#include <exception>
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
+#include <optional>
+#include <thread>
 #include <vector>
 
+#include "renderer/image/png_strips.h"
 #include "renderer/image/rgb8_image.h"
 #include "renderer/image/tile_buffer.h"
+#include "renderer/util/uninitialized_array.h"
 
 namespace farm {
 
@@ -22,26 +27,45 @@ Rgb8Image to_srgb8_image(const TileBuffer& image);
 void write_preview(const TileBuffer& image, const std::filesystem::path& file);
 
 // A film's preview made while the film's EXR is written (write_merged): the threads that pack
-// the EXR's chunks convert each chunk's rows from the lines they have just read, and write()
-// encodes the rows in order as they become ready, on a thread of its own. Converted apart, the
-// film was read a second time from another core's cache: 2 to 4 ms of a 640x480 frame's 6.
+// the EXR's chunks convert each chunk's rows from the lines they have just read (converted apart,
+// the film was read a second time from another core's cache: 2 to 4 ms of a 640x480 frame's 6).
+// A PNG's strips are compressed there too, by the thread that completes their rows (png_strips.h),
+// and finish() only writes the file; a JPEG is encoded row by row, in order, as the rows become
+// ready, on a thread of its own.
 class StreamedPreview {
  public:
-  explicit StreamedPreview(const TileBuffer& film);  // the film outlives it
+  // `file`'s extension picks the format (write_preview's, and its errors). The film outlives this.
+  StreamedPreview(const TileBuffer& film, std::filesystem::path file);
+  ~StreamedPreview();  // abandons a preview not finished
+  StreamedPreview(const StreamedPreview&) = delete;
+  StreamedPreview& operator=(const StreamedPreview&) = delete;
+
   // Rows [y0, y1), counted from the film's top; each row once, from any thread.
   void convert(int y0, int y1);
-  // No more rows will come (the EXR failed): write() stops waiting and throws.
+  // No more rows will come (the EXR failed): finish() stops waiting and throws, leaving no file.
   void abandon();
-  // write_preview's file and errors, each row written as soon as it is converted.
-  void write(const std::filesystem::path& file);
+  // Once every row has come (it waits for them): the file, written as write_preview writes it.
+  void finish();
 
  private:
+  std::exception_ptr failure_locked() const;  // abandoned, or a strip that failed
+
   const TileBuffer& film_;
-  Rgb8Image image_;
-  std::mutex mutex_;  // guards the three below
-  std::condition_variable row_ready_;
-  std::vector<bool> ready_;
-  int leading_ = 0;  // rows [0, leading_) are all ready
+  const std::filesystem::path file_;
+  const bool png_;
+  const int width_;
+  const int height_;
+  UninitializedArray<std::uint8_t> pixels_;  // the film's rows as sRGB bytes, as they are converted
+  std::optional<PngStrips> strips_;  // PNG
+  std::thread jpeg_encoder_;         // JPEG
+  std::exception_ptr jpeg_failure_;  // set by the encoder before it ends
+  mutable std::mutex mutex_;         // guards the five below
+  std::condition_variable changed_;
+  std::vector<int> strip_rows_ready_;  // PNG: per strip, its rows converted
+  int strips_done_ = 0;                // PNG: strips compressed
+  std::exception_ptr strip_failure_;   // PNG: the first strip that failed
+  int leading_ = 0;                    // JPEG: rows [0, leading_) are all converted
+  std::vector<bool> ready_;            // JPEG: per row, converted
   bool abandoned_ = false;
 };
 

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "renderer/util/uninitialized_array.h"
+
 namespace farm {
 namespace {
 
@@ -58,10 +60,12 @@ std::array<std::uint8_t, 2> zlib_header(int level) {
 bool deflate_piece(std::span<const std::uint8_t> data, int level, bool last, std::vector<std::uint8_t>& out,
                    std::size_t limit) {
   thread_local ThreadDeflater deflater;
+  // Deflated into room this thread keeps (never zeroed, no fresh pages), then only the bytes
+  // made are appended.
+  thread_local UninitializedArray<std::uint8_t> room;
   z_stream& stream = deflater.fresh(level);
-  const std::size_t before = out.size();
-  out.resize(before + limit);
-  stream.next_out = out.data() + before;
+  room.allocate(std::max<std::size_t>(limit, 1));
+  stream.next_out = room.begin();
   stream.avail_out = static_cast<uInt>(std::min<std::size_t>(limit, 0xFFFFFFFFu));
   const std::uint8_t* next = data.data();
   std::size_t left = data.size();
@@ -80,12 +84,19 @@ bool deflate_piece(std::span<const std::uint8_t> data, int level, bool last, std
       fits = false;
     }
   } while (fits && left > 0);
-  out.resize(fits ? before + (limit - stream.avail_out) : before);
+  if (fits) out.insert(out.end(), room.begin(), stream.next_out);
   return fits;
 }
 
+std::size_t deflate_limit(std::size_t bytes) {
+  // compressBound covers the zlib wrapper's six bytes; a sync flush adds at most five.
+  return static_cast<std::size_t>(compressBound(static_cast<uLong>(bytes))) + 16;
+}
+
+// libdeflate, as zlib, answers a null buffer with the initial value: an empty span (whose data()
+// may be null) continues the checksum instead.
 std::uint32_t adler32_of(std::span<const std::uint8_t> data, std::uint32_t adler) {
-  return libdeflate_adler32(adler, data.data(), data.size());
+  return data.empty() ? adler : libdeflate_adler32(adler, data.data(), data.size());
 }
 
 std::uint32_t adler32_join(std::uint32_t first, std::uint32_t second, std::size_t second_bytes) {
@@ -93,7 +104,7 @@ std::uint32_t adler32_join(std::uint32_t first, std::uint32_t second, std::size_
 }
 
 std::uint32_t crc32_of(std::span<const std::uint8_t> data, std::uint32_t crc) {
-  return libdeflate_crc32(crc, data.data(), data.size());
+  return data.empty() ? crc : libdeflate_crc32(crc, data.data(), data.size());
 }
 
 void append_big_endian(std::uint32_t value, std::vector<std::uint8_t>& out) {
@@ -105,7 +116,6 @@ bool zlib_compress(std::span<const std::uint8_t> data, int level, std::vector<st
   out.clear();
   if (limit < 6) return false;
   const std::array<std::uint8_t, 2> header = zlib_header(level);
-  out.reserve(limit);
   out.assign(header.begin(), header.end());
   if (!deflate_piece(data, level, true, out, limit - 6)) {
     out.clear();

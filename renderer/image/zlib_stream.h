@@ -25,6 +25,9 @@ std::array<std::uint8_t, 2> zlib_header(int level);
 bool deflate_piece(std::span<const std::uint8_t> data, int level, bool last, std::vector<std::uint8_t>& out,
                    std::size_t limit);
 
+// Room enough for any deflated piece of `bytes` bytes, flushed or final.
+std::size_t deflate_limit(std::size_t bytes);
+
 // Adler-32 of `data` continued from `adler` (1 for a fresh stream).
 std::uint32_t adler32_of(std::span<const std::uint8_t> data, std::uint32_t adler = 1);
 // The Adler-32 of two pieces one after the other, from each piece's and the second's length.

@@ -118,8 +118,8 @@ TEST(StreamedPreview, RowsConvertedInAnyOrderByManyThreadsMakeWritePreviewsFile)
   const TileBuffer film = gradient_film(Rect{5, 9, 5 + 203, 9 + 150});
   for (const std::string name : {"p.png", "p.jpg"}) {
     write_preview(film, dir / ("whole-" + name));
-    StreamedPreview streamed(film);
-    std::thread writer([&] { streamed.write(dir / ("streamed-" + name)); });
+    StreamedPreview streamed(film, dir / ("streamed-" + name));
+    std::thread writer([&] { streamed.finish(); });
     // Pieces of 16 lines (the last short), from the bottom up, two threads taking turns.
     std::vector<std::pair<int, int>> pieces;
     for (int y = 0; y < 150; y += 16) pieces.emplace_back(y, std::min(150, y + 16));
@@ -137,25 +137,28 @@ TEST(StreamedPreview, RowsConvertedInAnyOrderByManyThreadsMakeWritePreviewsFile)
   }
 }
 
-// Rows that never come (the EXR beside it failed): the writer stops, throws, and leaves no file.
+// Rows that never come (the EXR beside it failed): the writer stops, throws, and leaves no file,
+// for both formats.
 TEST(StreamedPreview, AnAbandonedPreviewThrowsAndLeavesNoFile) {
-  test::TempDir dir;
-  const TileBuffer film = gradient_film(Rect{0, 0, 64, 48});
-  StreamedPreview streamed(film);
-  streamed.convert(0, 16);
-  std::exception_ptr failure;
-  std::thread writer([&] {
-    try {
-      streamed.write(dir / "p.png");
-    } catch (...) {
-      failure = std::current_exception();
-    }
-  });
-  streamed.abandon();
-  writer.join();
-  ASSERT_TRUE(failure);
-  EXPECT_THROW(std::rethrow_exception(failure), std::runtime_error);
-  EXPECT_TRUE(fs::is_empty(dir.path()));
+  for (const std::string name : {"p.png", "p.jpg"}) {
+    test::TempDir dir;
+    const TileBuffer film = gradient_film(Rect{0, 0, 64, 48});
+    StreamedPreview streamed(film, dir / name);
+    streamed.convert(0, 16);
+    std::exception_ptr failure;
+    std::thread writer([&] {
+      try {
+        streamed.finish();
+      } catch (...) {
+        failure = std::current_exception();
+      }
+    });
+    streamed.abandon();
+    writer.join();
+    ASSERT_TRUE(failure) << name;
+    EXPECT_THROW(std::rethrow_exception(failure), std::runtime_error) << name;
+    EXPECT_TRUE(fs::is_empty(dir.path())) << name;
+  }
 }
 
 }  // namespace

@@ -85,11 +85,14 @@ TEST(ZlibStream, PiecesDeflatedApartInflateToTheWholeAndTheirChecksumsJoin) {
   EXPECT_EQ(back, data);
 }
 
-TEST(ZlibStream, Crc32IsZlibs) {
+TEST(ZlibStream, Crc32IsZlibsAndAnEmptyPieceChangesNoChecksum) {
   const std::vector<std::uint8_t> data = frame_like_bytes(100003, 5);
   const auto zlibs = static_cast<std::uint32_t>(crc32(0, data.data(), static_cast<uInt>(data.size())));
   EXPECT_EQ(crc32_of(data), zlibs);
   EXPECT_EQ(crc32_of(std::span(data).subspan(500), crc32_of(std::span(data).first(500))), zlibs);
+  // An empty piece, even one without a buffer, leaves either checksum as it was.
+  EXPECT_EQ(crc32_of(std::span<const std::uint8_t>(), zlibs), zlibs);
+  EXPECT_EQ(adler32_of(std::span<const std::uint8_t>(), 12345u), 12345u);
 }
 
 }  // namespace
