@@ -3,8 +3,8 @@
 // file around the chunks through OpenEXRCore). OpenEXR's C++ writer copies each channel through a
 // generic frame buffer, then reorders the bytes, then compresses: for a 640x480 half RGBA frame
 // that was 7 ms of the 11 ms a frame's files took, and the frame path's largest cost beside the
-// engine. Here each line's floats are converted straight into the chunk (float_to_half.h) and the
-// reorder is one pass.
+// engine. Here each line's floats are converted (float_to_half.h) straight into the two halves of
+// the reorder, and the predictor is one pass.
 //
 // The format, as OpenEXR's file layout defines it: a chunk holds 16 lines (fewer at the bottom of
 // the image); each line holds every channel in the file's channel order (sorted by name), each

@@ -24,8 +24,13 @@ echo "package: $deb"
 # links (not a hand-written list), and the files where the issue puts them.
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
-for library in libembree3 libgrpc++ libopenexr libassimp libpq5 libsqlite3; do
+for library in libembree3 libopenexr libassimp libpq5 libsqlite3 libdeflate0; do
   grep -q "$library" <<<"$depends" || fail "Depends does not name $library: $depends"
+done
+# gRPC, protobuf and abseil are linked in (FARM_STATIC_GRPC, docs/architecture.md 9.1): a Depends
+# naming them would pull in packages the binary never loads.
+for library in libgrpc libprotobuf libabsl; do
+  if grep -q "$library" <<<"$depends"; then fail "Depends names $library, which farm links statically: $depends"; fi
 done
 contents=$(dpkg-deb -c "$deb")
 for file in ./usr/bin/farm ./usr/share/renderfarm/jobs/cornell.json ./usr/share/renderfarm/jobs/assets/ \
