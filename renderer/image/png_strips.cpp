@@ -106,7 +106,7 @@ void PngStrips::compress(int strip, const std::function<const std::uint8_t*(int 
   }
   const bool last = strip + 1 == strips();
   const std::span<const std::uint8_t> rows(filtered.begin(), filtered.size());
-  if (!deflate_piece(rows, kLevel, last, s.deflated, deflate_limit(rows.size()))) {
+  if (!deflate_piece(rows, kLevel, last, s.deflated, deflate_limit(rows.size()), /*run_length=*/true)) {
     throw std::runtime_error(fmt::format("{}: cannot write PNG: zlib could not compress rows {} to {}",
                                          name_.string(), y0, y1 - 1));
   }

@@ -22,8 +22,8 @@ class ThreadDeflater {
     if (open_) deflateEnd(&stream_);
   }
 
-  z_stream& fresh(int level) {
-    if (open_ && level == level_) {
+  z_stream& fresh(int level, int strategy) {
+    if (open_ && level == level_ && strategy == strategy_) {
       deflateReset(&stream_);
       return stream_;
     }
@@ -31,11 +31,12 @@ class ThreadDeflater {
     open_ = false;
     stream_ = z_stream{};
     // compress2's window (15 bits) and memory level (8), without its header and checksum.
-    if (deflateInit2(&stream_, level, Z_DEFLATED, -15, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
+    if (deflateInit2(&stream_, level, Z_DEFLATED, -15, 8, strategy) != Z_OK) {
       throw std::runtime_error("zlib could not start a deflate stream");
     }
     open_ = true;
     level_ = level;
+    strategy_ = strategy;
     return stream_;
   }
 
@@ -43,6 +44,7 @@ class ThreadDeflater {
   z_stream stream_{};
   bool open_ = false;
   int level_ = 0;
+  int strategy_ = Z_DEFAULT_STRATEGY;
 };
 
 }  // namespace
@@ -58,12 +60,12 @@ std::array<std::uint8_t, 2> zlib_header(int level) {
 }
 
 bool deflate_piece(std::span<const std::uint8_t> data, int level, bool last, std::vector<std::uint8_t>& out,
-                   std::size_t limit) {
+                   std::size_t limit, bool run_length) {
   thread_local ThreadDeflater deflater;
   // Deflated into room this thread keeps (never zeroed, no fresh pages), then only the bytes
   // made are appended.
   thread_local UninitializedArray<std::uint8_t> room;
-  z_stream& stream = deflater.fresh(level);
+  z_stream& stream = deflater.fresh(level, run_length ? Z_RLE : Z_DEFAULT_STRATEGY);
   room.allocate(std::max<std::size_t>(limit, 1));
   stream.next_out = room.begin();
   stream.avail_out = static_cast<uInt>(std::min<std::size_t>(limit, 0xFFFFFFFFu));
