@@ -2,8 +2,8 @@
 // zlib streams as the frame writers make them (the EXR's chunks, the PNG's strips): the deflate
 // itself is zlib's, raw, on a stream each thread keeps; the checksum is libdeflate's adler32.
 // zlib's own adler32 is a byte at a time: it was a fifth of compress2's time on a frame's EXR
-// chunks (0.74 of 3.6 ms for a 640x480 frame), libdeflate's vectorised one a fiftieth. The bytes
-// are exactly compress2's: the same header, the same deflate, the same checksum.
+// chunks (0.74 of 3.6 ms for a 640x480 frame), libdeflate's vectorised one a fiftieth.
+// zlib_compress's bytes are exactly compress2's: the same header, deflate and checksum.
 //
 // A stream may also be made of pieces deflated apart, on different threads (the PNG's strips):
 // each piece but the last ends in a sync flush, so that the next, started with an empty window,
