@@ -150,17 +150,14 @@ StreamedPreview::StreamedPreview(const TileBuffer& film, std::filesystem::path f
     return;
   }
   ready_.assign(static_cast<std::size_t>(height_), false);
-  const std::size_t stride = static_cast<std::size_t>(width_) * 3;
-  jpeg_encoder_ = std::thread([this, stride] {
+  jpeg_encoder_ = std::thread([this] {
     try {
       write_rows({width_, height_,
-                  [this, stride](int y) {
+                  [this](int y) {
                     std::unique_lock lock(mutex_);
                     changed_.wait(lock, [&] { return y < leading_ || abandoned_; });
-                    if (y >= leading_) {
-                      throw std::runtime_error(fmt::format("{}: the preview's rows never came", file_.string()));
-                    }
-                    return pixels_.begin() + static_cast<std::size_t>(y) * stride;
+                    if (y >= leading_) throw rows_never_came();
+                    return row(y);
                   }},
                  PreviewFormat::Jpeg, file_);
     } catch (...) {
@@ -197,10 +194,9 @@ void StreamedPreview::convert(int y0, int y1) {
       if (++ready == strips_->end_row(strip) - strips_->first_row(strip)) complete.push_back(strip);
     }
   }
-  const std::size_t stride = static_cast<std::size_t>(width_) * 3;
   for (int strip : complete) {
     try {
-      strips_->compress(strip, [&](int y) { return pixels_.begin() + static_cast<std::size_t>(y) * stride; });
+      strips_->compress(strip, [this](int y) { return row(y); });
     } catch (...) {
       {
         std::lock_guard lock(mutex_);
@@ -225,12 +221,12 @@ void StreamedPreview::abandon() {
   changed_.notify_all();
 }
 
-std::exception_ptr StreamedPreview::failure_locked() const {
-  if (strip_failure_) return strip_failure_;
-  if (abandoned_) {
-    return std::make_exception_ptr(std::runtime_error(fmt::format("{}: the preview's rows never came", file_.string())));
-  }
-  return nullptr;
+const std::uint8_t* StreamedPreview::row(int y) const {
+  return pixels_.begin() + static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) * 3;
+}
+
+std::runtime_error StreamedPreview::rows_never_came() const {
+  return std::runtime_error(fmt::format("{}: the preview's rows never came", file_.string()));
 }
 
 void StreamedPreview::finish() {
@@ -241,8 +237,9 @@ void StreamedPreview::finish() {
   }
   {
     std::unique_lock lock(mutex_);
-    changed_.wait(lock, [&] { return strips_done_ == strips_->strips() || failure_locked(); });
-    if (strips_done_ < strips_->strips()) std::rethrow_exception(failure_locked());
+    changed_.wait(lock, [&] { return strips_done_ == strips_->strips() || strip_failure_ || abandoned_; });
+    if (strip_failure_) std::rethrow_exception(strip_failure_);
+    if (strips_done_ < strips_->strips()) throw rows_never_came();
   }
   write_c_file_atomically(file_, [&](std::FILE* out) { strips_->write(out); });
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -48,7 +49,8 @@ class StreamedPreview {
   void finish();
 
  private:
-  std::exception_ptr failure_locked() const;  // abandoned, or a strip that failed
+  const std::uint8_t* row(int y) const;        // row y of pixels_
+  std::runtime_error rows_never_came() const;  // what finish() throws once abandoned
 
   const TileBuffer& film_;
   const std::filesystem::path file_;
