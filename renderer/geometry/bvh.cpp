@@ -297,6 +297,7 @@ void Bvh::build_wide() {
       }
       node.count[k] = static_cast<std::uint8_t>(n.count);
       if (n.count != 0) {
+        node.leaf_mask = static_cast<std::uint8_t>(node.leaf_mask | (1u << i));
         node.child[k] = leaf_number[slots[k]];
       } else {
         node.child[k] = static_cast<std::uint32_t>(wide_.size());

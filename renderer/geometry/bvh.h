@@ -37,6 +37,7 @@ struct alignas(32) WideBvhNode {
   std::uint32_t child[kWideBvhWidth];    // inner child: its WideBvhNode index; leaf child: its number in leaves()
   std::uint8_t count[kWideBvhWidth];     // leaf child: primitives; 0: an inner child
   std::uint8_t children = 0;             // slots in use
+  std::uint8_t leaf_mask = 0;            // bit i: child i is a leaf
 };
 
 // A leaf: entries [first, first + count) of Bvh::order().

@@ -5,9 +5,9 @@
 // inside namespace farm.
 
 // Both traversals walk the wide nodes: the slab tests give the entry distances of all eight
-// children; leaf children are tested at once, nearest first (any hit: in slot order), and inner
-// ones are stacked so the nearest is entered next. A stacked node is dropped when it starts beyond the closest hit found
-// since. `nodes` counts the wide nodes entered.
+// children; leaf children are tested at once, nearest first (any hit: in slot order), and the
+// nearest inner one is entered next (docs/architecture.md 8, "The tree"). A stacked node is
+// dropped when it starts beyond the closest hit found since. `nodes` counts the wide nodes entered.
 // kAnyHit: stop at the first primitive hit (t_max never shrinks); otherwise keep the nearest.
 template <bool kAnyHit, typename Test>
 bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) const {
@@ -86,49 +86,35 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
     }
 #endif
     mask &= (1 << node.children) - 1;
-    // One inner child met, the commonest case: entered at once, without the stack.
-    if (mask != 0 && (mask & (mask - 1)) == 0) {
-      const int only = __builtin_ctz(static_cast<unsigned>(mask));
-      if (node.count[only] == 0) {
-        index = node.child[only];
-        continue;
+    unsigned leaves = static_cast<unsigned>(mask) & node.leaf_mask;
+    unsigned inner = static_cast<unsigned>(mask) & ~static_cast<unsigned>(node.leaf_mask);
+    // Leaf children first, nearest first for the closest hit (so the hit found shortens the rest);
+    // in slot order for any hit, which any occluder ends and so gains little from the order:
+    // sorting cost it more than it saved (farm bench rt, incoherent any hit 16-19% faster on the
+    // cow and the bunny). A node's children are nearly always all leaves or all inner nodes, and
+    // a ray meets one or two of them: those cases take no sort.
+    while (leaves) {
+      int c = __builtin_ctz(leaves);
+      if constexpr (!kAnyHit) {
+        for (unsigned rest = leaves & (leaves - 1); rest; rest &= rest - 1) {
+          const int other = __builtin_ctz(rest);
+          if (entry[other] < entry[c]) c = other;  // the lower slot of equals: ctz order
+        }
+        if (entry[c] > t_max) break;  // and so are the others
       }
-    }
-
-    // Visit the children that the ray meets: nearest first for the closest hit; in slot order for
-    // any hit, which any occluder ends and so gains little from the order: sorting cost it more
-    // than it saved (farm bench rt, incoherent any hit 16-19% faster on the cow and the bunny).
-    std::array<int, kWideBvhWidth> order{};
-    int n = 0;
-    while (mask) {
-      const int i = __builtin_ctz(static_cast<unsigned>(mask));
-      mask &= mask - 1;
-      int j = n++;
-      while (!kAnyHit && j > 0 && entry[order[static_cast<std::size_t>(j - 1)]] > entry[i]) {
-        order[static_cast<std::size_t>(j)] = order[static_cast<std::size_t>(j - 1)];
-        --j;
-      }
-      order[static_cast<std::size_t>(j)] = i;
-    }
-    // Inner children go on the stack farthest first, so the nearest is popped next.
-    for (int k = n - 1; k >= 0; --k) {
-      const auto c = static_cast<std::size_t>(order[static_cast<std::size_t>(k)]);
-      if (node.count[c] == 0) stack[top++] = {node.child[c], entry[c]};
-    }
-    for (int k = 0; k < n; ++k) {
-      const auto c = static_cast<std::size_t>(order[static_cast<std::size_t>(k)]);
-      if (node.count[c] == 0 || entry[c] > t_max) continue;
+      leaves &= ~(1u << c);
+      const auto k = static_cast<std::size_t>(c);
       if constexpr (kLeafTest) {
-        primitives_tested += node.count[c];
-        const BvhLeafRef leaf{node.child[c], node.count[c]};
+        primitives_tested += node.count[k];
+        const BvhLeafRef leaf{node.child[k], node.count[k]};
         if constexpr (kAnyHit) {
           hit = test(leaf);
         } else if (test(leaf, t_max)) {
           hit = true;
         }
       } else {
-        const std::uint32_t first = leaves_[node.child[c]].first;
-        for (std::uint32_t i = first; i < first + node.count[c]; ++i) {
+        const std::uint32_t first = leaves_[node.child[k]].first;
+        for (std::uint32_t i = first; i < first + node.count[k]; ++i) {
           ++primitives_tested;
           if constexpr (kAnyHit) {
             if (call_primitive_test(test, order_[i], i)) {
@@ -143,6 +129,43 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
       if (kAnyHit && hit) break;
     }
     if (kAnyHit && hit) break;
+    if (inner != 0) {
+      const int first = __builtin_ctz(inner);
+      inner &= inner - 1;
+      if (inner == 0) {  // one inner child met, the commonest case: entered at once
+        if (kAnyHit || entry[first] <= t_max) {
+          index = node.child[first];
+          continue;
+        }
+      } else if ((inner & (inner - 1)) == 0) {  // two: the nearer entered, the other stacked
+        const int second = __builtin_ctz(inner);
+        const bool swap = !kAnyHit && entry[second] < entry[first];
+        const int nearer = swap ? second : first, farther = swap ? first : second;
+        if (kAnyHit || entry[nearer] <= t_max) {
+          stack[top++] = {node.child[farther], entry[farther]};
+          index = node.child[nearer];
+          continue;
+        }
+      } else {
+        // More: stacked farthest first, so the nearest is popped next.
+        std::array<int, kWideBvhWidth> order;
+        order[0] = first;
+        int n = 1;
+        for (; inner; inner &= inner - 1) {
+          const int i = __builtin_ctz(inner);
+          int j = n++;
+          while (!kAnyHit && j > 0 && entry[order[static_cast<std::size_t>(j - 1)]] > entry[i]) {
+            order[static_cast<std::size_t>(j)] = order[static_cast<std::size_t>(j - 1)];
+            --j;
+          }
+          order[static_cast<std::size_t>(j)] = i;
+        }
+        for (int k = n - 1; k >= 0; --k) {
+          const auto c = static_cast<std::size_t>(order[static_cast<std::size_t>(k)]);
+          stack[top++] = {node.child[c], entry[c]};
+        }
+      }
+    }
     // Next: the nearest pending node that still starts before the closest hit.
     while (top > 0 && stack[top - 1].t_entry > t_max) --top;
     if (top == 0) break;

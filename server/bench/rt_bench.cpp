@@ -164,17 +164,36 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
   const std::vector<Ray> few_primary = primary_rays(bounds, o.naive_rays), few_incoherent = incoherent_rays(bounds, o.naive_rays);
 
   for (int threads : o.threads) {
-    std::vector<std::pair<RayRates, RayRates>> rates;  // primary, incoherent
-    for (const Subject& s : subjects) {
-      const bool few = s.rays != o.rays;
-      force_traversal_isa(s.isa);
-      rates.emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any),
-                         measure(few ? few_incoherent : incoherent, threads, s.closest, s.any));
-      force_traversal_isa(std::nullopt);
+    // Rounds of every subject in turn, so a slow spell of this shared machine falls on all of them
+    // alike; each cell is its median over the rounds.
+    std::vector<std::vector<std::pair<RayRates, RayRates>>> rounds(subjects.size());  // primary, incoherent
+    for (int round = 0; round < o.repeats; ++round) {
+      for (std::size_t i = 0; i < subjects.size(); ++i) {
+        const Subject& s = subjects[i];
+        const bool few = s.rays != o.rays;
+        force_traversal_isa(s.isa);
+        rounds[i].emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any),
+                               measure(few ? few_incoherent : incoherent, threads, s.closest, s.any));
+        force_traversal_isa(std::nullopt);
+      }
     }
-    fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), {} thread{}, Mrays/s\n", name,
-               prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays, threads,
-               threads == 1 ? "" : "s");
+    std::vector<std::pair<RayRates, RayRates>> rates;
+    for (const auto& runs : rounds) {
+      const auto cell = [&](auto pick) {
+        std::vector<double> values;
+        for (const auto& run : runs) values.push_back(pick(run));
+        return bench::median(values);
+      };
+      std::pair<RayRates, RayRates> r = runs.front();  // the hit counts, the same every round
+      r.first.closest = cell([](const auto& run) { return run.first.closest; });
+      r.first.any = cell([](const auto& run) { return run.first.any; });
+      r.second.closest = cell([](const auto& run) { return run.second.closest; });
+      r.second.any = cell([](const auto& run) { return run.second.any; });
+      rates.push_back(r);
+    }
+    fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), {} thread{}, Mrays/s (median of {})\n",
+               name, prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays, threads,
+               threads == 1 ? "" : "s", o.repeats);
     fmt::print("{:<24} {:>9} {:>16} {:>12} {:>19} {:>15}\n", "accel", "build ms", "primary closest",
                "primary any", "incoherent closest", "incoherent any");
     for (std::size_t i = 0; i < subjects.size(); ++i) {

@@ -16,6 +16,7 @@ struct RtBenchOptions {
   std::uint64_t rays = 1'000'000;     // per ray set
   std::uint64_t naive_rays = 20'000;  // `naive` tests every triangle: fewer rays, same Mrays/s
   std::vector<int> threads = {1};     // a table for each count
+  int repeats = 3;                    // rounds over every subject; medians reported
 };
 
 void run_rt_bench(const RtBenchOptions& options);
