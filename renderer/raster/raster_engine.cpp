@@ -189,6 +189,7 @@ class RegionRasterizer {
 void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, const Scene& scene,
                   const Rect& region, FixedPoint offset, bool write_aovs, TileBuffer& out) {
   const float pixel_size = scene.camera.pixel_size_at_unit_depth(frame.height);
+  const CameraRays camera_rays(scene.camera, frame.width, frame.height);
   Material textured;
   for (int y = region.y0; y < region.y1; ++y) {
     for (int x = region.x0; x < region.x1; ++x) {
@@ -199,9 +200,8 @@ void shade_region(const RegionRasterizer& raster, const RasterFrame& frame, cons
         glm::vec3 background = scene.background;
         if (scene.environment) {
           const float scale = 1.0f / static_cast<float>(kSubpixelScale);
-          const Ray ray = scene.camera.primary_ray(static_cast<float>(x) + static_cast<float>(offset.x) * scale,
-                                                   static_cast<float>(y) + static_cast<float>(offset.y) * scale,
-                                                   frame.width, frame.height);
+          const Ray ray = camera_rays.ray(static_cast<float>(x) + static_cast<float>(offset.x) * scale,
+                                          static_cast<float>(y) + static_cast<float>(offset.y) * scale);
           background = limit_radiance(background_radiance(scene, ray.direction));
         }
         pixel += glm::vec4(background, 0.0f);

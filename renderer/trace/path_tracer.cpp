@@ -298,7 +298,7 @@ class PathTracer {
 
 StopReason render_tile(const PreparedScene& scene, const RenderSettings& settings, const Rect& tile,
                        TileBuffer& out, const CancelFlag& cancel) {
-  const Camera& camera = scene.scene().camera;
+  const CameraRays camera(scene.scene().camera, settings.width, settings.height);
   // This call's samples of each pixel: a pass's, or all spp. Indices are global within the pixel
   // (pass 1 starts at pass_spp), so the sampler never repeats a sample between passes.
   const SampleRange range = samples_to_render(settings);
@@ -319,9 +319,8 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         for (int s = range.begin; s < range.end; ++s) {
           const SampleKey key{seed, pixel, static_cast<std::uint32_t>(s)};
           // Box filter: the sample lands uniformly anywhere in the pixel.
-          const Ray ray = camera.primary_ray(static_cast<float>(x) + sample_uniform(key, 0),
-                                             static_cast<float>(y) + sample_uniform(key, 1),
-                                             settings.width, settings.height);
+          const Ray ray = camera.ray(static_cast<float>(x) + sample_uniform(key, 0),
+                                     static_cast<float>(y) + sample_uniform(key, 1));
           const PathTracer::Result r = tracer.trace(ray, key);
           if (tracer.stopped()) return false;  // r is a path cut short
           ++out.stats().samples;

@@ -151,7 +151,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   // The variance AOV stays at the zeros reset() writes: a Whitted pixel is no Monte Carlo
   // estimate of the light reaching it (its extra samples only antialias), so there is no noise
   // in it to report.
-  const Camera& camera = scene.scene().camera;
+  const CameraRays camera(scene.scene().camera, settings.width, settings.height);
   const int samples = std::max(1, settings.spp);
   const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
   return trace_tile(
@@ -167,8 +167,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
           SampleKey k = key;
           k.sample = static_cast<std::uint32_t>(s);
           const float ox = s == 0 ? 0.5f : sample_uniform(k, 0), oy = s == 0 ? 0.5f : sample_uniform(k, 1);
-          const Ray ray = camera.primary_ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy,
-                                             settings.width, settings.height);
+          const Ray ray = camera.ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy);
           TraversalStats stats;
           const WhittedTracer::Primary p = tracer.trace_primary(ray, s == 0 ? &stats : nullptr);
           if (tracer.stopped()) return false;
