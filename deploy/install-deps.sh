@@ -29,7 +29,7 @@ build_packages=(
   # file: dpkg-shlibdeps reads the binary with it when `cpack -G DEB` computes the Depends
   file
   # renderer (TBB, which Embree's CMake config asks for, comes with libembree-dev)
-  libembree-dev libopenexr-dev libimath-dev libpng-dev libjpeg-dev libdeflate-dev
+  libembree-dev libopenexr-dev libimath-dev libpng-dev libjpeg-dev libdeflate-dev libisal-dev
   libtinygltf-dev libassimp-dev libglm-dev
   # service
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev

@@ -53,8 +53,7 @@ void split_lines(const std::vector<ExrChannel>& channels, std::size_t width, int
 
 }  // namespace
 
-std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels, int width, int y0, int y1,
-                                         int level) {
+std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels, int width, int y0, int y1) {
   const std::size_t n = exr_line_bytes(channels, width) * static_cast<std::size_t>(y1 - y0);  // even
   thread_local UninitializedArray<std::uint8_t> scratch;  // reused: no fresh pages a chunk
   scratch.allocate(std::max<std::size_t>(2 * n, 1));
@@ -67,7 +66,7 @@ std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels
   std::vector<std::uint8_t> out;
   // Only a stream shorter than the lines is kept (a reader tells the two apart by the size);
   // otherwise the lines themselves, interleaved again from the split (rare: noise).
-  if (n > 0 && zlib_compress({predicted, n}, level, out, n - 1)) return out;
+  if (n > 0 && zlib_compress({predicted, n}, out, n - 1)) return out;
   out.resize(n);
   for (std::size_t i = 0; i < n / 2; ++i) {
     out[2 * i] = split[i];

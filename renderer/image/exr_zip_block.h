@@ -11,7 +11,8 @@
 // channel's values for the line's pixels, little-endian. The bytes are then split into two
 // halves, the bytes at even offsets followed by those at odd offsets; each byte after the first is
 // replaced by its difference to the one before plus 128 (mod 256); and the result is compressed
-// as one zlib stream. A chunk that zlib would not make smaller is stored as it was before the
+// as one zlib stream (any deflate will do: ours is igzip's, zlib_stream.h, and the inflated
+// bytes are those of OpenEXR's own writer). A chunk that deflate would not make smaller is stored as it was before the
 // split, which is how a reader tells the two apart (its size equals the unpacked size).
 #include <cstddef>
 #include <cstdint>
@@ -35,8 +36,7 @@ struct ExrChannel {
 std::size_t exr_line_bytes(const std::vector<ExrChannel>& channels, int width);
 
 // The chunk of lines [y0, y1) (counted from the image's first line) of `width` pixels, channels
-// in the file's order, compressed by zlib at `level`, or unpacked when that is not smaller.
-std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels, int width, int y0, int y1,
-                                         int level);
+// in the file's order, as a zlib stream (zlib_stream.h), or unpacked when that is not smaller.
+std::vector<std::uint8_t> pack_zip_chunk(const std::vector<ExrChannel>& channels, int width, int y0, int y1);
 
 }  // namespace farm

@@ -16,7 +16,6 @@
 namespace farm {
 namespace {
 
-constexpr int kLevel = 1;
 constexpr std::uint8_t kFilterSub = 1;
 constexpr std::uint8_t kFilterUp = 2;
 
@@ -101,13 +100,13 @@ void PngStrips::compress(int strip, const std::function<const std::uint8_t*(int 
   Strip& s = strips_[static_cast<std::size_t>(strip)];
   s.deflated.clear();
   if (strip == 0) {
-    const auto header = zlib_header(kLevel);
+    const auto header = zlib_header();
     s.deflated.assign(header.begin(), header.end());
   }
   const bool last = strip + 1 == strips();
   const std::span<const std::uint8_t> rows(filtered.begin(), filtered.size());
-  if (!deflate_piece(rows, kLevel, last, s.deflated, deflate_limit(rows.size()), /*run_length=*/true)) {
-    throw std::runtime_error(fmt::format("{}: cannot write PNG: zlib could not compress rows {} to {}",
+  if (!deflate_piece(rows, last, s.deflated, deflate_limit(rows.size()))) {
+    throw std::runtime_error(fmt::format("{}: cannot write PNG: could not compress rows {} to {}",
                                          name_.string(), y0, y1 - 1));
   }
   s.adler = adler32_of(rows);

@@ -24,7 +24,7 @@ echo "package: $deb"
 # links (not a hand-written list), and the files where the issue puts them.
 depends=$(dpkg-deb -f "$deb" Depends)
 echo "Depends: $depends"
-for library in libembree3 libopenexr libassimp libpq5 libsqlite3 libdeflate0; do
+for library in libembree3 libopenexr libassimp libpq5 libsqlite3 libdeflate0 libisal2; do
   grep -q "$library" <<<"$depends" || fail "Depends does not name $library: $depends"
 done
 # gRPC, protobuf and abseil are linked in (FARM_STATIC_GRPC, docs/architecture.md 9.1): a Depends
