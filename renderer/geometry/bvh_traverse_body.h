@@ -86,23 +86,24 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
     }
 #endif
     mask &= (1 << node.children) - 1;
-    unsigned leaves = static_cast<unsigned>(mask) & node.leaf_mask;
-    unsigned inner = static_cast<unsigned>(mask) & ~static_cast<unsigned>(node.leaf_mask);
+    // The children met, leaves and inner nodes apart (bits by slot).
+    unsigned leaves_met = static_cast<unsigned>(mask) & node.leaf_mask;
+    unsigned inner_met = static_cast<unsigned>(mask) & ~static_cast<unsigned>(node.leaf_mask);
     // Leaf children first, nearest first for the closest hit (so the hit found shortens the rest);
     // in slot order for any hit, which any occluder ends and so gains little from the order:
     // sorting cost it more than it saved (farm bench rt, incoherent any hit 16-19% faster on the
     // cow and the bunny). A node's children are nearly always all leaves or all inner nodes, and
     // a ray meets one or two of them: those cases take no sort.
-    while (leaves) {
-      int c = __builtin_ctz(leaves);
+    while (leaves_met) {
+      int c = __builtin_ctz(leaves_met);
       if constexpr (!kAnyHit) {
-        for (unsigned rest = leaves & (leaves - 1); rest; rest &= rest - 1) {
+        for (unsigned rest = leaves_met & (leaves_met - 1); rest; rest &= rest - 1) {
           const int other = __builtin_ctz(rest);
           if (entry[other] < entry[c]) c = other;  // the lower slot of equals: ctz order
         }
         if (entry[c] > t_max) break;  // and so are the others
       }
-      leaves &= ~(1u << c);
+      leaves_met &= ~(1u << c);
       const auto k = static_cast<std::size_t>(c);
       if constexpr (kLeafTest) {
         primitives_tested += node.count[k];
@@ -129,16 +130,16 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
       if (kAnyHit && hit) break;
     }
     if (kAnyHit && hit) break;
-    if (inner != 0) {
-      const int first = __builtin_ctz(inner);
-      inner &= inner - 1;
-      if (inner == 0) {  // one inner child met, the commonest case: entered at once
+    if (inner_met != 0) {
+      const int first = __builtin_ctz(inner_met);
+      inner_met &= inner_met - 1;
+      if (inner_met == 0) {  // one inner child met, the commonest case: entered at once
         if (kAnyHit || entry[first] <= t_max) {
           index = node.child[first];
           continue;
         }
-      } else if ((inner & (inner - 1)) == 0) {  // two: the nearer entered, the other stacked
-        const int second = __builtin_ctz(inner);
+      } else if ((inner_met & (inner_met - 1)) == 0) {  // two: the nearer entered, the other stacked
+        const int second = __builtin_ctz(inner_met);
         const bool swap = !kAnyHit && entry[second] < entry[first];
         const int nearer = swap ? second : first, farther = swap ? first : second;
         if (kAnyHit || entry[nearer] <= t_max) {
@@ -151,8 +152,8 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
         std::array<int, kWideBvhWidth> order;
         order[0] = first;
         int n = 1;
-        for (; inner; inner &= inner - 1) {
-          const int i = __builtin_ctz(inner);
+        for (; inner_met; inner_met &= inner_met - 1) {
+          const int i = __builtin_ctz(inner_met);
           int j = n++;
           while (!kAnyHit && j > 0 && entry[order[static_cast<std::size_t>(j - 1)]] > entry[i]) {
             order[static_cast<std::size_t>(j)] = order[static_cast<std::size_t>(j - 1)];

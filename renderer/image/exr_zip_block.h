@@ -12,8 +12,9 @@
 // halves, the bytes at even offsets followed by those at odd offsets; each byte after the first is
 // replaced by its difference to the one before plus 128 (mod 256); and the result is compressed
 // as one zlib stream (any deflate will do: ours is igzip's, zlib_stream.h, and the inflated
-// bytes are those of OpenEXR's own writer). A chunk that deflate would not make smaller is stored as it was before the
-// split, which is how a reader tells the two apart (its size equals the unpacked size).
+// bytes are those of OpenEXR's own writer). A chunk that deflate would not make smaller is
+// stored as it was before the split, which is how a reader tells the two apart (its size equals
+// the unpacked size).
 #include <cstddef>
 #include <cstdint>
 #include <string>

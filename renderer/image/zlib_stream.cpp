@@ -15,11 +15,13 @@
 namespace farm {
 namespace {
 
-// What a thread keeps for igzip: its stream state (80 KiB) and level 1's hash tables and token
-// buffer (276 KiB), so that a piece costs no allocation and no fresh pages.
+// What a thread keeps for igzip: its stream state (80 KiB), level 1's hash tables and token
+// buffer (276 KiB), and the room a piece is deflated into (never zeroed), so that a piece costs
+// no allocation and no fresh pages; only the bytes made are appended to the caller's vector.
 struct ThreadIgzip {
   std::unique_ptr<isal_zstream> stream = std::make_unique<isal_zstream>();
   UninitializedArray<std::uint8_t> level_buffer;
+  UninitializedArray<std::uint8_t> room;
   ThreadIgzip() { level_buffer.allocate(ISAL_DEF_LVL1_DEFAULT); }
 };
 
@@ -36,9 +38,7 @@ std::array<std::uint8_t, 2> zlib_header() {
 bool deflate_piece(std::span<const std::uint8_t> data, bool last, std::vector<std::uint8_t>& out, std::size_t limit) {
   if (data.size() > std::numeric_limits<std::uint32_t>::max()) return false;  // no frame's piece is near it
   thread_local ThreadIgzip igzip;
-  // Deflated into room this thread keeps (never zeroed, no fresh pages), then only the bytes
-  // made are appended.
-  thread_local UninitializedArray<std::uint8_t> room;
+  UninitializedArray<std::uint8_t>& room = igzip.room;
   room.allocate(std::max<std::size_t>(limit, 1));
   isal_zstream& stream = *igzip.stream;
   isal_deflate_stateless_init(&stream);
