@@ -47,17 +47,21 @@ std::string sha256_hex(std::string_view bytes) {
   return h.finish_hex();
 }
 
-std::string sha256_file_hex(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error(fmt::format("cannot read '{}'", file.string()));
+std::string sha256_stream_hex(std::istream& in, std::string_view name) {
   Sha256 h;
   std::array<char, 1 << 16> buffer;
   while (in) {
     in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
     h.update(buffer.data(), static_cast<std::size_t>(in.gcount()));
   }
-  if (in.bad()) throw std::runtime_error(fmt::format("error reading '{}'", file.string()));
+  if (in.bad()) throw std::runtime_error(fmt::format("error reading '{}'", name));
   return h.finish_hex();
+}
+
+std::string sha256_file_hex(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("cannot read '{}'", file.string()));
+  return sha256_stream_hex(in, file.string());
 }
 
 bool is_sha256_hex(std::string_view s) { return s.size() == 64 && is_lowercase_hex(s); }

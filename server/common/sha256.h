@@ -3,6 +3,7 @@
 // scene hashes (proto/farm.proto).
 #include <cstddef>
 #include <filesystem>
+#include <istream>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -31,6 +32,9 @@ class Sha256 {
 std::string sha256_hex(std::string_view bytes);
 // Streams the file; throws std::runtime_error when it cannot be read.
 std::string sha256_file_hex(const std::filesystem::path& file);
+// What is left of `in`, read to its end; `name` says what it is in the error thrown when reading
+// fails.
+std::string sha256_stream_hex(std::istream& in, std::string_view name);
 // 64 lowercase hex digits: the only form accepted as an asset name (it becomes a file name).
 bool is_sha256_hex(std::string_view s);
 

@@ -29,12 +29,33 @@ grpc::Status guarded(F&& body) {
 
 const grpc::Status kClientWentAway(grpc::StatusCode::CANCELLED, "client went away");
 
-// Streams `file` in chunks of `make(offset, bytes, first)`; false when the client went away.
+// A file to send, opened once: its size, its hash and its bytes all come from this one open file.
+// A result may be replaced while it is sent (a progressive preview renamed over by the next
+// pass's): opened once, the old one is sent whole and its sha256 is of the bytes sent. Opened
+// three times (hash, size, bytes), a fetch could get one version's hash with the other's bytes
+// (FarmPassesTest: "sha256 mismatch").
+struct FileToSend {
+  std::ifstream in;
+  std::uint64_t size = 0;
+
+  explicit FileToSend(const std::filesystem::path& file) : in(file, std::ios::binary) {
+    if (!in) throw std::runtime_error("cannot read " + file.string());
+    in.seekg(0, std::ios::end);
+    size = static_cast<std::uint64_t>(in.tellg());
+    in.seekg(0);
+  }
+  // Reads it all, then starts it again from its first byte.
+  std::string sha256(const std::filesystem::path& file) {
+    std::string sha = sha256_stream_hex(in, file.string());
+    in.clear();
+    in.seekg(0);
+    return sha;
+  }
+};
+
+// Streams `in` in chunks of `make(offset, bytes, first)`; false when the client went away.
 template <typename Chunk, typename Make>
-bool stream_file(const std::filesystem::path& file, grpc::ServerWriter<Chunk>* writer,
-                 grpc::ServerContext* context, Make&& make) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + file.string());
+bool stream_file(std::ifstream& in, grpc::ServerWriter<Chunk>* writer, grpc::ServerContext* context, Make&& make) {
   std::string buffer(kChunk, '\0');
   std::uint64_t offset = 0;
   bool first = true;
@@ -173,9 +194,10 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
                                          grpc::ServerWriter<v1::FileChunk>* writer) {
   return guarded([&] {
     const std::filesystem::path file = front_door_.result_file(caller(*context), *request);
-    const std::string sha = sha256_file_hex(file);
-    const std::uint64_t size = std::filesystem::file_size(file);
-    const bool complete = stream_file(file, writer, context,
+    FileToSend open(file);
+    const std::string sha = open.sha256(file);
+    const std::uint64_t size = open.size;
+    const bool complete = stream_file(open.in, writer, context,
                                       [&](std::uint64_t offset, std::string_view bytes, bool first) {
       v1::FileChunk chunk;
       if (first) {
@@ -246,8 +268,9 @@ grpc::Status SchedulerService::GetAsset(grpc::ServerContext* context,
                                         grpc::ServerWriter<v1::AssetChunk>* writer) {
   return guarded([&] {
     const std::filesystem::path file = front_door_.asset_file(caller(*context), request->sha256());
-    const std::uint64_t size = std::filesystem::file_size(file);
-    const bool complete = stream_file(file, writer, context,
+    FileToSend open(file);
+    const std::uint64_t size = open.size;
+    const bool complete = stream_file(open.in, writer, context,
                                       [&](std::uint64_t offset, std::string_view bytes, bool) {
       v1::AssetChunk chunk;
       chunk.set_total_size(size);
