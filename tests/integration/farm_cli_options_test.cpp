@@ -77,6 +77,16 @@ TEST_F(FarmCliOptionsTest, VersionIsTheCMakeProjectVersion) {
   EXPECT_EQ(r.output, fmt::format("farm {}\n", FARM_PROJECT_VERSION));
 }
 
+// libpq and the twenty libraries it needs are loaded when a PostgreSQL store is opened, not by
+// every command's start-up (libpq_library.h); the FarmSchedulerOnPostgresTest tests load it.
+// The dynamic loader's own log says what `farm` loaded: SQLite, which it links, must be in it.
+TEST_F(FarmCliOptionsTest, StartingUpLoadsNoLibpq) {
+  const auto r = run_command("LD_DEBUG=libs " + farm("--version"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("libsqlite3.so"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("libpq.so"), std::string::npos) << r.output;
+}
+
 TEST_F(FarmCliOptionsTest, EveryCommandExplainsItselfInHelp) {
   const std::string overview = help_of("");
   const std::vector<std::string> commands = {"render", "info",   "validate",    "bench raster", "bench rt",

@@ -1,7 +1,6 @@
 #include "server/scheduler/store/postgres_connection.h"
 
 #include <fmt/format.h>
-#include <libpq-fe.h>
 #include <poll.h>
 
 #include <algorithm>
@@ -10,6 +9,7 @@
 #include <vector>
 
 #include "renderer/util/utf8_text.h"
+#include "server/scheduler/store/libpq_library.h"
 
 namespace farm {
 
@@ -21,8 +21,8 @@ constexpr Oid kTextOid = 25;
 constexpr Oid kByteaOid = 17;
 
 std::string server_message(pg_conn* conn, const PGresult* result) {
-  std::string message = result ? PQresultErrorMessage(result) : "";
-  if (message.empty()) message = PQerrorMessage(conn);
+  std::string message = result ? libpq().resultErrorMessage(result) : "";
+  if (message.empty()) message = libpq().errorMessage(conn);
   while (!message.empty() && std::isspace(static_cast<unsigned char>(message.back()))) message.pop_back();
   return message;
 }
@@ -32,16 +32,16 @@ std::string server_message(pg_conn* conn, const PGresult* result) {
 [[noreturn]] void throw_postgres_error(pg_conn* conn, const PGresult* result, const std::string& where,
                                        const std::string& sql) {
   const std::string message = server_message(conn, result);
-  if (PQstatus(conn) != CONNECTION_OK) {
+  if (libpq().status(conn) != CONNECTION_OK) {
     throw StoreUnavailable(fmt::format("job store {}: connection lost: {}", where, message));
   }
-  const char* state = result ? PQresultErrorField(result, PG_DIAG_SQLSTATE) : nullptr;
+  const char* state = result ? libpq().resultErrorField(result, PG_DIAG_SQLSTATE) : nullptr;
   throw std::runtime_error(fmt::format("job store {}: {}{}: {}", where, message,
                                        state ? fmt::format(" (SQLSTATE {})", state) : "", sql));
 }
 
 struct ResultDeleter {
-  void operator()(PGresult* r) const { PQclear(r); }
+  void operator()(PGresult* r) const { libpq().clear(r); }
 };
 using Result = std::unique_ptr<PGresult, ResultDeleter>;
 
@@ -66,7 +66,7 @@ std::string storable_text(const std::string& text) {
 }
 
 void check(pg_conn* conn, const Result& result, const std::string& where, const std::string& sql) {
-  const ExecStatusType status = result ? PQresultStatus(result.get()) : PGRES_FATAL_ERROR;
+  const ExecStatusType status = result ? libpq().resultStatus(result.get()) : PGRES_FATAL_ERROR;
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) throw_postgres_error(conn, result.get(), where, sql);
 }
 
@@ -87,7 +87,7 @@ class PostgresStatement : public SqlStatement {
     } else {
       ++row_;
     }
-    return row_ < PQntuples(result_.get());
+    return row_ < libpq().ntuples(result_.get());
   }
   void reset() override {
     result_.reset();
@@ -106,23 +106,23 @@ class PostgresStatement : public SqlStatement {
     std::from_chars(v, end, out);
     return out;
   }
-  bool column_is_null(int c) const override { return PQgetisnull(result_.get(), row_, c) != 0; }
+  bool column_is_null(int c) const override { return libpq().getisnull(result_.get(), row_, c) != 0; }
   std::string column_text(int c) const override {
     const char* v = value(c);
-    return v ? std::string(v, static_cast<std::size_t>(PQgetlength(result_.get(), row_, c))) : std::string();
+    return v ? std::string(v, static_cast<std::size_t>(libpq().getlength(result_.get(), row_, c))) : std::string();
   }
   std::string column_blob(int c) const override {
     const char* v = value(c);
     if (!v) return {};
     std::size_t length = 0;
-    unsigned char* bytes = PQunescapeBytea(reinterpret_cast<const unsigned char*>(v), &length);
+    unsigned char* bytes = libpq().unescapeBytea(reinterpret_cast<const unsigned char*>(v), &length);
     if (!bytes) throw std::runtime_error("job store: out of memory reading a bytea column");
     std::string out(reinterpret_cast<const char*>(bytes), length);
-    PQfreemem(bytes);
+    libpq().freemem(bytes);
     return out;
   }
   std::int64_t changes() const override {
-    const char* n = result_ ? PQcmdTuples(result_.get()) : "";
+    const char* n = result_ ? libpq().cmdTuples(result_.get()) : "";
     std::int64_t out = 0;
     std::from_chars(n, n + std::char_traits<char>::length(n), out);
     return out;
@@ -142,9 +142,9 @@ class PostgresStatement : public SqlStatement {
   }
 
   const char* value(int c) const {
-    if (!result_ || row_ >= PQntuples(result_.get()) || c >= PQnfields(result_.get())) return nullptr;
-    if (PQgetisnull(result_.get(), row_, c)) return nullptr;
-    return PQgetvalue(result_.get(), row_, c);
+    if (!result_ || row_ >= libpq().ntuples(result_.get()) || c >= libpq().nfields(result_.get())) return nullptr;
+    if (libpq().getisnull(result_.get(), row_, c)) return nullptr;
+    return libpq().getvalue(result_.get(), row_, c);
   }
 
   void execute() {
@@ -160,14 +160,14 @@ class PostgresStatement : public SqlStatement {
       formats[i] = values_[i].binary ? 1 : 0;
     }
     if (name_.empty()) {
-      result_.reset(PQexecParams(conn, sql_.c_str(), n, types.data(), values.data(), lengths.data(), formats.data(), 0));
+      result_.reset(libpq().execParams(conn, sql_.c_str(), n, types.data(), values.data(), lengths.data(), formats.data(), 0));
     } else {
       if (prepared_generation_ != db_.generation() + 1) {
-        Result prepared(PQprepare(conn, name_.c_str(), sql_.c_str(), n, types.data()));
+        Result prepared(libpq().prepare(conn, name_.c_str(), sql_.c_str(), n, types.data()));
         check(conn, prepared, db_.describe(), sql_);
         prepared_generation_ = db_.generation() + 1;  // 0: never prepared
       }
-      result_.reset(PQexecPrepared(conn, name_.c_str(), n, values.data(), lengths.data(), formats.data(), 0));
+      result_.reset(libpq().execPrepared(conn, name_.c_str(), n, values.data(), lengths.data(), formats.data(), 0));
     }
     check(conn, result_, db_.describe(), sql_);
   }
@@ -184,10 +184,10 @@ void ignore_notice(void*, const char*) {}
 
 // "postgresql://user@host:port/db" of the live connection: no password, for messages and logs.
 std::string describe_connection(pg_conn* conn) {
-  const char* host = PQhost(conn);
+  const char* host = libpq().host(conn);
   const std::string h = host && *host ? host : "localhost";
-  return fmt::format("postgresql://{}@{}:{}/{}", PQuser(conn), h.find(':') != std::string::npos ? "[" + h + "]" : h,
-                     PQport(conn), PQdb(conn));
+  return fmt::format("postgresql://{}@{}:{}/{}", libpq().user(conn), h.find(':') != std::string::npos ? "[" + h + "]" : h,
+                     libpq().port(conn), libpq().db(conn));
 }
 
 }  // namespace
@@ -231,41 +231,41 @@ PostgresConnection::PostgresConnection(const std::string& url) : url_(url) {
   const char* keywords[] = {"connect_timeout", "application_name", "keepalives_idle", "keepalives_interval",
                             "keepalives_count", "tcp_user_timeout", "dbname", "client_encoding", nullptr};
   const char* values[] = {"10", "farm", "5", "2", "3", "10000", url.c_str(), "UTF8", nullptr};
-  conn_ = PQconnectdbParams(keywords, values, 1);
-  if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
+  conn_ = libpq().connectdbParams(keywords, values, 1);
+  if (!conn_ || libpq().status(conn_) != CONNECTION_OK) {
     const std::string message = conn_ ? server_message(conn_, nullptr) : "out of memory";
-    PQfinish(conn_);
+    libpq().finish(conn_);
     conn_ = nullptr;
     // The URL may hold a password: name the store without it.
     const std::size_t at = url.find('@');
     const std::string where = at == std::string::npos ? url : url.substr(0, url.find("://") + 3) + "..." + url.substr(at);
     throw StoreUnavailable(fmt::format("cannot reach job store {}: {}", where, message));
   }
-  PQsetNoticeProcessor(conn_, ignore_notice, nullptr);
+  libpq().setNoticeProcessor(conn_, ignore_notice, nullptr);
   described_ = describe_connection(conn_);
 }
 
 PostgresConnection::~PostgresConnection() {
   statements_.clear();
-  PQfinish(conn_);
+  libpq().finish(conn_);
 }
 
 pg_conn* PostgresConnection::live() {
-  if (PQstatus(conn_) == CONNECTION_OK) return conn_;
+  if (libpq().status(conn_) == CONNECTION_OK) return conn_;
   // Never made again under a transaction: its first statements went with the old connection.
   if (in_transaction_) throw StoreUnavailable(fmt::format("job store {}: connection lost", described_));
-  PQreset(conn_);
-  if (PQstatus(conn_) != CONNECTION_OK) {
+  libpq().reset(conn_);
+  if (libpq().status(conn_) != CONNECTION_OK) {
     throw StoreUnavailable(fmt::format("job store {}: cannot reconnect: {}", described_, server_message(conn_, nullptr)));
   }
-  PQsetNoticeProcessor(conn_, ignore_notice, nullptr);
+  libpq().setNoticeProcessor(conn_, ignore_notice, nullptr);
   ++generation_;
   return conn_;
 }
 
 void PostgresConnection::exec(const std::string& sql) {
   pg_conn* conn = live();
-  Result result(PQexec(conn, sql.c_str()));
+  Result result(libpq().exec(conn, sql.c_str()));
   check(conn, result, described_, sql);
 }
 
@@ -291,8 +291,8 @@ void PostgresConnection::commit() {
 
 void PostgresConnection::rollback() noexcept {
   in_transaction_ = false;
-  if (PQstatus(conn_) != CONNECTION_OK) return;  // the transaction went with the connection
-  PQclear(PQexec(conn_, "ROLLBACK"));
+  if (libpq().status(conn_) != CONNECTION_OK) return;  // the transaction went with the connection
+  libpq().clear(libpq().exec(conn_, "ROLLBACK"));
 }
 
 void PostgresConnection::notify(const std::string& channel, const std::vector<std::string>& payloads) {
@@ -313,10 +313,10 @@ void PostgresConnection::notify(const std::string& channel, const std::vector<st
 
 void PostgresConnection::listen(const std::string& channel) {
   pg_conn* conn = live();
-  char* name = PQescapeIdentifier(conn, channel.data(), channel.size());
+  char* name = libpq().escapeIdentifier(conn, channel.data(), channel.size());
   if (!name) throw std::runtime_error(fmt::format("job store {}: cannot quote channel '{}'", described_, channel));
   const std::string sql = fmt::format("LISTEN {}", name);
-  PQfreemem(name);
+  libpq().freemem(name);
   exec(sql);
 }
 
@@ -324,19 +324,19 @@ std::vector<std::string> PostgresConnection::notifications(std::chrono::millisec
   pg_conn* conn = live();
   std::vector<std::string> out;
   const auto drain = [&] {
-    while (PGnotify* n = PQnotifies(conn)) {
+    while (PGnotify* n = libpq().notifies(conn)) {
       out.emplace_back(n->extra);
-      PQfreemem(n);
+      libpq().freemem(n);
     }
   };
   drain();  // those a statement's reply brought along
   if (!out.empty()) return out;
-  pollfd fd{.fd = PQsocket(conn), .events = POLLIN, .revents = 0};
+  pollfd fd{.fd = libpq().socket(conn), .events = POLLIN, .revents = 0};
   if (fd.fd < 0) throw StoreUnavailable(fmt::format("job store {}: connection lost", described_));
   if (::poll(&fd, 1, static_cast<int>(wait.count())) <= 0) return out;
   // A broken link (the server gone, keepalives unanswered) shows as readable and fails here;
   // PQstatus then says so, and live() makes the connection again.
-  if (!PQconsumeInput(conn) || PQstatus(conn) != CONNECTION_OK) {
+  if (!libpq().consumeInput(conn) || libpq().status(conn) != CONNECTION_OK) {
     throw StoreUnavailable(fmt::format("job store {}: connection lost: {}", described_, server_message(conn, nullptr)));
   }
   drain();
