@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/job/job.h"
@@ -18,6 +19,7 @@
 #include "renderer/scene/model.h"
 #include "renderer/util/input_error.h"
 #include "server/bench/bench_scenes.h"
+#include "server/bench/bench_support.h"
 
 namespace farm {
 namespace {
@@ -80,7 +82,18 @@ std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, const std::
   return t;
 }
 
-// `mitsuba_job`: the job Mitsuba renders beside ours; empty: none.
+// The rounds' median time. Samples and rays are the same every round: the same image, seeded alike.
+Throughput median_of(const std::vector<Throughput>& rounds) {
+  std::vector<double> seconds;
+  for (const Throughput& t : rounds) seconds.push_back(t.seconds);
+  Throughput m = rounds.front();
+  m.seconds = bench::median(seconds);
+  return m;
+}
+
+// `mitsuba_job`: the job Mitsuba renders beside ours; empty: none. Each round renders with farm
+// and then with each Mitsuba variant, so that a slow spell of a shared machine falls on all of
+// them alike; the medians over rounds are printed.
 void bench_scene(const std::string& name, const PreparedScene& scene, RenderSettings settings,
                  const PathBenchOptions& o, const std::filesystem::path& mitsuba_job) {
   settings.engine = EngineKind::Path;
@@ -88,26 +101,45 @@ void bench_scene(const std::string& name, const PreparedScene& scene, RenderSett
   settings.height = o.height;
   settings.spp = o.spp;
   settings.aovs = {};
-  fmt::print("\nscene {}: {} triangles, {}x{}, {} spp, max_depth {}\n", name, scene.triangle_count(),
-             o.width, o.height, o.spp, settings.max_depth);
+  const bool with_mitsuba = !mitsuba_job.empty() && !o.mitsuba_python.empty();
+  fmt::print("\nscene {}: {} triangles, {}x{}, {} spp, max_depth {}{}\n", name, scene.triangle_count(), o.width,
+             o.height, o.spp, settings.max_depth,
+             o.repeats > 1 ? fmt::format(", median of {} rounds{}", o.repeats,
+                                         with_mitsuba ? " (farm and Mitsuba taking turns)" : "")
+                           : std::string());
   fmt::print("{:<28} {:>7} {:>9} {:>11} {:>9} {:>11} {:>8}\n", "renderer", "threads", "seconds",
              "Msamples/s", "Mrays/s", "rays/sample", "speedup");
   double single = 0.0;
   for (int threads : o.threads) {
-    const Throughput t = measure(scene, settings, threads);
+    std::vector<Throughput> farm_rounds;
+    struct MitsubaRounds {
+      std::string renderer;
+      std::vector<Throughput> rounds;
+      std::vector<double> warmups;
+    };
+    std::array<MitsubaRounds, kMitsubaVariants.size()> mitsuba;
+    for (int round = 0; round < o.repeats; ++round) {
+      farm_rounds.push_back(measure(scene, settings, threads));
+      if (!with_mitsuba) continue;
+      for (std::size_t v = 0; v < kMitsubaVariants.size(); ++v) {
+        double warmup = 0.0;
+        if (const auto m = measure_mitsuba(o, mitsuba_job, threads, kMitsubaVariants[v], mitsuba[v].renderer, warmup)) {
+          mitsuba[v].rounds.push_back(*m);
+          mitsuba[v].warmups.push_back(warmup);
+        }
+      }
+    }
+    const Throughput t = median_of(farm_rounds);
     if (threads == 1) single = t.msamples_per_s();
     fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9.2f} {:>11.2f} {:>7.2f}x\n", "farm path", threads,
                t.seconds, t.msamples_per_s(), t.mrays_per_s(), t.rays / t.samples,
                single > 0.0 ? t.msamples_per_s() / single : 0.0);
-    if (mitsuba_job.empty() || o.mitsuba_python.empty()) continue;
-    for (const char* variant : kMitsubaVariants) {
-      std::string renderer;
-      double warmup = 0.0;
-      if (const auto m = measure_mitsuba(o, mitsuba_job, threads, variant, renderer, warmup)) {
-        fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9} {:>11} {:>8}   farm/mitsuba {:.2f}x (untimed warm-up {:.2f} s)\n",
-                   renderer, threads, m->seconds, m->msamples_per_s(), "-", "-", "-",
-                   t.msamples_per_s() / m->msamples_per_s(), warmup);
-      }
+    for (const MitsubaRounds& m : mitsuba) {
+      if (m.rounds.empty()) continue;
+      const Throughput mt = median_of(m.rounds);
+      fmt::print("{:<28} {:>7} {:>9.2f} {:>11.3f} {:>9} {:>11} {:>8}   farm/mitsuba {:.2f}x (untimed warm-up {:.2f} s)\n",
+                 m.renderer, threads, mt.seconds, mt.msamples_per_s(), "-", "-", "-",
+                 t.msamples_per_s() / mt.msamples_per_s(), bench::median(m.warmups));
     }
   }
 }

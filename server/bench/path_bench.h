@@ -4,7 +4,8 @@
 // all of them; the textured Cornell box's cost per sample against the plain one's; the yard lit
 // only by a sky map (jobs/environment.json); and, given a Python with Mitsuba 3, Mitsuba's
 // scalar_rgb and its JIT variant llvm_ad_rgb (compiled in an untimed first render, whose time is
-// printed) on the same Cornell box and sky-lit yard and thread counts in the same run.
+// printed) on the same Cornell box and sky-lit yard and thread counts in the same run, rendering in
+// turns over --repeats rounds.
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@ struct PathBenchOptions {
   std::string scene = "all";          // cornell, textured (plain against textured), environment, cbbunny or all
   std::string mitsuba_python;         // a python with `mitsuba` installed; empty: skip Mitsuba
   std::filesystem::path mitsuba_script = "tools/mitsuba_reference.py";
+  int repeats = 1;                    // rounds, farm and Mitsuba taking turns; medians reported
 };
 
 void run_path_bench(const PathBenchOptions& options);

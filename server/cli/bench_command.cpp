@@ -122,6 +122,10 @@ void add_path_bench(CLI::App& bench, CommandTable& commands) {
   path->add_option("--mitsuba-script", o->mitsuba_script,
                    "The script that renders a job with Mitsuba")
       ->capture_default_str();
+  path->add_option("--repeats", o->repeats,
+                   "Rounds, each rendering with farm and then each Mitsuba variant (medians reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   add_runner(commands, path, o, run_path_bench);
 }
 
