@@ -94,8 +94,8 @@ Bsdf::Bsdf(const Material& m, bool transmitted) {
   // What the specular layer reflects is not available to the diffuse one below it.
   specular_ = glm::clamp(m.specular, 0.0f, 1.0f);
   diffuse_ = glm::clamp(m.diffuse, 0.0f, 1.0f) * (1.0f - max_component(specular_));
+  if (specular_ == glm::vec3(0.0f)) return;  // Lambertian: no glossy layer, no roughness to work out
   alpha_ = roughness_from_shininess(m.shininess);
-  if (specular_ == glm::vec3(0.0f)) return;  // Lambertian: no glossy layer to sample or correct
   // ks is the glossy layer's albedo: single scattering reflects ks * E(mu) of it, and the
   // multiple-scattering lobe (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) the rest, so the
   // layer reflects exactly ks at every angle and roughness.
