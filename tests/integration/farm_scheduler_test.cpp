@@ -1125,9 +1125,9 @@ TEST_F(FarmSchedulerTest, ModelBombsAreRefusedWithinTheSceneBudgetAndTheSchedule
                                       "longer than 3 s, the scheduler's limit (--max-scene-seconds)"),
             std::string::npos) << slow.error_message();
 
-  {  // 250,000 honest quads: 10 MB of text that Assimp needs about 270 MiB of memory to load
+  {  // 640,000 honest quads: 26 MB of text that takes about 350 MiB of memory to load
     std::ofstream out(dir_ / "grid.obj");
-    constexpr int kSide = 500;
+    constexpr int kSide = 800;
     for (int j = 0; j < kSide; ++j)
       for (int i = 0; i < kSide; ++i) out << "v " << i << ' ' << j << " 0\n";
     for (int j = 0; j + 1 < kSide; ++j)
