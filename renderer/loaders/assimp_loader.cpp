@@ -302,7 +302,7 @@ Model load_with_assimp(const ModelFile& file) {
   // Import and post-processing are two calls, so that the imported meshes are checked between
   // them (check_imported_meshes).
   // Identical vertices are joined by join_identical_vertices afterwards, as Assimp's own step
-  // would have joined them (last of these in its order), in a tenth of its time.
+  // would have joined them (last of these in its order), in a quarter of its time.
   constexpr unsigned kPostProcess = aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure;
   const aiScene* scene = nullptr;
   try {

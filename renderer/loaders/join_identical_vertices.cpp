@@ -9,13 +9,13 @@
 namespace farm {
 namespace {
 
-// Assimp's rule, in its words' order: two vertices are one when their positions hash alike
-// (std::hash of x, y and z combined, boost-style: equal floats, +0 and -0 alike) and their
-// positions, normals, first texture coordinates, tangents and bitangents each differ by at most
-// 1e-5 in length (an attribute the mesh lacks counts as zero; colours are not compared; tangents
-// count only where bitangents come with them). A vertex
-// that matches several kept ones joins the most recently kept: Assimp asks a std::unordered_map,
-// which puts each new key at the front of its bucket and returns the first match it meets.
+// Assimp's rule: two vertices are one when their positions hash alike (std::hash of x, y and z
+// combined, boost-style: equal floats, +0 and -0 alike) and their positions, normals, first
+// texture coordinates, tangents and bitangents each differ by at most 1e-5 in length (an
+// attribute the mesh lacks counts as zero; colours are not compared; tangents count only where
+// bitangents come with them). A vertex that matches several kept ones joins the most recently
+// kept: Assimp asks a std::unordered_map, which puts each new key at the front of its bucket and
+// returns the first match it meets.
 constexpr float kEpsilon = 1e-5f;
 constexpr float kSquareEpsilon = kEpsilon * kEpsilon;
 

@@ -82,6 +82,13 @@ std::optional<Throughput> measure_mitsuba(const PathBenchOptions& o, const std::
   return t;
 }
 
+// One Mitsuba variant's rounds at one thread count.
+struct MitsubaRounds {
+  std::string renderer;  // as its script names itself
+  std::vector<Throughput> rounds;
+  std::vector<double> warmups;  // its untimed first render's seconds, each round
+};
+
 // The rounds' median time. Samples and rays are the same every round: the same image, seeded alike.
 Throughput median_of(const std::vector<Throughput>& rounds) {
   std::vector<double> seconds;
@@ -112,11 +119,6 @@ void bench_scene(const std::string& name, const PreparedScene& scene, RenderSett
   double single = 0.0;
   for (int threads : o.threads) {
     std::vector<Throughput> farm_rounds;
-    struct MitsubaRounds {
-      std::string renderer;
-      std::vector<Throughput> rounds;
-      std::vector<double> warmups;
-    };
     std::array<MitsubaRounds, kMitsubaVariants.size()> mitsuba;
     for (int round = 0; round < o.repeats; ++round) {
       farm_rounds.push_back(measure(scene, settings, threads));
