@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <fstream>
+#include <utility>
 
 #include "renderer/util/input_error.h"
 #include "server/common/job_state.h"
@@ -35,17 +36,18 @@ const grpc::Status kClientWentAway(grpc::StatusCode::CANCELLED, "client went awa
 // three times (hash, size, bytes), a fetch could get one version's hash with the other's bytes
 // (FarmPassesTest: "sha256 mismatch").
 struct FileToSend {
+  std::filesystem::path file;
   std::ifstream in;
   std::uint64_t size = 0;
 
-  explicit FileToSend(const std::filesystem::path& file) : in(file, std::ios::binary) {
+  explicit FileToSend(std::filesystem::path path) : file(std::move(path)), in(file, std::ios::binary) {
     if (!in) throw std::runtime_error("cannot read " + file.string());
     in.seekg(0, std::ios::end);
     size = static_cast<std::uint64_t>(in.tellg());
     in.seekg(0);
   }
   // Reads it all, then starts it again from its first byte.
-  std::string sha256(const std::filesystem::path& file) {
+  std::string sha256() {
     std::string sha = sha256_stream_hex(in, file.string());
     in.clear();
     in.seekg(0);
@@ -195,7 +197,7 @@ grpc::Status SchedulerService::GetResult(grpc::ServerContext* context,
   return guarded([&] {
     const std::filesystem::path file = front_door_.result_file(caller(*context), *request);
     FileToSend open(file);
-    const std::string sha = open.sha256(file);
+    const std::string sha = open.sha256();
     const std::uint64_t size = open.size;
     const bool complete = stream_file(open.in, writer, context,
                                       [&](std::uint64_t offset, std::string_view bytes, bool first) {
