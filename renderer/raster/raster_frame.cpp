@@ -100,6 +100,7 @@ class FrameBuilder {
     frame.vertices.allocate(vertices);
     if (has_uvs_) frame.vertex_textures.resize(vertices);
     frame.input_triangles = triangles;
+    frame.direct_triangles.allocate(triangles);
   }
 
   void run(ThreadPool* pool) {
@@ -266,7 +267,7 @@ class FrameBuilder {
   }
 
   void set_up(std::size_t begin, std::size_t end, SetupChunk& chunk) const {
-    chunk.triangles.direct.allocate(end - begin);
+    chunk.triangles.direct = frame_.direct_triangles.begin() + begin;
     chunk.bin_counts.assign(static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y), 0);
     chunk.binned.reserve(end - begin + (end - begin) / 4);
     std::size_t r = range_of_triangle(begin);
