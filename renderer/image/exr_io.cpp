@@ -13,6 +13,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -110,17 +113,23 @@ void check(exr_result_t result, const ExrSink& sink, const std::filesystem::path
   throw std::runtime_error(what);
 }
 
-// Compresses a frame's chunks: one thread a core, since compression is most of a merge, which
-// runs after the last tile while the farm waits for it.
-ThreadPool& chunk_pool() {
-  static ThreadPool pool(0);
-  return pool;
+// Compresses a frame's chunks on `threads` threads (0: one a core, since compression is most of a
+// merge, which runs after the last tile while the farm waits for it). One pool a size, made at its
+// first use and kept for the process.
+ThreadPool& chunk_pool(int threads) {
+  static std::mutex mutex;
+  static std::map<int, std::unique_ptr<ThreadPool>> pools;
+  const int size = resolve_thread_count(threads);
+  const std::lock_guard lock(mutex);
+  std::unique_ptr<ThreadPool>& pool = pools[size];
+  if (!pool) pool = std::make_unique<ThreadPool>(size);
+  return *pool;
 }
 
 }  // namespace
 
 void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPixelType type,
-               const std::function<void(int y0, int y1)>& lines_packed) {
+               const std::function<void(int y0, int y1)>& lines_packed, int threads) {
   const Rect& r = image.rect();
   if (r.empty()) throw std::invalid_argument(fmt::format("{}: cannot write an empty image", file.string()));
   const int width = r.width(), height = r.height();
@@ -136,7 +145,7 @@ void write_exr(const TileBuffer& image, const std::filesystem::path& file, ExrPi
 
   const std::size_t chunk_count = static_cast<std::size_t>((height + kExrZipLines - 1) / kExrZipLines);
   std::vector<std::vector<std::uint8_t>> chunks(chunk_count);
-  chunk_pool().parallel_for(chunk_count, 1, [&](std::size_t begin, std::size_t end, int) {
+  chunk_pool(threads).parallel_for(chunk_count, 1, [&](std::size_t begin, std::size_t end, int) {
     for (std::size_t c = begin; c < end; ++c) {
       const int y0 = static_cast<int>(c) * kExrZipLines, y1 = std::min(height, y0 + kExrZipLines);
       chunks[c] = pack_zip_chunk(channels, width, y0, y1);

@@ -16,10 +16,10 @@ enum class ExrPixelType { Half, Float };
 // file and renames it into place, so a failed write never leaves a truncated image behind.
 // `lines_packed(y0, y1)`, when given, is called for each chunk's lines (counted from the image's
 // top) on the thread that packed them, as soon as they are: work on the same lines while they are
-// in that core's cache (StreamedPreview).
+// in that core's cache (StreamedPreview). The chunks are packed on `threads` threads (0: one a core).
 void write_exr(const TileBuffer& image, const std::filesystem::path& file,
                ExrPixelType type = ExrPixelType::Half,
-               const std::function<void(int y0, int y1)>& lines_packed = {});
+               const std::function<void(int y0, int y1)>& lines_packed = {}, int threads = 0);
 
 // Reads an EXR written by write_exr (or any EXR with those channel names) as floats. The buffer's
 // rect is the file's data window; AOVs are present when their channels are.

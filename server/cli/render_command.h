@@ -18,9 +18,10 @@ struct RenderCommandOptions {
   bool progress = true;  // drawn only on a terminal anyway
 };
 
-// Runs the render and prints where the files went and how long each stage took. Throws
+// Runs the render and prints where the files went and how long each stage took, then ends the
+// process with exit code 0 (exit_without_teardown.h): it does not return on success. Throws
 // InputError for bad input (exit code 2) and other exceptions for internal failures.
-void run_render_command(const RenderCommandOptions& options);
+[[noreturn]] void run_render_command(const RenderCommandOptions& options);
 
 // Adds `farm render` to `app` and its runner to `commands`.
 void add_render_command(CLI::App& app, CommandTable& commands);

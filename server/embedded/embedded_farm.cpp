@@ -28,6 +28,7 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
   SchedulerOptions s;
   s.data_dir = data_dir_;
   s.exr_type = options.exr_type;
+  s.merge_threads = options.threads;
   // `farm render` shows a progress bar and a summary: its log is for warnings and errors.
   s.log_level = LogLevel::warn;
   s.in_memory = true;
@@ -55,10 +56,14 @@ EmbeddedFarm::EmbeddedFarm(EmbeddedFarmOptions options) : data_dir_(options.data
 EmbeddedFarm::~EmbeddedFarm() {
   core_->stop();
   core_.reset();
-  if (remove_data_dir_) {
-    std::error_code ignored;
-    fs::remove_all(data_dir_, ignored);
-  }
+  remove_scratch_folder();
+}
+
+void EmbeddedFarm::remove_scratch_folder() {
+  if (!remove_data_dir_) return;
+  std::error_code ignored;
+  fs::remove_all(data_dir_, ignored);
+  remove_data_dir_ = false;
 }
 
 std::string EmbeddedFarm::add_asset(std::string_view bytes) { return core_->assets().add(bytes); }
@@ -67,13 +72,19 @@ std::string EmbeddedFarm::add_asset_file(const fs::path& file) {
   return add_asset(read_whole_file(file, "asset"));
 }
 
+LoadedScene load_job_scene(const Job& job) {
+  LoadedScene loaded{std::make_shared<ModelLibrary>(job.asset_root), {}};
+  loaded.scene = build_scene(job, *loaded.models);
+  return loaded;
+}
+
 EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Progress& progress,
                                        LocalRunOptions options) {
   const Job& job = submission.job;
   const std::string hash = scene_hash(submission.spec);
-  auto models = std::make_shared<ModelLibrary>(job.asset_root);
-  Scene scene = build_scene(job, *models);
-  const std::shared_ptr<const CachedScene> cached = worker_->renderer().adopt(hash, job, std::move(scene), models);
+  LoadedScene loaded = options.loaded ? std::move(*options.loaded) : load_job_scene(job);
+  const std::shared_ptr<const CachedScene> cached =
+      worker_->renderer().adopt(hash, job, std::move(loaded.scene), std::move(loaded.models));
   ValidatedJob v;
   v.spec = submission.spec;
   v.scene_hash = hash;

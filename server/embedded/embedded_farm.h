@@ -13,6 +13,8 @@
 #include "proto/farm.pb.h"
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
+#include "renderer/loaders/model_library.h"
+#include "renderer/scene/scene.h"
 #include "server/client/job_submission.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
@@ -41,10 +43,21 @@ struct EmbeddedResult {
   std::shared_ptr<const PreparedScene> scene;
 };
 
+// A job's scene and the models it was built from, loaded from where the job's files lie.
+struct LoadedScene {
+  std::shared_ptr<ModelLibrary> models;
+  Scene scene;
+};
+
+// What run_local would load for `job`: InputError for a model that fails to load. Callable on
+// any thread (`farm render` loads while its farm is being set up).
+LoadedScene load_job_scene(const Job& job);
+
 // How run_local treats its job.
 struct LocalRunOptions {
   bool write_preview = true;  // the job's output.preview, when it names one
   bool keep_frame = false;    // EmbeddedResult::frame and ::scene filled in
+  std::optional<LoadedScene> loaded;  // the job's load_job_scene, done already; empty: run_local loads
 };
 
 class EmbeddedFarm {
@@ -74,6 +87,11 @@ class EmbeddedFarm {
 
   SchedulerCore& core() { return *core_; }
   InProcessTileWorker& worker() { return *worker_; }
+
+  // For a process about to end without destroying this farm (exit_without_teardown): removes its
+  // scratch folder, when it made one, the one thing the kernel would not take back. Call it once
+  // no job is running; the farm must not be used after it.
+  void remove_scratch_folder();
 
  private:
   // Waits for the job submitted with `queue` as its watcher to end.

@@ -57,6 +57,17 @@ void expect_same_pixels(const TileBuffer& a, const TileBuffer& b, const std::str
 // `farm render`'s farm makes units of at least 256 pixels a side out of the job's 32 px tiles
 // (unit_grid.h): a 640x300 frame is 3 x 2 units, not 20 x 10, and its pixels are render_frame's
 // whichever way it was cut, the units going out in batches of whole rows.
+// The farm compresses merged frames on the threads it renders on (`farm render --threads N`
+// uses N cores, not every core for its files); 0 stays all cores.
+TEST(EmbeddedFarmTest, ItsMergesUseItsThreads) {
+  for (int threads : {1, 3, 0}) {
+    EmbeddedFarmOptions options;
+    options.threads = threads;
+    EmbeddedFarm farm(options);
+    EXPECT_EQ(farm.core().options().merge_threads, threads);
+  }
+}
+
 TEST(EmbeddedFarmTest, ItsUnitsAreGroupsOfTheJobsTilesAndThePixelsDoNotChange) {
   test::TempDir dir;
   for (const int min_unit_edge : {256, 0}) {

@@ -65,6 +65,25 @@ TEST_F(FarmCliTest, ThreadsAndTileSizeDoNotChangeASingleBit) {
       ASSERT_EQ(std::memcmp(&ia.rgba(x, y), &ib.rgba(x, y), sizeof(glm::vec4)), 0) << x << "," << y;
 }
 
+// `farm render` ends its process once its files are written, without taking the embedded farm
+// apart (exit_without_teardown.h): what it printed still arrives whole through a pipe, and the
+// farm's scratch folder under TMPDIR is gone.
+TEST_F(FarmCliTest, RenderEndsWithItsSummaryFlushedAndNoScratchFolderLeft) {
+  const fs::path tmp = dir_ / "tmp";
+  fs::create_directories(tmp);
+  const fs::path out = dir_ / "o.exr";
+  const auto r = run_command("TMPDIR=" + shell_quote(tmp.string()) + " " +
+                             farm("render " + shell_quote((kSource / "jobs/cornell.json").string()) +
+                                  " --width 64 --height 48 --quiet --preview none --out " + shell_quote(out.string())));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("wrote " + out.string() + " ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\ntime: "), std::string::npos) << r.output;  // the summary's last line
+  EXPECT_TRUE(fs::exists(out));
+  std::string left;
+  for (const auto& entry : fs::directory_iterator(tmp)) left += entry.path().string() + " ";
+  EXPECT_TRUE(left.empty()) << "left behind: " << left;
+}
+
 TEST_F(FarmCliTest, BadJobExitsWith2AndNamesTheJsonPath) {
   std::ofstream(dir_ / "m.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   const fs::path job = dir_.write("bad.json", R"({"version": 1, "scene": {"objects": [{"file": "m.obj"}]},

@@ -15,12 +15,15 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <mutex>
 #include <random>
 #include <vector>
 #include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "renderer/image/exr_io.h"
 #include "renderer/util/atomic_file.h"
@@ -185,6 +188,33 @@ std::string unpacked_chunk(const std::string& chunk, std::size_t lines_bytes) {
 // them raw, and within a tenth of OpenEXR's size at zlib level 1 (ours are igzip's), on films of every
 // shape a frame has: all the AOVs, a height that is no multiple of the chunk's 16 lines, an odd
 // width, a film that does not start at the origin, and noise that deflate cannot shrink.
+// write_exr packs its chunks on as many threads as it is given: every chunk on one thread when
+// given one (`farm render --threads 1` compresses on one core, not on all), and the file is
+// byte for byte the one all cores write.
+TEST_F(ImageIoTest, ExrChunksArePackedOnTheThreadsAsked) {
+  TileBuffer film(Rect{0, 0, 64, 200}, {});  // 13 chunks of 16 lines
+  for (int y = 0; y < 200; ++y)
+    for (int x = 0; x < 64; ++x) film.rgba(x, y) = {0.01f * x, 0.005f * y, 0.25f, 1.0f};
+  std::mutex mutex;
+  std::set<std::thread::id> packers;
+  int chunks = 0;
+  write_exr(film, dir_ / "one.exr", ExrPixelType::Half,
+            [&](int, int) {
+              const std::lock_guard lock(mutex);
+              packers.insert(std::this_thread::get_id());
+              ++chunks;
+            },
+            1);
+  EXPECT_EQ(chunks, 13);
+  EXPECT_EQ(packers.size(), 1u);
+  write_exr(film, dir_ / "all.exr", ExrPixelType::Half, {}, 0);
+  const auto bytes = [](const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(bytes(dir_ / "one.exr"), bytes(dir_ / "all.exr"));
+}
+
 TEST_F(ImageIoTest, ExrChunksInflateToThoseOfOpenExrsOwnWriter) {
   std::mt19937 rng(5);
   // Random bit patterns of finite halves and of floats: nothing for zlib. (No NaNs: a signalling

@@ -142,7 +142,7 @@ bool Finisher::merge_frame(const std::string& job_id, int frame) {
     const std::shared_ptr<const JobInfo> info = jobs_.get(job_id);
     const std::vector<FramePart> parts = store_.frames().frame_parts(job_id, frame, info->passes());
     TileBuffer film = assembly_.assemble(job_id, info->frame(frame), parts);
-    write_merged(film, results_.files_of(job_id, *info, frame), options_.exr_type);
+    write_merged(film, results_.files_of(job_id, *info, frame), options_.exr_type, options_.merge_threads);
     if (!store_.frames().frame_merged(job_id, frame)) {
       // A worker was quarantined while the frame was merged, and some of its tiles taken back:
       // they are being rendered again, and the frame is merged once they are done.

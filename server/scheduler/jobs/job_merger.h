@@ -14,8 +14,9 @@ struct MergedFiles {
   std::filesystem::path exr, preview;
 };
 
-// Writes files.exr (`type`) and, unless it is empty, files.preview, each atomically. DiskFull
-// (naming the EXR's folder) when the disk has no room for them.
-void write_merged(const TileBuffer& film, const MergedFiles& files, ExrPixelType type = ExrPixelType::Half);
+// Writes files.exr (`type`) and, unless it is empty, files.preview, each atomically, on `threads`
+// threads (0: one a core). DiskFull (naming the EXR's folder) when the disk has no room for them.
+void write_merged(const TileBuffer& film, const MergedFiles& files, ExrPixelType type = ExrPixelType::Half,
+                  int threads = 0);
 
 }  // namespace farm

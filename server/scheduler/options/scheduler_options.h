@@ -72,6 +72,9 @@ struct SchedulerOptions {
   // The work one SubmitJob may start (submit_limits.h); over a limit is RESOURCE_EXHAUSTED.
   SubmitLimits limits;
   ExrPixelType exr_type = ExrPixelType::Half;  // as `farm render` without --float
+  // Threads that compress a merged frame's files (0: one a core). The embedded farm of `farm
+  // render --threads N` gives N: the command then uses the cores it was given, no more.
+  int merge_threads = 0;
   // What the scheduler logs on stderr unless the operator chose a level (set_log_level): a
   // server logs info and up, the embedded farm of `farm render` only warnings and errors.
   LogLevel log_level = LogLevel::info;
