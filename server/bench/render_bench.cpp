@@ -64,8 +64,13 @@ BenchJob write_grid_job(const fs::path& cow_model, const fs::path& dir) {
   return {"cow-grid-100", file, {}};
 }
 
-// One `farm render` of `job`, process start to exit, its outputs under `dir`.
-double time_command(const BenchJob& job, int threads, const fs::path& dir) {
+// One `farm render`: its time from process start to exit, and the CPU time of all its threads.
+struct CommandRun {
+  double ms = 0.0, cpu_ms = 0.0;
+};
+
+// One `farm render` of `job`, its outputs under `dir`.
+CommandRun time_command(const BenchJob& job, int threads, const fs::path& dir) {
   std::vector<std::string> argv{bench::self_binary(), "render", job.file.string(), "--threads",
                                 std::to_string(threads), "--quiet",
                                 "--out", (dir / (job.name + ".exr")).string(),
@@ -82,7 +87,7 @@ double time_command(const BenchJob& job, int threads, const fs::path& dir) {
                                          code ? fmt::format("exit {}", *code) : "timed out",
                                          command.output()));
   }
-  return ms;
+  return {ms, command.cpu_seconds().value_or(0.0) * 1e3};
 }
 
 // The engine alone: render_frame on an already loaded scene, a fresh PreparedScene for each frame
@@ -103,25 +108,28 @@ void bench_job(const BenchJob& job, const RenderBenchOptions& o, const fs::path&
   fmt::print("\n{}: {} engine, {}x{}, {} triangles in {} object(s), median of {} rounds\n", job.name,
              to_string(r.engine), r.width, r.height, scene.triangle_count(), scene.objects.size(),
              o.repeats);
-  fmt::print("{:>7} {:>14} {:>15} {:>8} {:>22}\n", "threads", "engine frame", "farm render", "ratio",
-             "2 x frame + 100 ms");
+  fmt::print("{:>7} {:>14} {:>15} {:>8} {:>22} {:>7}\n", "threads", "engine frame", "farm render", "ratio",
+             "2 x frame + 100 ms", "cores");
   std::map<int, double> command_ms;
   for (int threads : o.threads) {
     ThreadPool pool(threads);
     time_engine_frame(scene, r, threads, pool);  // warm-up: caches, page faults
     time_command(job, threads, out_dir);
     // Taking turns, so that a change in a shared machine's load falls on both alike.
-    std::vector<double> engine, command, ratio;
+    // cores: the command's CPU time over its time, what it kept busy on average.
+    std::vector<double> engine, command, ratio, cores;
     for (int i = 0; i < o.repeats; ++i) {
       engine.push_back(time_engine_frame(scene, r, threads, pool));
-      command.push_back(time_command(job, threads, out_dir));
+      const CommandRun run = time_command(job, threads, out_dir);
+      command.push_back(run.ms);
       ratio.push_back(command.back() / engine.back());
+      cores.push_back(run.cpu_ms / run.ms);
     }
     const double e = median(engine), c = median(command);
     command_ms[threads] = c;
     const double bound = 2.0 * e + 100.0;
-    fmt::print("{:>7} {:>11.1f} ms {:>12.1f} ms {:>7.1f}x {:>12.1f} ms ({})\n", threads, e, c,
-               median(ratio), bound, c <= bound ? "within" : "over");
+    fmt::print("{:>7} {:>11.1f} ms {:>12.1f} ms {:>7.1f}x {:>12.1f} ms ({}) {:>7.2f}\n", threads, e, c,
+               median(ratio), bound, c <= bound ? "within" : "over", median(cores));
   }
   if (command_ms.size() > 1) {
     const auto first = command_ms.begin();

@@ -4,10 +4,14 @@
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/syscall.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <stdexcept>
 #include <string_view>
 #include <thread>
@@ -38,6 +42,8 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
     close(out_fd_);
     throw std::runtime_error("cannot start " + argv.front());
   }
+  // By syscall: glibc 2.36's <sys/pidfd.h> declares pidfd_open without C linkage for C++.
+  pid_fd_ = static_cast<int>(syscall(SYS_pidfd_open, pid_, 0));
   reader_ = std::thread([this] { read_output(); });
 }
 
@@ -51,6 +57,7 @@ ChildProcess::~ChildProcess() {
   stop_reading_ = true;
   reader_.join();
   close(out_fd_);
+  if (pid_fd_ >= 0) close(pid_fd_);
 }
 
 void ChildProcess::read_output() {
@@ -111,12 +118,21 @@ std::optional<int> ChildProcess::wait_exit(std::chrono::milliseconds timeout) {
   const auto end = Clock::now() + timeout;
   while (!exit_code_) {
     int status = 0;
-    if (waitpid(pid_, &status, WNOHANG) == pid_) {
+    rusage usage{};
+    if (wait4(pid_, &status, WNOHANG, &usage) == pid_) {
       exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      const auto seconds = [](const timeval& t) { return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6; };
+      cpu_seconds_ = seconds(usage.ru_utime) + seconds(usage.ru_stime);
       break;
     }
-    if (Clock::now() >= end) return std::nullopt;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(end - Clock::now());
+    if (left.count() <= 0) return std::nullopt;
+    if (pid_fd_ >= 0) {
+      pollfd p{pid_fd_, POLLIN, 0};
+      poll(&p, 1, static_cast<int>(std::min<std::int64_t>(left.count(), 1000)));
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
   }
   return exit_code_;
 }
