@@ -96,6 +96,12 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
       if (!std::isalpha(first) && first != '_') {
         fail("element name '" + w[1] + "' does not start with a letter");
       }
+      // Assimp sizes its faces (or vertices) by the first element of a name and then writes every
+      // later one's into the same array: a second `element face 3` after `element face 1` wrote
+      // two faces past its end (valgrind; the fuzzer's heap checks caught it some runs later).
+      for (const PlyElement& earlier : header.elements) {
+        if (earlier.name == w[1]) fail("a second element '" + w[1] + "' (each element is declared once)");
+      }
       PlyElement e{w[1], 0, 0, {}};
       const auto [p, ec] = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
       if (ec != std::errc() || p != w[2].data() + w[2].size()) {

@@ -174,6 +174,15 @@ TEST(PlyHeader, MalformedHeadersNameTheFileAndTheLine) {
   EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\n").find("ends before end_header"),
             std::string::npos);
   EXPECT_NE(error_of("ply\nelement vertex 3\nend_header\n").find("no format line"), std::string::npos);
+  // An element declared twice: Assimp sized its faces by the first and wrote the second's past
+  // them (valgrind: invalid writes in libassimp; the fuzzer's ASan caught the heap corrupted).
+  EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nelement face 1\n"
+                     "property list uchar int vertex_indices\nelement face 3\n"
+                     "property list uchar int vertex_indices\nend_header\n")
+                .find("line 7: a second element 'face'"), std::string::npos);
+  EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nelement vertex 5\n"
+                     "property float x\nend_header\n")
+                .find("line 5: a second element 'vertex'"), std::string::npos);
   // A header that never ends is read no further than its bound.
   EXPECT_NE(error_of("ply\n" + std::string(kMaxPlyHeaderBytes, 'c') + "\n").find("no end_header within"),
             std::string::npos);
