@@ -78,6 +78,12 @@ Scene build_scene(const Job& job) {
   return build_scene(job, models);
 }
 
+LoadedScene load_job_scene(const Job& job) {
+  LoadedScene loaded{std::make_shared<ModelLibrary>(job.asset_root), {}};
+  loaded.scene = build_scene(job, *loaded.models);
+  return loaded;
+}
+
 Scene build_scene(const Job& job, ModelLibrary& models) {
   Scene scene;
   scene.ambient = job.scene.ambient;

@@ -19,7 +19,7 @@ struct RenderCommandOptions {
 };
 
 // Runs the render and prints where the files went and how long each stage took, then ends the
-// process with exit code 0 (exit_without_teardown.h): it does not return on success. Throws
+// process with exit code 0 (exit_abandoning_calls, server_shutdown.h): it does not return on success. Throws
 // InputError for bad input (exit code 2) and other exceptions for internal failures.
 [[noreturn]] void run_render_command(const RenderCommandOptions& options);
 

@@ -45,7 +45,8 @@ bool shut_down_within(FarmServer& server, std::chrono::milliseconds grace = kShu
 // Ends the process now with `code`, after flushing stdout and stderr, without running
 // destructors: the handlers still running die with the process, in the middle of their work. Only
 // for state that survives that, as a crash would leave it (files written to a temporary name and
-// renamed into place, SQLite transactions).
+// renamed into place, SQLite transactions). `farm render` ends this way too once its files are
+// written: its embedded farm is left to the kernel rather than taken apart.
 [[noreturn]] void exit_abandoning_calls(int code);
 
 }  // namespace farm

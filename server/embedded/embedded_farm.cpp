@@ -72,12 +72,6 @@ std::string EmbeddedFarm::add_asset_file(const fs::path& file) {
   return add_asset(read_whole_file(file, "asset"));
 }
 
-LoadedScene load_job_scene(const Job& job) {
-  LoadedScene loaded{std::make_shared<ModelLibrary>(job.asset_root), {}};
-  loaded.scene = build_scene(job, *loaded.models);
-  return loaded;
-}
-
 EmbeddedResult EmbeddedFarm::run_local(const JobSubmission& submission, const Progress& progress,
                                        LocalRunOptions options) {
   const Job& job = submission.job;

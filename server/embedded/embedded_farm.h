@@ -13,8 +13,7 @@
 #include "proto/farm.pb.h"
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/image/tile_buffer.h"
-#include "renderer/loaders/model_library.h"
-#include "renderer/scene/scene.h"
+#include "renderer/job/scene_builder.h"
 #include "server/client/job_submission.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
@@ -42,16 +41,6 @@ struct EmbeddedResult {
   std::optional<TileBuffer> frame;
   std::shared_ptr<const PreparedScene> scene;
 };
-
-// A job's scene and the models it was built from, loaded from where the job's files lie.
-struct LoadedScene {
-  std::shared_ptr<ModelLibrary> models;
-  Scene scene;
-};
-
-// What run_local would load for `job`: InputError for a model that fails to load. Callable on
-// any thread (`farm render` loads while its farm is being set up).
-LoadedScene load_job_scene(const Job& job);
 
 // How run_local treats its job.
 struct LocalRunOptions {
@@ -88,7 +77,7 @@ class EmbeddedFarm {
   SchedulerCore& core() { return *core_; }
   InProcessTileWorker& worker() { return *worker_; }
 
-  // For a process about to end without destroying this farm (exit_without_teardown): removes its
+  // For a process about to end without destroying this farm (exit_abandoning_calls): removes its
   // scratch folder, when it made one, the one thing the kernel would not take back. Call it once
   // no job is running; the farm must not be used after it.
   void remove_scratch_folder();

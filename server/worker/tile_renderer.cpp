@@ -199,9 +199,9 @@ std::shared_ptr<const CachedScene> TileRenderer::prepare(const v1::JobSpec& spec
     if (fetched_from.find(from) == std::string::npos) fetched_from += (fetched_from.empty() ? "" : ", ") + from;
   }
   MaterializedScene m = materialize_scene(spec, hash, store_, cache_dir_);
-  auto models = std::make_shared<ModelLibrary>(m.job.asset_root);
-  Scene scene = build_scene(m.job, *models);
-  auto prepared = std::make_shared<const CachedScene>(std::move(m.job), std::move(scene), std::move(models));
+  LoadedScene loaded = load_job_scene(m.job);
+  auto prepared =
+      std::make_shared<const CachedScene>(std::move(m.job), std::move(loaded.scene), std::move(loaded.models));
   // Once per scene and worker: what an operator looks for when a job's first tiles are slow.
   log_->info("scene {} of job '{}' prepared in {:.0f} ms: {} triangles{}", hash.substr(0, 12),
              prepared->job.name, ms_since(start), prepared->prepared.triangle_count(),

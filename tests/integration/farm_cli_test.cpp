@@ -66,7 +66,7 @@ TEST_F(FarmCliTest, ThreadsAndTileSizeDoNotChangeASingleBit) {
 }
 
 // `farm render` ends its process once its files are written, without taking the embedded farm
-// apart (exit_without_teardown.h): what it printed still arrives whole through a pipe, and the
+// apart (exit_abandoning_calls): what it printed still arrives whole through a pipe, and the
 // farm's scratch folder under TMPDIR is gone.
 TEST_F(FarmCliTest, RenderEndsWithItsSummaryFlushedAndNoScratchFolderLeft) {
   const fs::path tmp = dir_ / "tmp";

@@ -52,12 +52,11 @@ ValidatedJob SpecCheck::check(const v1::JobSpec& spec) const {
     if (scene_checker_) {
       scene_checker_->check(out.scene_hash, m.job_file, m.dir, shown_name);
     } else {
-      auto models = std::make_shared<ModelLibrary>(m.job.asset_root);
-      Scene scene = build_scene(m.job, *models);
+      LoadedScene loaded = load_job_scene(m.job);
       if (options_.validated_scene) {
-        options_.validated_scene(out.scene_hash, m.job, std::move(scene), std::move(models));
+        options_.validated_scene(out.scene_hash, m.job, std::move(loaded.scene), std::move(loaded.models));
       } else if (m.job.embree_rays > 0) {
-        out.scene = std::make_shared<const PreparedScene>(std::move(scene));  // for the merge's check
+        out.scene = std::make_shared<const PreparedScene>(std::move(loaded.scene));  // for the merge's check
       }
     }
   } catch (const InputError& e) {
