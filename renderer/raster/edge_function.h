@@ -16,8 +16,14 @@ struct FixedPoint {
   std::int64_t x, y;  // trivial, so vertex arrays holding it can start uninitialized
 };
 
+// Rounds half away from zero, as std::llround, without its call (one per vertex coordinate of
+// every frame): a float times 256 is exact in a double, and so is adding one half while its
+// magnitude is below 2^52, so truncating that sum is llround's answer. Beyond (and for NaN),
+// llround itself.
 inline std::int64_t to_fixed(float pixels) {
-  return std::llround(static_cast<double>(pixels) * static_cast<double>(kSubpixelScale));
+  const double scaled = static_cast<double>(pixels) * static_cast<double>(kSubpixelScale);
+  if (!(std::fabs(scaled) < 0x1p52)) return std::llround(scaled);
+  return static_cast<std::int64_t>(scaled + (scaled < 0.0 ? -0.5 : 0.5));
 }
 
 // Twice the signed area of (a, b, p). With y pointing down the image, it is positive when p lies

@@ -21,7 +21,8 @@ inline constexpr float kMaxRadiance = static_cast<float>(kRadianceBound);
 
 // `c` within [.., kMaxRadiance] per channel, a NaN channel 0 (a sample with no defined value adds
 // nothing, as the path tracer drops it).
-inline float limit_radiance(float c) { return std::isnan(c) ? 0.0f : std::fmin(c, kMaxRadiance); }
+// A comparison rather than std::fmin, whose NaN rules (handled first here) GCC keeps by calling libm.
+inline float limit_radiance(float c) { return std::isnan(c) ? 0.0f : (c < kMaxRadiance ? c : kMaxRadiance); }
 inline glm::vec3 limit_radiance(const glm::vec3& c) {
   return {limit_radiance(c.x), limit_radiance(c.y), limit_radiance(c.z)};
 }

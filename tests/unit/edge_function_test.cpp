@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -18,6 +21,26 @@ bool covers(const FixedPoint& a, const FixedPoint& b, const FixedPoint& c, const
   return edge_function(v1, v2, p) + fill_rule_bias(v1, v2) >= 0 &&
          edge_function(v2, v0, p) + fill_rule_bias(v2, v0) >= 0 &&
          edge_function(v0, v1, p) + fill_rule_bias(v0, v1) >= 0;
+}
+
+TEST(EdgeFunction, SnappingToTheGridRoundsAsLlroundForEveryFloat) {
+  // Every 61st float of either sign, from 0 to the magnitude where llround itself takes over, and
+  // the ties (an odd number of 512ths, which lands exactly on half a subpixel).
+  int checked = 0;
+  for (std::uint32_t bits = 0; bits < 0x5f000000u; bits += 61) {
+    for (const float f : {std::bit_cast<float>(bits), -std::bit_cast<float>(bits)}) {
+      ASSERT_EQ(to_fixed(f), std::llround(static_cast<double>(f) * kSubpixelScale)) << f;
+      ++checked;
+    }
+  }
+  for (int k = -4001; k <= 4001; k += 2) {
+    const float tie = static_cast<float>(k) / 512.0f;
+    ASSERT_EQ(to_fixed(tie), std::llround(static_cast<double>(tie) * kSubpixelScale)) << tie;
+  }
+  EXPECT_EQ(to_fixed(1.0f / 512.0f), 1);    // half a subpixel: away from zero
+  EXPECT_EQ(to_fixed(-1.0f / 512.0f), -1);
+  EXPECT_EQ(to_fixed(3.0f / 512.0f), 2);
+  EXPECT_GT(checked, 50'000'000);
 }
 
 TEST(EdgeFunction, SignTellsWhichSideOfTheEdgeAPointIs) {
