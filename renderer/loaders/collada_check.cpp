@@ -11,27 +11,11 @@
 #include <vector>
 #include <pugixml.hpp>
 
+#include "renderer/loaders/token_count.h"
 #include "renderer/util/input_error.h"
 
 namespace farm {
 namespace {
-
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
-
-// Whitespace-separated tokens of `text`.
-std::uint64_t token_count(std::string_view text) {
-  std::uint64_t count = 0;
-  bool in_token = false;
-  for (char c : text) {
-    if (is_space(c)) {
-      in_token = false;
-    } else if (!in_token) {
-      in_token = true;
-      ++count;
-    }
-  }
-  return count;
-}
 
 // The line of `offset` in `text`, for messages.
 std::size_t line_of(std::string_view text, std::ptrdiff_t offset) {
@@ -86,18 +70,12 @@ class ColladaCheck {
   // the walk reaches them (a mesh's <p> is most of its file: the bunny's was read four times).
   std::uint64_t index_count(const pugi::xml_node& node) {
     counted_.insert(node.internal_object());
-    std::uint64_t count = 0;
-    bool in_number = false;
-    for (const char c : std::string_view(node.child_value())) {
-      if (is_space(c)) {
-        in_number = false;
-        continue;
-      }
-      if (c < '0' || c > '9') fail(node, std::string("'") + c + "' in an index list (only whole numbers >= 0)");
-      if (!in_number) ++count;
-      in_number = true;
+    const std::string_view text = node.child_value();
+    const Tokens tokens = count_tokens(text, true);
+    if (tokens.bad < text.size()) {
+      fail(node, std::string("'") + text[tokens.bad] + "' in an index list (only whole numbers >= 0)");
     }
-    return count;
+    return tokens.count;
   }
 
   std::uint64_t whole_number_attribute(const pugi::xml_node& node, const char* name,
@@ -150,7 +128,7 @@ class ColladaCheck {
       if (!counted_.contains(node.internal_object())) (void)index_count(node);
     } else if (named(node, {"float_array", "int_array", "bool_array", "Name_array", "IDREF_array"})) {
       const std::uint64_t count = count_attribute(node);
-      const std::uint64_t values = token_count(node.child_value());
+      const std::uint64_t values = count_tokens(node.child_value(), false).count;
       if (count > values) {
         fail(node, "count " + std::to_string(count) + " but " + std::to_string(values) + " values");
       }
