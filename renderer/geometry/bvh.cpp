@@ -1,8 +1,11 @@
 #include "renderer/geometry/bvh.h"
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace farm {
@@ -23,7 +26,7 @@ constexpr std::uint32_t kNoParent = ~0u;
 constexpr int kPrimitivesPerPoll = 1 << 16;
 
 struct Task {
-  std::uint32_t begin, end;  // range of order_
+  std::uint32_t begin, end;  // range of refs_ (and so of the order() built)
   std::uint32_t parent;      // the node whose second-child offset this node is, or kNoParent
   int level;
 };
@@ -33,19 +36,25 @@ struct Bin {
   std::uint32_t count = 0;
 };
 
+// A primitive as the build moves it: its box and centroid travel with its index, so that every
+// pass over a node's range reads one contiguous run of memory (indices into the caller's boxes
+// sent each read elsewhere). The ranges are partitioned as the indices were, with the same
+// algorithms and predicates, so the tree and order() are what they were.
+struct PrimRef {
+  AABB box;
+  glm::vec3 centroid;
+  std::uint32_t index;
+};
+
 class Builder {
  public:
-  Builder(std::span<const AABB> boxes, const Bvh::Options& options, std::vector<BvhNode>& nodes,
-          std::vector<std::uint32_t>& order)
-      : boxes_(boxes),
-        split_(options.split),
+  Builder(std::span<const AABB> boxes, const Bvh::Options& options, std::vector<BvhNode>& nodes)
+      : split_(options.split),
         max_leaf_(static_cast<std::uint32_t>(std::clamp(options.max_leaf_size, 1, 255))),
         group_(static_cast<std::uint32_t>(std::clamp(options.test_group, 1, 255))),
         nodes_(nodes),
-        order_(order),
-        poll_(options.cancel ? *options.cancel : CancelFlag::never(), kPrimitivesPerPoll),
-        centroids_(boxes.size()) {
-    order_.reserve(boxes.size());
+        poll_(options.cancel ? *options.cancel : CancelFlag::never(), kPrimitivesPerPoll) {
+    refs_.reserve(boxes.size());
     for (std::size_t i = 0; i < boxes.size(); ++i) {
       if (boxes[i].empty()) continue;
       glm::vec3 c = boxes[i].center();
@@ -53,20 +62,26 @@ class Builder {
       for (int a = 0; a < 3; ++a) {
         if (std::isnan(c[a])) c[a] = 0.0f;
       }
-      centroids_[i] = c;
-      order_.push_back(static_cast<std::uint32_t>(i));
+      refs_.push_back({boxes[i], c, static_cast<std::uint32_t>(i)});
     }
   }
 
+  // The primitives in leaf order, once run() has built the tree.
+  std::vector<std::uint32_t> order() const {
+    std::vector<std::uint32_t> order(refs_.size());
+    for (std::size_t i = 0; i < refs_.size(); ++i) order[i] = refs_[i].index;
+    return order;
+  }
+
   int run() {
-    if (order_.empty()) return -1;
-    nodes_.reserve(2 * order_.size());
+    if (refs_.empty()) return -1;
+    nodes_.reserve(2 * refs_.size());
     int depth = 0;
     // Depth-first with an explicit stack: pushing the second child before the first puts the
     // first child right after its parent, and no recursion depth limit applies.
     std::vector<Task> stack;
     stack.reserve(2 * static_cast<std::size_t>(Bvh::kMaxDepth));
-    stack.push_back({0, static_cast<std::uint32_t>(order_.size()), kNoParent, 0});
+    stack.push_back({0, static_cast<std::uint32_t>(refs_.size()), kNoParent, 0});
     while (!stack.empty()) {
       const Task task = stack.back();
       stack.pop_back();
@@ -77,8 +92,8 @@ class Builder {
 
       AABB bounds, centroid_bounds;
       for (std::uint32_t i = task.begin; i < task.end; ++i) {
-        bounds.grow(boxes_[order_[i]]);
-        centroid_bounds.grow(centroids_[order_[i]]);
+        bounds.grow(refs_[i].box);
+        centroid_bounds.grow(refs_[i].centroid);
       }
       BvhNode node;
       node.bounds = bounds;
@@ -99,7 +114,7 @@ class Builder {
   }
 
  private:
-  // Chooses how to split order_[task.begin, task.end): false for a leaf.
+  // Chooses how to split refs_[task.begin, task.end): false for a leaf.
   bool split(const Task& task, const AABB& bounds, const AABB& centroid_bounds, int& axis,
              std::uint32_t& mid) {
     const std::uint32_t n = task.end - task.begin;
@@ -124,8 +139,8 @@ class Builder {
     axis = (e.x >= e.y && e.x >= e.z) ? 0 : (e.y >= e.z ? 1 : 2);
     mid = task.begin + (task.end - task.begin) / 2;
     const int a = axis;
-    std::nth_element(order_.begin() + task.begin, order_.begin() + mid, order_.begin() + task.end,
-                     [&](std::uint32_t p, std::uint32_t q) { return centroids_[p][a] < centroids_[q][a]; });
+    std::nth_element(refs_.begin() + task.begin, refs_.begin() + mid, refs_.begin() + task.end,
+                     [&](const PrimRef& p, const PrimRef& q) { return p.centroid[a] < q.centroid[a]; });
   }
 
   static int bin_of(float c, float lo, float scale, float last_bin) {
@@ -153,14 +168,36 @@ class Builder {
       for (int b = 0; b < bin_count; ++b) bins[a][b] = Bin{};
     }
     if (!any_axis) return false;
+    // Each bin's box grows as two 4-wide SSE operations (lane 3 unused) instead of six scalar
+    // ones: the same exact min and max, in AABB::grow's operand order (glm's min(x, y) is
+    // y < x ? y : x, which is minps(y, x)), so the bins, and the tree, are the same.
+    struct SseBox {
+      __m128 min, max;
+    };
+    std::array<std::array<SseBox, kBins>, 3> boxes;
+    const SseBox empty{_mm_set1_ps(std::numeric_limits<float>::infinity()),
+                       _mm_set1_ps(-std::numeric_limits<float>::infinity())};
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < bin_count; ++b) boxes[a][b] = empty;
+    }
     for (std::uint32_t i = task.begin; i < task.end; ++i) {
-      const std::uint32_t p = order_[i];
-      const glm::vec3& c = centroids_[p];
-      const AABB& box = boxes_[p];
+      const PrimRef& ref = refs_[i];
+      // 16 bytes from each corner: max's fourth is the centroid's x, PrimRef's next member.
+      const __m128 box_min = _mm_loadu_ps(&ref.box.min.x), box_max = _mm_loadu_ps(&ref.box.max.x);
       for (int a = 0; a < 3; ++a) {
-        Bin& bin = bins[a][bin_of(c[a], lo[a], scale[a], last_bin)];
-        bin.bounds.grow(box);
-        ++bin.count;
+        const int b = bin_of(ref.centroid[a], lo[a], scale[a], last_bin);
+        SseBox& box = boxes[a][b];
+        box.min = _mm_min_ps(box_min, box.min);
+        box.max = _mm_max_ps(box_max, box.max);
+        ++bins[a][b].count;
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < bin_count; ++b) {
+        alignas(16) float min[4], max[4];
+        _mm_store_ps(min, boxes[a][b].min);
+        _mm_store_ps(max, boxes[a][b].max);
+        bins[a][b].bounds = AABB{{min[0], min[1], min[2]}, {max[0], max[1], max[2]}};
       }
     }
 
@@ -200,9 +237,9 @@ class Builder {
     }
     axis = best_axis;
     const float a_lo = lo[axis], a_scale = scale[axis];
-    const auto first = order_.begin();
-    const auto split_it = std::partition(first + task.begin, first + task.end, [&](std::uint32_t p) {
-      return bin_of(centroids_[p][axis], a_lo, a_scale, last_bin) <= best_bin;
+    const auto first = refs_.begin();
+    const auto split_it = std::partition(first + task.begin, first + task.end, [&](const PrimRef& p) {
+      return bin_of(p.centroid[axis], a_lo, a_scale, last_bin) <= best_bin;
     });
     mid = static_cast<std::uint32_t>(split_it - first);
     return mid > task.begin && mid < task.end;  // cannot fail: both sides were counted non-empty
@@ -211,22 +248,21 @@ class Builder {
   // What testing `count` primitives costs: one test per group of Options::test_group.
   float groups(std::uint32_t count) const { return static_cast<float>((count + group_ - 1) / group_); }
 
-  std::span<const AABB> boxes_;
   BvhSplit split_;
   std::uint32_t max_leaf_;
   std::uint32_t group_;
   std::vector<BvhNode>& nodes_;
-  std::vector<std::uint32_t>& order_;
   CancelPoll poll_;  // counts the primitives each node's split goes over
-  std::vector<glm::vec3> centroids_;
+  std::vector<PrimRef> refs_;  // the non-empty primitives, partitioned node by node
 };
 
 }  // namespace
 
 Bvh Bvh::build(std::span<const AABB> primitive_bounds, const Options& options) {
   Bvh bvh;
-  Builder builder(primitive_bounds, options, bvh.nodes_, bvh.order_);
+  Builder builder(primitive_bounds, options, bvh.nodes_);
   bvh.depth_ = builder.run();
+  bvh.order_ = builder.order();
   bvh.build_wide();
   return bvh;
 }
