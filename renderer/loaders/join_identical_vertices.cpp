@@ -20,7 +20,7 @@ namespace {
 // Positions hash alike when they are the same floats, +0 and -0 alike: so for Assimp's hash
 // (std::hash of x, y and z, combined boost-style, a library call per float) and for this one,
 // one mix of the three floats' bits. Only two different positions whose 64-bit hashes collided
-// would be treated otherwise, about one chance in 10^9 for a model of a million vertices.
+// could be treated otherwise: for a million different positions, odds of about 3 in 10^8.
 constexpr float kEpsilon = 1e-5f;
 constexpr float kSquareEpsilon = kEpsilon * kEpsilon;
 
