@@ -46,6 +46,30 @@ struct PrimRef {
   std::uint32_t index;
 };
 
+// A box as two SSE registers (lane 3 unused): growing it is one min and one max instead of six
+// scalar ones, the same exact operations in AABB::grow's operand order (glm's min(x, y) is
+// y < x ? y : x, which is minps(y, x)), so the boxes, and the tree, are those AABB gave.
+struct SseBox {
+  __m128 min, max;
+  void grow(__m128 point) {
+    min = _mm_min_ps(point, min);
+    max = _mm_max_ps(point, max);
+  }
+  // 16 bytes from each corner: max's fourth is the centroid's x, PrimRef's next member.
+  void grow(const PrimRef& ref) {
+    min = _mm_min_ps(_mm_loadu_ps(&ref.box.min.x), min);
+    max = _mm_max_ps(_mm_loadu_ps(&ref.box.max.x), max);
+  }
+  AABB aabb() const {
+    alignas(16) float lo[4], hi[4];
+    _mm_store_ps(lo, min);
+    _mm_store_ps(hi, max);
+    return AABB{{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+  }
+};
+const SseBox kEmptySseBox{_mm_set1_ps(std::numeric_limits<float>::infinity()),
+                          _mm_set1_ps(-std::numeric_limits<float>::infinity())};
+
 class Builder {
  public:
   Builder(std::span<const AABB> boxes, const Bvh::Options& options, std::vector<BvhNode>& nodes)
@@ -90,11 +114,13 @@ class Builder {
       if (task.parent != kNoParent) nodes_[task.parent].offset = index;
       depth = std::max(depth, task.level);
 
-      AABB bounds, centroid_bounds;
+      // The node's box and its centroids' box, grown as in the bins below.
+      SseBox box = kEmptySseBox, centroid_box = kEmptySseBox;
       for (std::uint32_t i = task.begin; i < task.end; ++i) {
-        bounds.grow(refs_[i].box);
-        centroid_bounds.grow(refs_[i].centroid);
+        box.grow(refs_[i]);
+        centroid_box.grow(_mm_loadu_ps(&refs_[i].centroid.x));  // 4th lane: the index, unused
       }
+      const AABB bounds = box.aabb(), centroid_bounds = centroid_box.aabb();
       BvhNode node;
       node.bounds = bounds;
       int axis = 0;
@@ -168,37 +194,20 @@ class Builder {
       for (int b = 0; b < bin_count; ++b) bins[a][b] = Bin{};
     }
     if (!any_axis) return false;
-    // Each bin's box grows as two 4-wide SSE operations (lane 3 unused) instead of six scalar
-    // ones: the same exact min and max, in AABB::grow's operand order (glm's min(x, y) is
-    // y < x ? y : x, which is minps(y, x)), so the bins, and the tree, are the same.
-    struct SseBox {
-      __m128 min, max;
-    };
     std::array<std::array<SseBox, kBins>, 3> boxes;
-    const SseBox empty{_mm_set1_ps(std::numeric_limits<float>::infinity()),
-                       _mm_set1_ps(-std::numeric_limits<float>::infinity())};
     for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < bin_count; ++b) boxes[a][b] = empty;
+      for (int b = 0; b < bin_count; ++b) boxes[a][b] = kEmptySseBox;
     }
     for (std::uint32_t i = task.begin; i < task.end; ++i) {
       const PrimRef& ref = refs_[i];
-      // 16 bytes from each corner: max's fourth is the centroid's x, PrimRef's next member.
-      const __m128 box_min = _mm_loadu_ps(&ref.box.min.x), box_max = _mm_loadu_ps(&ref.box.max.x);
       for (int a = 0; a < 3; ++a) {
         const int b = bin_of(ref.centroid[a], lo[a], scale[a], last_bin);
-        SseBox& box = boxes[a][b];
-        box.min = _mm_min_ps(box_min, box.min);
-        box.max = _mm_max_ps(box_max, box.max);
+        boxes[a][b].grow(ref);
         ++bins[a][b].count;
       }
     }
     for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < bin_count; ++b) {
-        alignas(16) float min[4], max[4];
-        _mm_store_ps(min, boxes[a][b].min);
-        _mm_store_ps(max, boxes[a][b].max);
-        bins[a][b].bounds = AABB{{min[0], min[1], min[2]}, {max[0], max[1], max[2]}};
-      }
+      for (int b = 0; b < bin_count; ++b) bins[a][b].bounds = boxes[a][b].aabb();
     }
 
     const float parent_area = bounds.half_area();
