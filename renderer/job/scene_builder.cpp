@@ -72,13 +72,10 @@ const ModelAnimation* picked_animation(const Job& job, std::size_t i, const JobO
 
 }  // namespace
 
-Scene build_scene(const Job& job) {
-  // A job put together in code may have no asset root, and then each model's own folder is its root.
-  ModelLibrary models(job.asset_root);
-  return build_scene(job, models);
-}
+Scene build_scene(const Job& job) { return load_job_scene(job).scene; }
 
 LoadedScene load_job_scene(const Job& job) {
+  // A job put together in code may have no asset root, and then each model's own folder is its root.
   LoadedScene loaded{std::make_shared<ModelLibrary>(job.asset_root), {}};
   loaded.scene = build_scene(job, *loaded.models);
   return loaded;
