@@ -40,21 +40,28 @@ void render_tiles(const PreparedScene& scene, const RenderSettings& settings, Th
   // Tiles are handed out one at a time; each worker renders into its own buffer and copies the
   // finished tile into the film. Tiles are disjoint, so the copies need no lock; only the
   // counters and the progress callback do.
-  std::vector<TileBuffer> scratch(static_cast<std::size_t>(pool.size()));
-  std::vector<RenderStats> stats(scratch.size());
+  // Each worker's buffer and counters on cache lines of their own: an engine counts into its
+  // buffer's stats every sample, and a neighbour's line shared with them would bounce between
+  // the cores on every count.
+  struct alignas(128) WorkerScratch {
+    TileBuffer tile;
+    RenderStats stats;
+  };
+  std::vector<WorkerScratch> scratch(static_cast<std::size_t>(pool.size()));
   std::mutex progress_mutex;
   pool.parallel_for(tiles.size(), 1, [&](std::size_t begin, std::size_t end, int worker) {
-    TileBuffer& tile = scratch[static_cast<std::size_t>(worker)];
+    WorkerScratch& own = scratch[static_cast<std::size_t>(worker)];
+    TileBuffer& tile = own.tile;
     for (std::size_t i = begin; i < end; ++i) {
       render_tile(scene, settings, tiles[i], tile);
       film.paste(tile);
-      stats[static_cast<std::size_t>(worker)] += tile.stats();
+      own.stats += tile.stats();
       if (!progress) continue;
       std::lock_guard lock(progress_mutex);
       progress({++done, total});
     }
   });
-  for (const RenderStats& s : stats) film.stats() += s;
+  for (const WorkerScratch& s : scratch) film.stats() += s.stats;
 }
 
 }  // namespace

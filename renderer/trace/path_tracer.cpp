@@ -4,6 +4,7 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 #include <memory>
+#include <optional>
 
 #include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/radiance_limit.h"
@@ -12,6 +13,7 @@
 #include "renderer/texture/material_textures.h"
 #include "renderer/trace/bsdf.h"
 #include "renderer/trace/emitters.h"
+#include "renderer/trace/material_bsdfs.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/ray_tile.h"
 #include "renderer/trace/sampler.h"
@@ -71,16 +73,17 @@ class SampleVariance {
 class PathTracer {
  public:
   PathTracer(const PreparedScene& scene, const RenderSettings& settings,
-             const SceneIntersector& intersector, std::shared_ptr<const Emitters> emitters, CancelPoll& poll)
+             const SceneIntersector& intersector, std::shared_ptr<const Emitters> emitters,
+             std::shared_ptr<const MaterialBsdfs> bsdfs, CancelPoll& poll)
       : scene_(scene), settings_(settings), intersector_(intersector), emitters_(std::move(emitters)),
-        poll_(poll), environment_(scene.scene().environment.get()),
+        bsdfs_(std::move(bsdfs)), poll_(poll), environment_(scene.scene().environment.get()),
         next_event_estimation_(settings.light_sampling == LightSampling::NeeMis),
         pixel_size_(scene.scene().camera.pixel_size_at_unit_depth(settings.height)) {}
 
   struct Result {
     glm::vec3 radiance{0.0f};
     bool hit = false;
-    SurfaceHit first;
+    float first_depth = 0.0f;  // the first hit's t: the depth (a camera ray is unit long along the view)
     glm::vec3 first_normal{0.0f};
     glm::vec3 first_albedo{0.0f};  // its diffuse colour, textures read
   };
@@ -95,7 +98,7 @@ class PathTracer {
   // Always inlined into the sample loop (render_tile): GCC's choice moved with the unity unit this
   // file shares (its inlining budget grows with the unit), and a file added before it once left
   // a call per sample and 6% fewer samples per second, with no change to this code.
-  __attribute__((always_inline)) Result trace(Ray ray, const SampleKey& key) const {
+  __attribute__((always_inline)) Result trace(Ray ray, const PixelSamples& pixel, std::uint32_t sample) const {
     Result result;
     glm::vec3 beta(1.0f);
     bool after_specular = true;  // emission seen directly or through mirrors counts in full
@@ -104,7 +107,7 @@ class PathTracer {
     std::uint32_t dim = 2;  // 0 and 1 placed the sample in the pixel
     // Always inlined: when the loop grew (textures), GCC stopped inlining this lambda, and a call
     // per random number cost 6% of the Cornell box's samples per second.
-    const auto next = [&]() __attribute__((always_inline)) { return sample_uniform(key, dim++); };
+    const auto next = [&]() __attribute__((always_inline)) { return pixel.uniform(sample, dim++); };
 
     for (int bounce = 0;; ++bounce) {
       if (poll_()) break;
@@ -122,7 +125,7 @@ class PathTracer {
       const glm::vec3 wo_world = -glm::normalize(ray.direction);
       if (bounce == 0) {
         result.hit = true;
-        result.first = hit;
+        result.first_depth = hit.t;
         result.first_albedo = material.diffuse;
         result.first_normal = glm::dot(hit.shading_normal, wo_world) < 0.0f ? -hit.shading_normal
                                                                             : hit.shading_normal;
@@ -149,7 +152,8 @@ class PathTracer {
       // drawn only for such a surface: every other scene's samples stay the ones they were).
       const float transmitted = material.transmitted_share();
       const bool dielectric = transmitted >= 1.0f || (transmitted > 0.0f && next() < transmitted);
-      const Bsdf bsdf(material, dielectric);
+      const Bsdf& bsdf = !dielectric && &material == hit.material ? bsdfs_->opaque(hit)
+                                                                   : bsdf_.emplace(material, dielectric);
       // The shading frame on the side the ray arrives from (for dielectrics: the geometric
       // side decides inside or outside).
       glm::vec3 n = hit.shading_normal;
@@ -284,6 +288,7 @@ class PathTracer {
   const RenderSettings& settings_;
   const SceneIntersector& intersector_;
   std::shared_ptr<const Emitters> emitters_;  // the frame cache's, kept alive while this traces
+  std::shared_ptr<const MaterialBsdfs> bsdfs_;  // the same
   CancelPoll& poll_;  // counts path segments; the caller's, so that it sees a stop too
   const EnvironmentLight* environment_;  // the scene's; null: the constant background
   bool next_event_estimation_;
@@ -291,6 +296,8 @@ class PathTracer {
   // The hit's material with its textures read (hit_material): one per tracer, which one tile's
   // thread uses, so that trace() holds no object to construct and destroy per path.
   mutable Material textured_;
+  // The BSDF of a hit whose material is not one of MaterialBsdfs' (textured, or glass).
+  mutable std::optional<Bsdf> bsdf_;
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
 };
 
@@ -309,19 +316,21 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         return PathTracer(scene, settings, intersector,
                           scene.frame_cache().get_or_build<Emitters>(
                               "emitters", cancel, [&] { return std::make_shared<const Emitters>(scene); }),
+                          scene.frame_cache().get_or_build<MaterialBsdfs>(
+                              "material bsdfs", cancel, [&] { return std::make_shared<const MaterialBsdfs>(scene); }),
                           poll);
       },
       [&](const PathTracer& tracer, int x, int y) {
         glm::vec3 sum(0.0f);
         float coverage = 0.0f;
         SampleVariance variance;
-        const std::uint64_t pixel = pixel_index(settings, x, y);
+        const PixelSamples pixel(seed, pixel_index(settings, x, y));
         for (int s = range.begin; s < range.end; ++s) {
-          const SampleKey key{seed, pixel, static_cast<std::uint32_t>(s)};
+          const auto sample = static_cast<std::uint32_t>(s);
           // Box filter: the sample lands uniformly anywhere in the pixel.
-          const Ray ray = camera.ray(static_cast<float>(x) + sample_uniform(key, 0),
-                                     static_cast<float>(y) + sample_uniform(key, 1));
-          const PathTracer::Result r = tracer.trace(ray, key);
+          const Ray ray = camera.ray(static_cast<float>(x) + pixel.uniform(sample, 0),
+                                     static_cast<float>(y) + pixel.uniform(sample, 1));
+          const PathTracer::Result r = tracer.trace(ray, pixel, sample);
           if (tracer.stopped()) return false;  // r is a path cut short
           ++out.stats().samples;
           // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
@@ -338,7 +347,7 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
           // (what the merged frame keeps), and each later pass's own first so that a pass's
           // buffer is a complete image by itself.
           if (s != range.begin || !r.hit) continue;
-          if (out.aovs().depth) out.depth(x, y) = r.first.t;
+          if (out.aovs().depth) out.depth(x, y) = r.first_depth;
           if (out.aovs().normal) out.normal(x, y) = r.first_normal;
           if (out.aovs().albedo) out.albedo(x, y) = r.first_albedo;
         }
