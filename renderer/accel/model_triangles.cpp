@@ -1,6 +1,7 @@
 #include "renderer/accel/model_triangles.h"
 
 #include <algorithm>
+#include <glm/geometric.hpp>
 
 namespace farm {
 
@@ -33,6 +34,11 @@ ModelTriangles::ModelTriangles(const Model& model) {
     }
   }
   for (const glm::vec3& p : positions) bounds.grow(p);
+  winding_normals.reserve(triangles.size());
+  for (const glm::uvec3& t : triangles) {
+    const glm::vec3& a = positions[t.x];
+    winding_normals.push_back(glm::cross(positions[t.y] - a, positions[t.z] - a));
+  }
 }
 
 AABB ModelTriangles::triangle_bounds(std::uint32_t t) const {

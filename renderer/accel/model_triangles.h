@@ -20,6 +20,10 @@ struct ModelTriangles {
   std::vector<glm::vec4> tangents;     // the same for tangent frames (Mesh::tangents)
   std::vector<glm::uvec3> triangles;   // indices into positions
   std::vector<std::uint32_t> material; // per triangle: index into Model::materials
+  // Per triangle, cross(b - a, c - a) of its corners a, b, c: the winding's normal, unnormalised
+  // (its length is twice the area). Worked out once, so that a hit reads it instead of its
+  // three corners.
+  std::vector<glm::vec3> winding_normals;
   AABB bounds;
 
   explicit ModelTriangles(const Model& model);

@@ -31,13 +31,11 @@ void complete_surface_hit(const PreparedScene& scene, const Ray& ray, SurfaceHit
   const PreparedObject& object = scene.objects()[hit.object];
   const ModelTriangles& model = *object.triangles;
   const glm::uvec3& tri = model.triangles[hit.triangle];
-  const glm::vec3 &p0 = model.positions[tri.x], &p1 = model.positions[tri.y],
-                  &p2 = model.positions[tri.z];
 
   hit.position = ray.at(hit.t);
   // normal_to_world (inverse transpose) keeps the normal perpendicular to the world triangle
   // under non-uniform scale and on the same side of the surface under a mirroring transform.
-  const glm::vec3 geometric = glm::normalize(object.normal_to_world * glm::cross(p1 - p0, p2 - p0));
+  const glm::vec3 geometric = glm::normalize(object.normal_to_world * model.winding_normals[hit.triangle]);
   hit.geometric_normal = geometric;
   glm::vec3 shading = geometric;
   if (model.normals.size() == model.positions.size()) {

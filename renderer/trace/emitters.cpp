@@ -45,9 +45,7 @@ Emitters::Emitters(const PreparedScene& scene) {
       // The front as a hit on this triangle sees it (complete_surface_hit): the model's winding
       // normal carried by the inverse transpose, which keeps it on the same side of the surface
       // under a mirroring transform (the world edges' cross product would flip there).
-      const glm::vec3& m0 = mesh.positions[tri.x];
-      w.normal = glm::normalize(object.normal_to_world *
-                                glm::cross(mesh.positions[tri.y] - m0, mesh.positions[tri.z] - m0));
+      w.normal = glm::normalize(object.normal_to_world * mesh.winding_normals[t]);
       if (!std::isfinite(w.normal.x)) continue;
       w.radiance = le;
       w.two_sided = material.emission_sides == EmissionSides::Both;
