@@ -1,6 +1,7 @@
 #include "renderer/accel/model_triangles.h"
 
 #include <algorithm>
+#include <cmath>
 #include <glm/geometric.hpp>
 
 namespace farm {
@@ -34,10 +35,24 @@ ModelTriangles::ModelTriangles(const Model& model) {
     }
   }
   for (const glm::vec3& p : positions) bounds.grow(p);
-  winding_normals.reserve(triangles.size());
+  for (glm::vec3& n : normals) {
+    const float length = glm::length(n);
+    if (length > 0.0f && std::isfinite(length)) n *= 1.0f / length;
+  }
+  if (normals.size() == positions.size()) {
+    flat_shaded.reserve(triangles.size());
+    for (const glm::uvec3& t : triangles) {
+      const glm::vec3& n = normals[t.x];
+      const bool unit = glm::length(n) > 0.5f;  // normalised above; not zero, not NaN
+      flat_shaded.push_back(unit && n == normals[t.y] && n == normals[t.z] ? 1 : 0);
+    }
+  }
+  face_normals.reserve(triangles.size());
   for (const glm::uvec3& t : triangles) {
     const glm::vec3& a = positions[t.x];
-    winding_normals.push_back(glm::cross(positions[t.y] - a, positions[t.z] - a));
+    const glm::vec3 winding = glm::cross(positions[t.y] - a, positions[t.z] - a);
+    const float length = glm::length(winding);
+    face_normals.push_back(length > 0.0f && std::isfinite(length) ? winding / length : glm::vec3(0.0f));
   }
 }
 

@@ -11,8 +11,9 @@ PreparedScene::PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometr
   objects_.reserve(scene_.objects.size());
   for (const SceneObject& object : scene_.objects) {
     const ModelTriangles* triangles = &geometry_->triangles(object.model);
-    objects_.push_back({&object, triangles, object.model_to_world,
-                        glm::inverse(object.model_to_world), normal_matrix(object.model_to_world)});
+    const glm::mat3 normal_to_world = normal_matrix(object.model_to_world);
+    objects_.push_back({&object, triangles, object.model_to_world, glm::inverse(object.model_to_world),
+                        normal_to_world, normal_to_world == glm::mat3(1.0f)});
   }
 }
 

@@ -21,6 +21,9 @@ struct PreparedObject {
   glm::mat4 model_to_world{1.0f};
   glm::mat4 world_to_model{1.0f};
   glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
+  // normal_to_world is the identity (an object placed without rotation or scale): its hits'
+  // normals are the model's, no product and no second normalisation.
+  bool normals_untransformed = false;
 };
 
 class PreparedScene {

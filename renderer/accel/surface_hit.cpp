@@ -35,17 +35,25 @@ void complete_surface_hit(const PreparedScene& scene, const Ray& ray, SurfaceHit
   hit.position = ray.at(hit.t);
   // normal_to_world (inverse transpose) keeps the normal perpendicular to the world triangle
   // under non-uniform scale and on the same side of the surface under a mirroring transform.
-  const glm::vec3 geometric = glm::normalize(object.normal_to_world * model.winding_normals[hit.triangle]);
+  const glm::vec3& face = model.face_normals[hit.triangle];
+  const glm::vec3 geometric = object.normals_untransformed ? face : glm::normalize(object.normal_to_world * face);
   hit.geometric_normal = geometric;
   glm::vec3 shading = geometric;
   if (model.normals.size() == model.positions.size()) {
-    const float w0 = 1.0f - hit.u - hit.v;
-    const glm::vec3 n = w0 * model.normals[tri.x] + hit.u * model.normals[tri.y] +
-                        hit.v * model.normals[tri.z];
-    const glm::vec3 world = object.normal_to_world * n;
-    // Opposed vertex normals can cancel; the geometric normal is the only sensible fallback.
-    const float length = glm::length(world);
-    if (length > 0.0f && std::isfinite(length)) shading = world / length;
+    const bool flat = model.flat_shaded[hit.triangle] != 0;
+    if (flat && object.normals_untransformed) {
+      shading = model.normals[tri.x];  // unit, the same at all three corners
+    } else {
+      glm::vec3 n = model.normals[tri.x];
+      if (!flat) {
+        const float w0 = 1.0f - hit.u - hit.v;
+        n = w0 * n + hit.u * model.normals[tri.y] + hit.v * model.normals[tri.z];
+      }
+      const glm::vec3 world = object.normals_untransformed ? n : object.normal_to_world * n;
+      // Opposed vertex normals can cancel; the geometric normal is the only sensible fallback.
+      const float length = glm::length(world);
+      if (length > 0.0f && std::isfinite(length)) shading = world / length;
+    }
   }
   hit.shading_normal = shading;
   if (!model.uvs.empty()) {

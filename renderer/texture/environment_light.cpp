@@ -1,5 +1,6 @@
 #include "renderer/texture/environment_light.h"
 #include "renderer/util/pi.h"
+#include "renderer/util/unit_circle.h"
 
 #include <algorithm>
 #include <cmath>
@@ -147,8 +148,8 @@ std::optional<EnvironmentLight::Sample> EnvironmentLight::sample(float u1, float
     // Uniform over the sphere.
     const float z = 1.0f - 2.0f * u1;
     const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    const float phi = 2.0f * kPi * u2;
-    s.direction = {r * std::cos(phi), r * std::sin(phi), z};
+    const CosSin phi = unit_circle_point(u2);
+    s.direction = {r * phi.cos, r * phi.sin, z};
     s.radiance = scale_;
     s.pdf = 1.0f / (4.0f * kPi);
     return s;

@@ -8,6 +8,7 @@
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ggx.h"
 #include "renderer/util/pi.h"
+#include "renderer/util/unit_circle.h"
 
 namespace farm {
 namespace {
@@ -47,8 +48,9 @@ glm::vec3 turning_normal(const SeenFromAbove& d) {
 
 // Cosine-weighted hemisphere direction (Malley's method).
 glm::vec3 cosine_hemisphere(float u1, float u2) {
-  const float r = std::sqrt(u1), phi = 2.0f * kPi * u2;
-  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1.0f - u1))};
+  const float r = std::sqrt(u1);
+  const CosSin phi = unit_circle_point(u2);
+  return {r * phi.cos, r * phi.sin, std::sqrt(std::max(0.0f, 1.0f - u1))};
 }
 
 }  // namespace
@@ -95,6 +97,7 @@ Bsdf::Bsdf(const Material& m, bool transmitted) {
   specular_ = glm::clamp(m.specular, 0.0f, 1.0f);
   diffuse_ = glm::clamp(m.diffuse, 0.0f, 1.0f) * (1.0f - max_component(specular_));
   if (specular_ == glm::vec3(0.0f)) return;  // Lambertian: no glossy layer, no roughness to work out
+  kind_ = Kind::Layered;
   alpha_ = roughness_from_shininess(m.shininess);
   // ks is the glossy layer's albedo: single scattering reflects ks * E(mu) of it, and the
   // multiple-scattering lobe (1 - E(mu_o)) (1 - E(mu_i)) / (pi (1 - E_avg)) the rest, so the
@@ -108,7 +111,7 @@ Bsdf::Bsdf(const Material& m, bool transmitted) {
 
 glm::vec3 Bsdf::eval_layered(const glm::vec3& wo, const glm::vec3& wi) const {
   if (wo.z <= 0.0f || wi.z <= 0.0f) return glm::vec3(0.0f);
-  glm::vec3 f = diffuse_ / kPi;
+  glm::vec3 f = diffuse_ * (1.0f / kPi);  // a product, not three divisions: every bounce pays it
   if (specular_ != glm::vec3(0.0f)) {
     const glm::vec3 m = glm::normalize(wo + wi);
     f += specular_ * (ggx::distribution(m, alpha_) * ggx::smith_g2(wo, wi, alpha_) / (4.0f * wo.z * wi.z));
@@ -220,6 +223,7 @@ std::optional<BsdfSample> Bsdf::sample_mixture(const glm::vec3& wo, float u_lobe
 
 glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
+    case Kind::Lambertian:  // eval_layered without the glossy layer: the same bits
     case Kind::Layered: return eval_layered(wo, wi);
     case Kind::MetalRoughness: return eval_metal_roughness(wo, wi);
     case Kind::RoughDielectric: return rough_dielectric(wo, wi).f;
@@ -229,6 +233,7 @@ glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
 
 float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
+    case Kind::Lambertian:  // specular_probability_ is 0
     case Kind::Layered: return mixture_pdf(wo, wi, specular_probability_);
     case Kind::MetalRoughness: return mixture_pdf(wo, wi, metal_roughness_specular_probability(wo));
     case Kind::RoughDielectric: return rough_dielectric(wo, wi).pdf;
@@ -273,6 +278,15 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
 
     case Kind::RoughDielectric: return sample_rough_dielectric(wo, u_lobe, u1, u2);
 
+    case Kind::Lambertian:
+      // The cosine lobe is this BSDF's exactly: f cos / pdf = (kd / pi) cos / (cos / pi) = kd, not
+      // worked out (an evaluation and three divisions a bounce on the Cornell box's walls).
+      if (wo.z <= 0.0f) return std::nullopt;
+      s.wi = cosine_hemisphere(u1, u2);
+      if (!(s.wi.z > 0.0f)) return std::nullopt;
+      s.pdf = s.wi.z / kPi;
+      s.weight = diffuse_;
+      return s;
     case Kind::Layered:
       return sample_mixture(wo, u_lobe, u1, u2, specular_probability_,
                             [this](const glm::vec3& o, const glm::vec3& i) { return eval_layered(o, i); });

@@ -55,7 +55,9 @@ class Bsdf {
   static float roughness_from_shininess(float shininess);
 
  private:
-  enum class Kind { Layered, MetalRoughness, Mirror, Dielectric, RoughDielectric };
+  // Lambertian: a Layered material without its glossy layer, which samples its own lobe exactly
+  // (weight kd, no evaluation: f cos / pdf is kd).
+  enum class Kind { Lambertian, Layered, MetalRoughness, Mirror, Dielectric, RoughDielectric };
 
   glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
   glm::vec3 eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const;
@@ -78,7 +80,7 @@ class Bsdf {
   std::optional<BsdfSample> sample_mixture(const glm::vec3& wo, float u_lobe, float u1, float u2,
                                            float specular_probability, Eval&& eval) const;
 
-  Kind kind_ = Kind::Layered;
+  Kind kind_ = Kind::Lambertian;
   glm::vec3 diffuse_{0.0f};   // kd scaled by what the specular layer leaves
   glm::vec3 specular_{0.0f};  // ks, or the mirror's reflectance
   glm::vec3 multiple_scattering_{0.0f};  // ks / (pi (1 - E_avg))

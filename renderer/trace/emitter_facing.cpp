@@ -116,7 +116,7 @@ std::vector<EmitterFacingAway> find_emitters_facing_away(const PreparedScene& sc
       if (!(most > 0.0f) || !std::isfinite(most) || material.emission_sides != EmissionSides::Front) continue;
       EmissiveTriangle e{p0, p1 - p0, p2 - p0, glm::vec3(0.0f), 0.0f};
       e.area = 0.5f * glm::length(glm::cross(e.e1, e.e2));
-      e.normal = glm::normalize(object.normal_to_world * mesh.winding_normals[t]);
+      e.normal = glm::normalize(object.normal_to_world * mesh.face_normals[t]);
       if (!(e.area > 0.0f) || !std::isfinite(e.normal.x)) continue;
       const auto [it, added] = group_of.emplace(std::make_pair(o, mesh.material[t]), groups.size());
       if (added) {

@@ -10,6 +10,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <optional>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -25,6 +26,10 @@ struct EmitterSample {
   bool two_sided = false;     // shines from the back too
   float pdf_area = 0.0f;      // density of this point per unit area (choice included)
 };
+
+// The index of the first entry of `sorted` (ascending) greater than `value`, sorted.size() if
+// none: std::upper_bound's answer, found without data-dependent branches.
+std::size_t first_above(std::span<const float> sorted, float value);
 
 class Emitters {
  public:
@@ -52,7 +57,9 @@ class Emitters {
   };
   std::vector<Triangle> triangles_;
   std::vector<float> cdf_;  // cdf_[i] = P(pick <= i)
-  std::vector<float> probability_;
+  // Per triangle, the density per unit area of a point sample() makes there: its chance of being
+  // picked over its area, divided once here rather than at every sample.
+  std::vector<float> pdf_area_;
   std::unordered_map<std::uint64_t, std::uint32_t> index_of_;  // (object << 32 | triangle) -> i
 };
 

@@ -8,6 +8,8 @@
 #include <glm/vec3.hpp>
 #include <numbers>
 
+#include "renderer/util/unit_circle.h"
+
 namespace farm::ggx {
 
 inline float distribution(const glm::vec3& m, float alpha) {
@@ -44,10 +46,11 @@ inline glm::vec3 sample_visible_normal(const glm::vec3& wo, float alpha, float u
   const float len2 = v.x * v.x + v.y * v.y;
   const glm::vec3 t1 = len2 > 0.0f ? glm::vec3(-v.y, v.x, 0.0f) / std::sqrt(len2) : glm::vec3(1, 0, 0);
   const glm::vec3 t2 = glm::cross(v, t1);
-  const float r = std::sqrt(u1), phi = 2.0f * std::numbers::pi_v<float> * u2;
-  const float p1 = r * std::cos(phi);
+  const float r = std::sqrt(u1);
+  const CosSin phi = unit_circle_point(u2);
+  const float p1 = r * phi.cos;
   const float s = 0.5f * (1.0f + v.z);
-  const float p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * r * std::sin(phi);
+  const float p2 = (1.0f - s) * std::sqrt(std::max(0.0f, 1.0f - p1 * p1)) + s * r * phi.sin;
   const glm::vec3 n = p1 * t1 + p2 * t2 + std::sqrt(std::max(0.0f, 1.0f - p1 * p1 - p2 * p2)) * v;
   return glm::normalize(glm::vec3(alpha * n.x, alpha * n.y, std::max(1e-6f, n.z)));
 }

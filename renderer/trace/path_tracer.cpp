@@ -184,7 +184,7 @@ class PathTracer {
       if (settings_.max_depth < 0 && bounce + 1 >= kRouletteStart) {
         const float survive = std::min(0.95f, std::max({beta.x, beta.y, beta.z}));
         if (next() >= survive) break;
-        beta /= survive;
+        beta *= 1.0f / survive;
       }
       if (beta == glm::vec3(0.0f)) break;
     }
@@ -202,7 +202,7 @@ class PathTracer {
       const EmitterSample light = emitters_->sample(u_pick, u1, u2);
       const glm::vec3 d = light.position - hit.position;
       const float dist2 = glm::dot(d, d);
-      const glm::vec3 wi_world = d / std::sqrt(dist2);
+      const glm::vec3 wi_world = d * (1.0f / std::sqrt(dist2));  // one division, not three
       // The light leaves the emitter along -wi_world: a point picked on the back of a front-only
       // emitter sends nothing this way. The pick itself ignores the side, so its pdf (and the MIS
       // weight, the same pdf BSDF sampling's hits use) is unchanged: unbiased either way.
@@ -212,7 +212,7 @@ class PathTracer {
       const glm::vec3 f = bsdf.eval(wo, wi) * std::fabs(wi.z);
       if (cos_light > 0.0f && f != glm::vec3(0.0f) && visible(hit, light.position)) {
         const float light_pdf = light.pdf_area * dist2 / cos_light;
-        sum += f * light.radiance * power_heuristic(light_pdf, bsdf.pdf(wo, wi)) / light_pdf;
+        sum += f * light.radiance * (power_heuristic(light_pdf, bsdf.pdf(wo, wi)) / light_pdf);
       }
     }
     // One direction of the environment, by its luminance, weighted against BSDF sampling. Its

@@ -58,6 +58,33 @@ TEST(Bsdf, WhiteLambertianReflectsAllEnergyAndItsSamplesMatchItsPdf) {
   }
 }
 
+TEST(Bsdf, ALambertianSampleWeighsItsColourAndItsDensityIsThePdfFunctions) {
+  Material matte;
+  matte.diffuse = glm::vec3(0.3f, 0.6f, 0.9f);
+  matte.specular = glm::vec3(0.0f);
+  const Bsdf bsdf(matte);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  double cos_sum = 0.0;
+  constexpr int kSamples = 200000;
+  for (int i = 0; i < kSamples; ++i) {
+    const glm::vec3 wo = direction_at(80.0f * u(rng));
+    const auto s = bsdf.sample(wo, u(rng), u(rng), u(rng));
+    ASSERT_TRUE(s.has_value()) << i;
+    ASSERT_GT(s->wi.z, 0.0f) << i;
+    ASSERT_FALSE(s->specular);
+    EXPECT_EQ(s->weight, matte.diffuse) << i;  // f cos / pdf, exactly kd
+    EXPECT_EQ(s->pdf, bsdf.pdf(wo, s->wi)) << i;
+    const glm::vec3 by_eval = bsdf.eval(wo, s->wi) * s->wi.z / s->pdf;
+    EXPECT_NEAR(by_eval.y, matte.diffuse.y, 1e-6f) << i;
+    cos_sum += s->wi.z;
+  }
+  // Cosine-weighted: the mean cosine is 2/3 (a uniform hemisphere's would be 1/2).
+  EXPECT_NEAR(cos_sum / kSamples, 2.0 / 3.0, 0.003);
+  // Seen from below, nothing is reflected.
+  EXPECT_FALSE(bsdf.sample(glm::vec3(0.0f, 0.0f, -1.0f), 0.5f, 0.5f, 0.5f).has_value());
+}
+
 TEST(Bsdf, GlossySamplingAgreesWithIndependentIntegrationAndNeverCreatesEnergy) {
   std::mt19937 rng(2);
   for (float shininess : {5.0f, 50.0f, 500.0f}) {
