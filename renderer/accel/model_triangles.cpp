@@ -52,7 +52,7 @@ ModelTriangles::ModelTriangles(const Model& model) {
     const glm::vec3& a = positions[t.x];
     const glm::vec3 winding = glm::cross(positions[t.y] - a, positions[t.z] - a);
     const float length = glm::length(winding);
-    face_normals.push_back(length > 0.0f && std::isfinite(length) ? winding / length : glm::vec3(0.0f));
+    face_normals.push_back(length > 0.0f && std::isfinite(length) ? winding * (1.0f / length) : glm::vec3(0.0f));
   }
 }
 

@@ -327,10 +327,12 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         const PixelSamples pixel(seed, pixel_index(settings, x, y));
         for (int s = range.begin; s < range.end; ++s) {
           const auto sample = static_cast<std::uint32_t>(s);
-          // Box filter: the sample lands uniformly anywhere in the pixel.
-          const Ray ray = camera.ray(static_cast<float>(x) + pixel.uniform(sample, 0),
-                                     static_cast<float>(y) + pixel.uniform(sample, 1));
-          const PathTracer::Result r = tracer.trace(ray, pixel, sample);
+          // Box filter: the sample lands uniformly anywhere in the pixel. The ray is made in the
+          // argument's place: a named copy was stored in pieces and read back whole, a stalled
+          // store forward per sample (perf).
+          const PathTracer::Result r = tracer.trace(camera.ray(static_cast<float>(x) + pixel.uniform(sample, 0),
+                                                               static_cast<float>(y) + pixel.uniform(sample, 1)),
+                                                    pixel, sample);
           if (tracer.stopped()) return false;  // r is a path cut short
           ++out.stats().samples;
           // A dropped sample adds 0 to the sum that is divided by all samples, so the variance
