@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "renderer/engine.h"
+#include "renderer/scene/transform.h"
 
 namespace farm::test {
 
@@ -102,6 +103,15 @@ Model make_sphere(int rings, int segments) {
   model.meshes.push_back(mesh);
   model.materials.push_back(Material{});
   return model;
+}
+
+glm::mat4 placed(glm::vec3 translate, glm::vec3 axis, float degrees, glm::vec3 scale) {
+  ObjectTransform transform;
+  transform.translate = translate;
+  transform.rotate_axis = axis;
+  transform.rotate_degrees = degrees;
+  transform.scale = scale;
+  return transform.matrix();
 }
 
 SceneObject object_of(Model model, const glm::mat4& model_to_world, const Material& material) {

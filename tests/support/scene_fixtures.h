@@ -20,6 +20,9 @@ Model make_grid(int n);
 // UV sphere of radius 1 at the origin with smooth normals.
 Model make_sphere(int rings, int segments);
 
+// The matrix of an object translated, rotated `degrees` about `axis` and scaled (ObjectTransform).
+glm::mat4 placed(glm::vec3 translate, glm::vec3 axis, float degrees, glm::vec3 scale);
+
 SceneObject object_of(Model model, const glm::mat4& model_to_world = glm::mat4(1.0f),
                       const Material& material = Material{});
 

@@ -15,7 +15,6 @@
 #include "renderer/accel/instance_intersector.h"
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/geometry/triangle_intersect.h"
-#include "renderer/scene/transform.h"
 #include "tests/support/ray_fixtures.h"
 #include "tests/support/scene_fixtures.h"
 
@@ -71,15 +70,6 @@ bool brute_force(const std::vector<WorldTriangle>& triangles, Ray ray, Reference
 // Within rounding of a triangle's edge, world- and model-space tests may decide differently.
 bool near_edge(float u, float v) { return std::min({u, v, 1.0f - u - v}) < 1e-4f; }
 
-glm::mat4 placed(glm::vec3 translate, glm::vec3 axis, float degrees, glm::vec3 scale) {
-  ObjectTransform transform;
-  transform.translate = translate;
-  transform.rotate_axis = axis;
-  transform.rotate_degrees = degrees;
-  transform.scale = scale;
-  return transform.matrix();
-}
-
 SceneObject instance(std::shared_ptr<const Model> model, const glm::mat4& model_to_world,
                      float shade) {
   SceneObject object;
@@ -101,13 +91,13 @@ Scene mixed_scene() {
   empty->materials.push_back(Material{});
   Scene scene;
   const std::vector<std::pair<std::shared_ptr<const Model>, glm::mat4>> placements = {
-      {sphere, placed({0.0f, 0.0f, 0.0f}, {1, 1, 0}, 30.0f, {0.3f, 2.0f, 1.0f})},
-      {sphere, placed({2.5f, 0.0f, 0.0f}, {0, 0, 1}, -20.0f, {-0.8f, 0.8f, 0.8f})},  // mirrored
-      {box, placed({-2.0f, 0.0f, 1.0f}, {0, 1, 0}, 45.0f, {1.0f, 0.2f, 3.0f})},
-      {grid, placed({0.0f, -2.5f, 0.0f}, {1, 0, 0}, -90.0f, {3.0f, 3.0f, 1.0f})},
-      {sphere, placed({0.5f, 0.8f, 0.3f}, {0, 1, 0}, 10.0f, {1.0f, 1.0f, 1.0f})},  // overlaps 0
-      {box, placed({0.0f, 1.5f, -1.5f}, {1, 0, 1}, 60.0f, {-1.0f, 1.0f, -0.5f})},  // two mirrors
-      {sphere, placed({-1.0f, -1.0f, -1.0f}, {0, 1, 1}, 75.0f, {-1.5f, 0.4f, 1.0f})},
+      {sphere, test::placed({0.0f, 0.0f, 0.0f}, {1, 1, 0}, 30.0f, {0.3f, 2.0f, 1.0f})},
+      {sphere, test::placed({2.5f, 0.0f, 0.0f}, {0, 0, 1}, -20.0f, {-0.8f, 0.8f, 0.8f})},  // mirrored
+      {box, test::placed({-2.0f, 0.0f, 1.0f}, {0, 1, 0}, 45.0f, {1.0f, 0.2f, 3.0f})},
+      {grid, test::placed({0.0f, -2.5f, 0.0f}, {1, 0, 0}, -90.0f, {3.0f, 3.0f, 1.0f})},
+      {sphere, test::placed({0.5f, 0.8f, 0.3f}, {0, 1, 0}, 10.0f, {1.0f, 1.0f, 1.0f})},  // overlaps 0
+      {box, test::placed({0.0f, 1.5f, -1.5f}, {1, 0, 1}, 60.0f, {-1.0f, 1.0f, -0.5f})},  // two mirrors
+      {sphere, test::placed({-1.0f, -1.0f, -1.0f}, {0, 1, 1}, 75.0f, {-1.5f, 0.4f, 1.0f})},
       {empty, glm::mat4(1.0f)},
   };
   for (std::size_t o = 0; o < placements.size(); ++o) {
@@ -258,7 +248,7 @@ TEST(InstanceIntersector, HitDistanceIsInUnitsOfTheWorldDirectionUnderNonUniform
   // at y = -2, so t = 3 / |d|-units whatever the model-space direction's length.
   Scene s;
   s.objects.push_back(instance(std::make_shared<const Model>(test::make_sphere(32, 64)),
-                               placed({0, 0, 0}, {0, 1, 0}, 0.0f, {0.3f, 2.0f, 1.0f}), 0.0f));
+                               test::placed({0, 0, 0}, {0, 1, 0}, 0.0f, {0.3f, 2.0f, 1.0f}), 0.0f));
   const PreparedScene scene(std::move(s));
   for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
     const auto ours = build_scene_intersector(scene, kind);
@@ -286,7 +276,7 @@ TEST(InstanceIntersector, HundredInstancesShareOneMeshAccel) {
     const glm::vec3 at{static_cast<float>(i % 10) * 2.5f, 0.0f, static_cast<float>(i / 10) * 2.5f};
     const glm::vec3 scale{1.0f + 0.05f * static_cast<float>(i % 7), 1.0f - 0.05f * static_cast<float>(i % 5),
                           i % 3 == 0 ? -1.0f : 1.0f};
-    s.objects.push_back(instance(sphere, placed(at, {0, 1, 0}, 3.6f * static_cast<float>(i), scale),
+    s.objects.push_back(instance(sphere, test::placed(at, {0, 1, 0}, 3.6f * static_cast<float>(i), scale),
                                  static_cast<float>(i) / 100.0f));
   }
   const PreparedScene scene(std::move(s));
@@ -411,7 +401,7 @@ TEST(InstanceIntersector, CoincidentObjectsGoToTheLowestObjectIndexUnderEveryAcc
     // is not a list.
     const glm::vec3 at{static_cast<float>(i / 2) * 2.5f, 0.0f, 0.0f};
     s.objects.push_back(instance(i % 2 ? specked : sphere,
-                                 placed(at, {0, 1, 0}, 10.0f * static_cast<float>(i / 2), {1, 1, 1}),
+                                 test::placed(at, {0, 1, 0}, 10.0f * static_cast<float>(i / 2), {1, 1, 1}),
                                  static_cast<float>(i) / 12.0f));
   }
   const PreparedScene scene(std::move(s));

@@ -11,21 +11,11 @@
 
 #include "renderer/accel/instance_intersector.h"
 #include "renderer/accel/prepared_scene.h"
-#include "renderer/scene/transform.h"
 #include "tests/support/ray_fixtures.h"
 #include "tests/support/scene_fixtures.h"
 
 namespace farm {
 namespace {
-
-glm::mat4 placed(glm::vec3 translate, glm::vec3 axis, float degrees, glm::vec3 scale) {
-  ObjectTransform transform;
-  transform.translate = translate;
-  transform.rotate_axis = axis;
-  transform.rotate_degrees = degrees;
-  transform.scale = scale;
-  return transform.matrix();
-}
 
 glm::dvec3 unit(const glm::dvec3& v) { return v / glm::length(v); }
 
@@ -33,10 +23,10 @@ TEST(SurfaceHit, FlatAndSmoothNormalsAreTheModelsCarriedToWorldSpace) {
   const auto box = std::make_shared<const Model>(test::make_box({-0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, 0.5f}));
   const auto sphere = std::make_shared<const Model>(test::make_sphere(10, 20));
   Scene scene;
-  scene.objects.push_back(test::object_of(*box, placed({-1.5f, 0.0f, 0.0f}, {0, 1, 0}, 0.0f, {1, 1, 1})));
-  scene.objects.push_back(test::object_of(*box, placed({1.5f, 0.2f, 0.0f}, {1, 1, 0}, 35.0f, {-0.7f, 1.6f, 0.9f})));
-  scene.objects.push_back(test::object_of(*sphere, placed({0.0f, 0.0f, 2.0f}, {0, 1, 0}, 0.0f, {1, 1, 1})));
-  scene.objects.push_back(test::object_of(*sphere, placed({0.0f, 1.8f, -1.0f}, {0, 0, 1}, -50.0f, {1.4f, -0.5f, 0.8f})));
+  scene.objects.push_back(test::object_of(*box, test::placed({-1.5f, 0.0f, 0.0f}, {0, 1, 0}, 0.0f, {1, 1, 1})));
+  scene.objects.push_back(test::object_of(*box, test::placed({1.5f, 0.2f, 0.0f}, {1, 1, 0}, 35.0f, {-0.7f, 1.6f, 0.9f})));
+  scene.objects.push_back(test::object_of(*sphere, test::placed({0.0f, 0.0f, 2.0f}, {0, 1, 0}, 0.0f, {1, 1, 1})));
+  scene.objects.push_back(test::object_of(*sphere, test::placed({0.0f, 1.8f, -1.0f}, {0, 0, 1}, -50.0f, {1.4f, -0.5f, 0.8f})));
   const PreparedScene prepared(std::move(scene));
   ASSERT_TRUE(prepared.objects()[0].normals_untransformed);
   ASSERT_FALSE(prepared.objects()[1].normals_untransformed);
