@@ -14,6 +14,13 @@ const ModelTriangles& ModelGeometry::triangles(const std::shared_ptr<const Model
   return *e.triangles;
 }
 
+std::size_t ModelGeometry::flattened_models() {
+  std::lock_guard lock(mutex_);
+  std::size_t n = 0;
+  for (const auto& [model, entry] : models_) n += entry.triangles ? 1 : 0;
+  return n;
+}
+
 std::shared_ptr<const MeshAccel> ModelGeometry::mesh_accel(const ModelTriangles& triangles, AccelKind accel,
                                                            const CancelFlag& cancel) {
   const std::string key = fmt::format("{} {}", static_cast<const void*>(&triangles), to_string(accel));

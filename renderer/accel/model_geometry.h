@@ -23,6 +23,8 @@ class ModelGeometry {
   // concurrent callers wait for one build, each polling its own `cancel` (RenderStopped).
   std::shared_ptr<const MeshAccel> mesh_accel(const ModelTriangles& triangles, AccelKind accel,
                                               const CancelFlag& cancel);
+  // How many models have been flattened so far.
+  std::size_t flattened_models();
 
  private:
   struct Entry {

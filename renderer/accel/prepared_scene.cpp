@@ -10,11 +10,17 @@ PreparedScene::PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometr
     : scene_(std::move(scene)), geometry_(geometry ? std::move(geometry) : std::make_shared<ModelGeometry>()) {
   objects_.reserve(scene_.objects.size());
   for (const SceneObject& object : scene_.objects) {
-    const ModelTriangles* triangles = &geometry_->triangles(object.model);
     const glm::mat3 normal_to_world = normal_matrix(object.model_to_world);
-    objects_.push_back({&object, triangles, object.model_to_world, glm::inverse(object.model_to_world),
+    objects_.push_back({&object, nullptr, object.model_to_world, glm::inverse(object.model_to_world),
                         normal_to_world, normal_to_world == glm::mat3(1.0f)});
   }
+}
+
+const std::vector<PreparedObject>& PreparedScene::objects() const {
+  std::call_once(flattened_, [this] {
+    for (PreparedObject& object : objects_) object.triangles = &geometry_->triangles(object.source->model);
+  });
+  return objects_;
 }
 
 }  // namespace farm

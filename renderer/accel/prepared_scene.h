@@ -2,11 +2,14 @@
 // A scene made ready for rendering: everything that depends only on the scene (world matrices,
 // normal matrices, flattened triangles per model) computed once per job per process and shared
 // by all tiles; engines cache their own derived structures (BVHs, frame set-up) in frame_cache().
+// The models are flattened when a ray engine first asks for objects(), not before: the
+// rasterizer reads the meshes themselves (placements()), and a raster job pays nothing for them.
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 #include <vector>
 
 #include <memory>
+#include <mutex>
 
 #include "renderer/accel/model_geometry.h"
 #include "renderer/accel/model_triangles.h"
@@ -17,7 +20,7 @@ namespace farm {
 
 struct PreparedObject {
   const SceneObject* source = nullptr;
-  const ModelTriangles* triangles = nullptr;  // shared by every object of the same model
+  const ModelTriangles* triangles = nullptr;  // shared by every object of the same model (objects())
   glm::mat4 model_to_world{1.0f};
   glm::mat4 world_to_model{1.0f};
   glm::mat3 normal_to_world{1.0f};  // inverse transpose of the linear part
@@ -35,7 +38,12 @@ class PreparedScene {
   PreparedScene& operator=(const PreparedScene&) = delete;
 
   const Scene& scene() const { return scene_; }
-  const std::vector<PreparedObject>& objects() const { return objects_; }
+  // Every object with its model's triangles (flattened for the whole scene on the first call,
+  // from any thread): what the ray engines read.
+  const std::vector<PreparedObject>& objects() const;
+  // The same objects with `triangles` null until objects() has been called: their sources and
+  // transforms, for an engine that never reads the triangles (the rasterizer).
+  const std::vector<PreparedObject>& placements() const { return objects_; }
   std::size_t triangle_count() const { return scene_.triangle_count(); }
 
   // The models' triangles and bottom-level structures, shared with the job's other frames.
@@ -47,7 +55,8 @@ class PreparedScene {
 
  private:
   Scene scene_;
-  std::vector<PreparedObject> objects_;
+  mutable std::vector<PreparedObject> objects_;  // `triangles` filled once, by objects()
+  mutable std::once_flag flattened_;
   std::shared_ptr<ModelGeometry> geometry_;
   mutable FrameCache frame_cache_;
 };

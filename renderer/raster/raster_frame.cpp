@@ -82,7 +82,7 @@ class FrameBuilder {
     frame.view_to_world = glm::inverse(view_);
     frame.eye = camera.position;
     std::size_t vertices = 0, triangles = 0;
-    for (const PreparedObject& object : scene.objects()) {
+    for (const PreparedObject& object : scene.placements()) {  // the meshes, not the flattened triangles
       for (const Mesh& mesh : object.source->model->meshes) {
         ranges_.push_back({&object, &mesh, vertices, triangles});
         frame.materials.push_back(&object.source->materials.at(mesh.material));
