@@ -21,7 +21,9 @@
 namespace farm::path {
 namespace {
 
-constexpr int kRouletteStart = 3;  // bounces traced in full before Russian roulette may stop
+// Bounces traced in full before Russian roulette may stop a path (Mitsuba's rr_depth 3, which
+// tools/mitsuba_reference.py sets to match: keep the two equal).
+constexpr int kRouletteStart = 3;
 // Path segments (closest-hit rays, each with its shadow rays) traced between looks at the cancel
 // flag: tens of microseconds of work, so a cancelled tile stops within a millisecond whatever its
 // spp, and the look (a clock read when there is a deadline) costs nothing measurable.
