@@ -16,11 +16,11 @@ PreparedScene::PreparedScene(Scene scene, std::shared_ptr<ModelGeometry> geometr
   }
 }
 
-const std::vector<PreparedObject>& PreparedScene::objects() const {
-  std::call_once(flattened_, [this] {
+void PreparedScene::flatten() const {
+  std::call_once(flatten_once_, [this] {
     for (PreparedObject& object : objects_) object.triangles = &geometry_->triangles(object.source->model);
+    flattened_.store(true, std::memory_order_release);
   });
-  return objects_;
 }
 
 }  // namespace farm

@@ -8,6 +8,7 @@
 #include <glm/mat4x4.hpp>
 #include <vector>
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 
@@ -40,7 +41,12 @@ class PreparedScene {
   const Scene& scene() const { return scene_; }
   // Every object with its model's triangles (flattened for the whole scene on the first call,
   // from any thread): what the ray engines read.
-  const std::vector<PreparedObject>& objects() const;
+  // Inline, a load and a branch once flattened: complete_surface_hit asks it at every hit, and
+  // std::call_once alone cost 35 instructions a call (TLS writes and a pthread_once call).
+  const std::vector<PreparedObject>& objects() const {
+    if (!flattened_.load(std::memory_order_acquire)) flatten();
+    return objects_;
+  }
   // The same objects with `triangles` null until objects() has been called: their sources and
   // transforms, for an engine that never reads the triangles (the rasterizer).
   const std::vector<PreparedObject>& placements() const { return objects_; }
@@ -55,8 +61,11 @@ class PreparedScene {
 
  private:
   Scene scene_;
+  void flatten() const;  // fills every object's `triangles`, once
+
   mutable std::vector<PreparedObject> objects_;  // `triangles` filled once, by objects()
-  mutable std::once_flag flattened_;
+  mutable std::once_flag flatten_once_;
+  mutable std::atomic<bool> flattened_{false};  // set, with release, when flatten_once_ is done
   std::shared_ptr<ModelGeometry> geometry_;
   mutable FrameCache frame_cache_;
 };
