@@ -7,8 +7,8 @@
 
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ggx.h"
+#include "renderer/trace/sample_warp.h"
 #include "renderer/util/pi.h"
-#include "renderer/util/unit_circle.h"
 
 namespace farm {
 namespace {
@@ -44,13 +44,6 @@ glm::vec3 turning_normal(const SeenFromAbove& d) {
   const float o = glm::dot(d.wo, m), i = glm::dot(d.wi, m);
   if (o <= 0.0f || (reflected ? i <= 0.0f : i >= 0.0f)) return glm::vec3(0.0f);
   return m;
-}
-
-// Cosine-weighted hemisphere direction (Malley's method).
-glm::vec3 cosine_hemisphere(float u1, float u2) {
-  const float r = std::sqrt(u1);
-  const CosSin phi = unit_circle_point(u2);
-  return {r * phi.cos, r * phi.sin, std::sqrt(std::max(0.0f, 1.0f - u1))};
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/accel/scene_intersector.h"
 #include "renderer/trace/ray_offset.h"
+#include "renderer/trace/sample_warp.h"
 
 namespace farm {
 namespace {
@@ -56,24 +57,19 @@ bool closed_faces_away(const Side& front, const Side& back) {
 template <typename Skip>
 void trace_both_sides(const SceneIntersector& intersector, const EmissiveTriangle& t,
                       float diagonal, Skip&& skip, Side& front, Side& back) {
-  // A frame around the normal (Duff et al. 2017).
   const glm::vec3& n = t.normal;
-  const float sign = std::copysign(1.0f, n.z);
-  const float a = -1.0f / (sign + n.z), b = n.x * n.y * a;
-  const glm::vec3 tangent{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
-  const glm::vec3 bitangent{b, sign + n.y * n.y * a, -n.y};
+  const ShadingFrame frame(n);
   for (int i = 0; i < kGrid; ++i) {
     for (int j = 0; j < kGrid; ++j) {
       const float u1 = (static_cast<float>(i) + 0.5f) / kGrid, u2 = (static_cast<float>(j) + 0.5f) / kGrid;
       // The point: uniform on the triangle, from the pattern read the other way round so that
       // points and directions do not line up.
-      const float s = std::sqrt(u2);
-      const glm::vec3 p = t.p0 + (1.0f - s) * t.e1 + (u1 * s) * t.e2;
-      // The direction: cosine-weighted about the normal (Malley's method).
-      const float r = std::sqrt(u1), phi = 6.2831853f * u2;
-      const glm::vec3 local{r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.0f, 1.0f - u1))};
+      const glm::vec2 w = uniform_triangle_weights(u2, u1);
+      const glm::vec3 p = t.p0 + w.x * t.e1 + w.y * t.e2;
+      // The direction: cosine-weighted about the normal, on the side being looked at.
+      const glm::vec3 local = cosine_hemisphere(u1, u2);
       for (const float side : {1.0f, -1.0f}) {
-        const glm::vec3 d = local.x * tangent + local.y * bitangent + side * local.z * n;
+        const glm::vec3 d = frame.to_world({local.x, local.y, side * local.z});
         Ray ray{offset_ray_origin(p, n, d), d};
         SurfaceHit hit;
         Side& out = side > 0.0f ? front : back;

@@ -6,6 +6,7 @@
 
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/texture/material_textures.h"
+#include "renderer/trace/sample_warp.h"
 
 namespace farm {
 namespace {
@@ -90,9 +91,8 @@ std::size_t first_above(std::span<const float> sorted, float value) {
 EmitterSample Emitters::sample(float u_pick, float u1, float u2) const {
   const std::size_t i = std::min(first_above(cdf_, u_pick), cdf_.size() - 1);
   const Triangle& t = triangles_[i];
-  // Uniform on the triangle: fold the unit square onto it.
-  const float s = std::sqrt(u1);
-  const float b1 = 1.0f - s, b2 = u2 * s;
+  const glm::vec2 w = uniform_triangle_weights(u1, u2);
+  const float b1 = w.x, b2 = w.y;
   EmitterSample out;
   out.position = t.p0 + b1 * t.e1 + b2 * t.e2;
   out.normal = t.normal;

@@ -16,6 +16,7 @@
 #include "renderer/trace/material_bsdfs.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/ray_tile.h"
+#include "renderer/trace/sample_warp.h"
 #include "renderer/trace/sampler.h"
 
 namespace farm::path {
@@ -30,19 +31,6 @@ constexpr int kRouletteStart = 3;
 constexpr int kSegmentsPerPoll = 32;
 
 // An orthonormal frame around a unit normal (Duff et al. 2017), for the BSDF's local space.
-struct Frame {
-  glm::vec3 t, b, n;
-  explicit Frame(const glm::vec3& normal) : n(normal) {
-    const float sign = std::copysign(1.0f, n.z);
-    const float a = -1.0f / (sign + n.z);
-    const float c = n.x * n.y * a;
-    t = {1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x};
-    b = {c, sign + n.y * n.y * a, -n.y};
-  }
-  glm::vec3 to_local(const glm::vec3& v) const { return {glm::dot(v, t), glm::dot(v, b), glm::dot(v, n)}; }
-  glm::vec3 to_world(const glm::vec3& v) const { return v.x * t + v.y * b + v.z * n; }
-};
-
 float power_heuristic(float f, float g) {
   const float f2 = f * f, g2 = g * g;
   return f2 + g2 > 0.0f ? f2 / (f2 + g2) : 0.0f;
@@ -163,7 +151,7 @@ class PathTracer {
       if (!dielectric && glm::dot(n, wo_world) < 0.0f) {
         n = has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, wo_world) : -n;
       }
-      const Frame frame(n);
+      const ShadingFrame frame(n);
       const glm::vec3 wo = frame.to_local(wo_world);
 
       if (next_event_estimation_ && !bsdf.is_specular()) {
@@ -195,7 +183,7 @@ class PathTracer {
 
  private:
   template <typename Next>
-  glm::vec3 direct_light(const SurfaceHit& hit, const Frame& frame, const Bsdf& bsdf,
+  glm::vec3 direct_light(const SurfaceHit& hit, const ShadingFrame& frame, const Bsdf& bsdf,
                          const glm::vec3& wo, Next&& next) const {
     glm::vec3 sum(0.0f);
     // One point on the area lights, weighted against BSDF sampling.
@@ -256,7 +244,7 @@ class PathTracer {
     return environment_->radiance(ray.direction) * weight;
   }
   // One direction picked by the environment's luminance, weighted against BSDF sampling.
-  [[gnu::noinline]] glm::vec3 environment_sampled(const SurfaceHit& hit, const Frame& frame, const Bsdf& bsdf,
+  [[gnu::noinline]] glm::vec3 environment_sampled(const SurfaceHit& hit, const ShadingFrame& frame, const Bsdf& bsdf,
                                                   const glm::vec3& wo, float u1, float u2) const {
     const auto light = environment_->sample(u1, u2);
     if (!light) return glm::vec3(0.0f);
