@@ -328,8 +328,8 @@ void Bvh::build_wide() {
       const auto k = static_cast<std::size_t>(i);
       if (i >= used) {
         for (int a = 0; a < 3; ++a) {
-          node.bounds[a][k] = INFINITY;
-          node.bounds[3 + a][k] = -INFINITY;
+          node.bounds[2 * a][k] = INFINITY;
+          node.bounds[2 * a + 1][k] = -INFINITY;
         }
         node.child[k] = 0;
         node.count[k] = 0;
@@ -337,8 +337,8 @@ void Bvh::build_wide() {
       }
       const BvhNode& n = nodes_[slots[k]];
       for (int a = 0; a < 3; ++a) {
-        node.bounds[a][k] = n.bounds.min[a];
-        node.bounds[3 + a][k] = n.bounds.max[a];
+        node.bounds[2 * a][k] = n.bounds.min[a];
+        node.bounds[2 * a + 1][k] = n.bounds.max[a];
       }
       node.count[k] = static_cast<std::uint8_t>(n.count);
       if (n.count != 0) {

@@ -33,7 +33,11 @@ inline constexpr int kWideBvhWidth = 8;
 // The traversal form of a Bvh: the binary tree collapsed into nodes of up to kWideBvhWidth
 // children, whose boxes are stored axis by axis so that SIMD instructions test four at a time.
 struct alignas(32) WideBvhNode {
-  float bounds[6][kWideBvhWidth];        // min x, y, z then max x, y, z, per child
+  // Per child: min x, max x, min y, max y, min z, max z. A slot past `children` holds an empty
+  // box (min +inf, max -inf), which every ray misses: the traversal needs no mask for it. Each
+  // axis's min and max side by side, so the plane a ray leaves by is the one it enters by with
+  // one address bit flipped (a row is 32 bytes): one offset a ray per axis.
+  float bounds[6][kWideBvhWidth];
   std::uint32_t child[kWideBvhWidth];    // inner child: its WideBvhNode index; leaf child: its number in leaves()
   std::uint8_t count[kWideBvhWidth];     // leaf child: primitives; 0: an inner child
   std::uint8_t children = 0;             // slots in use
@@ -100,11 +104,16 @@ class Bvh {
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
  private:
-  // The traversal for any x86-64 and for AVX2 (bvh_traversal.h).
-  template <bool kAnyHit, typename Test>
+  // The traversal for any x86-64, for AVX2 and for AVX-512 (bvh_traversal.h), with or without
+  // counting nodes and primitives into `stats`.
+  template <bool kAnyHit, bool kCount, typename Test>
   bool traverse_sse(const Ray& ray, Test& test, TraversalStats* stats) const;
-  template <bool kAnyHit, typename Test>
+  template <bool kAnyHit, bool kCount, typename Test>
   bool traverse_avx2(const Ray& ray, Test& test, TraversalStats* stats) const;
+  template <bool kAnyHit, bool kCount, typename Test>
+  bool traverse_avx512(const Ray& ray, Test& test, TraversalStats* stats) const;
+  template <bool kAnyHit, typename Test>
+  bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
   void build_wide();
 
   std::vector<BvhNode> nodes_;

@@ -71,16 +71,53 @@ bool call_primitive_test(Test& test, std::uint32_t primitive, std::uint32_t leaf
 #pragma GCC pop_options
 #endif
 
+// The AVX2 code again, compiled for AVX-512's VL subset: the same 256-bit instructions (so the
+// same bits), on 32 vector registers instead of 16. With 16, a node's slab state (origin,
+// reciprocals, widened reciprocals: ten registers) was stored and loaded again around every leaf
+// test, 26 instructions a node with leaves met. No fused multiply-add: AVX-512 has its own forms,
+// which GCC contracts products and sums into unless told not to (the leaf tests and instance
+// transforms inlined here must round each product as the other builds do); clang fuses only
+// within one source expression, which intrinsics never are.
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2,avx512f,avx512vl"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx2,avx512f,avx512vl")
+#pragma GCC optimize("fp-contract=off")
+#endif
+#define FARM_BVH_TRAVERSE traverse_avx512
+#define FARM_BVH_AVX2 1
+#include "renderer/geometry/bvh_traverse_body.h"
+#undef FARM_BVH_TRAVERSE
+#undef FARM_BVH_AVX2
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#endif
+
+// The build for this CPU, with or without counting.
+template <bool kAnyHit, typename Test>
+bool Bvh::traverse(const Ray& ray, Test& test, TraversalStats* stats) const {
+  switch (traversal_isa()) {
+    case TraversalIsa::Avx512:
+      return stats ? traverse_avx512<kAnyHit, true>(ray, test, stats) : traverse_avx512<kAnyHit, false>(ray, test, stats);
+    case TraversalIsa::Avx2:
+      return stats ? traverse_avx2<kAnyHit, true>(ray, test, stats) : traverse_avx2<kAnyHit, false>(ray, test, stats);
+    case TraversalIsa::Sse:
+      break;
+  }
+  return stats ? traverse_sse<kAnyHit, true>(ray, test, stats) : traverse_sse<kAnyHit, false>(ray, test, stats);
+}
+
 template <typename Test>
 bool Bvh::closest(const Ray& ray, Test&& test, TraversalStats* stats) const {
-  return traversal_isa() == TraversalIsa::Avx2 ? traverse_avx2<false>(ray, test, stats)
-                                               : traverse_sse<false>(ray, test, stats);
+  return traverse<false>(ray, test, stats);
 }
 
 template <typename Test>
 bool Bvh::any(const Ray& ray, Test&& test, TraversalStats* stats) const {
-  return traversal_isa() == TraversalIsa::Avx2 ? traverse_avx2<true>(ray, test, stats)
-                                               : traverse_sse<true>(ray, test, stats);
+  return traverse<true>(ray, test, stats);
 }
 
 }  // namespace farm

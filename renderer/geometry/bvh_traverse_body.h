@@ -1,15 +1,17 @@
-// The body of Bvh's traversal, included twice by bvh_traversal.h (so no include guard): once
-// as traverse_sse for any x86-64, once as traverse_avx2 inside a region compiled for AVX2.
-// FARM_BVH_TRAVERSE names the member defined, FARM_BVH_AVX2 picks the slab test. The two slab
-// tests do the same operations on each child's box: the same bits, the same mask. Included
-// inside namespace farm.
+// The body of Bvh's traversal, included three times by bvh_traversal.h (so no include guard): as
+// traverse_sse for any x86-64, as traverse_avx2 inside a region compiled for AVX2, and as
+// traverse_avx512 inside one compiled for AVX-512VL. FARM_BVH_TRAVERSE names the member defined,
+// FARM_BVH_AVX2 picks the slab test. The two slab tests do the same operations on each child's
+// box: the same bits, the same mask. Included inside namespace farm.
 
-// Both traversals walk the wide nodes: the slab tests give the entry distances of all eight
+// Every build walks the wide nodes: the slab tests give the entry distances of all eight
 // children; leaf children are tested at once, nearest first (any hit: in slot order), and the
 // nearest inner one is entered next (docs/architecture.md 8, "The tree"). A stacked node is
 // dropped when it starts beyond the closest hit found since. `nodes` counts the wide nodes entered.
 // kAnyHit: stop at the first primitive hit (t_max never shrinks); otherwise keep the nearest.
-template <bool kAnyHit, typename Test>
+// kCount: count into `stats` (a query without them runs without the two counters, whose
+// registers the node loop wants: the planes' offsets stayed on the stack with them).
+template <bool kAnyHit, bool kCount, typename Test>
 bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) const {
   if (wide_.empty()) return false;
   constexpr bool kLeafTest = kAnyHit ? std::is_invocable_r_v<bool, Test&, const BvhLeafRef&>
@@ -20,12 +22,16 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
   // the max/min below keep their running value when handed a NaN first (SSE returns the second
   // operand), so such a ray counts as inside the closed slab, as in AABB::intersect.
   const glm::vec3 inv_dir = 1.0f / ray.direction;
-  int near_plane[3], far_plane[3];
+  // The byte offset in a node of the row of planes the ray enters each axis's slab by (its min
+  // row, or its max row for a negative direction); it leaves by the other, kRowBytes away.
+  constexpr std::size_t kRowBytes = sizeof(float) * kWideBvhWidth;
+  std::size_t near_row[3];
   for (int a = 0; a < 3; ++a) {
-    const bool negative = inv_dir[a] < 0.0f;
-    near_plane[a] = negative ? 3 + a : a;
-    far_plane[a] = negative ? a : 3 + a;
+    near_row[a] = (2 * static_cast<std::size_t>(a) + (inv_dir[a] < 0.0f ? 1 : 0)) * kRowBytes;
   }
+  const auto row = [](const WideBvhNode& node, std::size_t offset) {
+    return reinterpret_cast<const float*>(reinterpret_cast<const char*>(node.bounds) + offset);
+  };
   // Far distances are widened by a few ulps so rounding never culls a hit on a box boundary
   // (pbrt's 1 + 2 gamma(3), which covers the four roundings of (far - o) * (inv * widen): the
   // widening goes into the reciprocal once per ray instead of into every distance).
@@ -56,16 +62,16 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
   std::uint32_t index = 0;
   for (;;) {
     const WideBvhNode& node = wide_[index];
-    ++nodes_visited;
+    if constexpr (kCount) ++nodes_visited;
     alignas(32) float entry[kWideBvhWidth];
     int mask = 0;
 #if FARM_BVH_AVX2
     {
       __m256 t_near = t_min_lanes, t_far = _mm256_set1_ps(t_max);
       for (int a = 0; a < 3; ++a) {
-        const __m256 enter = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node.bounds[near_plane[a]]), origin[a]), inv[a]);
+        const __m256 enter = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(row(node, near_row[a])), origin[a]), inv[a]);
         const __m256 leave =
-            _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node.bounds[far_plane[a]]), origin[a]), inv_far[a]);
+            _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(row(node, near_row[a] ^ kRowBytes)), origin[a]), inv_far[a]);
         t_near = _mm256_max_ps(enter, t_near);  // the second operand on a NaN, as SSE's max
         t_far = _mm256_min_ps(leave, t_far);
       }
@@ -76,8 +82,9 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
     for (int h = 0; h < kWideBvhWidth; h += 4) {
       __m128 t_near = t_min_lanes, t_far = _mm_set1_ps(t_max);
       for (int a = 0; a < 3; ++a) {
-        const __m128 enter = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[near_plane[a]] + h), origin[a]), inv[a]);
-        const __m128 leave = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node.bounds[far_plane[a]] + h), origin[a]), inv_far[a]);
+        const __m128 enter = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(row(node, near_row[a]) + h), origin[a]), inv[a]);
+        const __m128 leave =
+            _mm_mul_ps(_mm_sub_ps(_mm_load_ps(row(node, near_row[a] ^ kRowBytes) + h), origin[a]), inv_far[a]);
         t_near = _mm_max_ps(enter, t_near);
         t_far = _mm_min_ps(leave, t_far);
       }
@@ -85,7 +92,6 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
       mask |= _mm_movemask_ps(_mm_cmple_ps(t_near, t_far)) << h;
     }
 #endif
-    mask &= (1 << node.children) - 1;
     // The children met, leaves and inner nodes apart (bits by slot).
     unsigned leaves_met = static_cast<unsigned>(mask) & node.leaf_mask;
     unsigned inner_met = static_cast<unsigned>(mask) & ~static_cast<unsigned>(node.leaf_mask);
@@ -106,7 +112,7 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
       leaves_met &= ~(1u << c);
       const auto k = static_cast<std::size_t>(c);
       if constexpr (kLeafTest) {
-        primitives_tested += node.count[k];
+        if constexpr (kCount) primitives_tested += node.count[k];
         const BvhLeafRef leaf{node.child[k], node.count[k]};
         if constexpr (kAnyHit) {
           hit = test(leaf);
@@ -116,7 +122,7 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
       } else {
         const std::uint32_t first = leaves_[node.child[k]].first;
         for (std::uint32_t i = first; i < first + node.count[k]; ++i) {
-          ++primitives_tested;
+          if constexpr (kCount) ++primitives_tested;
           if constexpr (kAnyHit) {
             if (call_primitive_test(test, order_[i], i)) {
               hit = true;
@@ -172,7 +178,7 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
     if (top == 0) break;
     index = stack[--top].index;
   }
-  if (stats) {
+  if (kCount && stats) {
     stats->nodes += nodes_visited;
     stats->triangles += primitives_tested;
   }

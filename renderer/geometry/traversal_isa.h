@@ -1,14 +1,16 @@
 #pragma once
-// Which build of the BVH traversal a query runs (bvh_traversal.h): AVX2 where the CPU has it,
-// else SSE, the x86-64 baseline every CPU has. Both give the same hits and visit the same
-// nodes, so the choice changes speed only; tests and `farm bench rt --isa` force one to compare.
+// Which build of the BVH traversal a query runs (bvh_traversal.h): AVX-512 (its VL subset, on
+// 256-bit registers) where the CPU has it, else AVX2, else SSE, the x86-64 baseline every CPU
+// has. All give the same hits and visit the same nodes, so the choice changes speed only; tests
+// and `farm bench rt` force one to compare.
 #include <atomic>
 #include <optional>
 #include <string_view>
 
 namespace farm {
 
-enum class TraversalIsa { Sse, Avx2 };
+// In order of preference, worst first.
+enum class TraversalIsa { Sse, Avx2, Avx512 };
 
 namespace detail {
 // Set from the CPU when the program starts (zero, Sse, until then: safe anywhere).
@@ -19,9 +21,15 @@ extern std::atomic<TraversalIsa> traversal_isa_in_use;
 inline TraversalIsa traversal_isa() { return detail::traversal_isa_in_use.load(std::memory_order_relaxed); }
 
 bool cpu_has_avx2();
+// AVX-512 Foundation and Vector Length extensions (the traversal's 8-wide code on 32 registers).
+bool cpu_has_avx512();
+// Whether this CPU runs `isa`'s build.
+bool cpu_runs(TraversalIsa isa);
+// The best build this CPU runs.
+TraversalIsa best_traversal_isa();
 
-// Runs every later query on `isa` (nullopt: the CPU's best). Throws std::invalid_argument for
-// AVX2 on a CPU without it.
+// Runs every later query on `isa` (nullopt: the CPU's best). Throws std::invalid_argument for a
+// build this CPU cannot run.
 void force_traversal_isa(std::optional<TraversalIsa> isa);
 
 std::string_view to_string(TraversalIsa isa);

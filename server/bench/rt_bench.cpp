@@ -140,11 +140,16 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
     };
     s.any = [intersector](const Ray& ray) { return intersector->occluded(ray); };
     subjects.push_back(s);
-    if (accel == AccelKind::Bvh && cpu_has_avx2()) {
-      // The same tree walked by the build for any x86-64, to show what AVX2 buys.
-      s.name = "bvh-sse";
-      s.isa = TraversalIsa::Sse;
-      extra_rows.push_back(std::move(s));
+    if (accel == AccelKind::Bvh) {
+      // The same tree walked by each lesser build this CPU runs (the x86-64 baseline, AVX2 under
+      // AVX-512), to show what the wider instruction sets buy.
+      for (TraversalIsa isa : {TraversalIsa::Avx2, TraversalIsa::Sse}) {
+        if (isa >= best_traversal_isa()) continue;
+        Subject lesser = s;
+        lesser.name = fmt::format("bvh-{}", to_string(isa));
+        lesser.isa = isa;
+        extra_rows.push_back(std::move(lesser));
+      }
     }
   }
   subjects.insert(subjects.end(), extra_rows.begin(), extra_rows.end());

@@ -346,17 +346,18 @@ TEST(MeshAccel, TiesGoToTheLowestTriangleIndexWhateverTheTree) {
   EXPECT_GT(ties, 20u) << "the soup's duplicates and shared vertices should give ties";
 }
 
-// The traversal built for AVX2 against the one for any x86-64 (traversal_isa.h): the same hits
-// to the bit, and the same nodes and triangles counted (the bvh_cost AOV), ray by ray, so a farm
-// of mixed machines renders one image. Skipped on a CPU without AVX2.
-TEST(BvhTraversalIsa, Avx2AndSseFindTheSameHitsThroughTheSameNodes) {
+// The traversals built for AVX2 and AVX-512 against the one for any x86-64 (traversal_isa.h):
+// the same hits to the bit, and the same nodes and triangles counted (the bvh_cost AOV), ray by
+// ray, so a farm of mixed machines renders one image. A build this CPU cannot run is skipped
+// (all of them: the test is skipped).
+TEST(BvhTraversalIsa, EveryBuildFindsTheSameHitsThroughTheSameNodesAsSse) {
   if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
   const ModelTriangles triangles(test::random_soup(3000, 9));
   const std::vector<Ray> rays = test::random_rays(triangles.bounds, 20000 / kRayDivisor, 9, some_vertices(triangles, 64));
   const auto sah = build_mesh_accel(triangles, AccelKind::Bvh);
   struct Answer {
-    bool hit = false, any = false;
-    TriangleHit nearest;
+    bool hit = false, any = false, hit_uncounted = false, any_uncounted = false;
+    TriangleHit nearest, nearest_uncounted;
     TraversalStats closest_work, any_work;
   };
   auto answers = [&](TraversalIsa isa) {
@@ -365,23 +366,58 @@ TEST(BvhTraversalIsa, Avx2AndSseFindTheSameHitsThroughTheSameNodes) {
     for (std::size_t i = 0; i < rays.size(); ++i) {
       out[i].hit = sah->closest_hit(rays[i], out[i].nearest, &out[i].closest_work);
       out[i].any = sah->any_hit(rays[i], &out[i].any_work);
+      // And without counting (a build of its own: Bvh::traverse).
+      out[i].hit_uncounted = sah->closest_hit(rays[i], out[i].nearest_uncounted, nullptr);
+      out[i].any_uncounted = sah->any_hit(rays[i], nullptr);
     }
     force_traversal_isa(std::nullopt);
     return out;
   };
-  const std::vector<Answer> sse = answers(TraversalIsa::Sse), avx2 = answers(TraversalIsa::Avx2);
-  std::size_t hits = 0, failures = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const Answer &a = sse[i], &b = avx2[i];
-    hits += a.hit;
-    const bool same = a.hit == b.hit && a.any == b.any && a.nearest.triangle == b.nearest.triangle &&
-                      a.nearest.t == b.nearest.t && a.nearest.u == b.nearest.u && a.nearest.v == b.nearest.v &&
-                      a.closest_work.nodes == b.closest_work.nodes && a.closest_work.triangles == b.closest_work.triangles &&
-                      a.any_work.nodes == b.any_work.nodes && a.any_work.triangles == b.any_work.triangles;
-    if (!same && ++failures <= 5) ADD_FAILURE() << "ray " << i << ": sse and avx2 differ";
+  const std::vector<Answer> sse = answers(TraversalIsa::Sse);
+  const auto same_hit = [](bool hit_a, const TriangleHit& a, bool hit_b, const TriangleHit& b) {
+    return hit_a == hit_b && (!hit_a || (a.triangle == b.triangle && a.t == b.t && a.u == b.u && a.v == b.v));
+  };
+  int builds = 0;
+  for (TraversalIsa isa : {TraversalIsa::Avx2, TraversalIsa::Avx512}) {
+    if (!cpu_runs(isa)) continue;
+    ++builds;
+    SCOPED_TRACE(std::string(to_string(isa)));
+    const std::vector<Answer> wide = answers(isa);
+    std::size_t hits = 0, failures = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Answer &a = sse[i], &b = wide[i];
+      hits += a.hit;
+      const bool same = same_hit(a.hit, a.nearest, b.hit, b.nearest) &&
+                        same_hit(a.hit, a.nearest, b.hit_uncounted, b.nearest_uncounted) &&
+                        same_hit(a.hit, a.nearest, a.hit_uncounted, a.nearest_uncounted) && a.any == b.any &&
+                        a.any == b.any_uncounted && a.any == a.any_uncounted &&
+                        a.closest_work.nodes == b.closest_work.nodes &&
+                        a.closest_work.triangles == b.closest_work.triangles &&
+                        a.any_work.nodes == b.any_work.nodes && a.any_work.triangles == b.any_work.triangles;
+      if (!same && ++failures <= 5) ADD_FAILURE() << "ray " << i << ": sse and " << to_string(isa) << " differ";
+    }
+    EXPECT_EQ(failures, 0u);
+    EXPECT_GT(hits, rays.size() / 10);
   }
-  EXPECT_EQ(failures, 0u);
-  EXPECT_GT(hits, rays.size() / 10);
+  EXPECT_GE(builds, 1);
+}
+
+// A build the CPU cannot run is refused by name; the best one is what runs unless forced.
+TEST(BvhTraversalIsa, TheBestBuildRunsByDefaultAndOneTheCpuLacksIsRefused) {
+  EXPECT_EQ(traversal_isa(), best_traversal_isa());
+  EXPECT_TRUE(cpu_runs(TraversalIsa::Sse));
+  EXPECT_EQ(cpu_runs(TraversalIsa::Avx512), cpu_has_avx512());
+  EXPECT_TRUE(!cpu_has_avx512() || cpu_has_avx2());
+  for (TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2, TraversalIsa::Avx512}) {
+    if (cpu_runs(isa)) {
+      force_traversal_isa(isa);
+      EXPECT_EQ(traversal_isa(), isa);
+    } else {
+      EXPECT_THROW(force_traversal_isa(isa), std::invalid_argument);
+    }
+  }
+  force_traversal_isa(std::nullopt);
+  EXPECT_EQ(traversal_isa(), best_traversal_isa());
 }
 
 // The lab's models: SAH against the median tree on 100k rays (two independent trees), and both
