@@ -381,6 +381,45 @@ TEST(InstanceIntersector, VisitsTopLevelAndPerObjectBoxesForDrawing) {
   EXPECT_EQ(none, 0u);
 }
 
+// A turned instance's top-level box is made of its model's upper BVH boxes carried to the world,
+// not of its model box's corners: a rod (a staircase of small boxes) along the model's xz
+// diagonal, turned 45 degrees about y, lies along world x, and its box is thin in z (the model box's corners would give it the
+// rod's whole length). It still holds every world vertex, and rays still find what brute force
+// finds.
+TEST(InstanceIntersector, ATurnedInstancesTopLevelBoxFollowsItsModelsUpperBoxes) {
+  Model rod;
+  for (int i = 0; i < 64; ++i) {
+    const float a = 0.125f * static_cast<float>(i), b = a + 0.125f;
+    rod.meshes.push_back(test::make_box({a, 0.0f, a}, {b, 0.1f, b}).meshes[0]);
+  }
+  rod.materials.push_back(Material{});
+  Scene s;
+  Material shade;  // check_ray's mark of object 0
+  shade.diffuse = glm::vec3(0.0f);
+  s.objects.push_back(test::object_of(rod, test::placed(glm::vec3(0.0f), {0, 1, 0}, 45.0f, glm::vec3(1.0f)), shade));
+  const PreparedScene scene(std::move(s));
+  AABB vertices;
+  const std::vector<WorldTriangle> world = world_triangles(scene, vertices);
+  const InstanceIntersector ours(scene, AccelKind::Bvh);
+  AABB top;
+  ours.visit_bvh_boxes(0, [&](const BvhBox& box) {
+    if (box.object < 0) top = box.bounds;
+  });
+  const glm::vec3 slack(1e-4f);
+  EXPECT_TRUE(top.contains(AABB{vertices.min + slack, vertices.max - slack}));
+  // The rod is 8 * sqrt(2) = 11.3 long along x; its model box's corners turned would span
+  // 11.3 in z too; the four upper boxes (each a quarter of the rod) span a quarter of that.
+  EXPECT_GT(top.extent().x, 11.0f);
+  EXPECT_LT(top.extent().z, 0.3f * top.extent().x);
+  const std::vector<Ray> rays = test::random_rays(vertices, 20000 / kRayDivisor, 5);
+  const std::vector<Expected> expected = brute_force(world, rays);
+  const std::vector<std::size_t> first_of = first_triangle_of(scene);
+  Tally tally;
+  for (std::size_t i = 0; i < rays.size(); ++i) check_ray(scene, ours, world, first_of, rays[i], expected[i], i, "bvh", tally);
+  EXPECT_EQ(tally.failures, 0u);
+  EXPECT_GT(tally.hits, rays.size() / 20);
+}
+
 // Objects in the same place (a model placed twice, as a job's copy-paste leaves it) are hit at
 // the same t: the lowest object index wins under every accel, whatever the top-level tree's
 // order (ray_hit_order.h), and within it the lowest triangle.
