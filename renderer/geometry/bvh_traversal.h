@@ -41,60 +41,49 @@ bool call_primitive_test(Test& test, std::uint32_t primitive, std::uint32_t leaf
   }
 }
 
-// The traversal, written once (bvh_traverse_body.h) and compiled twice: for any x86-64 (SSE,
-// a node's eight slabs as two halves) and for AVX2 (all eight at once), the one for this CPU
-// picked per query (traversal_isa.h). Both compute every slab distance with the same operations
-// in the same order, so they enter the same nodes in the same order and find the same hits:
-// results, and the nodes counted for bvh_cost, do not depend on the machine.
+// The traversal, written once (bvh_traverse_body.h) and compiled three times: for any x86-64
+// (SSE, a node's eight slabs as two halves), for AVX2 (all eight at once) and for AVX-512's VL
+// subset (that AVX2 code on 32 vector registers instead of 16: with 16, a node's slab state,
+// ten registers, was stored and loaded again around every leaf test, 26 instructions a node with
+// leaves met). The one for this CPU is picked per query (traversal_isa.h). All compute every slab
+// distance with the same operations in the same order, so they enter the same nodes in the same
+// order and find the same hits: results, and the nodes counted for bvh_cost, do not depend on
+// the machine.
+//
+// A region compiled for `isa` (GCC's pragmas; clang, the fuzz build's compiler, spells it as an
+// attribute pushed on every function). No fused multiply-add in it: AVX-512 has its own forms,
+// which GCC contracts products and sums into unless told not to (the leaf tests and instance
+// transforms inlined here must round each product as the SSE build does); clang fuses only
+// within one source expression, which intrinsics never are.
+#define FARM_PRAGMA(text) _Pragma(#text)
+#if defined(__clang__)
+#define FARM_BVH_TARGET_PUSH(isa) FARM_PRAGMA(clang attribute push(__attribute__((target(isa))), apply_to = function))
+#define FARM_BVH_TARGET_POP FARM_PRAGMA(clang attribute pop)
+#else
+#define FARM_BVH_TARGET_PUSH(isa) \
+  FARM_PRAGMA(GCC push_options) FARM_PRAGMA(GCC target(isa)) FARM_PRAGMA(GCC optimize("fp-contract=off"))
+#define FARM_BVH_TARGET_POP FARM_PRAGMA(GCC pop_options)
+#endif
+
 #define FARM_BVH_TRAVERSE traverse_sse
 #define FARM_BVH_AVX2 0
 #include "renderer/geometry/bvh_traverse_body.h"
-#undef FARM_BVH_TRAVERSE
-#undef FARM_BVH_AVX2
 
-// The functions defined here are compiled for AVX2 (GCC's pragma; clang, the fuzz build's
-// compiler, spells it as an attribute pushed on every function).
-#if defined(__clang__)
-#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
-#else
-#pragma GCC push_options
-#pragma GCC target("avx2")
-#endif
+FARM_BVH_TARGET_PUSH("avx2")
 #define FARM_BVH_TRAVERSE traverse_avx2
 #define FARM_BVH_AVX2 1
 #include "renderer/geometry/bvh_traverse_body.h"
-#undef FARM_BVH_TRAVERSE
-#undef FARM_BVH_AVX2
-#if defined(__clang__)
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#endif
+FARM_BVH_TARGET_POP
 
-// The AVX2 code again, compiled for AVX-512's VL subset: the same 256-bit instructions (so the
-// same bits), on 32 vector registers instead of 16. With 16, a node's slab state (origin,
-// reciprocals, widened reciprocals: ten registers) was stored and loaded again around every leaf
-// test, 26 instructions a node with leaves met. No fused multiply-add: AVX-512 has its own forms,
-// which GCC contracts products and sums into unless told not to (the leaf tests and instance
-// transforms inlined here must round each product as the other builds do); clang fuses only
-// within one source expression, which intrinsics never are.
-#if defined(__clang__)
-#pragma clang attribute push(__attribute__((target("avx2,avx512f,avx512vl"))), apply_to = function)
-#else
-#pragma GCC push_options
-#pragma GCC target("avx2,avx512f,avx512vl")
-#pragma GCC optimize("fp-contract=off")
-#endif
+FARM_BVH_TARGET_PUSH("avx2,avx512f,avx512vl")
 #define FARM_BVH_TRAVERSE traverse_avx512
 #define FARM_BVH_AVX2 1
 #include "renderer/geometry/bvh_traverse_body.h"
-#undef FARM_BVH_TRAVERSE
-#undef FARM_BVH_AVX2
-#if defined(__clang__)
-#pragma clang attribute pop
-#else
-#pragma GCC pop_options
-#endif
+FARM_BVH_TARGET_POP
+
+#undef FARM_BVH_TARGET_PUSH
+#undef FARM_BVH_TARGET_POP
+#undef FARM_PRAGMA
 
 // The build for this CPU, with or without counting.
 template <bool kAnyHit, typename Test>

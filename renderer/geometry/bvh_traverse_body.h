@@ -1,8 +1,9 @@
 // The body of Bvh's traversal, included three times by bvh_traversal.h (so no include guard): as
 // traverse_sse for any x86-64, as traverse_avx2 inside a region compiled for AVX2, and as
 // traverse_avx512 inside one compiled for AVX-512VL. FARM_BVH_TRAVERSE names the member defined,
-// FARM_BVH_AVX2 picks the slab test. The two slab tests do the same operations on each child's
-// box: the same bits, the same mask. Included inside namespace farm.
+// FARM_BVH_AVX2 picks the slab test; both are undefined again at the end. The two slab tests do
+// the same operations on each child's box: the same bits, the same mask. Included inside
+// namespace farm.
 
 // Every build walks the wide nodes: the slab tests give the entry distances of all eight
 // children; leaf children are tested at once, nearest first (any hit: in slot order), and the
@@ -185,3 +186,5 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
   return hit;
 }
 
+#undef FARM_BVH_TRAVERSE
+#undef FARM_BVH_AVX2
