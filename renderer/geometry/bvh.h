@@ -31,7 +31,8 @@ struct BvhNode {
 inline constexpr int kWideBvhWidth = 8;
 
 // The traversal form of a Bvh: the binary tree collapsed into nodes of up to kWideBvhWidth
-// children, whose boxes are stored axis by axis so that SIMD instructions test four at a time.
+// children, whose boxes are stored plane by plane so that SIMD instructions test the children
+// together (eight at a time with AVX2, two halves of four with SSE).
 struct alignas(32) WideBvhNode {
   // Per child: min x, max x, min y, max y, min z, max z. A slot past `children` holds an empty
   // box (min +inf, max -inf), which every ray misses: the traversal needs no mask for it. Each
