@@ -323,7 +323,6 @@ void Bvh::build_wide() {
       }
     }
     WideBvhNode node;
-    node.children = static_cast<std::uint8_t>(used);
     for (int i = 0; i < kWideBvhWidth; ++i) {
       const auto k = static_cast<std::size_t>(i);
       if (i >= used) {

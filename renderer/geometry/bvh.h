@@ -34,14 +34,13 @@ inline constexpr int kWideBvhWidth = 8;
 // children, whose boxes are stored plane by plane so that SIMD instructions test the children
 // together (eight at a time with AVX2, two halves of four with SSE).
 struct alignas(32) WideBvhNode {
-  // Per child: min x, max x, min y, max y, min z, max z. A slot past `children` holds an empty
-  // box (min +inf, max -inf), which every ray misses: the traversal needs no mask for it. Each
+  // Per child: min x, max x, min y, max y, min z, max z. An unused slot holds an empty box (min
+  // +inf, max -inf), which every ray misses: the traversal needs no count or mask of the slots. Each
   // axis's min and max side by side, so the plane a ray leaves by is the one it enters by with
   // one address bit flipped (a row is 32 bytes): one offset a ray per axis.
   float bounds[6][kWideBvhWidth];
   std::uint32_t child[kWideBvhWidth];    // inner child: its WideBvhNode index; leaf child: its number in leaves()
   std::uint8_t count[kWideBvhWidth];     // leaf child: primitives; 0: an inner child
-  std::uint8_t children = 0;             // slots in use
   std::uint8_t leaf_mask = 0;            // bit i: child i is a leaf
 };
 
