@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
-#include <glm/vec4.hpp>
 #include <limits>
 #include <numbers>
 #include <vector>
@@ -44,13 +43,7 @@ double uniform(std::uint64_t seed, std::uint64_t ray, std::uint64_t dimension) {
 AABB world_bounds(const PreparedScene& scene) {
   AABB world;
   for (const PreparedObject& object : scene.objects()) {
-    const AABB& box = object.triangles->bounds;
-    if (box.empty()) continue;
-    for (int corner = 0; corner < 8; ++corner) {
-      const glm::vec3 p{(corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
-                        (corner & 4) ? box.max.z : box.min.z};
-      world.grow(glm::vec3(object.model_to_world * glm::vec4(p, 1.0f)));
-    }
+    world.grow(transformed(object.triangles->bounds, object.model_to_world));
   }
   if (world.empty()) world = AABB{glm::vec3(-1.0f), glm::vec3(1.0f)};
   return world;

@@ -49,14 +49,7 @@ std::vector<AABB> frontier_boxes(const MeshAccel& accel, const AABB& whole, int 
 AABB world_bounds(const PreparedObject& object, const std::vector<AABB>& model_boxes) {
   AABB world;
   if (object.triangles->bounds.empty()) return world;
-  for (const AABB& box : model_boxes) {
-    if (box.empty()) continue;
-    for (int corner = 0; corner < 8; ++corner) {
-      const glm::vec3 p{(corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
-                        (corner & 4) ? box.max.z : box.min.z};
-      world.grow(glm::vec3(object.model_to_world * glm::vec4(p, 1.0f)));
-    }
-  }
+  for (const AABB& box : model_boxes) world.grow(transformed(box, object.model_to_world));
   return world;
 }
 

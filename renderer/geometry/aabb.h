@@ -1,6 +1,8 @@
 #pragma once
 #include <glm/common.hpp>
+#include <glm/mat4x4.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 #include <limits>
 
 namespace farm {
@@ -61,5 +63,18 @@ struct AABB {
     return t0 <= t1;
   }
 };
+
+// The box that holds `box` carried by the affine map `to`: the box of its eight corners carried
+// over (empty for an empty box). What an object's model-space box is in the world.
+inline AABB transformed(const AABB& box, const glm::mat4& to) {
+  AABB out;
+  if (box.empty()) return out;
+  for (int corner = 0; corner < 8; ++corner) {
+    const glm::vec3 p{(corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
+                      (corner & 4) ? box.max.z : box.min.z};
+    out.grow(glm::vec3(to * glm::vec4(p, 1.0f)));
+  }
+  return out;
+}
 
 }  // namespace farm

@@ -30,7 +30,6 @@ constexpr int kRouletteStart = 3;
 // spp, and the look (a clock read when there is a deadline) costs nothing measurable.
 constexpr int kSegmentsPerPoll = 32;
 
-// An orthonormal frame around a unit normal (Duff et al. 2017), for the BSDF's local space.
 float power_heuristic(float f, float g) {
   const float f2 = f * f, g2 = g * g;
   return f2 + g2 > 0.0f ? f2 / (f2 + g2) : 0.0f;

@@ -33,14 +33,7 @@ using bench::seconds_since;
 
 AABB world_bounds(const PreparedScene& scene) {
   AABB box;
-  for (const PreparedObject& o : scene.objects()) {
-    const AABB& b = o.triangles->bounds;
-    for (int i = 0; i < 8; ++i) {
-      const glm::vec3 corner{(i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y,
-                             (i & 4) ? b.max.z : b.min.z};
-      box.grow(glm::vec3(o.model_to_world * glm::vec4(corner, 1.0f)));
-    }
-  }
+  for (const PreparedObject& o : scene.objects()) box.grow(transformed(o.triangles->bounds, o.model_to_world));
   return box;
 }
 

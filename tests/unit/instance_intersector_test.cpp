@@ -318,17 +318,6 @@ TEST(InstanceIntersector, CountsTopAndBottomLevelWork) {
   EXPECT_LT(bvh_stats.cost(), naive_stats.cost());
 }
 
-// Corners of `box` under `m`, as a world-space box.
-AABB transformed(const AABB& box, const glm::mat4& m) {
-  AABB out;
-  for (int c = 0; c < 8; ++c) {
-    const glm::vec3 p{(c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
-                      (c & 4) ? box.max.z : box.min.z};
-    out.grow(glm::vec3(m * glm::vec4(p, 1.0f)));
-  }
-  return out;
-}
-
 TEST(InstanceIntersector, VisitsTopLevelAndPerObjectBoxesForDrawing) {
   const PreparedScene scene(mixed_scene());
   AABB bounds;
