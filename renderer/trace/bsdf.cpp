@@ -214,7 +214,7 @@ std::optional<BsdfSample> Bsdf::sample_mixture(const glm::vec3& wo, float u_lobe
   return s;
 }
 
-glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
+glm::vec3 Bsdf::eval_other(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Lambertian:  // eval_layered without the glossy layer: the same bits
     case Kind::Layered: return eval_layered(wo, wi);
@@ -224,7 +224,7 @@ glm::vec3 Bsdf::eval(const glm::vec3& wo, const glm::vec3& wi) const {
   }
 }
 
-float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
+float Bsdf::pdf_other(const glm::vec3& wo, const glm::vec3& wi) const {
   switch (kind_) {
     case Kind::Lambertian:  // specular_probability_ is 0
     case Kind::Layered: return mixture_pdf(wo, wi, specular_probability_);
@@ -234,7 +234,7 @@ float Bsdf::pdf(const glm::vec3& wo, const glm::vec3& wi) const {
   }
 }
 
-std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float u1, float u2) const {
+std::optional<BsdfSample> Bsdf::sample_other(const glm::vec3& wo, float u_lobe, float u1, float u2) const {
   BsdfSample s;
   switch (kind_) {
     case Kind::Mirror:
@@ -271,15 +271,7 @@ std::optional<BsdfSample> Bsdf::sample(const glm::vec3& wo, float u_lobe, float 
 
     case Kind::RoughDielectric: return sample_rough_dielectric(wo, u_lobe, u1, u2);
 
-    case Kind::Lambertian:
-      // The cosine lobe is this BSDF's exactly: f cos / pdf = (kd / pi) cos / (cos / pi) = kd, not
-      // worked out (an evaluation and three divisions a bounce on the Cornell box's walls).
-      if (wo.z <= 0.0f) return std::nullopt;
-      s.wi = cosine_hemisphere(u1, u2);
-      if (!(s.wi.z > 0.0f)) return std::nullopt;
-      s.pdf = s.wi.z / kPi;
-      s.weight = diffuse_;
-      return s;
+    case Kind::Lambertian: return sample_lambertian(wo, u1, u2);
     case Kind::Layered:
       return sample_mixture(wo, u_lobe, u1, u2, specular_probability_,
                             [this](const glm::vec3& o, const glm::vec3& i) { return eval_layered(o, i); });

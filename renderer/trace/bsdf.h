@@ -21,6 +21,8 @@
 
 #include "renderer/scene/material.h"
 #include "renderer/trace/dielectric_coat.h"
+#include "renderer/trace/sample_warp.h"
+#include "renderer/util/pi.h"
 
 namespace farm {
 
@@ -40,13 +42,27 @@ class Bsdf {
   // A material that is wholly one or the other; a partly transmissive one gets its glass part.
   explicit Bsdf(const Material& material);
 
+  // The three below take a Lambertian surface (the commonest: every wall of a Cornell box) inline,
+  // and the other kinds out of line: the calls, their switch and the returned structures through
+  // memory were 4% of the Cornell box's instructions for a few multiplies (docs/architecture.md 8.1).
+
   // f(wo, wi) of the non-delta lobes (without the cosine).
-  glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi) const;
+  glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi) const {
+    if (kind_ != Kind::Lambertian) return eval_other(wo, wi);
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return glm::vec3(0.0f);
+    return diffuse_ * (1.0f / kPi);  // a product, not three divisions: every bounce pays it
+  }
   // Density with which sample() picks wi given wo, non-delta lobes only.
-  float pdf(const glm::vec3& wo, const glm::vec3& wi) const;
+  float pdf(const glm::vec3& wo, const glm::vec3& wi) const {
+    if (kind_ != Kind::Lambertian) return pdf_other(wo, wi);
+    if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
+    return wi.z / kPi;
+  }
   // Picks wi for uniform numbers u_lobe, u1, u2 in [0, 1); none when the sample is lost (a
   // glossy reflection that points below the surface).
-  std::optional<BsdfSample> sample(const glm::vec3& wo, float u_lobe, float u1, float u2) const;
+  std::optional<BsdfSample> sample(const glm::vec3& wo, float u_lobe, float u1, float u2) const {
+    return kind_ == Kind::Lambertian ? sample_lambertian(wo, u1, u2) : sample_other(wo, u_lobe, u1, u2);
+  }
 
   // Only delta lobes: next-event estimation has nothing to add here.
   bool is_specular() const { return kind_ == Kind::Mirror || kind_ == Kind::Dielectric; }
@@ -58,6 +74,23 @@ class Bsdf {
   // Lambertian: a Layered material without its glossy layer, which samples its own lobe exactly
   // (weight kd, no evaluation: f cos / pdf is kd).
   enum class Kind { Lambertian, Layered, MetalRoughness, Mirror, Dielectric, RoughDielectric };
+
+  // The cosine lobe is a Lambertian BSDF's exactly: f cos / pdf = (kd / pi) cos / (cos / pi) = kd,
+  // not worked out (an evaluation and three divisions a bounce).
+  std::optional<BsdfSample> sample_lambertian(const glm::vec3& wo, float u1, float u2) const {
+    if (wo.z <= 0.0f) return std::nullopt;
+    BsdfSample s;
+    s.wi = cosine_hemisphere(u1, u2);
+    if (!(s.wi.z > 0.0f)) return std::nullopt;
+    s.pdf = s.wi.z / kPi;
+    s.weight = diffuse_;
+    return s;
+  }
+  // eval, pdf and sample out of line, for every kind (sample() and the others take Lambertian
+  // inline).
+  glm::vec3 eval_other(const glm::vec3& wo, const glm::vec3& wi) const;
+  float pdf_other(const glm::vec3& wo, const glm::vec3& wi) const;
+  std::optional<BsdfSample> sample_other(const glm::vec3& wo, float u_lobe, float u1, float u2) const;
 
   glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
   glm::vec3 eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const;

@@ -85,6 +85,30 @@ TEST(Bsdf, ALambertianSampleWeighsItsColourAndItsDensityIsThePdfFunctions) {
   EXPECT_FALSE(bsdf.sample(glm::vec3(0.0f, 0.0f, -1.0f), 0.5f, 0.5f, 0.5f).has_value());
 }
 
+// The Lambertian case is answered inline (bsdf.h) and every other out of line: its answers must
+// stay the layered BSDF's without a glossy layer, bit for bit (kd / pi, cos / pi, nothing below
+// the surface on either side), or every path-traced image would move.
+TEST(Bsdf, ALambertiansInlineAnswersAreTheLayeredFormulasBitForBit) {
+  Material matte;
+  matte.diffuse = glm::vec3(0.3f, 0.6f, 0.9f);
+  matte.specular = glm::vec3(0.0f);
+  const Bsdf bsdf(matte);
+  const float inv_pi = 1.0f / kPi;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 10000; ++i) {
+    const glm::vec3 wo = direction_at(89.0f * u(rng)), wi = direction_at(89.0f * u(rng));
+    const glm::vec3 f = bsdf.eval(wo, wi);
+    EXPECT_EQ(f, matte.diffuse * inv_pi) << i;
+    EXPECT_EQ(bsdf.pdf(wo, wi), wi.z / kPi) << i;
+    const glm::vec3 below{wi.x, wi.y, -wi.z};
+    EXPECT_EQ(bsdf.eval(wo, below), glm::vec3(0.0f)) << i;
+    EXPECT_EQ(bsdf.eval(below, wi), glm::vec3(0.0f)) << i;
+    EXPECT_EQ(bsdf.pdf(wo, below), 0.0f) << i;
+    EXPECT_EQ(bsdf.pdf(below, wi), 0.0f) << i;
+  }
+}
+
 TEST(Bsdf, GlossySamplingAgreesWithIndependentIntegrationAndNeverCreatesEnergy) {
   std::mt19937 rng(2);
   for (float shininess : {5.0f, 50.0f, 500.0f}) {
