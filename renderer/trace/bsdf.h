@@ -44,7 +44,7 @@ class Bsdf {
 
   // The three below take a Lambertian surface (the commonest: every wall of a Cornell box) inline,
   // and the other kinds out of line: the calls, their switch and the returned structures through
-  // memory were 4% of the Cornell box's instructions for a few multiplies (docs/architecture.md 8.1).
+  // memory were 7.6% of the Cornell box's instructions for a few multiplies (docs/architecture.md 8.1).
 
   // f(wo, wi) of the non-delta lobes (without the cosine).
   glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi) const {
