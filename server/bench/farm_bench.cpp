@@ -206,8 +206,8 @@ void run_farm_bench(const FarmBenchOptions& o) {
   overrides.height = o.height;
   overrides.spp = o.spp;
   const JobSubmission submission = make_job_submission(o.job, {}, overrides);
-  fmt::print("farm bench farm ({} build, {} hardware threads): {} at {}x{}, {} spp, {} tiles of {} px, "
-             "median of {}\n", FARM_BUILD_TYPE, std::thread::hardware_concurrency(), o.job.string(), o.width,
+  fmt::print("farm bench farm ({}): {} at {}x{}, {} spp, {} tiles of {} px, "
+             "median of {}\n", bench::machine_summary(), o.job.string(), o.width,
              o.height, o.spp, (o.width + submission.job.render.tile_size - 1) / submission.job.render.tile_size *
                  ((o.height + submission.job.render.tile_size - 1) / submission.job.render.tile_size),
              submission.job.render.tile_size, o.repeats);

@@ -55,9 +55,9 @@ void run_flip_bench(const FlipBenchOptions& o) {
   const fs::path& dir = scratch.path();
   render_pair(o, dir);
   const std::string farm = bench::self_binary();
-  fmt::print("farm bench flip ({} build, {} hardware threads): {} at {}x{}, 4 spp vs 1 spp; whole commands, "
+  fmt::print("farm bench flip ({}): {} at {}x{}, 4 spp vs 1 spp; whole commands, "
              "median of {}, taking turns\n",
-             FARM_BUILD_TYPE, std::thread::hardware_concurrency(), o.job.string(), o.width, o.height, o.repeats);
+             bench::machine_summary(), o.job.string(), o.width, o.height, o.repeats);
   fmt::print("{:<5} {:>8} {:>16} {:>16} {:>10}\n", "range", "threads", "farm compare", "flip-evaluator", "speed-up");
   for (const char* range : {"LDR", "HDR"}) {
     const std::string ext = std::string(range) == "LDR" ? "png" : "exr";

@@ -162,7 +162,7 @@ void bench_path(const FramesBenchOptions& o, const fs::path& dir) {
 
 void run_frames_bench(const FramesBenchOptions& o) {
   const bench::ScratchDir scratch("bench-frames");
-  fmt::print("farm bench frames ({} build, {} hardware threads)\n", FARM_BUILD_TYPE, std::thread::hardware_concurrency());
+  fmt::print("farm bench frames ({})\n", bench::machine_summary());
   if (o.scene == "all" || o.scene == "turntable") bench_turntable(o, scratch.path());
   if (o.scene == "all" || o.scene == "path") bench_path(o, scratch.path());
 }

@@ -184,8 +184,7 @@ void run_path_bench(const PathBenchOptions& options) {
     if (all > 1) o.threads.push_back(all);
   }
   if (o.assets.empty()) o.assets = "../shared/assets";
-  fmt::print("farm bench path ({} build, {} hardware threads)\n", FARM_BUILD_TYPE,
-             std::thread::hardware_concurrency());
+  fmt::print("farm bench path ({})\n", bench::machine_summary());
 
   if (o.scene == "all" || o.scene == "cornell") {
     const Job job = load_job(o.cornell_job);

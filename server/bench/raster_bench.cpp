@@ -83,8 +83,7 @@ void run_raster_bench(const RasterBenchOptions& options) {
                                  model_path.string()));
   }
   const auto cow = std::make_shared<const Model>(load_model(model_path));
-  fmt::print("farm bench raster ({} build, {} hardware threads), model {}\n", FARM_BUILD_TYPE,
-             std::thread::hardware_concurrency(), model_path.string());
+  fmt::print("farm bench raster ({}), model {}\n", bench::machine_summary(), model_path.string());
   if (options.scene == "all" || options.scene == "cow") bench_scene("cow", bench::single_cow(cow), options);
   if (options.scene == "all" || options.scene == "cow-grid-100") {
     bench_scene("cow-grid-100", bench::cow_grid(cow, 10), options);

@@ -35,9 +35,9 @@ void run_regress_bench(const RegressBenchOptions& o) {
   setups[1].options.jobs = 2;
   setups[2].label = "(c) scheduler + 2 workers over loopback";
   setups[2].options.scheduler = SchedulerConnection{loopback.address(), {}};
-  fmt::print("farm bench regress ({} build, {} hardware threads): {} ({} tests), {} workers of {} thread(s) in (c), "
+  fmt::print("farm bench regress ({}): {} ({} tests), {} workers of {} thread(s) in (c), "
              "median of {}\n",
-             FARM_BUILD_TYPE, std::thread::hardware_concurrency(), o.suite.string(), suite.tests.size(), 2,
+             bench::machine_summary(), o.suite.string(), suite.tests.size(), 2,
              o.worker_threads, o.repeats);
   // Taking turns, so that a change in the shared machine's load falls on all three alike.
   for (int round = 0; round < o.repeats; ++round) {

@@ -150,9 +150,9 @@ void run_render_bench(const RenderBenchOptions& o) {
   const Job cow_job = load_job(cow.file, cow.load);
   const bench::ScratchDir scratch("bench-render");
   const fs::path& dir = scratch.path();
-  fmt::print("farm bench render ({} build, {} hardware threads): the whole `farm render` command "
+  fmt::print("farm bench render ({}): the whole `farm render` command "
              "(process start to exit) vs the bare engine frame on the same scene\n",
-             FARM_BUILD_TYPE, std::thread::hardware_concurrency());
+             bench::machine_summary());
   if (o.scene == "all" || o.scene == "cow") bench_job(cow, o, dir);
   if (o.scene == "all" || o.scene == "cow-grid-100") {
     bench_job(write_grid_job(cow_job.scene.objects.at(0).file, dir), o, dir);

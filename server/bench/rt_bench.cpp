@@ -247,7 +247,7 @@ void run_rt_bench(const RtBenchOptions& options) {
   const std::filesystem::path assets =
       options.assets.empty() ? bench::default_cow_path().parent_path().parent_path() : options.assets;
   const auto cow = load(assets / "dae/cow.dae");
-  fmt::print("farm bench rt ({} build), models from {}\n", FARM_BUILD_TYPE, assets.string());
+  fmt::print("farm bench rt ({}), models from {}\n", bench::machine_summary(), assets.string());
   bench_scene("cow.dae", single(cow), options, true);
   bench_scene("bunny.dae", single(load(assets / "dae/bunny.dae")), options, false);
   bench_scene("CBbunny.dae", single(load(assets / "dae/CBbunny.dae")), options, false);

@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <utility>
 
@@ -18,6 +19,7 @@
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 
+#include "renderer/geometry/traversal_isa.h"
 #include "renderer/image/exr_io.h"
 #include "tests/support/farm_cli_fixture.h"
 #include "tests/support/job_specs.h"
@@ -317,6 +319,19 @@ TEST_F(FarmCliTest, BenchRtTimesEmbreeDirectlyAtEachThreadCountOnTheSameScene) {
   EXPECT_EQ(tables.size(), 8u) << r.output;  // four scenes, two thread counts
   EXPECT_EQ(direct, 8) << r.output;
   EXPECT_EQ(ratios, 8) << r.output;
+  // Its first line names the machine the figures belong to: the CPU as /proc/cpuinfo calls it,
+  // the hardware threads and the traversal build this CPU runs.
+  std::string model = "unknown CPU";
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  for (std::string line; std::getline(cpuinfo, line);) {
+    if (line.rfind("model name", 0) != 0) continue;
+    model = line.substr(line.find(':') + 2);
+    while (!model.empty() && model.back() == ' ') model.pop_back();
+    break;
+  }
+  const std::string machine = fmt::format(", {}, {} hardware threads, {} ray traversal)", model,
+                                          std::thread::hardware_concurrency(), to_string(best_traversal_isa()));
+  EXPECT_NE(r.output.substr(0, r.output.find('\n')).find(machine), std::string::npos) << machine << "\n" << r.output;
 }
 
 // The dispatch benchmark claims every queued job once, as many as asked or as are queued (it
