@@ -40,13 +40,10 @@ double uniform(std::uint64_t seed, std::uint64_t ray, std::uint64_t dimension) {
   return static_cast<double>(h >> 11) * 0x1.0p-53;  // [0, 1)
 }
 
-AABB world_bounds(const PreparedScene& scene) {
-  AABB world;
-  for (const PreparedObject& object : scene.objects()) {
-    world.grow(transformed(object.triangles->bounds, object.model_to_world));
-  }
-  if (world.empty()) world = AABB{glm::vec3(-1.0f), glm::vec3(1.0f)};
-  return world;
+// The scene's world box, or a unit box around the origin for a scene without triangles.
+AABB bounds_to_aim_at(const PreparedScene& scene) {
+  const AABB world = scene.world_bounds();
+  return world.empty() ? AABB{glm::vec3(-1.0f), glm::vec3(1.0f)} : world;
 }
 
 struct RaySet {
@@ -101,7 +98,7 @@ AccelValidation validate_accel(const PreparedScene& scene, const RenderSettings&
                                const SceneIntersector& ours, const SceneIntersector& reference,
                                std::uint64_t rays) {
   const RaySet ray_set{scene.scene().camera, std::max(1, settings.width),
-                       std::max(1, settings.height), settings.seed, rays / 2, world_bounds(scene)};
+                       std::max(1, settings.height), settings.seed, rays / 2, bounds_to_aim_at(scene)};
 
   const double scale = glm::length(ray_set.bounds.extent());
   const std::size_t chunks = (rays + kChunk - 1) / kChunk;

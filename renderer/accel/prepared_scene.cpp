@@ -23,4 +23,12 @@ void PreparedScene::flatten() const {
   });
 }
 
+AABB PreparedScene::world_bounds() const {
+  AABB world;
+  for (const PreparedObject& object : objects()) {
+    world.grow(transformed(object.triangles->bounds, object.model_to_world));
+  }
+  return world;
+}
+
 }  // namespace farm

@@ -51,6 +51,9 @@ class PreparedScene {
   // transforms, for an engine that never reads the triangles (the rasterizer).
   const std::vector<PreparedObject>& placements() const { return objects_; }
   std::size_t triangle_count() const { return scene_.triangle_count(); }
+  // The world box of every object's model box carried over by its placement (geometry/aabb.h's
+  // transformed); empty for a scene without triangles. Flattens the models (objects()).
+  AABB world_bounds() const;
 
   // The models' triangles and bottom-level structures, shared with the job's other frames.
   ModelGeometry& geometry() const { return *geometry_; }

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cstdlib>
 #include <stdexcept>
-#include <thread>
 
 #include "renderer/accel/prepared_scene.h"
 #include "renderer/image/exr_io.h"

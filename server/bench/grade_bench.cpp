@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <random>
-#include <thread>
 
 #include "renderer/compare/image.h"
 #include "server/bench/bench_support.h"
@@ -77,7 +76,8 @@ void run_grade_bench(const GradeBenchOptions& o) {
   const double reports = seconds_since(reported);
   double total = 0.0;
   for (const StudentGrade& s : grades.students) total += s.total();
-  fmt::print("farm bench grade ({}): {} ({} image tasks), {} students\n", bench::machine_summary(), o.rubric.string(), file_tasks, o.students);
+  fmt::print("farm bench grade ({}): {} ({} image tasks), {} students\n", bench::machine_summary(),
+             o.rubric.string(), file_tasks, o.students);
   fmt::print("references rendered once   {:8.2f} s\n", references);
   fmt::print("grading {} students        {:8.2f} s   ({:.1f} ms a student, mean score {:.1f} of {:g})\n", o.students,
              grading, 1000.0 * grading / std::max(1, o.students), total / static_cast<double>(std::max<std::size_t>(1, grades.students.size())),

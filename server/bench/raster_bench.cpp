@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <thread>
 
 #include "renderer/render_frame.h"
 #include "renderer/util/input_error.h"

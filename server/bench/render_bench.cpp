@@ -7,7 +7,6 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
-#include <thread>
 
 #include "renderer/job/job.h"
 #include "renderer/job/scene_builder.h"

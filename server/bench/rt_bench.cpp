@@ -30,13 +30,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using bench::seconds_since;
 
-
-AABB world_bounds(const PreparedScene& scene) {
-  AABB box;
-  for (const PreparedObject& o : scene.objects()) box.grow(transformed(o.triangles->bounds, o.model_to_world));
-  return box;
-}
-
 // Coherent rays: a square grid of camera rays that frames the whole scene.
 std::vector<Ray> primary_rays(const AABB& bounds, std::uint64_t count) {
   const int side = static_cast<int>(std::sqrt(static_cast<double>(count)));
@@ -116,7 +109,7 @@ struct Subject {
 
 void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, bool with_naive) {
   const PreparedScene prepared(std::move(scene));
-  const AABB bounds = world_bounds(prepared);
+  const AABB bounds = prepared.world_bounds();
   std::vector<AccelKind> accels{AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Embree};
   if (with_naive) accels.push_back(AccelKind::Naive);
   std::vector<Subject> subjects, extra_rows;
