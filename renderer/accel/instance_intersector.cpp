@@ -1,5 +1,6 @@
 #include "renderer/accel/instance_intersector.h"
 
+#include <array>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -154,6 +155,72 @@ bool InstanceIntersector::find_closest(const Ray& ray, SurfaceHit& hit, Traversa
   hit.u = nearest.u;
   hit.v = nearest.v;
   return true;
+}
+
+unsigned InstanceIntersector::find_closest_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const {
+  lanes &= (1u << Bvh::kPacketWidth) - 1u;
+  if (!top_ && !one_object_) return SceneIntersector::find_closest_packet(rays, lanes, hits);  // naive
+  std::array<float, Bvh::kPacketWidth> t_max{};
+  for (unsigned rest = lanes; rest; rest &= rest - 1) {
+    const int i = __builtin_ctz(rest);
+    t_max[static_cast<std::size_t>(i)] = rays[i].t_max;
+  }
+  std::array<TriangleHit, Bvh::kPacketWidth> nearest{};
+  std::array<std::uint32_t, Bvh::kPacketWidth> nearest_object{};
+  unsigned found = 0;
+  if (one_object_untransformed_) {
+    found = object_accel_[0]->closest_hit_packet(rays, lanes, t_max.data(), nearest.data());
+  } else {
+    // As find_closest's test, lane by lane: an object is asked up to and including the nearest
+    // hit so far, and an equal t is taken from a lower object index only.
+    std::array<Ray, Bvh::kPacketWidth> local;
+    std::array<TriangleHit, Bvh::kPacketWidth> object_hits;
+    const auto test_object = [&](std::uint32_t o, unsigned object_lanes) {
+      for (unsigned rest = object_lanes; rest; rest &= rest - 1) {
+        const auto i = static_cast<std::size_t>(__builtin_ctz(rest));
+        local[i] = to_model(scene_.objects()[o], rays[i], t_max[i]);
+      }
+      std::array<float, Bvh::kPacketWidth> bound = t_max;
+      const unsigned object_found = object_accel_[o]->closest_hit_packet(local.data(), object_lanes, bound.data(),
+                                                                         object_hits.data());
+      for (unsigned rest = object_found; rest; rest &= rest - 1) {
+        const auto i = static_cast<std::size_t>(__builtin_ctz(rest));
+        const unsigned bit = 1u << i;
+        const TriangleHit& h = object_hits[i];
+        if ((found & bit) && !nearer_hit(h.t, o, nearest[i].t, nearest_object[i])) continue;
+        nearest[i] = h;
+        nearest_object[i] = o;
+        found |= bit;
+        t_max[i] = limit_through(h.t);
+      }
+    };
+    if (one_object_) {
+      test_object(0, lanes);
+    } else {
+      top_->closest_packet(rays, lanes, t_max.data(), [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+        for (std::uint32_t k = 0; k < leaf.count; ++k) test_object(top_->leaf_primitive(leaf, k), leaf_lanes);
+      });
+    }
+  }
+  for (unsigned rest = found; rest; rest &= rest - 1) {
+    const auto i = static_cast<std::size_t>(__builtin_ctz(rest));
+    hits[i] = SurfaceHit{};
+    hits[i].t = nearest[i].t;
+    hits[i].object = nearest_object[i];
+    hits[i].triangle = nearest[i].triangle;
+    hits[i].u = nearest[i].u;
+    hits[i].v = nearest[i].v;
+  }
+  return found;
+}
+
+unsigned InstanceIntersector::closest_hit_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const {
+  const unsigned found = find_closest_packet(rays, lanes, hits);
+  for (unsigned rest = found; rest; rest &= rest - 1) {
+    const int i = __builtin_ctz(rest);
+    complete_surface_hit(scene_, rays[i], hits[i]);
+  }
+  return found;
 }
 
 bool InstanceIntersector::occluded(const Ray& ray, TraversalStats* stats) const {

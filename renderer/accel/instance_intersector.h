@@ -34,6 +34,8 @@ class InstanceIntersector final : public SceneIntersector {
 
   bool closest_hit(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const override;
   bool find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const override;
+  unsigned find_closest_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const override;
+  unsigned closest_hit_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const override;
   bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const override;
 
   // Structures built: one MeshAccel per distinct model.

@@ -1,13 +1,17 @@
 #include "renderer/accel/mesh_accel.h"
 
 #include <array>
+#include <bit>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "renderer/geometry/bvh.h"
 #include "renderer/geometry/ray_hit_order.h"
+#include "renderer/geometry/traversal_isa.h"
 #include "renderer/geometry/triangle4.h"
+#include "renderer/geometry/triangle4_packet.h"
 #include "renderer/geometry/triangle_intersect.h"
 
 namespace farm {
@@ -85,24 +89,52 @@ class BvhAccel final : public MeshAccel {
     const Triangle4Ray packet_ray(ray);
     bool found = false;
     bvh_.closest(
-        ray,
-        [&](const BvhLeafRef& leaf, float& t_max) {
-          __m128 t, u, v;
-          const int mask = intersect_triangle4(packet_ray, packets_[leaf.number], t_max, t, u, v);
-          if (mask == 0) return false;
-          const std::uint32_t* ids = ids_[leaf.number].data();
-          const int lane = nearest_lane(mask, t, ids);
-          alignas(16) float ts[4], us[4], vs[4];
-          _mm_store_ps(ts, t);
-          if (found && !nearer_hit(ts[lane], ids[lane], hit.t, hit.triangle)) return false;
-          _mm_store_ps(us, u);
-          _mm_store_ps(vs, v);
-          hit = TriangleHit{ts[lane], us[lane], vs[lane], ids[lane]};
-          found = true;
-          t_max = limit_through(hit.t);
-          return true;
-        },
+        ray, [&](const BvhLeafRef& leaf, float& t_max) { return test_leaf(packet_ray, leaf, t_max, hit, found); },
         stats);
+    return found;
+  }
+
+  unsigned closest_hit_packet(const Ray* rays, unsigned lanes, float* t_max, TriangleHit* hits) const override {
+    // A leaf that most of the packet meets is tested a ray per lane (triangle4_packet.h, AVX2:
+    // the packet walk runs only there); one that a few rays meet, ray by ray, each lane's
+    // Triangle4Ray made when a leaf first asks for it. Both give each ray the same hit.
+    const bool transposed = traversal_isa() != TraversalIsa::Sse;
+    Triangle4PacketRays packet_rays;
+    if (transposed) {
+      for (unsigned rest = lanes; rest; rest &= rest - 1) packet_rays.set(__builtin_ctz(rest), rays[__builtin_ctz(rest)]);
+    }
+    alignas(Triangle4Ray) unsigned char storage[Bvh::kPacketWidth][sizeof(Triangle4Ray)];
+    const auto packet_ray = [&](int i) -> Triangle4Ray& {
+      return *std::launder(reinterpret_cast<Triangle4Ray*>(storage[i]));
+    };
+    unsigned made = 0, found = 0;
+    bvh_.closest_packet(rays, lanes, t_max, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+      if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
+        Triangle4PacketHits leaf_hits;
+        const std::uint32_t* ids = ids_[leaf.number].data();
+        const unsigned met = intersect_triangle4_packet(packet_rays, packets_[leaf.number], static_cast<int>(leaf.count),
+                                                        ids, t_max, leaf_lanes, leaf_hits);
+        for (unsigned rest = met; rest; rest &= rest - 1) {
+          const int i = __builtin_ctz(rest);
+          const unsigned bit = 1u << i;
+          if ((found & bit) && !nearer_hit(leaf_hits.t[i], leaf_hits.id[i], hits[i].t, hits[i].triangle)) continue;
+          hits[i] = TriangleHit{leaf_hits.t[i], leaf_hits.u[i], leaf_hits.v[i], leaf_hits.id[i]};
+          found |= bit;
+          t_max[i] = limit_through(hits[i].t);
+        }
+        return;
+      }
+      for (; leaf_lanes; leaf_lanes &= leaf_lanes - 1) {
+        const int i = __builtin_ctz(leaf_lanes);
+        const unsigned bit = 1u << i;
+        if (!(made & bit)) {
+          new (storage[i]) Triangle4Ray(rays[i]);
+          made |= bit;
+        }
+        bool lane_found = (found & bit) != 0;
+        if (test_leaf(packet_ray(i), leaf, t_max[i], hits[i], lane_found)) found |= bit;
+      }
+    });
     return found;
   }
 
@@ -120,13 +152,49 @@ class BvhAccel final : public MeshAccel {
   const Bvh* bvh() const override { return &bvh_; }
 
  private:
+  // One leaf's Triangle4 against a ray, keeping the nearest hit by ray_hit_order.h's rule: after
+  // a hit at t the leaves are tested up to and including t, and an equal t is taken from a lower
+  // triangle index only. Lowers t_max past a hit kept.
+  bool test_leaf(const Triangle4Ray& ray, const BvhLeafRef& leaf, float& t_max, TriangleHit& hit,
+                 bool& found) const {
+    __m128 t, u, v;
+    const int mask = intersect_triangle4(ray, packets_[leaf.number], t_max, t, u, v);
+    if (mask == 0) return false;
+    const std::uint32_t* ids = ids_[leaf.number].data();
+    const int lane = nearest_lane(mask, t, ids);
+    alignas(16) float ts[4], us[4], vs[4];
+    _mm_store_ps(ts, t);
+    if (found && !nearer_hit(ts[lane], ids[lane], hit.t, hit.triangle)) return false;
+    _mm_store_ps(us, u);
+    _mm_store_ps(vs, v);
+    hit = TriangleHit{ts[lane], us[lane], vs[lane], ids[lane]};
+    found = true;
+    t_max = limit_through(hit.t);
+    return true;
+  }
+
   static constexpr int kLeafSize = 4;  // one Triangle4
+  static constexpr int kTransposedFrom = 4;  // rays of a packet meeting a leaf
   Bvh bvh_;
   std::vector<Triangle4> packets_;                     // per leaf (Bvh::leaves())
   std::vector<std::array<std::uint32_t, 4>> ids_;      // per leaf, its triangles' ModelTriangles indices
 };
 
 }  // namespace
+
+unsigned MeshAccel::closest_hit_packet(const Ray* rays, unsigned lanes, float* t_max, TriangleHit* hits) const {
+  unsigned found = 0;
+  for (; lanes; lanes &= lanes - 1) {
+    const int i = __builtin_ctz(lanes);
+    Ray ray = rays[i];
+    ray.t_max = t_max[i];
+    if (closest_hit(ray, hits[i], nullptr)) {
+      found |= 1u << i;
+      t_max[i] = limit_through(hits[i].t);
+    }
+  }
+  return found;
+}
 
 std::unique_ptr<MeshAccel> build_mesh_accel(const ModelTriangles& triangles, AccelKind accel,
                                             const CancelFlag& cancel) {

@@ -42,6 +42,14 @@ class SceneIntersector {
   virtual bool find_closest(const Ray& ray, SurfaceHit& hit, TraversalStats* stats = nullptr) const {
     return closest_hit(ray, hit, stats);
   }
+  // find_closest for up to 8 rays at once, rays[i] for each bit i of `lanes` (hits[i] filled
+  // for the lanes returned, which are those hit): the same hits, bit for bit, as find_closest
+  // ray by ray, which this one asks. Ours walks a packet's rays through each BVH together
+  // (Bvh::closest_packet): coherent rays (a block of camera rays) share the nodes' loads and tests.
+  virtual unsigned find_closest_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const;
+  // closest_hit for such a packet: each hit completed, the same bits as closest_hit ray by ray
+  // (which this one asks). What the engines trace a pixel's camera rays with.
+  virtual unsigned closest_hit_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const;
   // Whether anything blocks the ray within (ray.t_min, ray.t_max): shadow rays.
   virtual bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const = 0;
 };

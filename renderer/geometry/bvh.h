@@ -7,6 +7,7 @@
 // first and skipping nodes farther than the closest hit so far. Leaves are numbered in the order
 // of order(), so that a caller may keep a leaf's primitives together (mesh_accel's Triangle4s).
 #include <cstdint>
+#include <immintrin.h>
 #include <span>
 #include <vector>
 
@@ -103,6 +104,24 @@ class Bvh {
   template <typename Test>
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
+  // Closest-hit traversal of up to kPacketWidth rays at once: rays[i] for each bit i of `lanes`.
+  // t_max[i] starts as the ray's bound and is lowered by `test(leaf, leaf_lanes)`, which tests
+  // the leaf against each ray of `leaf_lanes` (those whose slab test met the leaf's box) and
+  // lowers their t_max on a hit. Each ray meets exactly the boxes its own closest() would meet
+  // at the same t_max (the same slab arithmetic, lane by lane), so with a leaf test that keeps
+  // the nearest hit by ray_hit_order.h's rule, every ray finds the hit closest() finds for it.
+  // Rays whose directions' signs differ are walked as separate packets (each sign pattern, an
+  // octant, one). Nodes are shared where the rays are coherent (a block of camera rays): one
+  // load and one pass of slab tests for all. Without AVX2, each ray goes through closest().
+  static constexpr int kPacketWidth = 8;
+  template <typename Test>
+  void closest_packet(const Ray* rays, unsigned lanes, float* t_max, Test&& test) const;
+
+  // The primitive of a leaf's entry `i` (< leaf.count): what a packet's leaf test resolves.
+  std::uint32_t leaf_primitive(const BvhLeafRef& leaf, std::uint32_t i) const {
+    return order_[leaves_[leaf.number].first + i];
+  }
+
  private:
   // The traversal for any x86-64, for AVX2 and for AVX-512 (bvh_traversal.h), with or without
   // counting nodes and primitives into `stats`.
@@ -114,6 +133,12 @@ class Bvh {
   bool traverse_avx512(const Ray& ray, Test& test, TraversalStats* stats) const;
   template <bool kAnyHit, typename Test>
   bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
+  // closest_packet with AVX2 (bvh_packet_body.h): the rays' set-up, then one walk per octant.
+  template <typename Test>
+  void traverse_packet_avx2(const Ray* rays, unsigned lanes, float* t_max, Test& test) const;
+  template <typename Test>
+  void walk_packet_avx2(unsigned lanes, const std::size_t* near_row, const __m256* origin, const __m256* inv,
+                        const __m256* inv_far, const __m256* t_min, float* t_max, Test& test) const;
   void build_wide();
 
   std::vector<BvhNode> nodes_;

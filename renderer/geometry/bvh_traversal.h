@@ -81,6 +81,10 @@ FARM_BVH_TARGET_PUSH("avx2,avx512f,avx512vl")
 #include "renderer/geometry/bvh_traverse_body.h"
 FARM_BVH_TARGET_POP
 
+FARM_BVH_TARGET_PUSH("avx2")
+#include "renderer/geometry/bvh_packet_body.h"
+FARM_BVH_TARGET_POP
+
 #undef FARM_BVH_TARGET_PUSH
 #undef FARM_BVH_TARGET_POP
 #undef FARM_PRAGMA
@@ -107,6 +111,29 @@ bool Bvh::closest(const Ray& ray, Test&& test, TraversalStats* stats) const {
 template <typename Test>
 bool Bvh::any(const Ray& ray, Test&& test, TraversalStats* stats) const {
   return traverse<true>(ray, test, stats);
+}
+
+template <typename Test>
+void Bvh::closest_packet(const Ray* rays, unsigned lanes, float* t_max, Test&& test) const {
+  lanes &= (1u << kPacketWidth) - 1u;
+  if (wide_.empty() || lanes == 0) return;
+  if (traversal_isa() == TraversalIsa::Sse) {
+    // One ray at a time through closest(), its leaf test the packet's on that lane alone.
+    for (unsigned rest = lanes; rest; rest &= rest - 1) {
+      const int i = __builtin_ctz(rest);
+      Ray ray = rays[i];
+      ray.t_max = t_max[i];
+      auto one = [&](const BvhLeafRef& leaf, float& bound) {
+        const float before = t_max[i];
+        test(leaf, 1u << i);
+        bound = t_max[i];
+        return t_max[i] != before;
+      };
+      traverse<false>(ray, one, nullptr);
+    }
+    return;
+  }
+  traverse_packet_avx2(rays, lanes, t_max, test);
 }
 
 }  // namespace farm

@@ -12,6 +12,7 @@
 #include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
 #include "renderer/trace/bsdf.h"
+#include "renderer/trace/camera_packet.h"
 #include "renderer/trace/emitters.h"
 #include "renderer/trace/material_bsdfs.h"
 #include "renderer/trace/ray_offset.h"
@@ -77,6 +78,9 @@ class PathTracer {
     glm::vec3 first_albedo{0.0f};  // its diffuse colour, textures read
   };
 
+  // A pixel's camera rays, traced together.
+  void trace_camera_rays(CameraPacket& packet, int count) const { packet.trace(intersector_, count); }
+
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
   // Whether the poll said stop: what was traced since is cut short.
@@ -87,7 +91,9 @@ class PathTracer {
   // Always inlined into the sample loop (render_tile): GCC's choice moved with the unity unit this
   // file shares (its inlining budget grows with the unit), and a file added before it once left
   // a call per sample and 6% fewer samples per second, with no change to this code.
-  __attribute__((always_inline)) Result trace(Ray ray, const PixelSamples& pixel, std::uint32_t sample) const {
+  // `camera`: the camera ray's hit when it was found beforehand (camera_packet.h).
+  __attribute__((always_inline)) Result trace(Ray ray, const PixelSamples& pixel, std::uint32_t sample,
+                                              const CameraRayHit& camera) const {
     Result result;
     glm::vec3 beta(1.0f);
     bool after_specular = true;  // emission seen directly or through mirrors counts in full
@@ -102,7 +108,14 @@ class PathTracer {
       if (poll_()) break;
       SurfaceHit hit;
       ++rays_;
-      if (!intersector_.closest_hit(ray, hit)) {
+      bool met;
+      if (bounce == 0 && camera.traced) {
+        met = camera.met;
+        if (met) hit = *camera.hit;
+      } else {
+        met = intersector_.closest_hit(ray, hit);
+      }
+      if (!met) {
         result.radiance += beta * (environment_ ? environment_met(ray, after_specular, previous_pdf)
                                                 : scene_.scene().background);  // constant, never sampled
         break;
@@ -314,14 +327,22 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         float coverage = 0.0f;
         SampleVariance variance;
         const PixelSamples pixel(seed, pixel_index(settings, x, y));
+        CameraPacket camera_rays;
         for (int s = range.begin; s < range.end; ++s) {
           const auto sample = static_cast<std::uint32_t>(s);
-          // Box filter: the sample lands uniformly anywhere in the pixel. The ray is made in the
-          // argument's place: a named copy was stored in pieces and read back whole, a stalled
-          // store forward per sample (perf).
-          const PathTracer::Result r = tracer.trace(camera.ray(static_cast<float>(x) + pixel.uniform(sample, 0),
-                                                               static_cast<float>(y) + pixel.uniform(sample, 1)),
-                                                    pixel, sample);
+          // Box filter: the sample lands uniformly anywhere in the pixel. The pixel's camera rays
+          // are traced a packet at a time, each shaded in its turn below.
+          const int lane = (s - range.begin) % CameraPacket::kWidth;
+          if (lane == 0) {
+            const int count = std::min(CameraPacket::kWidth, range.end - s);
+            for (int i = 0; i < count; ++i) {
+              const auto next = static_cast<std::uint32_t>(s + i);
+              camera_rays.ray(i) = camera.ray(static_cast<float>(x) + pixel.uniform(next, 0),
+                                              static_cast<float>(y) + pixel.uniform(next, 1));
+            }
+            tracer.trace_camera_rays(camera_rays, count);
+          }
+          const PathTracer::Result r = tracer.trace(camera_rays.ray(lane), pixel, sample, camera_rays.hit(lane));
           if (tracer.stopped()) return false;  // r is a path cut short
           ++out.stats().samples;
           // A dropped sample adds 0 to the sum that is divided by all samples, so the variance

@@ -10,6 +10,7 @@
 #include "renderer/scene/shading_normal.h"
 #include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
+#include "renderer/trace/camera_packet.h"
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/ray_tile.h"
@@ -37,6 +38,9 @@ class WhittedTracer {
     glm::vec3 albedo{0.0f};  // the surface's diffuse colour, textures read
   };
 
+  // A pixel's camera rays, traced together.
+  void trace_camera_rays(CameraPacket& packet, int count) const { packet.trace(intersector_, count); }
+
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
   // Whether the poll said stop: what was traced since is cut short.
@@ -44,11 +48,20 @@ class WhittedTracer {
 
   // The first hit is returned too, for the AOVs. Once poll_ says stop, the rays not yet traced
   // are skipped and the colour is meaningless (the caller checks poll_.stopped(), drops the tile).
-  Primary trace_primary(const Ray& ray, TraversalStats* stats) const {
+  // `camera`: the ray's hit when it was found beforehand (camera_packet.h); else it is traced
+  // here, its work counted into `stats` (optional).
+  Primary trace_primary(const Ray& ray, const CameraRayHit& camera, TraversalStats* stats) const {
     Primary p;
     if (poll_()) return p;
     ++rays_;
-    if (!intersector_.closest_hit(ray, p.surface, stats)) {
+    bool met;
+    if (camera.traced) {
+      met = camera.met;
+      if (met) p.surface = *camera.hit;
+    } else {
+      met = intersector_.closest_hit(ray, p.surface, stats);
+    }
+    if (!met) {
       p.color = background_radiance(scene_, ray.direction);
       return p;
     }
@@ -162,14 +175,33 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
       [&](const WhittedTracer& tracer, int x, int y) {
         glm::vec4 sum(0.0f);
         const SampleKey key{seed, pixel_index(settings, x, y), 0};
-        for (int s = 0; s < samples; ++s) {
-          // Sample 0 is the pixel centre; further samples are jittered within the pixel.
+        // The cost AOV counts sample 0's own walk, so that ray is traced alone; the others (all,
+        // without the AOV) are traced a packet at a time and each shaded in its turn.
+        const bool counted = out.aovs().bvh_cost;
+        CameraPacket camera_rays;
+        int packet_start = 0;
+        // Sample 0 is the pixel centre; further samples are jittered within the pixel.
+        const auto ray_of = [&](int sample) {
           SampleKey k = key;
-          k.sample = static_cast<std::uint32_t>(s);
-          const float ox = s == 0 ? 0.5f : sample_uniform(k, 0), oy = s == 0 ? 0.5f : sample_uniform(k, 1);
-          const Ray ray = camera.ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy);
+          k.sample = static_cast<std::uint32_t>(sample);
+          const float ox = sample == 0 ? 0.5f : sample_uniform(k, 0), oy = sample == 0 ? 0.5f : sample_uniform(k, 1);
+          return camera.ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy);
+        };
+        for (int s = 0; s < samples; ++s) {
           TraversalStats stats;
-          const WhittedTracer::Primary p = tracer.trace_primary(ray, s == 0 ? &stats : nullptr);
+          WhittedTracer::Primary p;
+          if (s == 0 && counted) {
+            p = tracer.trace_primary(ray_of(0), CameraRayHit{}, &stats);
+          } else {
+            if (s == (counted ? 1 : 0) || s - packet_start == CameraPacket::kWidth) {
+              packet_start = s;
+              const int count = std::min(CameraPacket::kWidth, samples - s);
+              for (int i = 0; i < count; ++i) camera_rays.ray(i) = ray_of(s + i);
+              tracer.trace_camera_rays(camera_rays, count);
+            }
+            const int lane = s - packet_start;
+            p = tracer.trace_primary(camera_rays.ray(lane), camera_rays.hit(lane), nullptr);
+          }
           if (tracer.stopped()) return false;
           sum += glm::vec4(limit_radiance(p.color), p.hit ? 1.0f : 0.0f);
           if (s != 0) continue;

@@ -59,4 +59,40 @@ bool EmbreeDirect::closest_hit(const Ray& ray) const {
 
 bool EmbreeDirect::occluded(const Ray& ray) const { return embree_occluded1(handles_->scene, ray); }
 
+unsigned EmbreeDirect::closest_hit8(const Ray* rays, unsigned lanes) const {
+  alignas(32) int valid[8];
+  alignas(32) RTCRayHit8 query;
+  for (int i = 0; i < 8; ++i) {
+    valid[i] = (lanes >> i & 1u) ? -1 : 0;
+    RTCRay one;
+    to_embree(valid[i] ? rays[i] : Ray{}, one);
+    query.ray.org_x[i] = one.org_x;
+    query.ray.org_y[i] = one.org_y;
+    query.ray.org_z[i] = one.org_z;
+    query.ray.dir_x[i] = one.dir_x;
+    query.ray.dir_y[i] = one.dir_y;
+    query.ray.dir_z[i] = one.dir_z;
+    query.ray.tnear[i] = one.tnear;
+    query.ray.tfar[i] = one.tfar;
+    query.ray.time[i] = one.time;
+    query.ray.mask[i] = one.mask;
+    query.ray.id[i] = one.id;
+    query.ray.flags[i] = one.flags;
+    query.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    query.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+#if RTC_VERSION_MAJOR >= 4
+  rtcIntersect8(valid, handles_->scene, &query);
+#else
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcIntersect8(valid, handles_->scene, &context, &query);
+#endif
+  unsigned hit = 0;
+  for (int i = 0; i < 8; ++i) {
+    if (valid[i] && query.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) hit |= 1u << i;
+  }
+  return hit;
+}
+
 }  // namespace farm

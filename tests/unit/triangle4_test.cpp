@@ -9,7 +9,9 @@
 #include <limits>
 #include <random>
 
+#include "renderer/geometry/traversal_isa.h"
 #include "renderer/geometry/triangle4.h"
+#include "renderer/geometry/triangle4_packet.h"
 #include "renderer/geometry/triangle_intersect.h"
 
 namespace farm {
@@ -107,6 +109,73 @@ TEST(Triangle4, EveryLaneGivesTheBitsOfTheScalarTestAndTheNearestLaneIsTheScalar
   EXPECT_GT(hits, 10000);
   EXPECT_LT(hits, lanes_compared / 2);
   EXPECT_GT(ties, 100);
+}
+
+// A leaf tested a ray per lane gives each ray of the packet the hit its own Triangle4 test and
+// nearest_lane give it, bit for bit: rays near one another and apart, each its own t range, ties
+// between copies of a triangle (to the lower id, ids above 2^31 included), lanes left out.
+TEST(Triangle4, APacketsRaysEachGetTheHitTheirOwnTestGivesBitForBit) {
+  if (!cpu_has_avx2()) GTEST_SKIP() << "the packet test needs AVX2";
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<unsigned> subset(1, 255);
+  int hits = 0, ties = 0;
+  for (int trial = 0; trial < 40000; ++trial) {
+    Ray base;
+    base.origin = glm::vec3(unit(rng), unit(rng), unit(rng));
+    base.direction = glm::vec3(unit(rng), unit(rng), unit(rng));
+    const int count = 1 + trial % 4;
+    std::array<Corners, 4> tris{};
+    Triangle4 leaf;
+    for (int k = 0; k < count; ++k) {
+      tris[static_cast<std::size_t>(k)] = random_triangle(rng, base);
+      if (trial % 5 == 0 && k == 1) tris[1] = tris[0];  // a tie: the lower id must win
+      const Corners& c = tris[static_cast<std::size_t>(k)];
+      leaf.set(k, c.a, c.b, c.c);
+    }
+    const std::uint32_t ids[4] = {trial % 2 ? 0x80000003u : 9u, trial % 3 ? 4u : 0x80000001u, 2u, 7u};
+    std::array<Ray, 8> rays;
+    std::array<float, 8> t_max;
+    Triangle4PacketRays packet;
+    for (int i = 0; i < 8; ++i) {
+      Ray& ray = rays[static_cast<std::size_t>(i)];
+      ray = base;
+      if (i % 4 != 0) {  // a neighbour of the base ray, or (1 in 4 trials) a stranger
+        const float spread = trial % 4 == 0 ? 1.0f : 1e-3f;
+        ray.origin += spread * glm::vec3(unit(rng), unit(rng), unit(rng));
+        ray.direction += spread * glm::vec3(unit(rng), unit(rng), unit(rng));
+      }
+      if (i == 3) ray.t_min = 0.5f;
+      t_max[static_cast<std::size_t>(i)] = i == 5 ? 2.0f : ray.t_max;
+      packet.set(i, ray);
+    }
+    const unsigned lanes = trial % 3 == 0 ? 0xFFu : subset(rng);
+    Triangle4PacketHits got;
+    const unsigned met = intersect_triangle4_packet(packet, leaf, count, ids, t_max.data(), lanes, got);
+    ASSERT_EQ(met & ~lanes, 0u) << "trial " << trial;
+    for (int i = 0; i < 8; ++i) {
+      if (!(lanes >> i & 1u)) continue;
+      const auto k = static_cast<std::size_t>(i);
+      __m128 t4, u4, v4;
+      const int mask = intersect_triangle4(Triangle4Ray(rays[k]), leaf, t_max[k], t4, u4, v4);
+      ASSERT_EQ(mask != 0, (met >> i & 1u) != 0) << "trial " << trial << " ray " << i;
+      if (mask == 0) continue;
+      ++hits;
+      if (std::popcount(static_cast<unsigned>(mask)) > 1) ++ties;
+      const int lane = nearest_lane(mask, t4, ids);
+      alignas(16) float t[4], u[4], v[4];
+      _mm_store_ps(t, t4);
+      _mm_store_ps(u, u4);
+      _mm_store_ps(v, v4);
+      const auto l = static_cast<std::size_t>(lane);
+      EXPECT_EQ(bits(got.t[k]), bits(t[l])) << "trial " << trial << " ray " << i;
+      EXPECT_EQ(bits(got.u[k]), bits(u[l])) << "trial " << trial << " ray " << i;
+      EXPECT_EQ(bits(got.v[k]), bits(v[l])) << "trial " << trial << " ray " << i;
+      EXPECT_EQ(got.id[k], ids[l]) << "trial " << trial << " ray " << i;
+    }
+  }
+  EXPECT_GT(hits, 10000);
+  EXPECT_GT(ties, 1000);  // rays meeting more than one of a leaf's triangles: the nearest picked
 }
 
 }  // namespace
