@@ -10,8 +10,8 @@
 // layered plastic of Weidlich and Wilkie (2007), Mitsuba 3's roughplastic with nonlinear=false.
 //
 // Both come from tables over the roughness alpha and mu, integrated by quadrature over the visible
-// normals for each index of refraction on a grid (1 to 3 in steps of 0.05) the first time a coat
-// of that index is made; an index between grid points interpolates the two beside it.
+// normals for each index of refraction on a grid (1 to 3 in steps of 0.05) by the build
+// (dielectric_coat_quadrature.h); an index between grid points interpolates the two beside it.
 
 namespace farm {
 
