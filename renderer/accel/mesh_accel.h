@@ -23,8 +23,8 @@ class MeshAccel {
   virtual bool closest_hit(const Ray& ray, TriangleHit& hit, TraversalStats* stats) const = 0;
   // Whether anything is hit with t in (ray.t_min, ray.t_max).
   virtual bool any_hit(const Ray& ray, TraversalStats* stats) const = 0;
-  // closest_hit for up to 8 rays at once (rays[i], t_max[i] for each bit i of `lanes`, t_max
-  // standing for each ray's own): the same hit per ray, bit for bit. Returns the lanes hit, and
+  // closest_hit for up to 8 rays at once (rays[i], t_max[i] for each bit i of `lanes`; t_max an
+  // array of 8, standing for each ray's own bound): the same hit per ray, bit for bit. Returns the lanes hit, and
   // lowers t_max[i] past each hit (ray_hit_order.h's limit_through). This one asks closest_hit
   // ray by ray; a BVH walks them together (Bvh::closest_packet).
   virtual unsigned closest_hit_packet(const Ray* rays, unsigned lanes, float* t_max, TriangleHit* hits) const;
