@@ -25,17 +25,18 @@ class CameraPacket {
   Ray& ray(int lane) { return rays_[static_cast<std::size_t>(lane)]; }
   const Ray& ray(int lane) const { return rays_[static_cast<std::size_t>(lane)]; }
 
-  // Traces rays 0 .. count - 1 (at most kWidth), set beforehand through ray(). A lone ray goes
-  // the single ray's way, which a packet of one only slows.
+  // Traces rays 0 .. count - 1 (at most kWidth), set beforehand through ray(), when they fill
+  // the packet. Fewer are left to the tracer, ray by ray: a packet's walk tests every child box
+  // against all its lanes, so a part-filled one costs more a ray than single rays do (Whitted's
+  // 4 samples a pixel over the 100-cow grid: 11% more instructions, callgrind).
   void trace(const SceneIntersector& intersector, int count) {
-    if (count == 1) {
-      met_ = intersector.closest_hit(rays_[0], hits_[0]) ? 1u : 0u;
-      return;
-    }
-    met_ = intersector.closest_hit_packet(rays_.data(), (1u << count) - 1u, hits_.data());
+    traced_ = count == kWidth;
+    if (traced_) met_ = intersector.closest_hit_packet(rays_.data(), (1u << kWidth) - 1u, hits_.data());
   }
 
+  // The ray's hit, or none (traced = false) when the packet was not traced.
   CameraRayHit hit(int lane) const {
+    if (!traced_) return {};
     const bool met = (met_ >> lane & 1u) != 0;
     return {true, met, met ? &hits_[static_cast<std::size_t>(lane)] : nullptr};
   }
@@ -44,6 +45,7 @@ class CameraPacket {
   std::array<Ray, kWidth> rays_;
   std::array<SurfaceHit, kWidth> hits_;
   unsigned met_ = 0;
+  bool traced_ = false;
 };
 
 }  // namespace farm

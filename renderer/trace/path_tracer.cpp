@@ -312,6 +312,8 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   // (pass 1 starts at pass_spp), so the sampler never repeats a sample between passes.
   const SampleRange range = samples_to_render(settings);
   const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
+  // A pixel's camera rays, made once a tile (its arrays are not cleared per pixel).
+  CameraPacket camera_rays;
   return trace_tile(
       scene, settings, tile, out, cancel, kSegmentsPerPoll,
       [&](const SceneIntersector& intersector, CancelPoll& poll) {
@@ -327,7 +329,6 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         float coverage = 0.0f;
         SampleVariance variance;
         const PixelSamples pixel(seed, pixel_index(settings, x, y));
-        CameraPacket camera_rays;
         for (int s = range.begin; s < range.end; ++s) {
           const auto sample = static_cast<std::uint32_t>(s);
           // Box filter: the sample lands uniformly anywhere in the pixel. The pixel's camera rays

@@ -167,6 +167,8 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   const CameraRays camera(scene.scene().camera, settings.width, settings.height);
   const int samples = std::max(1, settings.spp);
   const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
+  // A pixel's camera rays, made once a tile (its arrays are not cleared per pixel).
+  CameraPacket camera_rays;
   return trace_tile(
       scene, settings, tile, out, cancel, kRaysPerPoll,
       [&](const SceneIntersector& intersector, CancelPoll& poll) {
@@ -178,7 +180,6 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         // The cost AOV counts sample 0's own walk, so that ray is traced alone; the others (all,
         // without the AOV) are traced a packet at a time and each shaded in its turn.
         const bool counted = out.aovs().bvh_cost;
-        CameraPacket camera_rays;
         int packet_start = 0;
         // Sample 0 is the pixel centre; further samples are jittered within the pixel.
         const auto ray_of = [&](int sample) {
