@@ -8,6 +8,12 @@
 namespace farm {
 
 // Axis-aligned box; an empty box has min > max so that growing it by any point is correct.
+// What every slab test multiplies its exit distances by (or its reciprocal, once per ray): a few
+// ulps, pbrt's 1 + 2 gamma(3), so that rounding never culls a ray the triangle test hits right on
+// a box's boundary. One constant, since the single and packet traversals must round alike.
+inline constexpr float kSlabExitWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
+                                                   (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
+
 struct AABB {
   glm::vec3 min{std::numeric_limits<float>::infinity()};
   glm::vec3 max{-std::numeric_limits<float>::infinity()};
@@ -42,10 +48,8 @@ struct AABB {
   // the plane, d = 0 gives -inf..+inf inside the slab and an empty +-inf interval outside it.
   bool intersect(const glm::vec3& origin, const glm::vec3& inv_dir, float t_min, float t_max,
                  float& t_entry) const {
-    // The far distances are widened by a few ulps so a ray that the triangle test hits right on
-    // the box's boundary is never culled by rounding here (pbrt's 1 + 2*gamma(3)).
-    constexpr float kWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
-                                        (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
+    // The far distances are widened (kSlabExitWiden) so a ray that the triangle test hits right
+    // on the box's boundary is never culled by rounding here.
     float t0 = t_min, t1 = t_max;
     for (int a = 0; a < 3; ++a) {
       // Picking the planes by the sign of inv_dir keeps near <= far without a swap, including
@@ -54,7 +58,7 @@ struct AABB {
       const float near_plane = negative ? max[a] : min[a];
       const float far_plane = negative ? min[a] : max[a];
       const float t_near = (near_plane - origin[a]) * inv_dir[a];
-      const float t_far = (far_plane - origin[a]) * inv_dir[a] * kWiden;
+      const float t_far = (far_plane - origin[a]) * inv_dir[a] * kSlabExitWiden;
       // Comparisons are false for NaN, which leaves t0/t1 unchanged.
       if (t_near > t0) t0 = t_near;
       if (t_far < t1) t1 = t_far;

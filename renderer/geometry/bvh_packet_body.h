@@ -12,8 +12,6 @@
 // packet's first ray; a stacked node keeps the rays that met it.
 template <typename Test>
 void Bvh::traverse_packet_avx2(const Ray* rays, unsigned lanes, float* t_max, Test& test) const {
-  constexpr float kWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
-                                      (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
   // The rays axis by axis (lanes outside `lanes` get a harmless direction, never read back).
   alignas(32) float lane_values[7][kPacketWidth];
   for (int i = 0; i < kPacketWidth; ++i) {
@@ -26,7 +24,7 @@ void Bvh::traverse_packet_avx2(const Ray* rays, unsigned lanes, float* t_max, Te
   }
   // 1 / d and its widened copy, each lane rounded as traverse rounds its ray's (a correctly
   // rounded division and one product, whatever the width).
-  const __m256 one = _mm256_set1_ps(1.0f), widen = _mm256_set1_ps(kWiden);
+  const __m256 one = _mm256_set1_ps(1.0f), widen = _mm256_set1_ps(kSlabExitWiden);
   __m256 origin[3], inv[3], inv_far[3];
   unsigned negative[3];
   for (int a = 0; a < 3; ++a) {

@@ -33,12 +33,10 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
   const auto row = [](const WideBvhNode& node, std::size_t offset) {
     return reinterpret_cast<const float*>(reinterpret_cast<const char*>(node.bounds) + offset);
   };
-  // Far distances are widened by a few ulps so rounding never culls a hit on a box boundary
-  // (pbrt's 1 + 2 gamma(3), which covers the four roundings of (far - o) * (inv * widen): the
-  // widening goes into the reciprocal once per ray instead of into every distance).
-  constexpr float kWiden = 1.0f + 2.0f * (3.0f * std::numeric_limits<float>::epsilon() * 0.5f) /
-                                      (1.0f - 3.0f * std::numeric_limits<float>::epsilon() * 0.5f);
-  const glm::vec3 inv_far_dir = inv_dir * kWiden;
+  // Far distances are widened (kSlabExitWiden, aabb.h: 1 + 2 gamma(3) covers the four roundings
+  // of (far - o) * (inv * widen)): the widening goes into the reciprocal once per ray instead of
+  // into every distance.
+  const glm::vec3 inv_far_dir = inv_dir * kSlabExitWiden;
 #if FARM_BVH_AVX2
   const __m256 inv[3] = {_mm256_set1_ps(inv_dir.x), _mm256_set1_ps(inv_dir.y), _mm256_set1_ps(inv_dir.z)};
   const __m256 inv_far[3] = {_mm256_set1_ps(inv_far_dir.x), _mm256_set1_ps(inv_far_dir.y),

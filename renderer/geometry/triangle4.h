@@ -34,6 +34,15 @@ struct alignas(16) Triangle4 {
   }
 };
 
+// A ray's two values every Triangle4 test reads, one way for the single test and the packet
+// test (triangle4_packet.h), which must agree to the bit: the least t a hit may have, max(t_min,
+// t_epsilon) as std::max picks it, and dot(d, d) as glm::dot sums it.
+inline float triangle_t_lower(const Ray& ray, float t_epsilon) { return ray.t_min < t_epsilon ? t_epsilon : ray.t_min; }
+inline float triangle_direction_dot(const Ray& ray) {
+  const glm::vec3& d = ray.direction;
+  return (d.x * d.x + d.y * d.y) + d.z * d.z;
+}
+
 // What one ray brings to every Triangle4 test, worked out once per query.
 struct Triangle4Ray {
   __m128 origin[3], direction[3];
@@ -45,9 +54,8 @@ struct Triangle4Ray {
       origin[axis] = _mm_set1_ps(ray.origin[axis]);
       direction[axis] = _mm_set1_ps(ray.direction[axis]);
     }
-    t_lower = _mm_set1_ps(ray.t_min < t_epsilon ? t_epsilon : ray.t_min);  // std::max's choice
-    const glm::vec3& d = ray.direction;
-    direction_dot = _mm_set1_ps((d.x * d.x + d.y * d.y) + d.z * d.z);
+    t_lower = _mm_set1_ps(triangle_t_lower(ray, t_epsilon));
+    direction_dot = _mm_set1_ps(triangle_direction_dot(ray));
   }
 };
 

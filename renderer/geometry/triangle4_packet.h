@@ -22,9 +22,8 @@ struct alignas(32) Triangle4PacketRays {
       origin[axis][lane] = ray.origin[axis];
       direction[axis][lane] = ray.direction[axis];
     }
-    t_lower[lane] = ray.t_min < t_epsilon ? t_epsilon : ray.t_min;  // std::max's choice
-    const glm::vec3& d = ray.direction;
-    direction_dot[lane] = (d.x * d.x + d.y * d.y) + d.z * d.z;
+    t_lower[lane] = triangle_t_lower(ray, t_epsilon);
+    direction_dot[lane] = triangle_direction_dot(ray);
   }
 };
 
