@@ -234,6 +234,29 @@ bool InstanceIntersector::occluded(const Ray& ray, TraversalStats* stats) const 
   return false;
 }
 
+unsigned InstanceIntersector::occluded_packet(const Ray* rays, unsigned lanes) const {
+  lanes &= (1u << Bvh::kPacketWidth) - 1u;
+  if (!top_ && !one_object_) return SceneIntersector::occluded_packet(rays, lanes);  // naive
+  if (one_object_untransformed_) return object_accel_[0]->any_hit_packet(rays, lanes);
+  // As occluded, lane by lane: a ray is blocked once any object it meets blocks it.
+  std::array<Ray, Bvh::kPacketWidth> local;
+  const auto blocked_in = [&](std::uint32_t o, unsigned object_lanes) {
+    for (unsigned rest = object_lanes; rest; rest &= rest - 1) {
+      const auto i = static_cast<std::size_t>(__builtin_ctz(rest));
+      local[i] = to_model(scene_.objects()[o], rays[i], rays[i].t_max);
+    }
+    return object_accel_[o]->any_hit_packet(local.data(), object_lanes);
+  };
+  if (one_object_) return blocked_in(0, lanes);
+  return top_->any_packet(rays, lanes, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+    unsigned blocked = 0;
+    for (std::uint32_t k = 0; k < leaf.count && leaf_lanes != blocked; ++k) {
+      blocked |= blocked_in(top_->leaf_primitive(leaf, k), leaf_lanes & ~blocked);
+    }
+    return blocked;
+  });
+}
+
 void InstanceIntersector::visit_bvh_boxes(int max_level,
                                           const std::function<void(const BvhBox&)>& visit) const {
   if (!top_) return;

@@ -37,6 +37,7 @@ class InstanceIntersector final : public SceneIntersector {
   unsigned find_closest_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const override;
   unsigned closest_hit_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const override;
   bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const override;
+  unsigned occluded_packet(const Ray* rays, unsigned lanes) const override;
 
   // Structures built: one MeshAccel per distinct model.
   std::size_t mesh_accel_count() const { return mesh_accels_.size(); }

@@ -56,6 +56,25 @@ class NaiveAccel final : public MeshAccel {
   const ModelTriangles& triangles_;
 };
 
+// Each lane's Triangle4Ray, made when a leaf first asks for it: a packet's rays that meet
+// leaves only together (tested a ray per lane) never need theirs.
+class LaneRays {
+ public:
+  explicit LaneRays(const Ray* rays) : rays_(rays) {}
+  const Triangle4Ray& operator[](int lane) {
+    if (!(made_ >> lane & 1u)) {
+      new (storage_[lane]) Triangle4Ray(rays_[lane]);
+      made_ |= 1u << lane;
+    }
+    return *std::launder(reinterpret_cast<const Triangle4Ray*>(storage_[lane]));
+  }
+
+ private:
+  const Ray* rays_;
+  alignas(Triangle4Ray) unsigned char storage_[Bvh::kPacketWidth][sizeof(Triangle4Ray)];
+  unsigned made_ = 0;
+};
+
 class BvhAccel final : public MeshAccel {
  public:
   BvhAccel(const ModelTriangles& triangles, BvhSplit split, const CancelFlag& cancel) {
@@ -103,11 +122,8 @@ class BvhAccel final : public MeshAccel {
     if (transposed) {
       for (unsigned rest = lanes; rest; rest &= rest - 1) packet_rays.set(__builtin_ctz(rest), rays[__builtin_ctz(rest)]);
     }
-    alignas(Triangle4Ray) unsigned char storage[Bvh::kPacketWidth][sizeof(Triangle4Ray)];
-    const auto packet_ray = [&](int i) -> Triangle4Ray& {
-      return *std::launder(reinterpret_cast<Triangle4Ray*>(storage[i]));
-    };
-    unsigned made = 0, found = 0;
+    LaneRays lane_rays(rays);
+    unsigned found = 0;
     bvh_.closest_packet(rays, lanes, t_max, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
       if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
@@ -127,12 +143,8 @@ class BvhAccel final : public MeshAccel {
       for (; leaf_lanes; leaf_lanes &= leaf_lanes - 1) {
         const int i = __builtin_ctz(leaf_lanes);
         const unsigned bit = 1u << i;
-        if (!(made & bit)) {
-          new (storage[i]) Triangle4Ray(rays[i]);
-          made |= bit;
-        }
         bool lane_found = (found & bit) != 0;
-        if (test_leaf(packet_ray(i), leaf, t_max[i], hits[i], lane_found)) found |= bit;
+        if (test_leaf(lane_rays[i], leaf, t_max[i], hits[i], lane_found)) found |= bit;
       }
     });
     return found;
@@ -147,6 +159,34 @@ class BvhAccel final : public MeshAccel {
           return intersect_triangle4(packet_ray, packets_[leaf.number], ray.t_max, t, u, v) != 0;
         },
         stats);
+  }
+
+  unsigned any_hit_packet(const Ray* rays, unsigned lanes) const override {
+    // As closest_hit_packet: a leaf most of the packet meets tested a ray per lane, else ray by
+    // ray; either way a ray is hit when intersect_triangle4 finds a hit for it, as in any_hit.
+    const bool transposed = traversal_isa() != TraversalIsa::Sse;
+    Triangle4PacketRays packet_rays;
+    alignas(32) float t_max[Bvh::kPacketWidth] = {};
+    for (unsigned rest = lanes; rest; rest &= rest - 1) {
+      const int i = __builtin_ctz(rest);
+      t_max[i] = rays[i].t_max;
+      if (transposed) packet_rays.set(i, rays[i]);
+    }
+    LaneRays lane_rays(rays);
+    return bvh_.any_packet(rays, lanes, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+      if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
+        Triangle4PacketHits leaf_hits;
+        return intersect_triangle4_packet(packet_rays, packets_[leaf.number], static_cast<int>(leaf.count),
+                                          ids_[leaf.number].data(), t_max, leaf_lanes, leaf_hits);
+      }
+      unsigned met = 0;
+      for (; leaf_lanes; leaf_lanes &= leaf_lanes - 1) {
+        const int i = __builtin_ctz(leaf_lanes);
+        __m128 t, u, v;
+        if (intersect_triangle4(lane_rays[i], packets_[leaf.number], t_max[i], t, u, v) != 0) met |= 1u << i;
+      }
+      return met;
+    });
   }
 
   const Bvh* bvh() const override { return &bvh_; }
@@ -194,6 +234,15 @@ unsigned MeshAccel::closest_hit_packet(const Ray* rays, unsigned lanes, float* t
     }
   }
   return found;
+}
+
+unsigned MeshAccel::any_hit_packet(const Ray* rays, unsigned lanes) const {
+  unsigned hit = 0;
+  for (; lanes; lanes &= lanes - 1) {
+    const int i = __builtin_ctz(lanes);
+    if (any_hit(rays[i], nullptr)) hit |= 1u << i;
+  }
+  return hit;
 }
 
 std::unique_ptr<MeshAccel> build_mesh_accel(const ModelTriangles& triangles, AccelKind accel,

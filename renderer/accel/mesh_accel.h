@@ -28,6 +28,10 @@ class MeshAccel {
   // lowers t_max[i] past each hit (ray_hit_order.h's limit_through). This one asks closest_hit
   // ray by ray; a BVH walks them together (Bvh::closest_packet).
   virtual unsigned closest_hit_packet(const Ray* rays, unsigned lanes, float* t_max, TriangleHit* hits) const;
+  // any_hit for up to 8 rays at once (rays[i] for each bit i of `lanes`): returns the lanes hit,
+  // each ray's answer any_hit's. This one asks any_hit ray by ray; a BVH walks them together
+  // (Bvh::any_packet).
+  virtual unsigned any_hit_packet(const Ray* rays, unsigned lanes) const;
   // The BVH behind it, for drawing its boxes; null for `naive`.
   virtual const Bvh* bvh() const { return nullptr; }
 };

@@ -52,6 +52,10 @@ class SceneIntersector {
   virtual unsigned closest_hit_packet(const Ray* rays, unsigned lanes, SurfaceHit* hits) const;
   // Whether anything blocks the ray within (ray.t_min, ray.t_max): shadow rays.
   virtual bool occluded(const Ray& ray, TraversalStats* stats = nullptr) const = 0;
+  // occluded for up to 8 rays at once (rays[i] for each bit i of `lanes`): returns the lanes
+  // blocked, each ray's answer occluded's (which this one asks ray by ray). Ours walks the rays
+  // through each BVH together (Bvh::any_packet): shadow rays from a pixel's hits toward one light.
+  virtual unsigned occluded_packet(const Ray* rays, unsigned lanes) const;
 };
 
 // Builds the intersector for `accel` (Embree included), polling `cancel` as it goes: throws

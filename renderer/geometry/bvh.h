@@ -117,6 +117,15 @@ class Bvh {
   template <typename Test>
   void closest_packet(const Ray* rays, unsigned lanes, float* t_max, Test&& test) const;
 
+  // Any-hit traversal of up to kPacketWidth rays at once (shadow rays toward one light from
+  // neighbouring points): `test(leaf, leaf_lanes)` tests the leaf against each ray of
+  // `leaf_lanes` within its own (t_min, t_max) and returns those it hit. Returns the rays of
+  // `lanes` hit. A ray takes part until its first hit, meeting the boxes any() would meet (the
+  // packet walk's slab arithmetic, t_max never lowered), so with the leaf test any() uses, each
+  // ray's answer is any()'s. Without AVX2, each ray goes through any().
+  template <typename Test>
+  unsigned any_packet(const Ray* rays, unsigned lanes, Test&& test) const;
+
   // The primitive of a leaf's entry `i` (< leaf.count): what a packet's leaf test resolves.
   std::uint32_t leaf_primitive(const BvhLeafRef& leaf, std::uint32_t i) const {
     return order_[leaves_[leaf.number].first + i];

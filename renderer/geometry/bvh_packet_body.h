@@ -61,10 +61,26 @@ void Bvh::walk_packet_avx2(unsigned lanes, const std::size_t* near_row, const __
   int top = 0;
   std::uint32_t index = 0;
   unsigned active = lanes;
+  // The next stacked node and its rays; false when none is left.
+  const auto pop = [&] {
+    if (top == 0) return false;
+    --top;
+    index = stack[top].index;
+    active = stack[top].lanes;
+    return true;
+  };
   for (;;) {
     const WideBvhNode& node = wide_[index];
     for (int i = 0; i < kPacketWidth; ++i) bound[i] = (active >> i & 1u) ? t_max[i] : -INFINITY;
     const __m256 t_far_start = _mm256_load_ps(bound);  // lanes outside the walk: met by nothing
+    // A ray whose bound is -inf (any_packet's, once hit) meets nothing more: when no ray is
+    // left, the node is skipped.
+    active &= static_cast<unsigned>(
+        _mm256_movemask_ps(_mm256_cmp_ps(t_far_start, _mm256_set1_ps(-INFINITY), _CMP_NEQ_OQ)));
+    if (active == 0) {
+      if (!pop()) break;
+      continue;
+    }
     alignas(32) float entry[kWideBvhWidth][kPacketWidth];
     unsigned met[kWideBvhWidth];
     int used = 0;
@@ -126,9 +142,6 @@ void Bvh::walk_packet_avx2(unsigned lanes, const std::size_t* near_row, const __
       active = met[nearest];
       continue;
     }
-    if (top == 0) break;
-    --top;
-    index = stack[top].index;
-    active = stack[top].lanes;
+    if (!pop()) break;
   }
 }

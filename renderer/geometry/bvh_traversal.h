@@ -136,4 +136,30 @@ void Bvh::closest_packet(const Ray* rays, unsigned lanes, float* t_max, Test&& t
   traverse_packet_avx2(rays, lanes, t_max, test);
 }
 
+template <typename Test>
+unsigned Bvh::any_packet(const Ray* rays, unsigned lanes, Test&& test) const {
+  lanes &= (1u << kPacketWidth) - 1u;
+  if (wide_.empty() || lanes == 0) return 0;
+  unsigned hit = 0;
+  if (traversal_isa() == TraversalIsa::Sse) {
+    for (unsigned rest = lanes; rest; rest &= rest - 1) {
+      const int i = __builtin_ctz(rest);
+      auto one = [&](const BvhLeafRef& leaf) { return (test(leaf, 1u << i) >> i & 1u) != 0; };
+      if (traverse<true>(rays[i], one, nullptr)) hit |= 1u << i;
+    }
+    return hit;
+  }
+  // The closest-hit walk with bounds that never shrink, but for a ray hit: its bound drops to
+  // -inf, which no box's slab test meets, so it leaves the walk.
+  alignas(32) float t_max[kPacketWidth];
+  for (unsigned rest = lanes; rest; rest &= rest - 1) t_max[__builtin_ctz(rest)] = rays[__builtin_ctz(rest)].t_max;
+  auto leaf_test = [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+    const unsigned met = test(leaf, leaf_lanes) & leaf_lanes;
+    hit |= met;
+    for (unsigned rest = met; rest; rest &= rest - 1) t_max[__builtin_ctz(rest)] = -INFINITY;
+  };
+  traverse_packet_avx2(rays, lanes, t_max, leaf_test);
+  return hit;
+}
+
 }  // namespace farm

@@ -5,6 +5,7 @@
 // Directional lights contribute I with no falloff. A ray tracer passes a visibility test so
 // shadowed lights drop out; the rasterizer has no shadows and sees every light.
 #include <cmath>
+#include <cstddef>
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 #include <span>
@@ -51,21 +52,21 @@ inline glm::vec3 blinn_phong_term(const Material& m, const glm::vec3& n, const g
 }
 
 struct AllLightsVisible {
-  bool operator()(const glm::vec3&, const LightIncidence&) const { return true; }
+  bool operator()(const glm::vec3&, const LightIncidence&, std::size_t) const { return true; }
 };
 
 // `n` must face the viewer (flip back faces before calling); `front_side` says whether the viewer
-// sees the surface's front face (its winding's side); `visible(point, incidence)` decides
-// shadowing.
+// sees the surface's front face (its winding's side); `visible(point, incidence, light)` decides
+// shadowing, `light` the light's index in `lights`.
 template <typename Visibility = AllLightsVisible>
 glm::vec3 shade_blinn_phong(const Material& m, const glm::vec3& point, const glm::vec3& n,
                             const glm::vec3& to_eye, bool front_side, std::span<const Light> lights,
                             const glm::vec3& ambient, Visibility&& visible = {}) {
   glm::vec3 color = m.emitted(front_side) + m.ambient * ambient;
-  for (const Light& light : lights) {
-    const LightIncidence in = light_incidence(light, point);
+  for (std::size_t l = 0; l < lights.size(); ++l) {
+    const LightIncidence in = light_incidence(lights[l], point);
     if (glm::dot(n, in.to_light) <= 0.0f) continue;
-    if (!visible(point, in)) continue;
+    if (!visible(point, in, l)) continue;
     color += blinn_phong_term(m, n, to_eye, in);
   }
   return color;

@@ -12,7 +12,7 @@
 #include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
 #include "renderer/trace/bsdf.h"
-#include "renderer/trace/camera_packet.h"
+#include "renderer/trace/camera_ray_stream.h"
 #include "renderer/trace/emitters.h"
 #include "renderer/trace/material_bsdfs.h"
 #include "renderer/trace/ray_offset.h"
@@ -78,8 +78,11 @@ class PathTracer {
     glm::vec3 first_albedo{0.0f};  // its diffuse colour, textures read
   };
 
-  // A pixel's camera rays, traced together.
-  void trace_camera_rays(CameraPacket& packet, int count) const { packet.trace(intersector_, count); }
+  // The tile's next camera rays, made by ray_of and traced together.
+  template <typename RayOf>
+  void trace_camera_rays(CameraRayStream& stream, RayOf&& ray_of) const {
+    stream.refill(intersector_, ray_of);
+  }
 
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
@@ -91,7 +94,7 @@ class PathTracer {
   // Always inlined into the sample loop (render_tile): GCC's choice moved with the unity unit this
   // file shares (its inlining budget grows with the unit), and a file added before it once left
   // a call per sample and 6% fewer samples per second, with no change to this code.
-  // `camera`: the camera ray's hit when it was found beforehand (camera_packet.h).
+  // `camera`: the camera ray's hit when it was found beforehand (camera_ray_stream.h).
   __attribute__((always_inline)) Result trace(Ray ray, const PixelSamples& pixel, std::uint32_t sample,
                                               const CameraRayHit& camera) const {
     Result result;
@@ -312,8 +315,20 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   // (pass 1 starts at pass_spp), so the sampler never repeats a sample between passes.
   const SampleRange range = samples_to_render(settings);
   const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
-  // A pixel's camera rays, made once a tile (its arrays are not cleared per pixel).
-  CameraPacket camera_rays;
+  // The tile's camera rays, traced ahead a packet at a time.
+  CameraRayStream camera_rays(tile, range.begin, range.end);
+  // The pixel whose numbers were worked out last: its samples come in a row.
+  std::uint64_t numbered = ~std::uint64_t{0};
+  PixelSamples numbers(seed, numbered);
+  const auto camera_ray = [&](int x, int y, int s) {
+    if (const std::uint64_t index = pixel_index(settings, x, y); index != numbered) {
+      numbers = PixelSamples(seed, index);
+      numbered = index;
+    }
+    const auto sample = static_cast<std::uint32_t>(s);
+    // Box filter: the sample lands uniformly anywhere in the pixel.
+    return camera.ray(static_cast<float>(x) + numbers.uniform(sample, 0), static_cast<float>(y) + numbers.uniform(sample, 1));
+  };
   return trace_tile(
       scene, settings, tile, out, cancel, kSegmentsPerPoll,
       [&](const SceneIntersector& intersector, CancelPoll& poll) {
@@ -331,18 +346,9 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         const PixelSamples pixel(seed, pixel_index(settings, x, y));
         for (int s = range.begin; s < range.end; ++s) {
           const auto sample = static_cast<std::uint32_t>(s);
-          // Box filter: the sample lands uniformly anywhere in the pixel. The pixel's camera rays
-          // are traced a packet at a time, each shaded in its turn below.
-          const int lane = (s - range.begin) % CameraPacket::kWidth;
-          if (lane == 0) {
-            const int count = std::min(CameraPacket::kWidth, range.end - s);
-            for (int i = 0; i < count; ++i) {
-              const auto next = static_cast<std::uint32_t>(s + i);
-              camera_rays.ray(i) = camera.ray(static_cast<float>(x) + pixel.uniform(next, 0),
-                                              static_cast<float>(y) + pixel.uniform(next, 1));
-            }
-            tracer.trace_camera_rays(camera_rays, count);
-          }
+          // The camera rays are traced a packet at a time, each shaded in its turn here.
+          if (camera_rays.used_up()) tracer.trace_camera_rays(camera_rays, camera_ray);
+          const int lane = camera_rays.take();
           const PathTracer::Result r = tracer.trace(camera_rays.ray(lane), pixel, sample, camera_rays.hit(lane));
           if (tracer.stopped()) return false;  // r is a path cut short
           ++out.stats().samples;

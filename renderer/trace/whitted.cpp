@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <vector>
 
 #include "renderer/accel/scene_intersector.h"
 #include "renderer/scene/blinn_phong.h"
@@ -10,7 +11,7 @@
 #include "renderer/scene/shading_normal.h"
 #include "renderer/texture/environment_light.h"
 #include "renderer/texture/material_textures.h"
-#include "renderer/trace/camera_packet.h"
+#include "renderer/trace/camera_ray_stream.h"
 #include "renderer/trace/fresnel.h"
 #include "renderer/trace/ray_offset.h"
 #include "renderer/trace/ray_tile.h"
@@ -22,6 +23,43 @@ namespace {
 // Closest-hit rays (camera rays and their reflections and refractions, each with its shadow rays)
 // traced between looks at the cancel flag: well under a millisecond of work.
 constexpr int kRaysPerPoll = 64;
+
+// The shading normal on the side the viewer sees: two-sided shading, as in the rasterizer.
+glm::vec3 facing_shading_normal(const SurfaceHit& hit, const glm::vec3& to_eye) {
+  const glm::vec3& n = hit.shading_normal;
+  if (glm::dot(n, to_eye) >= 0.0f) return n;
+  return has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, to_eye) : -n;
+}
+
+// The ray from `point` (on a surface of geometric normal `ng`) toward a light: only hits before
+// the light occlude.
+Ray shadow_ray(const glm::vec3& point, const glm::vec3& ng, const LightIncidence& in) {
+  Ray shadow;
+  shadow.origin = offset_ray_origin(point, ng, in.to_light);
+  if (std::isinf(in.distance)) {
+    shadow.direction = in.to_light;
+  } else {
+    // Aim at the light itself: only hits with t < 1 (before the light) occlude.
+    shadow.direction = in.to_light * in.distance + (point - shadow.origin);
+    shadow.t_max = 1.0f - 1e-4f;
+  }
+  return shadow;
+}
+
+// The shadow rays of a packet of camera rays' hits, traced toward each light together
+// (SceneIntersector::occluded_packet): from neighbouring points toward one light they are as
+// coherent as the camera rays. Per light, a bit per lane: the lanes whose shading asks for that
+// light, and those blocked. Each answer is occluded's for the same ray, so the shading that reads
+// it shades as if it had traced the ray itself.
+struct PacketShadows {
+  std::vector<unsigned> asked, blocked;
+};
+
+// What one camera ray's shading reads of its packet's shadows: none (trace them) or a lane.
+struct LaneShadows {
+  const PacketShadows* packet = nullptr;
+  int lane = 0;
+};
 
 class WhittedTracer {
  public:
@@ -38,8 +76,34 @@ class WhittedTracer {
     glm::vec3 albedo{0.0f};  // the surface's diffuse colour, textures read
   };
 
-  // A pixel's camera rays, traced together.
-  void trace_camera_rays(CameraPacket& packet, int count) const { packet.trace(intersector_, count); }
+  // The tile's next camera rays, made by ray_of and traced together, and then, when they were a
+  // packet, the shadow rays their hits' shading will ask for, a packet per light.
+  template <typename RayOf>
+  void trace_camera_rays(CameraRayStream& stream, RayOf&& ray_of) const {
+    stream.refill(intersector_, ray_of);
+    std::fill(shadows_.asked.begin(), shadows_.asked.end(), 0u);
+    if (!stream.traced() || !settings_.shadows) return;
+    std::array<Ray, CameraRayStream::kWidth> rays;
+    for (std::size_t l = 0; l < scene_.lights.size(); ++l) {
+      unsigned asked = 0;
+      for (int lane = 0; lane < CameraRayStream::kWidth; ++lane) {
+        const CameraRayHit camera = stream.hit(lane);
+        if (!camera.met) continue;
+        const SurfaceHit& hit = *camera.hit;
+        // As shade() and shade_blinn_phong ask: lights in front of the side seen.
+        const glm::vec3 n = facing_shading_normal(hit, -glm::normalize(stream.ray(lane).direction));
+        const LightIncidence in = light_incidence(scene_.lights[l], hit.position);
+        if (glm::dot(n, in.to_light) <= 0.0f) continue;
+        rays[static_cast<std::size_t>(lane)] = shadow_ray(hit.position, hit.geometric_normal, in);
+        asked |= 1u << lane;
+      }
+      shadows_.asked[l] = asked;
+      shadows_.blocked[l] = asked ? intersector_.occluded_packet(rays.data(), asked) : 0u;
+    }
+  }
+
+  // What the shading of the last camera rays' lane `lane` reads of their shadow packets.
+  LaneShadows shadows_of(int lane) const { return {&shadows_, lane}; }
 
   // Closest-hit and shadow rays traced so far.
   std::uint64_t rays_traced() const { return rays_; }
@@ -48,9 +112,11 @@ class WhittedTracer {
 
   // The first hit is returned too, for the AOVs. Once poll_ says stop, the rays not yet traced
   // are skipped and the colour is meaningless (the caller checks poll_.stopped(), drops the tile).
-  // `camera`: the ray's hit when it was found beforehand (camera_packet.h); else it is traced
+  // `camera`: the ray's hit when it was found beforehand (camera_ray_stream.h); else it is traced
   // here, its work counted into `stats` (optional).
-  Primary trace_primary(const Ray& ray, const CameraRayHit& camera, TraversalStats* stats) const {
+  // `shadows`: its shadow rays' answers found beforehand, where its packet has them.
+  Primary trace_primary(const Ray& ray, const CameraRayHit& camera, const LaneShadows& shadows,
+                        TraversalStats* stats) const {
     Primary p;
     if (poll_()) return p;
     ++rays_;
@@ -66,7 +132,7 @@ class WhittedTracer {
       return p;
     }
     p.hit = true;
-    p.color = shade(ray, p.surface, 0, &p.facing_normal, &p.albedo);
+    p.color = shade(ray, p.surface, 0, &p.facing_normal, &p.albedo, shadows);
     return p;
   }
 
@@ -80,24 +146,20 @@ class WhittedTracer {
     return shade(ray, hit, depth, nullptr);
   }
 
-  bool light_visible(const glm::vec3& point, const glm::vec3& geometric_normal,
-                     const LightIncidence& in) const {
+  // Light `light` seen from `point`: its shadow ray's answer from `shadows` when traced
+  // beforehand, else traced here.
+  bool light_visible(const glm::vec3& point, const glm::vec3& geometric_normal, const LightIncidence& in,
+                     std::size_t light, const LaneShadows& shadows) const {
     if (!settings_.shadows) return true;
-    Ray shadow;
-    shadow.origin = offset_ray_origin(point, geometric_normal, in.to_light);
-    if (std::isinf(in.distance)) {
-      shadow.direction = in.to_light;
-    } else {
-      // Aim at the light itself: only hits with t < 1 (before the light) occlude.
-      shadow.direction = in.to_light * in.distance + (point - shadow.origin);
-      shadow.t_max = 1.0f - 1e-4f;
-    }
     ++rays_;
-    return !intersector_.occluded(shadow);
+    if (shadows.packet && (shadows.packet->asked[light] >> shadows.lane & 1u)) {
+      return (shadows.packet->blocked[light] >> shadows.lane & 1u) == 0;
+    }
+    return !intersector_.occluded(shadow_ray(point, geometric_normal, in));
   }
 
   glm::vec3 shade(const Ray& ray, const SurfaceHit& hit, int depth, glm::vec3* facing_normal = nullptr,
-                  glm::vec3* albedo = nullptr) const {
+                  glm::vec3* albedo = nullptr, const LaneShadows& shadows = {}) const {
     // A camera ray's cone is a pixel wide at the hit's depth; reflected and refracted rays read
     // the textures' finest level.
     Material textured;
@@ -105,11 +167,7 @@ class WhittedTracer {
     if (albedo) *albedo = m.diffuse;
     const glm::vec3 d = glm::normalize(ray.direction);
     const glm::vec3 to_eye = -d;
-    // Two-sided shading, as in the rasterizer: light the side we see.
-    glm::vec3 n = hit.shading_normal;
-    if (glm::dot(n, to_eye) < 0.0f) {
-      n = has_normal_map(*hit.material) ? bent_normal_facing(n, hit.geometric_normal, to_eye) : -n;
-    }
+    const glm::vec3 n = facing_shading_normal(hit, to_eye);
     if (facing_normal) *facing_normal = n;
     const glm::vec3& ng = hit.geometric_normal;
 
@@ -120,7 +178,9 @@ class WhittedTracer {
     const bool traced = dielectric || m.is_mirror();
     const glm::vec3 local = shade_blinn_phong(
         m, hit.position, n, to_eye, front_side, scene_.lights, ambient_light(scene_, m, n, to_eye, !traced),
-        [&](const glm::vec3& p, const LightIncidence& in) { return light_visible(p, ng, in); });
+        [&](const glm::vec3& p, const LightIncidence& in, std::size_t light) {
+          return light_visible(p, ng, in, light, shadows);
+        });
     if (depth >= settings_.max_depth || !traced) return local;
 
     // The normal on the side the ray comes from, and the indices on either side.
@@ -154,6 +214,7 @@ class WhittedTracer {
   const SceneIntersector& intersector_;
   CancelPoll& poll_;  // counts closest-hit rays; the caller's, so that it sees a stop too
   mutable std::uint64_t rays_ = 0;  // one tracer per tile, so a plain counter
+  mutable PacketShadows shadows_{std::vector<unsigned>(scene_.lights.size()), std::vector<unsigned>(scene_.lights.size())};
   float pixel_size_;  // a camera ray's cone width per unit depth (Camera::pixel_size_at_unit_depth)
 };
 
@@ -167,8 +228,16 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
   const CameraRays camera(scene.scene().camera, settings.width, settings.height);
   const int samples = std::max(1, settings.spp);
   const std::uint64_t seed = frame_seed(settings.seed, settings.frame);
-  // A pixel's camera rays, made once a tile (its arrays are not cleared per pixel).
-  CameraPacket camera_rays;
+  // The cost AOV counts sample 0's own walk, so that ray is traced alone; the others (all,
+  // without the AOV) stream through the tile's packets and each is shaded in its turn.
+  const bool counted = settings.aovs.bvh_cost;
+  CameraRayStream camera_rays(tile, counted ? 1 : 0, samples);
+  // Sample 0 is the pixel centre; further samples are jittered within the pixel.
+  const auto camera_ray = [&](int x, int y, int sample) {
+    const SampleKey k{seed, pixel_index(settings, x, y), static_cast<std::uint32_t>(sample)};
+    const float ox = sample == 0 ? 0.5f : sample_uniform(k, 0), oy = sample == 0 ? 0.5f : sample_uniform(k, 1);
+    return camera.ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy);
+  };
   return trace_tile(
       scene, settings, tile, out, cancel, kRaysPerPoll,
       [&](const SceneIntersector& intersector, CancelPoll& poll) {
@@ -176,32 +245,15 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
       },
       [&](const WhittedTracer& tracer, int x, int y) {
         glm::vec4 sum(0.0f);
-        const SampleKey key{seed, pixel_index(settings, x, y), 0};
-        // The cost AOV counts sample 0's own walk, so that ray is traced alone; the others (all,
-        // without the AOV) are traced a packet at a time and each shaded in its turn.
-        const bool counted = out.aovs().bvh_cost;
-        int packet_start = 0;
-        // Sample 0 is the pixel centre; further samples are jittered within the pixel.
-        const auto ray_of = [&](int sample) {
-          SampleKey k = key;
-          k.sample = static_cast<std::uint32_t>(sample);
-          const float ox = sample == 0 ? 0.5f : sample_uniform(k, 0), oy = sample == 0 ? 0.5f : sample_uniform(k, 1);
-          return camera.ray(static_cast<float>(x) + ox, static_cast<float>(y) + oy);
-        };
         for (int s = 0; s < samples; ++s) {
           TraversalStats stats;
           WhittedTracer::Primary p;
           if (s == 0 && counted) {
-            p = tracer.trace_primary(ray_of(0), CameraRayHit{}, &stats);
+            p = tracer.trace_primary(camera_ray(x, y, 0), CameraRayHit{}, LaneShadows{}, &stats);
           } else {
-            if (s == (counted ? 1 : 0) || s - packet_start == CameraPacket::kWidth) {
-              packet_start = s;
-              const int count = std::min(CameraPacket::kWidth, samples - s);
-              for (int i = 0; i < count; ++i) camera_rays.ray(i) = ray_of(s + i);
-              tracer.trace_camera_rays(camera_rays, count);
-            }
-            const int lane = s - packet_start;
-            p = tracer.trace_primary(camera_rays.ray(lane), camera_rays.hit(lane), nullptr);
+            if (camera_rays.used_up()) tracer.trace_camera_rays(camera_rays, camera_ray);
+            const int lane = camera_rays.take();
+            p = tracer.trace_primary(camera_rays.ray(lane), camera_rays.hit(lane), tracer.shadows_of(lane), nullptr);
           }
           if (tracer.stopped()) return false;
           sum += glm::vec4(limit_radiance(p.color), p.hit ? 1.0f : 0.0f);

@@ -1,5 +1,6 @@
 #include "server/bench/embree_direct.h"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -59,25 +60,36 @@ bool EmbreeDirect::closest_hit(const Ray& ray) const {
 
 bool EmbreeDirect::occluded(const Ray& ray) const { return embree_occluded1(handles_->scene, ray); }
 
-unsigned EmbreeDirect::closest_hit8(const Ray* rays, unsigned lanes) const {
-  alignas(32) int valid[8];
-  alignas(32) RTCRayHit8 query;
+namespace {
+
+// Lanes `lanes` of rays[] into Embree's struct of arrays; `valid` marks them (-1) for Embree.
+void to_embree8(const Ray* rays, unsigned lanes, int* valid, RTCRay8& out) {
   for (int i = 0; i < 8; ++i) {
     valid[i] = (lanes >> i & 1u) ? -1 : 0;
     RTCRay one;
     to_embree(valid[i] ? rays[i] : Ray{}, one);
-    query.ray.org_x[i] = one.org_x;
-    query.ray.org_y[i] = one.org_y;
-    query.ray.org_z[i] = one.org_z;
-    query.ray.dir_x[i] = one.dir_x;
-    query.ray.dir_y[i] = one.dir_y;
-    query.ray.dir_z[i] = one.dir_z;
-    query.ray.tnear[i] = one.tnear;
-    query.ray.tfar[i] = one.tfar;
-    query.ray.time[i] = one.time;
-    query.ray.mask[i] = one.mask;
-    query.ray.id[i] = one.id;
-    query.ray.flags[i] = one.flags;
+    out.org_x[i] = one.org_x;
+    out.org_y[i] = one.org_y;
+    out.org_z[i] = one.org_z;
+    out.dir_x[i] = one.dir_x;
+    out.dir_y[i] = one.dir_y;
+    out.dir_z[i] = one.dir_z;
+    out.tnear[i] = one.tnear;
+    out.tfar[i] = one.tfar;
+    out.time[i] = one.time;
+    out.mask[i] = one.mask;
+    out.id[i] = one.id;
+    out.flags[i] = one.flags;
+  }
+}
+
+}  // namespace
+
+unsigned EmbreeDirect::closest_hit8(const Ray* rays, unsigned lanes) const {
+  alignas(32) int valid[8];
+  alignas(32) RTCRayHit8 query;
+  to_embree8(rays, lanes, valid, query.ray);
+  for (int i = 0; i < 8; ++i) {
     query.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
     query.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
   }
@@ -93,6 +105,25 @@ unsigned EmbreeDirect::closest_hit8(const Ray* rays, unsigned lanes) const {
     if (valid[i] && query.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID) hit |= 1u << i;
   }
   return hit;
+}
+
+unsigned EmbreeDirect::occluded8(const Ray* rays, unsigned lanes) const {
+  alignas(32) int valid[8];
+  alignas(32) RTCRay8 query;
+  to_embree8(rays, lanes, valid, query);
+#if RTC_VERSION_MAJOR >= 4
+  rtcOccluded8(valid, handles_->scene, &query);
+#else
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  rtcOccluded8(valid, handles_->scene, &context, &query);
+#endif
+  // Embree marks a blocked ray by setting its tfar to -inf.
+  unsigned blocked = 0;
+  for (int i = 0; i < 8; ++i) {
+    if (valid[i] && query.tfar[i] == -INFINITY) blocked |= 1u << i;
+  }
+  return blocked;
 }
 
 }  // namespace farm

@@ -66,20 +66,24 @@ std::vector<Ray> incoherent_rays(const AABB& bounds, std::uint64_t count) {
 
 struct RayRates {
   double closest = 0.0, any = 0.0;  // Mrays/s over all threads
-  double packet = 0.0;              // closest hit, the rays in packets of 8 in a row (primary rays only)
+  double packet = 0.0, packet_any = 0.0;  // closest and any hit, the rays in packets of 8 in a row (primary rays only)
   std::uint64_t closest_hits = 0;    // rays with a closest hit: the structures must agree on them
-  std::uint64_t packet_hits = 0;     // the same, asked in packets
+  std::uint64_t any_hits = 0;        // rays blocked
+  std::uint64_t packet_hits = 0, packet_any_hits = 0;  // the same, asked in packets
 };
 
-// A closest-hit query of up to 8 consecutive rays (`lanes`): the lanes hit.
+// A closest-hit or any-hit query of up to 8 consecutive rays (`lanes`): the lanes hit.
 using PacketQuery = std::function<unsigned(const Ray*, unsigned)>;
+struct PacketQueries {
+  PacketQuery closest, any;
+};
 
 // Each query of `rays` timed on `threads` threads, each its contiguous share (std::thread: the
 // bench measures the structure, not the farm's pool).
-// With `packet`, the closest hit is also timed a packet of 8 rays at a time (each thread's share
-// starts at a multiple of 8, so the packets are the same whatever the thread count).
+// With `packets`, the closest and any hit are also timed a packet of 8 rays at a time (each
+// thread's share starts at a multiple of 8, so the packets are the same whatever the thread count).
 RayRates measure(const std::vector<Ray>& rays, int threads, const std::function<bool(const Ray&)>& closest,
-                 const std::function<bool(const Ray&)>& any, const PacketQuery* packet = nullptr) {
+                 const std::function<bool(const Ray&)>& any, const PacketQueries* in_eights = nullptr) {
   std::uint64_t hits = 0;
   const auto run = [&](const std::function<std::uint64_t(std::size_t, std::size_t)>& span) {
     std::vector<std::uint64_t> counts(static_cast<std::size_t>(threads), 0);
@@ -110,16 +114,22 @@ RayRates measure(const std::vector<Ray>& rays, int threads, const std::function<
   r.closest = run(one_by_one(closest));
   r.closest_hits = hits;
   r.any = run(one_by_one(any));
-  if (packet) {
-    r.packet = run([&](std::size_t begin, std::size_t end) {
+  r.any_hits = hits;
+  const auto in_packets = [&](const PacketQuery& query) {
+    return [&](std::size_t begin, std::size_t end) {
       std::uint64_t c = 0;
       for (std::size_t i = begin; i < end; i += 8) {
         const std::size_t n = std::min<std::size_t>(8, end - i);
-        c += static_cast<std::uint64_t>(std::popcount((*packet)(&rays[i], (1u << n) - 1u)));
+        c += static_cast<std::uint64_t>(std::popcount(query(&rays[i], (1u << n) - 1u)));
       }
       return c;
-    });
+    };
+  };
+  if (in_eights) {
+    r.packet = run(in_packets(in_eights->closest));
     r.packet_hits = hits;
+    r.packet_any = run(in_packets(in_eights->any));
+    r.packet_any_hits = hits;
   }
   return r;
 }
@@ -130,7 +140,7 @@ struct Subject {
   double build_ms = 0.0;
   std::uint64_t rays = 0;
   std::function<bool(const Ray&)> closest, any;
-  PacketQuery packet;
+  PacketQueries packets;
   std::shared_ptr<void> keep;  // what the queries use
   std::optional<TraversalIsa> isa;  // our BVH's traversal forced to this build; none: the CPU's
 };
@@ -153,10 +163,11 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
       return intersector->find_closest(ray, hit);  // the hit alone, as embree-direct finds it
     };
     s.any = [intersector](const Ray& ray) { return intersector->occluded(ray); };
-    s.packet = [intersector](const Ray* rays, unsigned lanes) {
+    s.packets.closest = [intersector](const Ray* rays, unsigned lanes) {
       std::array<SurfaceHit, 8> hits;
       return intersector->find_closest_packet(rays, lanes, hits.data());
     };
+    s.packets.any = [intersector](const Ray* rays, unsigned lanes) { return intersector->occluded_packet(rays, lanes); };
     subjects.push_back(s);
     if (accel == AccelKind::Bvh) {
       // The same tree walked by each lesser build this CPU runs (the x86-64 baseline, AVX2 under
@@ -181,7 +192,8 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
     s.build_ms = seconds_since(t) * 1e3;
     s.closest = [direct](const Ray& ray) { return direct->closest_hit(ray); };
     s.any = [direct](const Ray& ray) { return direct->occluded(ray); };
-    s.packet = [direct](const Ray* rays, unsigned lanes) { return direct->closest_hit8(rays, lanes); };
+    s.packets.closest = [direct](const Ray* rays, unsigned lanes) { return direct->closest_hit8(rays, lanes); };
+    s.packets.any = [direct](const Ray* rays, unsigned lanes) { return direct->occluded8(rays, lanes); };
     subjects.push_back(std::move(s));
   }
   const std::vector<Ray> primary = primary_rays(bounds, o.rays), incoherent = incoherent_rays(bounds, o.rays);
@@ -196,7 +208,7 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
         const Subject& s = subjects[i];
         const bool few = s.rays != o.rays;
         force_traversal_isa(s.isa);
-        rounds[i].emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any, &s.packet),
+        rounds[i].emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any, &s.packets),
                                measure(few ? few_incoherent : incoherent, threads, s.closest, s.any));
         force_traversal_isa(std::nullopt);
       }
@@ -214,17 +226,18 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
       r.second.closest = cell([](const auto& run) { return run.second.closest; });
       r.second.any = cell([](const auto& run) { return run.second.any; });
       r.first.packet = cell([](const auto& run) { return run.first.packet; });
+      r.first.packet_any = cell([](const auto& run) { return run.first.packet_any; });
       rates.push_back(r);
     }
     fmt::print("\n{}: {} triangles, {} object(s); {} rays per set ({} for naive), {} thread{}, Mrays/s (median of {})\n",
                name, prepared.triangle_count(), prepared.objects().size(), o.rays, o.naive_rays, threads,
                threads == 1 ? "" : "s", o.repeats);
-    fmt::print("{:<24} {:>9} {:>16} {:>12} {:>19} {:>15} {:>14}\n", "accel", "build ms", "primary closest",
-               "primary any", "incoherent closest", "incoherent any", "primary x8");
+    fmt::print("{:<24} {:>9} {:>16} {:>12} {:>19} {:>15} {:>14} {:>14}\n", "accel", "build ms", "primary closest",
+               "primary any", "incoherent closest", "incoherent any", "primary x8", "primary any x8");
     for (std::size_t i = 0; i < subjects.size(); ++i) {
       const auto& [p, n] = rates[i];
-      fmt::print("{:<24} {:>9.2f} {:>16.2f} {:>12.2f} {:>19.2f} {:>15.2f} {:>14.2f}\n", subjects[i].name,
-                 subjects[i].build_ms, p.closest, p.any, n.closest, n.any, p.packet);
+      fmt::print("{:<24} {:>9.2f} {:>16.2f} {:>12.2f} {:>19.2f} {:>15.2f} {:>14.2f} {:>14.2f}\n", subjects[i].name,
+                 subjects[i].build_ms, p.closest, p.any, n.closest, n.any, p.packet, p.packet_any);
     }
     // Ours against the farm's Embree adapter (index 2), and against Embree called directly (last).
     const std::size_t direct = subjects.size() - 1;
@@ -232,16 +245,18 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
       for (std::size_t i = 0; i < 2; ++i) {
         const auto& [p, n] = rates[i];
         const auto& [ap, an] = rates[anchor];
-        fmt::print("{:<24} {:>9} {:>15.2f}x {:>11.2f}x {:>18.2f}x {:>14.2f}x {:>13.2f}x\n",
+        fmt::print("{:<24} {:>9} {:>15.2f}x {:>11.2f}x {:>18.2f}x {:>14.2f}x {:>13.2f}x {:>13.2f}x\n",
                    subjects[i].name + "/" + subjects[anchor].name, "", p.closest / ap.closest, p.any / ap.any,
-                   n.closest / an.closest, n.any / an.any, p.packet / ap.packet);
+                   n.closest / an.closest, n.any / an.any, p.packet / ap.packet, p.packet_any / ap.packet_any);
       }
     }
     // Packets find each ray's own hit: the same rays hit as one by one, for every structure.
     for (std::size_t i = 0; i < subjects.size(); ++i) {
-      if (rates[i].first.packet_hits != rates[i].first.closest_hits) {
-        throw std::runtime_error(fmt::format("{}: {} hit {} primary rays one by one but {} in packets", name,
-                                             subjects[i].name, rates[i].first.closest_hits, rates[i].first.packet_hits));
+      const RayRates& p = rates[i].first;
+      if (p.packet_hits != p.closest_hits || p.packet_any_hits != p.any_hits) {
+        throw std::runtime_error(fmt::format("{}: {} hit {} and blocked {} primary rays one by one but {} and {} in packets",
+                                             name, subjects[i].name, p.closest_hits, p.any_hits, p.packet_hits,
+                                             p.packet_any_hits));
       }
     }
     // The anchor traced the same scene: its hits are ours, to Embree's agreement tests' tolerance.

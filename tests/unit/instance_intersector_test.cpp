@@ -483,11 +483,9 @@ std::vector<Ray> eye_rays(const AABB& bounds, int side) {
   return rays;
 }
 
-// A packet's rays find, bit for bit, the hits find_closest finds for each alone: over many
-// objects turned, scaled and mirrored, over one object placed as it is and one moved, for
-// coherent and incoherent rays (whose octants split a packet), under every traversal build this
-// CPU runs and every accel. Lanes left out of a packet are neither traced nor written.
-TEST(InstanceIntersector, APacketsRaysFindTheHitsEachFindsAloneBitForBit) {
+// What the packet tests walk: many objects turned, scaled and mirrored; one object placed as it
+// is; one moved.
+std::vector<std::pair<std::string, Scene>> packet_scenes() {
   const auto sphere = std::make_shared<const Model>(test::make_sphere(12, 24));
   Scene one_untransformed, one_moved;
   one_untransformed.objects.push_back(instance(sphere, glm::mat4(1.0f), 0.5f));
@@ -496,15 +494,31 @@ TEST(InstanceIntersector, APacketsRaysFindTheHitsEachFindsAloneBitForBit) {
   scenes.emplace_back("mixed", mixed_scene());
   scenes.emplace_back("one untransformed", std::move(one_untransformed));
   scenes.emplace_back("one moved", std::move(one_moved));
+  return scenes;
+}
+
+// Coherent rays from an eye and random ones (whose octants split packets), a whole number of
+// packets of 8.
+std::vector<Ray> packet_rays(const PreparedScene& scene, std::uint32_t seed) {
+  AABB bounds;
+  world_triangles(scene, bounds);
+  std::vector<Ray> rays = eye_rays(bounds, 64);
+  const std::vector<Ray> incoherent = test::random_rays(bounds, 4096 / kRayDivisor, seed);
+  rays.insert(rays.end(), incoherent.begin(), incoherent.end());
+  rays.resize(rays.size() / 8 * 8);
+  return rays;
+}
+
+// A packet's rays find, bit for bit, the hits find_closest finds for each alone: over many
+// objects turned, scaled and mirrored, over one object placed as it is and one moved, for
+// coherent and incoherent rays (whose octants split a packet), under every traversal build this
+// CPU runs and every accel. Lanes left out of a packet are neither traced nor written.
+TEST(InstanceIntersector, APacketsRaysFindTheHitsEachFindsAloneBitForBit) {
+  std::vector<std::pair<std::string, Scene>> scenes = packet_scenes();
   const unsigned partial = 0b10110101u;
   for (auto& [name, built] : scenes) {
     const PreparedScene scene(std::move(built));
-    AABB bounds;
-    world_triangles(scene, bounds);
-    std::vector<Ray> rays = eye_rays(bounds, 64);
-    const std::vector<Ray> incoherent = test::random_rays(bounds, 4096 / kRayDivisor, 23);
-    rays.insert(rays.end(), incoherent.begin(), incoherent.end());
-    rays.resize(rays.size() / 8 * 8);
+    std::vector<Ray> rays = packet_rays(scene, 23);
     for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
       const auto ours = build_scene_intersector(scene, kind);
       for (const TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2, TraversalIsa::Avx512}) {
@@ -540,6 +554,50 @@ TEST(InstanceIntersector, APacketsRaysFindTheHitsEachFindsAloneBitForBit) {
         }
         force_traversal_isa(std::nullopt);
         EXPECT_GT(hits, rays.size() / 8) << name << ", " << to_string(kind) << ", " << to_string(isa);
+      }
+    }
+  }
+}
+
+// A packet of shadow rays is blocked, lane by lane, exactly where occluded says each ray alone
+// is: rays ending just short of their nearest hit, just past it, or never, so that packets mix
+// rays blocked and free and lanes leave the walk at different times; under every traversal
+// build this CPU runs and every accel. Lanes left out are reported free.
+TEST(InstanceIntersector, APacketOfShadowRaysIsBlockedWhereEachRayAloneIs) {
+  std::vector<std::pair<std::string, Scene>> scenes = packet_scenes();
+  const unsigned partial = 0b01101101u;
+  for (auto& [name, built] : scenes) {
+    const PreparedScene scene(std::move(built));
+    std::vector<Ray> rays = packet_rays(scene, 29);
+    {
+      const auto reference = build_scene_intersector(scene, AccelKind::Bvh);
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        SurfaceHit hit;
+        if (i % 3 == 2 || !reference->find_closest(rays[i], hit)) continue;  // every third: unbounded
+        rays[i].t_max = i % 3 == 0 ? std::nextafter(hit.t, 0.0f) * 0.999f : hit.t * 1.001f;
+      }
+    }
+    for (const AccelKind kind : {AccelKind::Bvh, AccelKind::BvhMedian, AccelKind::Naive}) {
+      const auto ours = build_scene_intersector(scene, kind);
+      for (const TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2, TraversalIsa::Avx512}) {
+        if (!cpu_runs(isa)) continue;
+        force_traversal_isa(isa);
+        std::size_t blocked = 0, free = 0;
+        for (std::size_t first = 0; first < rays.size(); first += 8) {
+          const unsigned lanes = (first / 8) % 2 ? partial : 0xFFu;
+          const unsigned packet = ours->occluded_packet(&rays[first], lanes);
+          EXPECT_EQ(packet & ~lanes, 0u);
+          for (std::size_t i = 0; i < 8; ++i) {
+            if (!(lanes >> i & 1u)) continue;
+            const bool alone = ours->occluded(rays[first + i]);
+            ASSERT_EQ((packet >> i & 1u) != 0, alone)
+                << name << ", " << to_string(kind) << ", " << to_string(isa) << ", ray " << first + i;
+            ++(alone ? blocked : free);
+          }
+        }
+        force_traversal_isa(std::nullopt);
+        EXPECT_GT(blocked, rays.size() / 8) << name << ", " << to_string(kind) << ", " << to_string(isa);
+        EXPECT_GT(free, rays.size() / 8) << name << ", " << to_string(kind) << ", " << to_string(isa);
       }
     }
   }

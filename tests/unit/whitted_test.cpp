@@ -168,6 +168,49 @@ TEST(WhittedRenderTile, AnyTilingAndThreadCountGivesTheSameBits) {
   }
 }
 
+// A tile's camera rays go a packet of 8 at a time, across pixels, and the shadow rays of a
+// packet's hits a packet per light: the image must be, bit for bit, the one traced ray by ray.
+// Tiles of one pixel at 4 samples never fill a packet (every ray is traced alone); tiles of
+// 16 and the whole frame do. Three lights (one directional, one below the floor that every
+// point faces away from), shadows that fall, a mirror and glass (whose own rays go alone).
+TEST(WhittedRenderTile, PacketsGiveTheImageOfRaysTracedOneByOne) {
+  Material mirror;
+  mirror.shininess = 1000;
+  mirror.ior = 3;
+  Material glass;
+  glass.diffuse = glm::vec3(0.0f);
+  glass.ior = 1.5f;
+  glass.transmission = 1.0f;
+  Scene scene;
+  scene.objects.push_back(object_of(test::make_sphere(16, 32), glm::scale(glm::mat4(1.0f), {1.0f, 1.4f, 0.8f}), mirror));
+  scene.objects.push_back(object_of(test::make_sphere(12, 24), test::placed({1.6f, -0.4f, 1.0f}, {0, 1, 0}, 0.0f, glm::vec3(0.6f)), glass));
+  scene.objects.push_back(object_of(make_box({-1.9f, -1.2f, 0.6f}, {-1.1f, 0.2f, 1.4f})));
+  scene.objects.push_back(object_of(make_box({-3, -1.6f, -3}, {3, -1.2f, 3})));
+  scene.camera.position = {2.5f, 1.5f, 3.5f};
+  scene.camera.far = 50;
+  scene.lights.push_back(Light{Light::Kind::Point, {3, 4, 2}, {}, glm::vec3(20.0f)});
+  scene.lights.push_back(Light{Light::Kind::Directional, {}, {0.4f, -1.0f, -0.3f}, glm::vec3(0.5f)});
+  scene.lights.push_back(Light{Light::Kind::Point, {0, -5, 0}, {}, glm::vec3(30.0f)});
+  const PreparedScene prepared(std::move(scene));
+  RenderSettings settings = whitted_settings(53, 41);
+  settings.spp = 4;
+  settings.tile_size = 1;
+  const TileBuffer alone = render_frame(prepared, settings);
+  RenderSettings no_shadows = settings;
+  no_shadows.shadows = false;
+  const TileBuffer unshadowed = render_frame(prepared, no_shadows);
+  int shadowed = 0;
+  for (int y = 0; y < 41; ++y)
+    for (int x = 0; x < 53; ++x) shadowed += alone.rgba(x, y) != unshadowed.rgba(x, y);
+  EXPECT_GT(shadowed, 53 * 41 / 10);  // the shadows show
+  for (int tile : {16, 64}) {
+    settings.tile_size = tile;
+    const TileBuffer packets = render_frame(prepared, settings);
+    for (int y = 0; y < 41; ++y)
+      for (int x = 0; x < 53; ++x) ASSERT_EQ(alone.rgba(x, y), packets.rgba(x, y)) << x << "," << y << ", tiles of " << tile;
+  }
+}
+
 // Four emissive quads side by side in front of the camera, with no lights and no ambient, so a
 // pixel shows ke or nothing: facing the camera; facing away; facing away but shining from both
 // sides; and a quad wound facing away whose object is mirrored through its own plane, which turns
