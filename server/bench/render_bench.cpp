@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -109,32 +111,52 @@ void bench_job(const BenchJob& job, const RenderBenchOptions& o, const fs::path&
              o.repeats);
   fmt::print("{:>7} {:>14} {:>15} {:>8} {:>22} {:>7}\n", "threads", "engine frame", "farm render", "ratio",
              "2 x frame + 100 ms", "cores");
-  std::map<int, double> command_ms;
+  // One pool per thread count, each warmed up (caches, page faults) with a frame and a command.
+  std::map<int, std::unique_ptr<ThreadPool>> pools;
   for (int threads : o.threads) {
-    ThreadPool pool(threads);
-    time_engine_frame(scene, r, threads, pool);  // warm-up: caches, page faults
+    auto& pool = pools[threads];
+    if (pool) continue;
+    pool = std::make_unique<ThreadPool>(threads);
+    time_engine_frame(scene, r, threads, *pool);
     time_command(job, threads, out_dir);
-    // Taking turns, so that a change in a shared machine's load falls on both alike.
-    // cores: the command's CPU time over its time, what it kept busy on average.
+  }
+  // Each round times every thread count in turn, the order reversed every other round, so that a
+  // change in a shared machine's state (its load; on a VM, whether freed memory must come back
+  // from the host) falls on all of them alike; within a count, the engine frame and the command
+  // take turns too. The speedups are paired by round.
+  struct Runs {
     std::vector<double> engine, command, ratio, cores;
-    for (int i = 0; i < o.repeats; ++i) {
-      engine.push_back(time_engine_frame(scene, r, threads, pool));
+  };
+  std::map<int, Runs> runs;
+  std::vector<int> order;  // each count once, fewest threads first
+  for (const auto& entry : pools) order.push_back(entry.first);
+  for (int i = 0; i < o.repeats; ++i) {
+    for (int threads : order) {
+      Runs& r_t = runs[threads];
+      r_t.engine.push_back(time_engine_frame(scene, r, threads, *pools.at(threads)));
       const CommandRun run = time_command(job, threads, out_dir);
-      command.push_back(run.ms);
-      ratio.push_back(command.back() / engine.back());
-      cores.push_back(run.cpu_ms / run.ms);
+      r_t.command.push_back(run.ms);
+      r_t.ratio.push_back(run.ms / r_t.engine.back());
+      // cores: the command's CPU time over its time, what it kept busy on average.
+      r_t.cores.push_back(run.cpu_ms / run.ms);
     }
-    const double e = median(engine), c = median(command);
-    command_ms[threads] = c;
+    std::reverse(order.begin(), order.end());
+  }
+  for (const auto& [threads, r_t] : runs) {
+    const double e = median(r_t.engine), c = median(r_t.command);
     const double bound = 2.0 * e + 100.0;
     fmt::print("{:>7} {:>11.1f} ms {:>12.1f} ms {:>7.1f}x {:>12.1f} ms ({}) {:>7.2f}\n", threads, e, c,
-               median(ratio), bound, c <= bound ? "within" : "over", median(cores));
+               median(r_t.ratio), bound, c <= bound ? "within" : "over", median(r_t.cores));
   }
-  if (command_ms.size() > 1) {
-    const auto first = command_ms.begin();
-    for (auto it = std::next(first); it != command_ms.end(); ++it) {
-      fmt::print("whole-command speedup {} -> {} threads: {:.2f}x\n", first->first, it->first,
-                 first->second / it->second);
+  if (runs.size() > 1) {
+    const auto first = runs.begin();
+    for (auto it = std::next(first); it != runs.end(); ++it) {
+      std::vector<double> speedups;
+      for (std::size_t i = 0; i < it->second.command.size(); ++i) {
+        speedups.push_back(first->second.command[i] / it->second.command[i]);
+      }
+      fmt::print("whole-command speedup {} -> {} threads: {:.2f}x (paired by round, median; of the medians: {:.2f}x)\n",
+                 first->first, it->first, median(speedups), median(first->second.command) / median(it->second.command));
     }
   }
 }
