@@ -154,6 +154,9 @@ unsigned Bvh::any_packet(const Ray* rays, unsigned lanes, Test&& test) const {
   alignas(32) float t_max[kPacketWidth];
   for (unsigned rest = lanes; rest; rest &= rest - 1) t_max[__builtin_ctz(rest)] = rays[__builtin_ctz(rest)].t_max;
   auto leaf_test = [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+    // A ray hit at an earlier leaf of the same node met this one before it left the walk.
+    leaf_lanes &= ~hit;
+    if (leaf_lanes == 0) return;
     const unsigned met = test(leaf, leaf_lanes) & leaf_lanes;
     hit |= met;
     for (unsigned rest = met; rest; rest &= rest - 1) t_max[__builtin_ctz(rest)] = -INFINITY;
