@@ -63,10 +63,10 @@ glm::vec3 shade_blinn_phong(const Material& m, const glm::vec3& point, const glm
                             const glm::vec3& to_eye, bool front_side, std::span<const Light> lights,
                             const glm::vec3& ambient, Visibility&& visible = {}) {
   glm::vec3 color = m.emitted(front_side) + m.ambient * ambient;
-  for (std::size_t l = 0; l < lights.size(); ++l) {
-    const LightIncidence in = light_incidence(lights[l], point);
+  for (const Light& light : lights) {
+    const LightIncidence in = light_incidence(light, point);
     if (glm::dot(n, in.to_light) <= 0.0f) continue;
-    if (!visible(point, in, l)) continue;
+    if (!visible(point, in, static_cast<std::size_t>(&light - lights.data()))) continue;
     color += blinn_phong_term(m, n, to_eye, in);
   }
   return color;
