@@ -51,8 +51,7 @@ class CameraRayStream {
       x_ = tile_.x0;
       ++y_;
     }
-    traced_ = count_ == kWidth;
-    met_ = traced_ ? intersector.closest_hit_packet(rays_.data(), (1u << kWidth) - 1u, hits_.data()) : 0u;
+    met_ = traced() ? intersector.closest_hit_packet(rays_.data(), (1u << kWidth) - 1u, hits_.data()) : 0u;
   }
 
   // The next sample's lane in the rays made by the last refill.
@@ -60,10 +59,10 @@ class CameraRayStream {
 
   const Ray& ray(int lane) const { return rays_[static_cast<std::size_t>(lane)]; }
   // Whether the last refill traced its rays (it made kWidth of them).
-  bool traced() const { return traced_; }
+  bool traced() const { return count_ == kWidth; }
   // The ray's hit, or none (traced = false) when the rays were not traced.
   CameraRayHit hit(int lane) const {
-    if (!traced_) return {};
+    if (!traced()) return {};
     const bool met = (met_ >> lane & 1u) != 0;
     return {true, met, met ? &hits_[static_cast<std::size_t>(lane)] : nullptr};
   }
@@ -76,7 +75,6 @@ class CameraRayStream {
   std::array<SurfaceHit, kWidth> hits_;
   int count_ = 0, taken_ = 0;
   unsigned met_ = 0;
-  bool traced_ = false;
 };
 
 }  // namespace farm

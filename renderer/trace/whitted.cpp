@@ -83,17 +83,25 @@ class WhittedTracer {
     stream.refill(intersector_, ray_of);
     std::fill(shadows_.asked.begin(), shadows_.asked.end(), 0u);
     if (!stream.traced() || !settings_.shadows) return;
+    // The side each hit's shading will light, as shade() works it out.
+    std::array<glm::vec3, CameraRayStream::kWidth> facing;
+    unsigned met = 0;
+    for (int lane = 0; lane < CameraRayStream::kWidth; ++lane) {
+      const CameraRayHit camera = stream.hit(lane);
+      if (!camera.met) continue;
+      facing[static_cast<std::size_t>(lane)] =
+          facing_shading_normal(*camera.hit, -glm::normalize(stream.ray(lane).direction));
+      met |= 1u << lane;
+    }
     std::array<Ray, CameraRayStream::kWidth> rays;
     for (std::size_t l = 0; l < scene_.lights.size(); ++l) {
       unsigned asked = 0;
-      for (int lane = 0; lane < CameraRayStream::kWidth; ++lane) {
-        const CameraRayHit camera = stream.hit(lane);
-        if (!camera.met) continue;
-        const SurfaceHit& hit = *camera.hit;
-        // As shade() and shade_blinn_phong ask: lights in front of the side seen.
-        const glm::vec3 n = facing_shading_normal(hit, -glm::normalize(stream.ray(lane).direction));
+      for (unsigned rest = met; rest; rest &= rest - 1) {
+        const int lane = __builtin_ctz(rest);
+        const SurfaceHit& hit = *stream.hit(lane).hit;
+        // As shade_blinn_phong asks: lights in front of the side seen.
         const LightIncidence in = light_incidence(scene_.lights[l], hit.position);
-        if (glm::dot(n, in.to_light) <= 0.0f) continue;
+        if (glm::dot(facing[static_cast<std::size_t>(lane)], in.to_light) <= 0.0f) continue;
         rays[static_cast<std::size_t>(lane)] = shadow_ray(hit.position, hit.geometric_normal, in);
         asked |= 1u << lane;
       }
