@@ -234,16 +234,20 @@ float Bsdf::pdf_other(const glm::vec3& wo, const glm::vec3& wi) const {
   }
 }
 
-std::optional<BsdfSample> Bsdf::sample_other(const glm::vec3& wo, float u_lobe, float u1, float u2) const {
-  BsdfSample s;
+bool Bsdf::sample_other(const glm::vec3& wo, float u_lobe, float u1, float u2, BsdfSample& s) const {
+  // The lobes sampled out of line, whose samples come back as optionals.
+  const auto taken = [&s](const std::optional<BsdfSample>& sample) {
+    if (sample) s = *sample;
+    return sample.has_value();
+  };
   switch (kind_) {
     case Kind::Mirror:
-      if (wo.z <= 0.0f) return std::nullopt;
+      if (wo.z <= 0.0f) return false;
       s.wi = {-wo.x, -wo.y, wo.z};
       s.weight = specular_;
       s.pdf = 1.0f;
       s.specular = true;
-      return s;
+      return true;
 
     case Kind::Dielectric: {
       // Indices on the side wo is on, and on the other side; the normal flipped to wo's side.
@@ -257,7 +261,7 @@ std::optional<BsdfSample> Bsdf::sample_other(const glm::vec3& wo, float u_lobe, 
         s.wi = {-wo.x, -wo.y, wo.z};
         s.weight = glm::vec3(1.0f);
         s.pdf = reflectance;
-        return s;
+        return true;
       }
       const float eta = eta_i / eta_t;
       const float cos_t = std::sqrt(std::max(0.0f, 1.0f - eta * eta * (1.0f - cos_i * cos_i)));
@@ -266,20 +270,20 @@ std::optional<BsdfSample> Bsdf::sample_other(const glm::vec3& wo, float u_lobe, 
       // way back out).
       s.weight = eta * eta * tint_;
       s.pdf = 1.0f - reflectance;
-      return s;
+      return true;
     }
 
-    case Kind::RoughDielectric: return sample_rough_dielectric(wo, u_lobe, u1, u2);
+    case Kind::RoughDielectric: return taken(sample_rough_dielectric(wo, u_lobe, u1, u2));
 
-    case Kind::Lambertian: return sample_lambertian(wo, u1, u2);
+    case Kind::Lambertian: return sample_lambertian(wo, u1, u2, s);
     case Kind::Layered:
-      return sample_mixture(wo, u_lobe, u1, u2, specular_probability_,
-                            [this](const glm::vec3& o, const glm::vec3& i) { return eval_layered(o, i); });
+      return taken(sample_mixture(wo, u_lobe, u1, u2, specular_probability_,
+                                  [this](const glm::vec3& o, const glm::vec3& i) { return eval_layered(o, i); }));
     case Kind::MetalRoughness:
-      return sample_mixture(wo, u_lobe, u1, u2, metal_roughness_specular_probability(wo),
-                            [this](const glm::vec3& o, const glm::vec3& i) { return eval_metal_roughness(o, i); });
+      return taken(sample_mixture(wo, u_lobe, u1, u2, metal_roughness_specular_probability(wo),
+                                  [this](const glm::vec3& o, const glm::vec3& i) { return eval_metal_roughness(o, i); }));
   }
-  return std::nullopt;
+  return false;
 }
 
 }  // namespace farm

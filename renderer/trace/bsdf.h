@@ -58,10 +58,18 @@ class Bsdf {
     if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
     return wi.z / kPi;
   }
-  // Picks wi for uniform numbers u_lobe, u1, u2 in [0, 1); none when the sample is lost (a
-  // glossy reflection that points below the surface).
+  // Picks wi for uniform numbers u_lobe, u1, u2 in [0, 1) into `s`; false when the sample is
+  // lost (a glossy reflection that points below the surface). The integrator's form: a sample
+  // written field by field into its caller's own BsdfSample. Returned as an optional, the inline
+  // Lambertian sample was stored in pieces and reloaded as 16-byte words, which the CPU cannot
+  // forward from smaller stores (perf: 12% of the path tracer's own samples stalled there).
+  bool sample(const glm::vec3& wo, float u_lobe, float u1, float u2, BsdfSample& s) const {
+    return kind_ == Kind::Lambertian ? sample_lambertian(wo, u1, u2, s) : sample_other(wo, u_lobe, u1, u2, s);
+  }
   std::optional<BsdfSample> sample(const glm::vec3& wo, float u_lobe, float u1, float u2) const {
-    return kind_ == Kind::Lambertian ? sample_lambertian(wo, u1, u2) : sample_other(wo, u_lobe, u1, u2);
+    BsdfSample s;
+    if (!sample(wo, u_lobe, u1, u2, s)) return std::nullopt;
+    return s;
   }
 
   // Only delta lobes: next-event estimation has nothing to add here.
@@ -77,20 +85,20 @@ class Bsdf {
 
   // The cosine lobe is a Lambertian BSDF's exactly: f cos / pdf = (kd / pi) cos / (cos / pi) = kd,
   // not worked out (an evaluation and three divisions a bounce).
-  std::optional<BsdfSample> sample_lambertian(const glm::vec3& wo, float u1, float u2) const {
-    if (wo.z <= 0.0f) return std::nullopt;
-    BsdfSample s;
+  bool sample_lambertian(const glm::vec3& wo, float u1, float u2, BsdfSample& s) const {
+    if (wo.z <= 0.0f) return false;
     s.wi = cosine_hemisphere(u1, u2);
-    if (!(s.wi.z > 0.0f)) return std::nullopt;
+    if (!(s.wi.z > 0.0f)) return false;
     s.pdf = s.wi.z / kPi;
     s.weight = diffuse_;
-    return s;
+    s.specular = false;
+    return true;
   }
   // eval, pdf and sample out of line, for every kind (sample() and the others take Lambertian
   // inline).
   glm::vec3 eval_other(const glm::vec3& wo, const glm::vec3& wi) const;
   float pdf_other(const glm::vec3& wo, const glm::vec3& wi) const;
-  std::optional<BsdfSample> sample_other(const glm::vec3& wo, float u_lobe, float u1, float u2) const;
+  bool sample_other(const glm::vec3& wo, float u_lobe, float u1, float u2, BsdfSample& s) const;
 
   glm::vec3 eval_layered(const glm::vec3& wo, const glm::vec3& wi) const;
   glm::vec3 eval_metal_roughness(const glm::vec3& wo, const glm::vec3& wi) const;

@@ -174,13 +174,13 @@ class PathTracer {
       }
 
       const float u_lobe = next(), u1 = next(), u2 = next();
-      const auto s = bsdf.sample(wo, u_lobe, u1, u2);
-      if (!s) break;
-      beta *= s->weight;
-      after_specular = s->specular;
-      previous_pdf = s->pdf;
+      BsdfSample s;
+      if (!bsdf.sample(wo, u_lobe, u1, u2, s)) break;
+      beta *= s.weight;
+      after_specular = s.specular;
+      previous_pdf = s.pdf;
       previous_position = hit.position;
-      const glm::vec3 wi = frame.to_world(s->wi);
+      const glm::vec3 wi = frame.to_world(s.wi);
       ray = Ray{offset_ray_origin(hit.position, hit.geometric_normal, wi), wi};
 
       // Russian roulette, for unbounded paths only: continue with a probability that follows the
