@@ -68,10 +68,12 @@ class WhittedTracer {
       : prepared_(scene), scene_(scene.scene()), settings_(settings), intersector_(intersector), poll_(poll),
         pixel_size_(scene_.camera.pixel_size_at_unit_depth(settings.height)) {}
 
+  // What a camera ray brings back: its colour, and the first hit's AOVs. Not the hit itself,
+  // which a packet's stream keeps (a SurfaceHit in here was zeroed and copied each sample).
   struct Primary {
     glm::vec3 color{0.0f};
     bool hit = false;
-    SurfaceHit surface;
+    float depth = 0.0f;  // the hit's t
     glm::vec3 facing_normal{0.0f};
     glm::vec3 albedo{0.0f};  // the surface's diffuse colour, textures read
   };
@@ -128,23 +130,27 @@ class WhittedTracer {
     Primary p;
     if (poll_()) return p;
     ++rays_;
-    bool met;
     if (camera.traced) {
-      met = camera.met;
-      if (met) p.surface = *camera.hit;
+      shade_primary(ray, camera.met ? camera.hit : nullptr, shadows, p);
     } else {
-      met = intersector_.closest_hit(ray, p.surface, stats);
+      SurfaceHit hit;
+      shade_primary(ray, intersector_.closest_hit(ray, hit, stats) ? &hit : nullptr, shadows, p);
     }
-    if (!met) {
-      p.color = background_radiance(scene_, ray.direction);
-      return p;
-    }
-    p.hit = true;
-    p.color = shade(ray, p.surface, 0, &p.facing_normal, &p.albedo, shadows);
     return p;
   }
 
  private:
+  // A camera ray's colour and AOVs from its hit (null: none).
+  void shade_primary(const Ray& ray, const SurfaceHit* hit, const LaneShadows& shadows, Primary& p) const {
+    if (!hit) {
+      p.color = background_radiance(scene_, ray.direction);
+      return;
+    }
+    p.hit = true;
+    p.depth = hit->t;
+    p.color = shade(ray, *hit, 0, &p.facing_normal, &p.albedo, shadows);
+  }
+
   glm::vec3 trace(const Ray& ray, int depth) const {
     // A deep max_depth through glass doubles the rays at every level: looked at here too.
     if (poll_()) return glm::vec3(0.0f);
@@ -255,21 +261,22 @@ StopReason render_tile(const PreparedScene& scene, const RenderSettings& setting
         glm::vec4 sum(0.0f);
         for (int s = 0; s < samples; ++s) {
           TraversalStats stats;
-          WhittedTracer::Primary p;
-          if (s == 0 && counted) {
-            p = tracer.trace_primary(camera_ray(x, y, 0), CameraRayHit{}, LaneShadows{}, &stats);
-          } else {
+          const auto primary = [&] {
+            if (s == 0 && counted) {
+              return tracer.trace_primary(camera_ray(x, y, 0), CameraRayHit{}, LaneShadows{}, &stats);
+            }
             if (camera_rays.used_up()) tracer.trace_camera_rays(camera_rays, camera_ray);
             const int lane = camera_rays.take();
-            p = tracer.trace_primary(camera_rays.ray(lane), camera_rays.hit(lane), tracer.shadows_of(lane), nullptr);
-          }
+            return tracer.trace_primary(camera_rays.ray(lane), camera_rays.hit(lane), tracer.shadows_of(lane), nullptr);
+          };
+          const WhittedTracer::Primary p = primary();
           if (tracer.stopped()) return false;
           sum += glm::vec4(limit_radiance(p.color), p.hit ? 1.0f : 0.0f);
           if (s != 0) continue;
           if (out.aovs().bvh_cost) out.bvh_cost(x, y) = static_cast<float>(stats.cost());
           if (!p.hit) continue;
           // primary_ray's direction has unit length along the viewing axis, so t is the depth.
-          if (out.aovs().depth) out.depth(x, y) = p.surface.t;
+          if (out.aovs().depth) out.depth(x, y) = p.depth;
           if (out.aovs().normal) out.normal(x, y) = p.facing_normal;
           if (out.aovs().albedo) out.albedo(x, y) = p.albedo;
         }
