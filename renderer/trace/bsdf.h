@@ -61,8 +61,8 @@ class Bsdf {
   // Picks wi for uniform numbers u_lobe, u1, u2 in [0, 1) into `s`; false when the sample is
   // lost (a glossy reflection that points below the surface), `s` then unspecified. The
   // integrator's form: as an optional, the inline Lambertian sample was stored in pieces and
-  // reloaded as 16-byte words, which no CPU forwards from smaller stores (docs/architecture.md
-  // 8.1: 12% of the integrator's samples waited there).
+  // reloaded as 16-byte words, which x86 CPUs do not forward from smaller stores
+  // (docs/architecture.md 8.1: 12% of the integrator's samples waited there).
   bool sample(const glm::vec3& wo, float u_lobe, float u1, float u2, BsdfSample& s) const {
     return kind_ == Kind::Lambertian ? sample_lambertian(wo, u1, u2, s) : sample_other(wo, u_lobe, u1, u2, s);
   }
