@@ -11,6 +11,9 @@ namespace {
 
 // Texel index `i` of a side `n` long, wrapped into [0, n).
 int wrap_index(int i, int n, TextureWrap wrap) {
+  // Nearly every index is inside already, and every mode keeps those: no integer division (two
+  // a repeated index, eight texel reads a bilinear lookup, were most of an environment map's).
+  if (static_cast<unsigned>(i) < static_cast<unsigned>(n)) return i;
   switch (wrap) {
     case TextureWrap::ClampToEdge: return std::clamp(i, 0, n - 1);
     case TextureWrap::MirroredRepeat: {
@@ -69,13 +72,14 @@ const glm::vec4& Texture::texel(int level, int x, int y) const {
 glm::vec4 Texture::sample(glm::vec2 uv, const TextureSampler& sampler, float footprint) const {
   const auto read = [&](int level, TextureFilter filter) {
     const Level& l = levels_[static_cast<std::size_t>(level)];
-    const auto at = [&](int x, int y) {
-      return l.texels[static_cast<std::size_t>(wrap_index(y, l.height, sampler.wrap_v)) * static_cast<std::size_t>(l.width) +
-                      static_cast<std::size_t>(wrap_index(x, l.width, sampler.wrap_u))];
+    // A texel's row start and column, wrapped once each (a bilinear lookup shares two of each).
+    const auto row = [&](int y) {
+      return static_cast<std::size_t>(wrap_index(y, l.height, sampler.wrap_v)) * static_cast<std::size_t>(l.width);
     };
+    const auto column = [&](int x) { return static_cast<std::size_t>(wrap_index(x, l.width, sampler.wrap_u)); };
     if (filter == TextureFilter::Nearest) {
-      return at(static_cast<int>(std::floor(finite_coordinate(uv.x * static_cast<float>(l.width)))),
-                static_cast<int>(std::floor(finite_coordinate(uv.y * static_cast<float>(l.height)))));
+      return l.texels[row(static_cast<int>(std::floor(finite_coordinate(uv.y * static_cast<float>(l.height))))) +
+                      column(static_cast<int>(std::floor(finite_coordinate(uv.x * static_cast<float>(l.width)))))];
     }
     // Texel centres sit at (i + 0.5) / side.
     const float x = finite_coordinate(uv.x * static_cast<float>(l.width) - 0.5f);
@@ -83,8 +87,9 @@ glm::vec4 Texture::sample(glm::vec2 uv, const TextureSampler& sampler, float foo
     const float fx0 = std::floor(x), fy0 = std::floor(y);
     const int x0 = static_cast<int>(fx0), y0 = static_cast<int>(fy0);
     const float fx = x - fx0, fy = y - fy0;
-    return (1.0f - fy) * ((1.0f - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
-           fy * ((1.0f - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+    const std::size_t r0 = row(y0), r1 = row(y0 + 1), c0 = column(x0), c1 = column(x0 + 1);
+    return (1.0f - fy) * ((1.0f - fx) * l.texels[r0 + c0] + fx * l.texels[r0 + c1]) +
+           fy * ((1.0f - fx) * l.texels[r1 + c0] + fx * l.texels[r1 + c1]);
   };
   // Kept below the level count: a huge footprint overflows the product to inf, whose conversion
   // to int below would be undefined (and index far outside levels_).
