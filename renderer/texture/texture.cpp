@@ -11,8 +11,9 @@ namespace {
 
 // Texel index `i` of a side `n` long, wrapped into [0, n).
 int wrap_index(int i, int n, TextureWrap wrap) {
-  // Nearly every index is inside already, and every mode keeps those: no integer division (two
-  // a repeated index, eight texel reads a bilinear lookup, were most of an environment map's).
+  // Nearly every index is inside already, and every mode keeps those: no integer division
+  // (Repeat's two per index, four indices a bilinear lookup, were most of an environment map's
+  // lookup time).
   if (static_cast<unsigned>(i) < static_cast<unsigned>(n)) return i;
   switch (wrap) {
     case TextureWrap::ClampToEdge: return std::clamp(i, 0, n - 1);
