@@ -80,6 +80,17 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
       }
       break;
     }
+    // Every keyword line left is printable ASCII words: Assimp splits and reads other bytes its
+    // own way ('element vertex\xff..\xff 2', found by the fuzzer, was two vertices here and a
+    // list of 2^32 values to it: it asked for 32 GiB), so the two readers would describe
+    // different bodies.
+    for (const char c : line) {
+      const auto byte = static_cast<unsigned char>(c);
+      if ((byte < 0x20 || byte > 0x7e) && c != '\t' && c != '\r') {
+        fail(fmt::format("byte 0x{:02x} in a '{}' line (a PLY header's keyword lines are plain ASCII)", byte,
+                         w[0].substr(0, 16)));
+      }
+    }
     if (w[0] == "format") {
       if (w.size() != 3) fail("expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
       if (w[1] == "ascii") header.format = PlyHeader::Format::ascii;

@@ -171,6 +171,12 @@ TEST(PlyHeader, MalformedHeadersNameTheFileAndTheLine) {
   // A misspelt keyword (found by the fuzzer: Assimp then allocated 32 GiB for a 243-byte file).
   EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\npro[perty float x\nend_header\n")
                 .find("line 4: unknown keyword 'pro[perty'"), std::string::npos);
+  // Bytes outside ASCII in a keyword line (found by the fuzzer: Assimp read this element's line
+  // its own way and asked for 32 GiB); a comment may hold any text.
+  EXPECT_NE(error_of(std::string("ply\nformat binary_little_endian 1.0\nelement vertex\xff\xff\xc3\xed 2\n"
+                                 "property float x\nend_header\n"))
+                .find("line 3: byte 0xff in a 'element' line"), std::string::npos);
+  EXPECT_EQ(error_of("ply\nformat ascii 1.0\ncomment caf\xc3\xa9\nelement vertex 0\nproperty float x\nend_header\n"), "");
   EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\n").find("ends before end_header"),
             std::string::npos);
   EXPECT_NE(error_of("ply\nelement vertex 3\nend_header\n").find("no format line"), std::string::npos);
