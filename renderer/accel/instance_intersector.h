@@ -50,10 +50,19 @@ class InstanceIntersector final : public SceneIntersector {
   void visit_bvh_boxes(int max_level, const std::function<void(const BvhBox&)>& visit) const;
 
  private:
-  // Nearest hit over object `o`, the world ray carried into its model space.
-  bool closest_in_object(std::uint32_t o, const Ray& world_ray, float t_max, TriangleHit& hit,
-                         TraversalStats* stats) const;
-  bool any_in_object(std::uint32_t o, const Ray& world_ray, TraversalStats* stats) const;
+  // What testing one object takes, kept together in the order the top level's leaves list their
+  // objects (Bvh::order(); object order without a top level): a leaf's object is one read away,
+  // not an index into order(), then into the scene's objects and object_accel_.
+  struct Placement {
+    glm::mat4 world_to_model{1.0f};
+    const MeshAccel* accel = nullptr;
+    std::uint32_t object = 0;
+  };
+
+  // Nearest hit over a placed object, the world ray carried into its model space.
+  static bool closest_in(const Placement& placement, const Ray& world_ray, float t_max, TriangleHit& hit,
+                         TraversalStats* stats);
+  static bool any_in(const Placement& placement, const Ray& world_ray, TraversalStats* stats);
 
   const PreparedScene& scene_;
   // One per distinct ModelTriangles, from the scene's ModelGeometry: built by the first frame
@@ -61,6 +70,7 @@ class InstanceIntersector final : public SceneIntersector {
   std::vector<std::shared_ptr<const MeshAccel>> mesh_accels_;
   std::vector<const MeshAccel*> object_accel_;           // per object
   std::optional<Bvh> top_;
+  std::vector<Placement> placements_;  // per entry of top_->order(), or per object without top_
   // A scene of one object is queried without the top level (a tree of one leaf), and without
   // carrying the ray into model space when its transform is the identity.
   bool one_object_ = false;

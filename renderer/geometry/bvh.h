@@ -126,10 +126,9 @@ class Bvh {
   template <typename Test>
   unsigned any_packet(const Ray* rays, unsigned lanes, Test&& test) const;
 
-  // The primitive of a leaf's entry `i` (< leaf.count): what a packet's leaf test resolves.
-  std::uint32_t leaf_primitive(const BvhLeafRef& leaf, std::uint32_t i) const {
-    return order_[leaves_[leaf.number].first + i];
-  }
+  // Where a leaf's entry `i` (< leaf.count) lies in order(): what a packet's leaf test resolves
+  // (order()[leaf_entry] is the primitive; a caller may keep its primitives' data in that order).
+  std::uint32_t leaf_entry(const BvhLeafRef& leaf, std::uint32_t i) const { return leaves_[leaf.number].first + i; }
 
  private:
   // The traversal for any x86-64, for AVX2 and for AVX-512 (bvh_traversal.h), with or without
