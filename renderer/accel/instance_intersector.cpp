@@ -1,6 +1,9 @@
 #include "renderer/accel/instance_intersector.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -17,11 +20,9 @@
 namespace farm {
 namespace {
 
-// How far below a model's BVH root the boxes lie that an instance's world box is made of: up to
-// four boxes, 32 corners carried to the world an instance. On the 100-cow grid (each cow turned
-// by its own angle) the rays of `farm bench rt` entered 0.513 instances a primary ray with the
-// model's box, 0.471 with these (a level further: 0.468, 0.451 at four; each level doubles the
-// corners a top-level build carries over).
+// How far below a model's BVH root the boxes lie that an instance's world box is made of when
+// its vertices are too many to carry over (InstanceIntersector::kExactBoxVertices): up to four
+// boxes, 32 corners an instance.
 constexpr int kInstanceBoxLevels = 2;
 
 // The boxes of a model's BVH down to `levels` below its root (a leaf above that counts as it
@@ -52,6 +53,35 @@ AABB world_bounds(const PreparedObject& object, const std::vector<AABB>& model_b
   AABB world;
   if (object.triangles->bounds.empty()) return world;
   for (const AABB& box : model_boxes) world.grow(transformed(box, object.model_to_world));
+  return world;
+}
+
+// An object's world box as the box of its model's vertices carried to the world (SSE, a column
+// a register), grown by 2^-16 of its largest coordinate: the query carries the ray to the model
+// instead, each rounding its own way, and a box that only just held the vertices could cut off
+// a hit grazing one.
+AABB vertex_world_bounds(const PreparedObject& object) {
+  AABB world;
+  if (object.triangles->bounds.empty()) return world;
+  const glm::mat4& m = object.model_to_world;
+  const __m128 c0 = _mm_loadu_ps(&m[0][0]), c1 = _mm_loadu_ps(&m[1][0]), c2 = _mm_loadu_ps(&m[2][0]),
+               c3 = _mm_loadu_ps(&m[3][0]);
+  __m128 low = _mm_set1_ps(std::numeric_limits<float>::infinity()), high = _mm_sub_ps(_mm_setzero_ps(), low);
+  for (const glm::vec3& p : object.triangles->positions) {
+    const __m128 w = _mm_add_ps(_mm_add_ps(_mm_mul_ps(c0, _mm_set1_ps(p.x)), _mm_mul_ps(c1, _mm_set1_ps(p.y))),
+                                _mm_add_ps(_mm_mul_ps(c2, _mm_set1_ps(p.z)), c3));
+    low = _mm_min_ps(low, w);
+    high = _mm_max_ps(high, w);
+  }
+  alignas(16) float lows[4], highs[4];
+  _mm_store_ps(lows, low);
+  _mm_store_ps(highs, high);
+  world.min = {lows[0], lows[1], lows[2]};
+  world.max = {highs[0], highs[1], highs[2]};
+  const glm::vec3 largest = glm::max(glm::abs(world.min), glm::abs(world.max));
+  const float margin = std::ldexp(std::max({largest.x, largest.y, largest.z}), -16);
+  world.min -= margin;
+  world.max += margin;
   return world;
 }
 
@@ -100,10 +130,16 @@ InstanceIntersector::InstanceIntersector(const PreparedScene& scene, AccelKind a
     object_accel_.push_back(shared);
   }
   if (accel != AccelKind::Naive) {
+    std::map<const ModelTriangles*, std::size_t> vertices_carried;  // per model, over its instances
+    for (const PreparedObject& object : objects) vertices_carried[object.triangles] += object.triangles->positions.size();
     std::vector<AABB> bounds;
     bounds.reserve(objects.size());
     std::map<const MeshAccel*, std::vector<AABB>> boxes_of;
     for (std::size_t o = 0; o < objects.size(); ++o) {
+      if (vertices_carried[objects[o].triangles] <= kExactBoxVertices) {
+        bounds.push_back(vertex_world_bounds(objects[o]));
+        continue;
+      }
       std::vector<AABB>& boxes = boxes_of[object_accel_[o]];
       if (boxes.empty()) boxes = frontier_boxes(*object_accel_[o], objects[o].triangles->bounds, kInstanceBoxLevels);
       bounds.push_back(world_bounds(objects[o], boxes));

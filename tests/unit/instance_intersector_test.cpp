@@ -373,43 +373,85 @@ TEST(InstanceIntersector, VisitsTopLevelAndPerObjectBoxesForDrawing) {
   EXPECT_EQ(none, 0u);
 }
 
-// A turned instance's top-level box is made of its model's upper BVH boxes carried to the world,
-// not of its model box's corners: a rod (a staircase of small boxes) along the model's xz
-// diagonal, turned 45 degrees about y, lies along world x, and its box is thin in z (the model box's corners would give it the
-// rod's whole length). It still holds every world vertex, and rays still find what brute force
-// finds.
-TEST(InstanceIntersector, ATurnedInstancesTopLevelBoxFollowsItsModelsUpperBoxes) {
+// A rod (a staircase of small boxes) along the model's xz diagonal, turned 45 degrees about y,
+// lies along world x: a box made of its model box's corners would span its whole length in z.
+Model diagonal_rod() {
   Model rod;
   for (int i = 0; i < 64; ++i) {
     const float a = 0.125f * static_cast<float>(i), b = a + 0.125f;
     rod.meshes.push_back(test::make_box({a, 0.0f, a}, {b, 0.1f, b}).meshes[0]);
   }
   rod.materials.push_back(Material{});
+  return rod;
+}
+
+// The top-level box of `copies` turned rods placed in the same spot (the root's box, each
+// copy's box being the same), and the box of their world vertices.
+std::pair<AABB, AABB> turned_rods_boxes(std::size_t copies) {
   Scene s;
-  Material shade;  // check_ray's mark of object 0
-  shade.diffuse = glm::vec3(0.0f);
-  s.objects.push_back(test::object_of(rod, test::placed(glm::vec3(0.0f), {0, 1, 0}, 45.0f, glm::vec3(1.0f)), shade));
+  s.objects.push_back(test::object_of(diagonal_rod(), test::placed(glm::vec3(0.0f), {0, 1, 0}, 45.0f, glm::vec3(1.0f))));
+  s.objects.resize(copies, s.objects[0]);  // one model, placed `copies` times
   const PreparedScene scene(std::move(s));
   AABB vertices;
-  const std::vector<WorldTriangle> world = world_triangles(scene, vertices);
+  world_triangles(scene, vertices);
   const InstanceIntersector ours(scene, AccelKind::Bvh);
   AABB top;
   ours.visit_bvh_boxes(0, [&](const BvhBox& box) {
     if (box.object < 0) top = box.bounds;
   });
-  const glm::vec3 slack(1e-4f);
-  EXPECT_TRUE(top.contains(AABB{vertices.min + slack, vertices.max - slack}));
-  // The rod is 8 * sqrt(2) = 11.3 long along x; its model box's corners turned would span
-  // 11.3 in z too; the four upper boxes (each a quarter of the rod) span a quarter of that.
+  return {top, vertices};
+}
+
+std::size_t vertex_count(const Model& model) {
+  std::size_t n = 0;
+  for (const Mesh& mesh : model.meshes) n += mesh.positions.size();
+  return n;
+}
+
+// A turned instance's top-level box is the box of its vertices carried to the world (grown by
+// 2^-16 of its largest coordinate), not its model box's corners carried over: it holds every
+// world vertex, is no larger, and rays still find what brute force finds.
+TEST(InstanceIntersector, ATurnedInstancesTopLevelBoxIsTheBoxOfItsWorldVertices) {
+  const auto [top, vertices] = turned_rods_boxes(1);
+  const glm::vec3 slack(1e-3f);
+  EXPECT_TRUE(top.contains(vertices));
+  EXPECT_TRUE((AABB{vertices.min - slack, vertices.max + slack}.contains(top)));
+  // The rod is 8 * sqrt(2) = 11.3 long along x; its model box's corners turned would span 11.3
+  // in z too, its vertices 0.125 * sqrt(2) = 0.18.
   EXPECT_GT(top.extent().x, 11.0f);
-  EXPECT_LT(top.extent().z, 0.3f * top.extent().x);
-  const std::vector<Ray> rays = test::random_rays(vertices, 20000 / kRayDivisor, 5);
+  EXPECT_LT(top.extent().z, 0.2f);
+
+  Scene s;
+  Material shade;  // check_ray's mark of object 0
+  shade.diffuse = glm::vec3(0.0f);
+  s.objects.push_back(test::object_of(diagonal_rod(), test::placed(glm::vec3(0.0f), {0, 1, 0}, 45.0f, glm::vec3(1.0f)), shade));
+  const PreparedScene scene(std::move(s));
+  AABB box;
+  const std::vector<WorldTriangle> world = world_triangles(scene, box);
+  const InstanceIntersector ours(scene, AccelKind::Bvh);
+  const std::vector<Ray> rays = test::random_rays(box, 20000 / kRayDivisor, 5);
   const std::vector<Expected> expected = brute_force(world, rays);
   const std::vector<std::size_t> first_of = first_triangle_of(scene);
   Tally tally;
   for (std::size_t i = 0; i < rays.size(); ++i) check_ray(scene, ours, world, first_of, rays[i], expected[i], i, "bvh", tally);
   EXPECT_EQ(tally.failures, 0u);
   EXPECT_GT(tally.hits, rays.size() / 20);
+}
+
+// Past kExactBoxVertices over a model's instances, each instance's box is made of its model's
+// upper BVH boxes (four, each a quarter of the rod) carried to the world by their corners:
+// looser than the vertices' box, still far tighter than the model box's corners, and holding
+// every vertex.
+TEST(InstanceIntersector, ManyInstancesOfAModelTakeTheBoxesOfItsUpperBvhNodes) {
+  const std::size_t copies = InstanceIntersector::kExactBoxVertices / vertex_count(diagonal_rod()) + 1;
+  const auto [top, vertices] = turned_rods_boxes(copies);
+  const glm::vec3 slack(1e-4f);
+  EXPECT_TRUE(top.contains(AABB{vertices.min + slack, vertices.max - slack}));
+  EXPECT_GT(top.extent().x, 11.0f);
+  EXPECT_GT(top.extent().z, 2.0f * vertices.extent().z);
+  EXPECT_LT(top.extent().z, 0.3f * top.extent().x);
+  const auto [half, half_vertices] = turned_rods_boxes(copies / 2);
+  EXPECT_LT(half.extent().z, 0.2f);  // a model placed half as often: its vertices' box
 }
 
 // Objects in the same place (a model placed twice, as a job's copy-paste leaves it) are hit at
