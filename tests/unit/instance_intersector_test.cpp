@@ -1,11 +1,12 @@
 // The instanced scene intersector (top-level BVH over objects, rays carried into model space)
 // against a brute force over every triangle transformed into world space, under rotations,
 // non-uniform and mirroring scales; and the SurfaceHit it completes.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <bit>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <glm/geometric.hpp>
@@ -371,6 +372,40 @@ TEST(InstanceIntersector, VisitsTopLevelAndPerObjectBoxesForDrawing) {
   std::size_t none = 0;
   naive.visit_bvh_boxes(100, [&](const BvhBox&) { ++none; });
   EXPECT_EQ(none, 0u);
+}
+
+// An instance's hit is its mesh's hit for the ray glm carries into model space (the point by
+// `world_to_model * vec4(origin, 1)`, the direction by `mat3(world_to_model)`), bit for bit: the
+// intersector carries it over with SSE, each lane glm's products and sums in their order, so
+// images rendered before that change keep their bits. Rotated, scaled and mirrored objects.
+TEST(InstanceIntersector, AnInstancesHitIsItsMeshsHitOnTheRayGlmCarriesToModelSpaceBitForBit) {
+  const PreparedScene scene(mixed_scene());
+  const InstanceIntersector ours(scene, AccelKind::Bvh);
+  AABB bounds;
+  world_triangles(scene, bounds);
+  const std::vector<Ray> rays = test::random_rays(bounds, 20000 / kRayDivisor, 17);
+  std::size_t hits = 0, differing = 0;
+  for (const Ray& ray : rays) {
+    SurfaceHit hit;
+    if (!ours.find_closest(ray, hit)) continue;
+    ++hits;
+    const glm::mat4& to_model = scene.objects()[hit.object].world_to_model;
+    Ray local = ray;
+    local.origin = glm::vec3(to_model * glm::vec4(ray.origin, 1.0f));
+    local.direction = glm::mat3(to_model) * ray.direction;
+    TriangleHit alone;
+    const bool found = ours.mesh_accel_of(hit.object).closest_hit(local, alone, nullptr);
+    const bool same = found && std::bit_cast<std::uint32_t>(alone.t) == std::bit_cast<std::uint32_t>(hit.t) &&
+                      std::bit_cast<std::uint32_t>(alone.u) == std::bit_cast<std::uint32_t>(hit.u) &&
+                      std::bit_cast<std::uint32_t>(alone.v) == std::bit_cast<std::uint32_t>(hit.v) &&
+                      alone.triangle == hit.triangle;
+    if (!same && ++differing <= 5) {
+      ADD_FAILURE() << fmt::format("object {} triangle {} t {}: alone on glm's model-space ray {}", hit.object,
+                                   hit.triangle, hit.t, found ? fmt::format("t {}", alone.t) : "no hit");
+    }
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_GT(hits, rays.size() / 10);
 }
 
 // A rod (a staircase of small boxes) along the model's xz diagonal, turned 45 degrees about y,
