@@ -25,6 +25,34 @@ namespace {
 // boxes, 32 corners an instance.
 constexpr int kInstanceBoxLevels = 2;
 
+// A matrix's columns in SSE registers, carrying points and directions as glm's operators do:
+// each lane makes their products and sums in their order (a point: (c0 x + c1 y) + (c2 z + c3),
+// c3 times w = 1 being c3; a direction: (c0 x + c1 y) + c2 z), so the same bits as
+// `m * vec4(p, 1)` and `mat3(m) * d`, which glm works out one scalar at a time (66 instructions
+// for both, an instance a ray entered, callgrind, the 100-cow grid). Lane 3 is not used.
+class SseColumns {
+ public:
+  explicit SseColumns(const glm::mat4& m)
+      : c0_(_mm_loadu_ps(&m[0][0])), c1_(_mm_loadu_ps(&m[1][0])), c2_(_mm_loadu_ps(&m[2][0])),
+        c3_(_mm_loadu_ps(&m[3][0])) {}
+  __m128 point(const glm::vec3& p) const {
+    return _mm_add_ps(first_two(p), _mm_add_ps(_mm_mul_ps(c2_, _mm_set1_ps(p.z)), c3_));
+  }
+  __m128 direction(const glm::vec3& d) const { return _mm_add_ps(first_two(d), _mm_mul_ps(c2_, _mm_set1_ps(d.z))); }
+
+ private:
+  __m128 first_two(const glm::vec3& v) const {
+    return _mm_add_ps(_mm_mul_ps(c0_, _mm_set1_ps(v.x)), _mm_mul_ps(c1_, _mm_set1_ps(v.y)));
+  }
+  __m128 c0_, c1_, c2_, c3_;
+};
+
+glm::vec3 first_three(__m128 v) {
+  alignas(16) float lanes[4];
+  _mm_store_ps(lanes, v);
+  return {lanes[0], lanes[1], lanes[2]};
+}
+
 // The boxes of a model's BVH down to `levels` below its root (a leaf above that counts as it
 // is): together they hold every triangle, more tightly than the root's box alone.
 std::vector<AABB> frontier_boxes(const MeshAccel& accel, const AABB& whole, int levels) {
@@ -56,28 +84,21 @@ AABB world_bounds(const PreparedObject& object, const std::vector<AABB>& model_b
   return world;
 }
 
-// An object's world box as the box of its model's vertices carried to the world (SSE, a column
-// a register), grown by 2^-16 of its largest coordinate: the query carries the ray to the model
-// instead, each rounding its own way, and a box that only just held the vertices could cut off
-// a hit grazing one.
+// An object's world box as the box of its model's vertices carried to the world, grown by
+// 2^-16 of its largest coordinate: the query carries the ray to the model instead, each rounding
+// its own way, and a box that only just held the vertices could cut off a hit grazing one.
 AABB vertex_world_bounds(const PreparedObject& object) {
   AABB world;
   if (object.triangles->bounds.empty()) return world;
-  const glm::mat4& m = object.model_to_world;
-  const __m128 c0 = _mm_loadu_ps(&m[0][0]), c1 = _mm_loadu_ps(&m[1][0]), c2 = _mm_loadu_ps(&m[2][0]),
-               c3 = _mm_loadu_ps(&m[3][0]);
+  const SseColumns to_world(object.model_to_world);
   __m128 low = _mm_set1_ps(std::numeric_limits<float>::infinity()), high = _mm_sub_ps(_mm_setzero_ps(), low);
   for (const glm::vec3& p : object.triangles->positions) {
-    const __m128 w = _mm_add_ps(_mm_add_ps(_mm_mul_ps(c0, _mm_set1_ps(p.x)), _mm_mul_ps(c1, _mm_set1_ps(p.y))),
-                                _mm_add_ps(_mm_mul_ps(c2, _mm_set1_ps(p.z)), c3));
+    const __m128 w = to_world.point(p);
     low = _mm_min_ps(low, w);
     high = _mm_max_ps(high, w);
   }
-  alignas(16) float lows[4], highs[4];
-  _mm_store_ps(lows, low);
-  _mm_store_ps(highs, high);
-  world.min = {lows[0], lows[1], lows[2]};
-  world.max = {highs[0], highs[1], highs[2]};
+  world.min = first_three(low);
+  world.max = first_three(high);
   const glm::vec3 largest = glm::max(glm::abs(world.min), glm::abs(world.max));
   const float margin = std::ldexp(std::max({largest.x, largest.y, largest.z}), -16);
   world.min -= margin;
@@ -85,26 +106,14 @@ AABB vertex_world_bounds(const PreparedObject& object) {
   return world;
 }
 
-// The ray in the object's model space. The direction is deliberately NOT renormalised: then
-// world_to_model(origin + t*d) = origin' + t*d' for the same t, so hit distances compare across
-// objects and stay right under non-uniform scale, with no conversion back.
-// Column by column with SSE: each lane makes the products and sums glm's operators make, in
-// their order (a point: (c0 x + c1 y) + (c2 z + c3), c3 times w = 1 being c3; a direction:
-// (c0 x + c1 y) + c2 z), so the same bits as `world_to_model * vec4(origin, 1)` and
-// `mat3(world_to_model) * direction`, which glm works out one scalar at a time (66 instructions
-// an instance a ray entered, callgrind, the 100-cow grid).
+// The ray in the object's model space (SseColumns: glm's bits). The direction is deliberately
+// NOT renormalised: then world_to_model(origin + t*d) = origin' + t*d' for the same t, so hit
+// distances compare across objects and stay right under non-uniform scale, with no conversion back.
 Ray to_model(const glm::mat4& world_to_model, const Ray& ray, float t_max) {
-  const __m128 c0 = _mm_loadu_ps(&world_to_model[0][0]), c1 = _mm_loadu_ps(&world_to_model[1][0]),
-               c2 = _mm_loadu_ps(&world_to_model[2][0]), c3 = _mm_loadu_ps(&world_to_model[3][0]);
-  const auto apply = [&](const glm::vec3& v) {
-    return _mm_add_ps(_mm_mul_ps(c0, _mm_set1_ps(v.x)), _mm_mul_ps(c1, _mm_set1_ps(v.y)));
-  };
-  alignas(16) float origin[4], direction[4];
-  _mm_store_ps(origin, _mm_add_ps(apply(ray.origin), _mm_add_ps(_mm_mul_ps(c2, _mm_set1_ps(ray.origin.z)), c3)));
-  _mm_store_ps(direction, _mm_add_ps(apply(ray.direction), _mm_mul_ps(c2, _mm_set1_ps(ray.direction.z))));
+  const SseColumns to_model_space(world_to_model);
   Ray local;
-  local.origin = {origin[0], origin[1], origin[2]};
-  local.direction = {direction[0], direction[1], direction[2]};
+  local.origin = first_three(to_model_space.point(ray.origin));
+  local.direction = first_three(to_model_space.direction(ray.direction));
   local.t_min = ray.t_min;
   local.t_max = t_max;
   return local;
