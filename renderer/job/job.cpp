@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <memory>
 #include <system_error>
 
@@ -36,6 +37,10 @@ struct Context {
   fs::path asset_root;  // absolute, symlinks resolved
   std::string asset_root_hint;  // JobLoadOptions'
   bool models_by_name = false;  // JobLoadOptions'
+  // Each file name's confinement, worked out once a parse: a scene places one model file under
+  // many objects, and confine_file walks the name's folders with a syscall apiece. A job of 10,000
+  // cows spent 55% of `farm render`'s set-up there (perf): 191-261 ms of set-up, 90-112 after.
+  mutable std::map<std::string, ConfinedFile> confined;
 };
 
 // An animated job's values are checked at every frame when it is loaded, so that no frame fails
@@ -64,8 +69,9 @@ fs::path resolve_named_file(const JsonValue& v, const Context& ctx) {
   }
   // A person writes a job on their own machine: an absolute path is fine if it lies in the root
   // (a submission rewrites it relative to the root before it travels).
-  const ConfinedFile file =
-      confine_file(ctx.asset_root, ctx.job_file, written, ReferenceForm::relative_or_absolute);
+  auto [known, fresh] = ctx.confined.try_emplace(written);
+  if (fresh) known->second = confine_file(ctx.asset_root, ctx.job_file, written, ReferenceForm::relative_or_absolute);
+  const ConfinedFile& file = known->second;
   if (file.verdict == Confinement::missing) v.fail(fmt::format("no such file '{}'", shown(written)));
   if (!file.allowed()) {
     v.fail(file.verdict == Confinement::outside && !ctx.asset_root_hint.empty()

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <system_error>
@@ -18,6 +19,8 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr std::size_t kMaxShown = 1024;  // a path, not a flood
+
+std::atomic<std::uint64_t> g_confine_file_calls{0};
 
 // A reference inside a message: shortened, so a hostile model cannot flood a log.
 std::string shown(const std::string& s) {
@@ -36,8 +39,11 @@ const char* kind_of(mode_t mode) {
 
 }  // namespace
 
+std::uint64_t confine_file_calls() { return g_confine_file_calls.load(std::memory_order_relaxed); }
+
 ConfinedFile confine_file(const fs::path& root, const fs::path& referrer, const std::string& reference,
                           ReferenceForm form) {
+  g_confine_file_calls.fetch_add(1, std::memory_order_relaxed);
   ConfinedFile out;
   const auto refuse = [&](Confinement verdict, const std::string& why) {
     out.verdict = verdict;

@@ -67,6 +67,10 @@ struct ConfinedFile {
 ConfinedFile confine_file(const std::filesystem::path& resolved_root, const std::filesystem::path& referrer,
                           const std::string& reference, ReferenceForm form = ReferenceForm::relative);
 
+// How many references confine_file has resolved in this process: each costs a syscall per folder
+// of the name, so callers that meet one name many times resolve it once (a test counts it).
+std::uint64_t confine_file_calls();
+
 // Opens an allowed file read-only (close-on-exec). -1 with `why` set when it is no longer the
 // regular file confine_file saw (replaced by a link, a FIFO, another file) or cannot be opened.
 int open_confined(const ConfinedFile& file, std::string* why);

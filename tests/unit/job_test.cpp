@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "renderer/job/job.h"
+#include "renderer/util/confined_file.h"
 #include "renderer/util/input_error.h"
 #include "tests/support/temp_dir.h"
 
@@ -338,6 +339,29 @@ TEST_F(JobFiles, JobPaths_SymlinkInsideRootIsAcceptedAndStoredCanonical) {
   const Job job = parse(job_with_object(R"({"file": "assets/inside.dae"})"));
   EXPECT_EQ(job.scene.objects[0].file, asset("cow.dae"));
   EXPECT_EQ(job.scene.objects[0].file_as_written, "assets/inside.dae");
+}
+
+// A scene places one model under many objects: each name is resolved once a parse (each
+// resolution walks the name's folders with a syscall apiece; 10,000 cows spent half their set-up
+// there), and every object still gets its own name's verdict: a link inside the root, the same
+// file by another spelling, and a link out of the root refused where it stands.
+TEST_F(JobFiles, JobPaths_EachNameIsResolvedOnceHoweverManyObjectsNameIt) {
+  std::string objects;
+  for (int i = 0; i < 50; ++i) {
+    objects += R"({"file": "assets/cow.dae"}, {"file": "assets/inside.dae"}, {"file": "./assets/cow.dae"}, )";
+  }
+  const std::uint64_t before = confine_file_calls();
+  const Job job = parse(job_with_object(objects + R"({"file": "assets/teapot.obj"})"));
+  EXPECT_EQ(confine_file_calls() - before, 4u);
+  ASSERT_EQ(job.scene.objects.size(), 151u);
+  for (std::size_t i = 0; i < 150; ++i) {
+    EXPECT_EQ(job.scene.objects[i].file, asset("cow.dae")) << i;
+  }
+  EXPECT_EQ(job.scene.objects[1].file_as_written, "assets/inside.dae");
+  EXPECT_EQ(job.scene.objects[150].file, asset("teapot.obj"));
+
+  const std::string msg = error_of(job_with_object(objects + R"({"file": "assets/escape.dae"})"));
+  EXPECT_TRUE(contains(msg, "scene.objects[150].file: 'assets/escape.dae'")) << msg;
 }
 
 TEST_F(JobFiles, JobPaths_AbsolutePathInsideRootIsAccepted) {
