@@ -4,12 +4,14 @@
 #include <atomic>
 #include <cmath>
 #include <functional>
+#include <unordered_map>
 #include <utility>
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 
 #include <fmt/format.h>
 
+#include "renderer/raster/view_culling.h"
 #include "renderer/util/input_error.h"
 
 namespace farm::raster {
@@ -37,6 +39,7 @@ struct MeshRange {
   const Mesh* mesh;
   std::size_t first_vertex;
   std::size_t first_triangle;
+  bool outside_view = false;  // wholly outside the view: its vertices and triangles are skipped
 };
 
 // The texture vertex at `p`, a point clipping made on triangle (a, b, c) with texture vertices
@@ -96,6 +99,15 @@ class FrameBuilder {
         triangles += mesh.triangles.size();
         has_uvs_ = has_uvs_ || !mesh.uvs.empty();
       }
+    }
+    // Meshes out of sight are skipped by both stages below (view_culling.h): each model's box is
+    // worked out once, however many objects place it.
+    std::unordered_map<const Mesh*, AABB> mesh_boxes;
+    for (MeshRange& range : ranges_) {
+      auto [box, fresh] = mesh_boxes.try_emplace(range.mesh);
+      if (fresh) box->second = range.mesh->bounds();
+      range.outside_view = wholly_outside_view(box->second, view_projection_ * range.object->model_to_world);
+      if (range.outside_view) ++frame.meshes_outside_view;
     }
     frame.vertices.allocate(vertices);
     if (has_uvs_) frame.vertex_textures.resize(vertices);
@@ -174,10 +186,14 @@ class FrameBuilder {
     while (begin < end) {
       while (begin >= ranges_[r].first_vertex + ranges_[r].mesh->positions.size()) ++r;
       const MeshRange& range = ranges_[r];
+      const std::size_t stop = std::min(end, range.first_vertex + range.mesh->positions.size());
+      if (range.outside_view) {  // no triangle of it reads them
+        begin = stop;
+        continue;
+      }
       const glm::mat4 to_clip = view_projection_ * range.object->model_to_world;
       const glm::mat4 to_view = view_ * range.object->model_to_world;
       const glm::mat3& to_world_normal = range.object->normal_to_world;
-      const std::size_t stop = std::min(end, range.first_vertex + range.mesh->positions.size());
       for (std::size_t i = begin; i < stop; ++i) {
         const std::size_t local = i - range.first_vertex;
         const glm::vec4 p(range.mesh->positions[local], 1.0f);
@@ -276,6 +292,10 @@ class FrameBuilder {
       poll.throw_if_stopped(kUnitsPerTriangle);
       while (i >= ranges_[r].first_triangle + ranges_[r].mesh->triangles.size()) ++r;
       const MeshRange& range = ranges_[r];
+      if (range.outside_view) {  // every triangle of it would be dropped below
+        i = std::min(end, range.first_triangle + range.mesh->triangles.size()) - 1;
+        continue;
+      }
       const glm::uvec3 local = range.mesh->triangles[i - range.first_triangle];
       const auto base = static_cast<std::uint32_t>(range.first_vertex);
       const std::uint32_t ia = base + local.x, ib = base + local.y, ic = base + local.z;

@@ -109,6 +109,8 @@ struct RasterFrame {
   }
 
   std::size_t input_triangles = 0;  // before clipping and culling of invisible ones
+  // Meshes (one per object and mesh) wholly outside the view, skipped before the vertex stage.
+  std::size_t meshes_outside_view = 0;
 
   Rect bin_rect(int bx, int by) const;
 };

@@ -1,0 +1,59 @@
+#include "renderer/raster/view_culling.h"
+
+#include <array>
+#include <cmath>
+#include <glm/vec4.hpp>
+
+namespace farm::raster {
+namespace {
+
+// A corner's clip-space distance beyond a plane must exceed this share of the magnitudes that
+// make it up: the float vertex stage (a product of two float matrices, then a float
+// matrix-vector product) is off by a few ulps of those magnitudes, 1e-6 of them at most.
+constexpr double kMargin = 1e-4;
+
+// Signed distance of clip-space point v inside plane p (>= 0 inside), and the magnitude its
+// terms carry.
+double inside_distance(const glm::dvec4& v, int plane) {
+  switch (plane) {
+    case 0: return v.z + v.w;  // near
+    case 1: return v.w - v.z;  // far
+    case 2: return v.w - v.x;  // right
+    case 3: return v.w + v.x;  // left
+    case 4: return v.w - v.y;  // top
+    default: return v.w + v.y;  // bottom
+  }
+}
+
+}  // namespace
+
+bool wholly_outside_view(const AABB& model_box, const glm::mat4& model_to_clip) {
+  if (model_box.empty()) return false;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(model_box.min[a]) || !std::isfinite(model_box.max[a])) return false;
+  }
+  const glm::dmat4 m(model_to_clip);
+  std::array<glm::dvec4, 8> corners;
+  std::array<double, 8> magnitude;
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec4 p((c & 1) ? model_box.max.x : model_box.min.x, (c & 2) ? model_box.max.y : model_box.min.y,
+                       (c & 4) ? model_box.max.z : model_box.min.z, 1.0);
+    corners[c] = m * p;
+    // What the float stage's rounding scales with: every product's size, summed.
+    double sum = 0.0;
+    for (int row = 0; row < 4; ++row) {
+      for (int k = 0; k < 4; ++k) sum += std::abs(m[k][row] * p[k]);
+    }
+    magnitude[c] = sum;
+  }
+  for (int plane = 0; plane < 6; ++plane) {
+    bool all_outside = true;
+    for (int c = 0; c < 8 && all_outside; ++c) {
+      all_outside = inside_distance(corners[c], plane) < -kMargin * magnitude[c];
+    }
+    if (all_outside) return true;
+  }
+  return false;
+}
+
+}  // namespace farm::raster
