@@ -8,12 +8,11 @@ namespace farm::raster {
 namespace {
 
 // A corner's clip-space distance beyond a plane must exceed this share of the magnitudes that
-// make it up: the float vertex stage (a product of two float matrices, then a float
-// matrix-vector product) is off by a few ulps of those magnitudes, 1e-6 of them at most.
+// make it up: the float vertex stage (`model_to_clip` times the point, then the plane's sum, each
+// in float) is off by a few ulps of those magnitudes, 1e-6 of them at most.
 constexpr double kMargin = 1e-4;
 
-// Signed distance of clip-space point v inside plane p (>= 0 inside), and the magnitude its
-// terms carry.
+// Signed distance of clip-space point v inside plane p (>= 0 inside).
 double inside_distance(const glm::dvec4& v, int plane) {
   switch (plane) {
     case 0: return v.z + v.w;  // near
