@@ -12,6 +12,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <set>
 #include <system_error>
 
 #include "renderer/job/job_animation.h"
@@ -473,8 +474,12 @@ Job parse_job_document(const nlohmann::json& doc, const fs::path& path, const Jo
 
 std::vector<fs::path> job_named_files(const Job& job) {
   std::vector<fs::path> files;
-  for (const JobObject& o : job.scene.objects) files.push_back(o.file);
-  if (job.scene.environment && !job.scene.environment->map.empty()) files.push_back(job.scene.environment->map);
+  std::set<fs::path> named;  // a scene places one model file under many objects
+  const auto add = [&](const fs::path& file) {
+    if (named.insert(file).second) files.push_back(file);
+  };
+  for (const JobObject& o : job.scene.objects) add(o.file);
+  if (job.scene.environment && !job.scene.environment->map.empty()) add(job.scene.environment->map);
   return files;
 }
 

@@ -86,8 +86,9 @@ struct Job {
   std::shared_ptr<const JobAnimation> animation;  // null: nothing is keyframed
 };
 
-// Every file the job names itself (each object's model, the environment's map), resolved, in
-// the job's order: what a submission uploads besides the files the models name.
+// Every file the job names itself (each object's model, the environment's map), resolved, each
+// once, in the order the job first names it: what a submission uploads besides the files the
+// models name.
 std::vector<std::filesystem::path> job_named_files(const Job& job);
 
 // The frames the job renders: its range's, or the still's frame 0.

@@ -8,6 +8,8 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <map>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "renderer/util/confined_file.h"
@@ -124,12 +126,17 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   const auto as_resolved = [&](const std::string& written, const fs::path& file) {
     return fs::path(written).lexically_normal() == file.lexically_relative(root);
   };
-  const std::optional<JobEnvironment>& environment = out.job.scene.environment;
-  const bool files_as_resolved =
-      std::all_of(out.job.scene.objects.begin(), out.job.scene.objects.end(),
-                  [&](const JobObject& o) { return as_resolved(o.file_as_written, o.file); }) &&
-      (!environment || environment->map.empty() || as_resolved(environment->map_as_written, environment->map));
-  const bool as_written = job_dir == root && !any_override(overrides) && files_as_resolved;
+  const auto files_as_resolved = [&] {
+    // Each name once (parse_job resolves one name to one file): a scene places one model file
+    // under many objects.
+    std::map<std::string, const fs::path*> resolved;
+    for (const JobObject& o : out.job.scene.objects) resolved.emplace(o.file_as_written, &o.file);
+    if (const std::optional<JobEnvironment>& e = out.job.scene.environment; e && !e->map.empty()) {
+      resolved.emplace(e->map_as_written, &e->map);
+    }
+    return std::all_of(resolved.begin(), resolved.end(), [&](const auto& n) { return as_resolved(n.first, *n.second); });
+  };
+  const bool as_written = job_dir == root && !any_override(overrides) && files_as_resolved();
   out.spec.set_job_json(as_written ? text : rewritten_job_text(std::move(document), out.job, root, overrides));
   out.spec.set_file_name(job_file.filename().string());
 
@@ -143,7 +150,9 @@ JobSubmission make_job_submission(const fs::path& job_file, const JobLoadOptions
   ModelDependencyScanner scanner(root);
   // parse_job confined the files the job names to the root already: resolved and inside.
   for (const fs::path& named : job_named_files(out.job)) by_path.emplace(named.lexically_relative(root).generic_string(), named);
+  std::set<fs::path> models;
   for (const JobObject& object : out.job.scene.objects) {
+    if (!models.insert(object.file).second) continue;  // its files are in by_path already
     for (const ConfinedFile& dependency : scanner.dependencies(object.file)) add(dependency);
   }
   out.files_scanned = scanner.files_scanned();

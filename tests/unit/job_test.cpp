@@ -359,6 +359,8 @@ TEST_F(JobFiles, JobPaths_EachNameIsResolvedOnceHoweverManyObjectsNameIt) {
   }
   EXPECT_EQ(job.scene.objects[1].file_as_written, "assets/inside.dae");
   EXPECT_EQ(job.scene.objects[150].file, asset("teapot.obj"));
+  // What a submission uploads besides the models' own files: each file once.
+  EXPECT_EQ(job_named_files(job), (std::vector<fs::path>{asset("cow.dae"), asset("teapot.obj")}));
 
   const std::string msg = error_of(job_with_object(objects + R"({"file": "assets/escape.dae"})"));
   EXPECT_TRUE(contains(msg, "scene.objects[150].file: 'assets/escape.dae'")) << msg;
