@@ -5,19 +5,8 @@
 namespace farm::raster {
 namespace {
 
-constexpr int kPlaneCount = 6;
-
-// Signed distance to plane i (>= 0 inside): near z >= -w, far z <= w, guard band in x and y.
-float plane_distance(const glm::vec4& v, int plane) {
-  switch (plane) {
-    case 0: return v.z + v.w;
-    case 1: return v.w - v.z;
-    case 2: return kGuardBand * v.w - v.x;
-    case 3: return kGuardBand * v.w + v.x;
-    case 4: return kGuardBand * v.w - v.y;
-    default: return kGuardBand * v.w + v.y;
-  }
-}
+// Signed distance to plane i (>= 0 inside), the sides at the guard band.
+float plane_distance(const glm::vec4& v, int plane) { return clip_plane_distance(v, plane, kGuardBand); }
 
 // Always interpolates from the inside vertex towards the outside one, so two triangles sharing
 // an edge compute bit-identical crossing points and no crack opens between them.
@@ -33,7 +22,7 @@ ClipVertex crossing(const ClipVertex& inside, float d_inside, const ClipVertex& 
 
 std::uint8_t outcode(const glm::vec4& clip) {
   std::uint8_t code = 0;
-  for (int p = 0; p < kPlaneCount; ++p) {
+  for (int p = 0; p < kClipPlaneCount; ++p) {
     if (plane_distance(clip, p) < 0.0f) code = static_cast<std::uint8_t>(code | (1u << p));
   }
   return code;
@@ -45,7 +34,7 @@ ClippedPolygon clip_triangle(const ClipVertex& a, const ClipVertex& b, const Cli
   poly.vertices[1] = b;
   poly.vertices[2] = c;
   poly.size = 3;
-  for (int plane = 0; plane < kPlaneCount && poly.size > 0; ++plane) {
+  for (int plane = 0; plane < kClipPlaneCount && poly.size > 0; ++plane) {
     // Sutherland-Hodgman against one plane.
     ClippedPolygon out;
     for (std::size_t i = 0; i < poly.size; ++i) {

@@ -22,6 +22,24 @@ struct ClipVertex {
 // |x|, |y| <= kGuardBand * w after clipping, i.e. NDC within [-kGuardBand, kGuardBand].
 inline constexpr float kGuardBand = 4.0f;
 
+// The clip planes, in outcode bit order: near, far, then the sides x and y at +-band * w.
+inline constexpr int kClipPlaneCount = 6;
+
+// Signed distance of clip-space point v inside plane `plane` (>= 0 inside): near z >= -w, far
+// z <= w, and |x|, |y| <= band * w (the guard band when clipping; 1, the image's edges, when
+// culling whole meshes, view_culling.h). One definition, in float or double, for both.
+template <typename Vec4, typename Scalar>
+Scalar clip_plane_distance(const Vec4& v, int plane, Scalar band) {
+  switch (plane) {
+    case 0: return v.z + v.w;
+    case 1: return v.w - v.z;
+    case 2: return band * v.w - v.x;
+    case 3: return band * v.w + v.x;
+    case 4: return band * v.w - v.y;
+    default: return band * v.w + v.y;
+  }
+}
+
 // A convex polygon: a triangle clipped by 6 planes has at most 9 vertices.
 struct ClippedPolygon {
   std::array<ClipVertex, 9> vertices;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <glm/vec4.hpp>
 
+#include "renderer/raster/clip_polygon.h"
+
 namespace farm::raster {
 namespace {
 
@@ -11,18 +13,6 @@ namespace {
 // make it up: the float vertex stage (`model_to_clip` times the point, then the plane's sum, each
 // in float) is off by a few ulps of those magnitudes, 1e-6 of them at most.
 constexpr double kMargin = 1e-4;
-
-// Signed distance of clip-space point v inside plane p (>= 0 inside).
-double inside_distance(const glm::dvec4& v, int plane) {
-  switch (plane) {
-    case 0: return v.z + v.w;  // near
-    case 1: return v.w - v.z;  // far
-    case 2: return v.w - v.x;  // right
-    case 3: return v.w + v.x;  // left
-    case 4: return v.w - v.y;  // top
-    default: return v.w + v.y;  // bottom
-  }
-}
 
 }  // namespace
 
@@ -45,10 +35,11 @@ bool wholly_outside_view(const AABB& model_box, const glm::mat4& model_to_clip) 
     }
     magnitude[c] = sum;
   }
-  for (int plane = 0; plane < 6; ++plane) {
+  // The clipper's near and far planes, and the image's edges for the sides.
+  for (int plane = 0; plane < kClipPlaneCount; ++plane) {
     bool all_outside = true;
     for (int c = 0; c < 8 && all_outside; ++c) {
-      all_outside = inside_distance(corners[c], plane) < -kMargin * magnitude[c];
+      all_outside = clip_plane_distance(corners[c], plane, 1.0) < -kMargin * magnitude[c];
     }
     if (all_outside) return true;
   }
