@@ -6,6 +6,7 @@
 // Traversal runs over an 8-wide collapse of the tree (WideBvhNode), visiting nearer children
 // first and skipping nodes farther than the closest hit so far. Leaves are numbered in the order
 // of order(), so that a caller may keep a leaf's primitives together (mesh_accel's Triangle4s).
+#include <array>
 #include <cstdint>
 #include <immintrin.h>
 #include <span>
@@ -44,6 +45,18 @@ struct alignas(32) WideBvhNode {
   std::uint8_t count[kWideBvhWidth];     // leaf child: primitives; 0: an inner child
   std::uint8_t leaf_mask = 0;            // bit i: child i is a leaf
 };
+
+// Per octant of a ray's direction (bit a: it runs toward -a), the byte offset in a WideBvhNode of
+// the row of planes it enters each axis's slab by: axis a's min row, or its max row (one row on)
+// for the rays running toward -a. Lane 3 is not used.
+inline constexpr std::array<std::array<std::uint32_t, 4>, 8> kWideBvhNearRows = [] {
+  std::array<std::array<std::uint32_t, 4>, 8> rows{};
+  constexpr std::uint32_t kRowBytes = sizeof(float) * kWideBvhWidth;
+  for (std::uint32_t octant = 0; octant < 8; ++octant) {
+    for (std::uint32_t a = 0; a < 3; ++a) rows[octant][a] = (2 * a + (octant >> a & 1u)) * kRowBytes;
+  }
+  return rows;
+}();
 
 // A leaf: entries [first, first + count) of Bvh::order().
 struct BvhLeaf {
