@@ -7,6 +7,8 @@
 #include <optional>
 #include <string_view>
 
+#include "renderer/util/cpu_features.h"  // cpu_has_avx2, cpu_has_avx512 (AVX-512: its 8-wide code on 32 registers)
+
 namespace farm {
 
 // In order of preference, worst first.
@@ -20,9 +22,6 @@ extern std::atomic<TraversalIsa> traversal_isa_in_use;
 // Read per query, so a relaxed load.
 inline TraversalIsa traversal_isa() { return detail::traversal_isa_in_use.load(std::memory_order_relaxed); }
 
-bool cpu_has_avx2();
-// AVX-512 Foundation and Vector Length extensions (the traversal's 8-wide code on 32 registers).
-bool cpu_has_avx512();
 // Whether this CPU runs `isa`'s build.
 bool cpu_runs(TraversalIsa isa);
 // The best build this CPU runs.

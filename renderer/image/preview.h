@@ -21,8 +21,12 @@ namespace farm {
 float linear_to_srgb(float linear);      // the sRGB transfer function, input clamped to [0, 1]
 std::uint8_t to_srgb8(float linear);        // rounded to 8 bits: what previews hold
 
+// Which code encodes a preview's channels: AVX2 where the CPU has it (Best), or the one every
+// x86-64 runs. Both give to_srgb8's bytes; tests compare them.
+enum class Srgb8Encoder { Best, Portable };
+
 // The film's RGB as a preview holds it: every channel through to_srgb8, rows top to bottom.
-Rgb8Image to_srgb8_image(const TileBuffer& image);
+Rgb8Image to_srgb8_image(const TileBuffer& image, Srgb8Encoder encoder = Srgb8Encoder::Best);
 
 // Writes to a temporary file beside `file` and renames it into place. Errors name `file`.
 void write_preview(const TileBuffer& image, const std::filesystem::path& file);
