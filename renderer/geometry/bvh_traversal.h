@@ -2,6 +2,7 @@
 // Template definitions for bvh.h (included at its end).
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <immintrin.h>
 #include <limits>
@@ -11,6 +12,10 @@
 #include "renderer/geometry/bvh.h"
 
 namespace farm {
+
+// The walk loads a ray's direction as four floats (bvh_traverse_body.h); the fourth, t_min, must
+// be the Ray's own.
+static_assert(offsetof(Ray, t_min) == offsetof(Ray, direction) + 3 * sizeof(float));
 
 template <typename Visit>
 void Bvh::visit_levels(int max_level, Visit&& visit) const {
