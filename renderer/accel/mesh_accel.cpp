@@ -107,17 +107,16 @@ class BvhAccel final : public MeshAccel {
     // test instead of an index lookup and three scattered position reads per triangle. Same
     // float values and arithmetic, so hits equal the naive ones exactly.
     const std::vector<std::uint32_t>& order = bvh_.order();
-    packets_.resize(bvh_.leaves().size());
-    ids_.resize(bvh_.leaves().size());
+    blocks_.resize(bvh_.leaves().size());
     for (std::size_t k = 0; k < bvh_.leaves().size(); ++k) {
       const BvhLeaf& leaf = bvh_.leaves()[k];
       if (leaf.count > kLeafSize) throw std::logic_error("BvhAccel: a leaf larger than one Triangle4");
       for (std::uint32_t lane = 0; lane < leaf.count; ++lane) {
         const std::uint32_t t = order[leaf.first + lane];
         const glm::uvec3& tri = triangles.triangles[t];
-        packets_[k].set(static_cast<int>(lane), triangles.positions[tri.x], triangles.positions[tri.y],
+        blocks_[k].triangles.set(static_cast<int>(lane), triangles.positions[tri.x], triangles.positions[tri.y],
                         triangles.positions[tri.z]);
-        ids_[k][lane] = t;
+        blocks_[k].ids[lane] = t;
       }
     }
   }
@@ -147,8 +146,8 @@ class BvhAccel final : public MeshAccel {
     bvh_.closest_packet(rays, lanes, t_max, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
       if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
-        const std::uint32_t* ids = ids_[leaf.number].data();
-        const unsigned met = intersect_triangle4_packet(packet_rays, packets_[leaf.number], static_cast<int>(leaf.count),
+        const std::uint32_t* ids = blocks_[leaf.number].ids.data();
+        const unsigned met = intersect_triangle4_packet(packet_rays, blocks_[leaf.number].triangles, static_cast<int>(leaf.count),
                                                         ids, t_max, leaf_lanes, leaf_hits);
         for (unsigned rest = met; rest; rest &= rest - 1) {
           const int i = __builtin_ctz(rest);
@@ -176,7 +175,7 @@ class BvhAccel final : public MeshAccel {
         ray,
         [&](const BvhLeafRef& leaf) {
           __m128 t, u, v;
-          return intersect_triangle4(packet_ray, packets_[leaf.number], ray.t_max, t, u, v) != 0;
+          return intersect_triangle4(packet_ray, blocks_[leaf.number].triangles, ray.t_max, t, u, v) != 0;
         },
         stats);
   }
@@ -196,14 +195,14 @@ class BvhAccel final : public MeshAccel {
     return bvh_.any_packet(rays, lanes, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
       if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
-        return intersect_triangle4_packet(packet_rays, packets_[leaf.number], static_cast<int>(leaf.count),
-                                          ids_[leaf.number].data(), t_max, leaf_lanes, leaf_hits);
+        return intersect_triangle4_packet(packet_rays, blocks_[leaf.number].triangles, static_cast<int>(leaf.count),
+                                          blocks_[leaf.number].ids.data(), t_max, leaf_lanes, leaf_hits);
       }
       unsigned met = 0;
       for (; leaf_lanes; leaf_lanes &= leaf_lanes - 1) {
         const int i = __builtin_ctz(leaf_lanes);
         __m128 t, u, v;
-        if (intersect_triangle4(lane_rays[i], packets_[leaf.number], t_max[i], t, u, v) != 0) met |= 1u << i;
+        if (intersect_triangle4(lane_rays[i], blocks_[leaf.number].triangles, t_max[i], t, u, v) != 0) met |= 1u << i;
       }
       return met;
     });
@@ -218,9 +217,9 @@ class BvhAccel final : public MeshAccel {
   bool test_leaf(const Triangle4Ray& ray, const BvhLeafRef& leaf, float& t_max, TriangleHit& hit,
                  bool& found) const {
     __m128 t, u, v;
-    const int mask = intersect_triangle4(ray, packets_[leaf.number], t_max, t, u, v);
+    const int mask = intersect_triangle4(ray, blocks_[leaf.number].triangles, t_max, t, u, v);
     if (mask == 0) return false;
-    const std::uint32_t* ids = ids_[leaf.number].data();
+    const std::uint32_t* ids = blocks_[leaf.number].ids.data();
     const int lane = nearest_lane(mask, t, ids);
     alignas(16) float ts[4], us[4], vs[4];
     _mm_store_ps(ts, t);
@@ -236,8 +235,14 @@ class BvhAccel final : public MeshAccel {
   static constexpr int kLeafSize = 4;  // one Triangle4
   static constexpr int kTransposedFrom = 4;  // rays of a packet meeting a leaf
   Bvh bvh_;
-  std::vector<Triangle4> packets_;                     // per leaf (Bvh::leaves())
-  std::vector<std::array<std::uint32_t, 4>> ids_;      // per leaf, its triangles' ModelTriangles indices
+  // A leaf's Triangle4 and its triangles' ModelTriangles indices in three whole cache lines: the
+  // test reads three lines, never four, and a hit's index comes from a line the test read.
+  struct alignas(64) LeafBlock {
+    Triangle4 triangles;
+    std::array<std::uint32_t, 4> ids{};
+  };
+  static_assert(sizeof(LeafBlock) == 192);
+  std::vector<LeafBlock> blocks_;  // per leaf (Bvh::leaves())
 };
 
 }  // namespace
