@@ -58,13 +58,16 @@ float uv_per_length(const ClipVertex& a, const ClipVertex& b, const ClipVertex& 
 // for one sub-pixel sample position. Owns its z-buffer: no other thread touches these pixels.
 class RegionRasterizer {
  public:
+  // The buffers start unwritten: begin() clears what a region reads (depth and material), and a
+  // pixel's attributes are written with its material, so only those of covered pixels are read.
+  // Zeroing them as well took 16,000 instructions a tile (2,040 tiles a frame of the 100-cow grid).
   explicit RegionRasterizer(const RasterFrame& frame) : frame_(frame) {
     constexpr std::size_t kPixels = static_cast<std::size_t>(kBinSize) * kBinSize;
-    depth_.resize(kPixels);
-    material_.resize(kPixels);
-    attributes_.resize(kPixels);
+    depth_.allocate(kPixels);
+    material_.allocate(kPixels);
+    attributes_.allocate(kPixels);
     // Only a frame with textured materials draws textured triangles: one without pays nothing.
-    if (frame.textured) texture_attributes_.resize(kPixels);
+    if (frame.textured) texture_attributes_.allocate(kPixels);
   }
 
   void begin(const Rect& region, FixedPoint sample_offset) {
@@ -177,10 +180,10 @@ class RegionRasterizer {
   const RasterFrame& frame_;
   Rect region_;
   FixedPoint offset_;
-  std::vector<float> depth_;  // NDC depth of the nearest surface so far
-  std::vector<const Material*> material_;
-  std::vector<SurfaceAttributes> attributes_;
-  std::vector<TextureAttributes> texture_attributes_;
+  UninitializedArray<float> depth_;  // NDC depth of the nearest surface so far
+  UninitializedArray<const Material*> material_;
+  UninitializedArray<SurfaceAttributes> attributes_;
+  UninitializedArray<TextureAttributes> texture_attributes_;
   std::uint64_t fragments_ = 0;
 };
 
