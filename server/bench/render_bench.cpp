@@ -65,9 +65,10 @@ BenchJob write_grid_job(const fs::path& cow_model, const fs::path& dir) {
   return {"cow-grid-100", file, {}};
 }
 
-// One `farm render`: its time from process start to exit, and the CPU time of all its threads.
+// One `farm render`: its time from process start to exit, the CPU time of all its threads, the
+// kernel's part of it, and its peak resident memory.
 struct CommandRun {
-  double ms = 0.0, cpu_ms = 0.0;
+  double ms = 0.0, cpu_ms = 0.0, kernel_ms = 0.0, peak_mib = 0.0;
 };
 
 // One `farm render` of `job`, its outputs under `dir`.
@@ -88,7 +89,8 @@ CommandRun time_command(const BenchJob& job, int threads, const fs::path& dir) {
                                          code ? fmt::format("exit {}", *code) : "timed out",
                                          command.output()));
   }
-  return {ms, command.cpu_seconds().value_or(0.0) * 1e3};
+  return {ms, command.cpu_seconds().value_or(0.0) * 1e3, command.kernel_seconds().value_or(0.0) * 1e3,
+          static_cast<double>(command.peak_memory_bytes().value_or(0)) / (1024.0 * 1024.0)};
 }
 
 // The engine alone: render_frame on an already loaded scene, a fresh PreparedScene for each frame
@@ -109,8 +111,8 @@ void bench_job(const BenchJob& job, const RenderBenchOptions& o, const fs::path&
   fmt::print("\n{}: {} engine, {}x{}, {} triangles in {} object(s), median of {} rounds\n", job.name,
              to_string(r.engine), r.width, r.height, scene.triangle_count(), scene.objects.size(),
              o.repeats);
-  fmt::print("{:>7} {:>14} {:>15} {:>8} {:>22} {:>7}\n", "threads", "engine frame", "farm render", "ratio",
-             "2 x frame + 100 ms", "cores");
+  fmt::print("{:>7} {:>14} {:>15} {:>8} {:>22} {:>7} {:>10} {:>9}\n", "threads", "engine frame", "farm render",
+             "ratio", "2 x frame + 100 ms", "cores", "kernel", "peak");
   // One pool per thread count, each warmed up (caches, page faults) with a frame and a command.
   std::map<int, std::unique_ptr<ThreadPool>> pools;
   for (int threads : o.threads) {
@@ -125,7 +127,7 @@ void bench_job(const BenchJob& job, const RenderBenchOptions& o, const fs::path&
   // from the host) falls on all of them alike; within a count, the engine frame and the command
   // take turns too. The speedups are paired by round.
   struct Runs {
-    std::vector<double> engine, command, ratio, cores;
+    std::vector<double> engine, command, ratio, cores, kernel, peak;
   };
   std::map<int, Runs> runs;
   std::vector<int> order;  // each count once, fewest threads first
@@ -139,14 +141,20 @@ void bench_job(const BenchJob& job, const RenderBenchOptions& o, const fs::path&
       r_t.ratio.push_back(run.ms / r_t.engine.back());
       // cores: the command's CPU time over its time, what it kept busy on average.
       r_t.cores.push_back(run.cpu_ms / run.ms);
+      // kernel: its system time, where a fresh process's page faults (the kernel zeroing every
+      // new page) go; on a VM they can cost several times more when the host must back the
+      // memory first, and that is what moves this table most from one run to the next.
+      r_t.kernel.push_back(run.kernel_ms);
+      r_t.peak.push_back(run.peak_mib);
     }
     std::reverse(order.begin(), order.end());
   }
   for (const auto& [threads, r_t] : runs) {
     const double e = median(r_t.engine), c = median(r_t.command);
     const double bound = 2.0 * e + 100.0;
-    fmt::print("{:>7} {:>11.1f} ms {:>12.1f} ms {:>7.1f}x {:>12.1f} ms ({}) {:>7.2f}\n", threads, e, c,
-               median(r_t.ratio), bound, c <= bound ? "within" : "over", median(r_t.cores));
+    fmt::print("{:>7} {:>11.1f} ms {:>12.1f} ms {:>7.1f}x {:>12.1f} ms ({}) {:>7.2f} {:>7.1f} ms {:>5.0f} MiB\n",
+               threads, e, c, median(r_t.ratio), bound, c <= bound ? "within" : "over", median(r_t.cores),
+               median(r_t.kernel), median(r_t.peak));
   }
   if (runs.size() > 1) {
     const auto first = runs.begin();

@@ -125,6 +125,8 @@ std::optional<int> ChildProcess::wait_exit(std::chrono::milliseconds timeout) {
         return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_usec) * 1e-6;
       };
       cpu_seconds_ = seconds(usage.ru_utime) + seconds(usage.ru_stime);
+      kernel_seconds_ = seconds(usage.ru_stime);
+      peak_memory_bytes_ = static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;  // Linux: KiB
       break;
     }
     const auto left = std::chrono::ceil<std::chrono::milliseconds>(end - Clock::now());

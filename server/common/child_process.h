@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -42,6 +43,10 @@ class ChildProcess {
   // The CPU time (user and system, all its threads) of a child wait_exit has seen end; nullopt
   // before. `farm bench render` shows from it how many cores a command kept busy.
   std::optional<double> cpu_seconds() const { return cpu_seconds_; }
+  // Of that, the kernel's part (system time: page faults and the zeroing of fresh memory among
+  // it), and the child's peak resident memory; nullopt before it has ended.
+  std::optional<double> kernel_seconds() const { return kernel_seconds_; }
+  std::optional<std::uint64_t> peak_memory_bytes() const { return peak_memory_bytes_; }
 
  private:
   static constexpr std::size_t kMaxOutputBytes = std::size_t{8} << 20;
@@ -51,7 +56,8 @@ class ChildProcess {
   int pid_fd_ = -1;  // readable once the child has ended; -1 where the kernel has no pidfd_open
   int out_fd_ = -1;
   std::optional<int> exit_code_;
-  std::optional<double> cpu_seconds_;
+  std::optional<double> cpu_seconds_, kernel_seconds_;
+  std::optional<std::uint64_t> peak_memory_bytes_;
   std::atomic<bool> stop_reading_{false};
   mutable std::mutex mutex_;  // guards the two below
   std::condition_variable output_changed_;
