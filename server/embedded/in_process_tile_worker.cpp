@@ -9,8 +9,15 @@ grpc::Status InProcessTileWorker::render(const v1::RenderTileRequest& request, R
   control.cancelled = [&cancel] { return cancel.cancelled(); };
   control.deadline = deadline;
   TileBuffer pixels;
-  const grpc::Status status = renderer_.render(request, pixels, *result.response.mutable_stats(), control);
-  if (status.ok()) result.pixels = std::move(pixels);
+  const grpc::Status status =
+      renderer_.render(request, pixels, *result.response.mutable_stats(), control, result.film.get());
+  if (!status.ok()) return status;
+  // An OK call without pixels of its own wrote them into the film (TileRenderer::render).
+  if (result.film && pixels.rect().empty()) {
+    result.in_film = true;
+  } else {
+    result.pixels = std::move(pixels);
+  }
   return status;
 }
 

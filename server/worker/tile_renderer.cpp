@@ -62,10 +62,11 @@ struct RectRender {
   RenderSettings settings;  // the scene's, at the call's sample pass
   std::vector<Rect> subs;
   TileBuffer out;
+  TileBuffer* into = &out;  // where sub-tiles are pasted: `out`, or the caller's film
   // The call's: cancelled by the handler when its client goes away (or a sub-tile fails); the
   // deadline is the client's. The engines poll it.
   CancelFlag flag;
-  std::atomic<std::size_t> complete{0};  // sub-tiles rendered to the end and pasted into `out`
+  std::atomic<std::size_t> complete{0};  // sub-tiles rendered to the end and pasted into `into`
 
   std::mutex mutex;  // guards the three below
   RenderStats stats;
@@ -100,7 +101,7 @@ void render_sub_tile(RectRender& r, const Rect& sub) {
       // A stopped sub-tile comes back without pixels and is never pasted: `out` is incomplete
       // then, and the call says CANCELLED or DEADLINE_EXCEEDED instead of sending it.
       if (render_tile(r.scene->prepared, r.settings, sub, tile, r.flag) == StopReason::None) {
-        r.out.paste(tile);  // sub-tiles are disjoint: no lock needed
+        r.into->paste(tile);  // sub-tiles are disjoint: no lock needed
         r.complete.fetch_add(1);
       }
       stats = tile.stats();
@@ -250,8 +251,8 @@ grpc::Status TileRenderer::render(const v1::RenderTileRequest& request,
 }
 
 grpc::Status TileRenderer::render(const v1::RenderTileRequest& request, TileBuffer& pixels,
-                                  v1::TileStats& stats, const RenderControl& control) {
-  const grpc::Status status = render_rect(request, pixels, stats, control);
+                                  v1::TileStats& stats, const RenderControl& control, TileBuffer* film) {
+  const grpc::Status status = render_rect(request, pixels, stats, control, film);
   log_call(request, status, stats);
   return status;
 }
@@ -274,7 +275,7 @@ void TileRenderer::log_call(const v1::RenderTileRequest& request, const grpc::St
 }
 
 grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuffer& pixels,
-                                       v1::TileStats& stats, const RenderControl& control) {
+                                       v1::TileStats& stats, const RenderControl& control, TileBuffer* film) {
   const Clock::time_point start = Clock::now();
   const v1::RenderTileRequest* request = &req;
   auto r = std::make_shared<RectRender>(CancelFlag::steady_deadline(control.deadline));
@@ -374,7 +375,13 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
       if (r->flag.stop_requested()) return stopped(r->flag);
       std::rethrow_exception(failure);
     }
-    r->out.reset_for_overwrite(rect, settings.aovs);
+    // Straight into the caller's film when it covers the rect with the render's AOVs; else into
+    // a buffer of the call's own, handed back whole.
+    if (film && film->rect().intersect(rect) == rect && film->aovs() == settings.aovs) {
+      r->into = film;
+    } else {
+      r->out.reset_for_overwrite(rect, settings.aovs);
+    }
     r->subs = split_into_tiles(rect.width(), rect.height(), sub_tile_size(settings, rect, pool_.size()));
     for (Rect& sub : r->subs) sub = {sub.x0 + rect.x0, sub.y0 + rect.y0, sub.x1 + rect.x0, sub.y1 + rect.y0};
     const std::shared_ptr<ThreadPool::Work> work =
@@ -382,13 +389,16 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
           for (std::size_t i = begin; i < end; ++i) render_sub_tile(*r, r->subs[i]);
         });
     const bool finished = finish_unless_stopped(*work, is_stopped);
+    // A sub-tile still running after a stop would paste into the film after the call has ended:
+    // by then the film may be merged or gone. The stopped ones end within a few samples.
+    if (r->into != &r->out) work->wait();
     {
       std::lock_guard lock(r->mutex);
       if (r->failure) std::rethrow_exception(r->failure);
     }
     // Only a tile whose every sub-tile ran to the end is sent: never a half-rendered one.
     if (!finished || r->complete.load() != r->subs.size()) return stopped(r->flag);
-    // Every sub-tile has finished: r is ours alone now.
+    // Every sub-tile has finished: r is ours alone now. (Into a film: `pixels` stays empty.)
     pixels = std::move(r->out);
     encode_stats(r->stats, stats);
     stats.set_render_ms(ms_since(render_start));

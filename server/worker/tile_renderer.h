@@ -58,9 +58,13 @@ class TileRenderer {
   // FAILED_PRECONDITION for missing assets, CANCELLED / DEADLINE_EXCEEDED when stopped).
   grpc::Status render(const v1::RenderTileRequest& request, v1::RenderTileResponse& response,
                       const RenderControl& control);
-  // The same, the pixels left as rendered instead of encoded (a caller in this process).
+  // The same, the pixels left as rendered instead of encoded (a caller in this process). Given a
+  // `film` (the frame's, in this process) that covers the rect with the render's AOVs, the
+  // sub-tiles are pasted straight into it instead, and an OK call leaves `pixels` empty (no
+  // rect): no buffer of the call's own, no copy at the merge. Into a film, a call returns only
+  // once none of its render threads can write to it any more, stopped or not.
   grpc::Status render(const v1::RenderTileRequest& request, TileBuffer& pixels,
-                      v1::TileStats& stats, const RenderControl& control);
+                      v1::TileStats& stats, const RenderControl& control, TileBuffer* film = nullptr);
 
   // Caches a scene built elsewhere in this process from `job` (its models loaded by `models`) as
   // if a call had prepared it, and returns the cached one (the earlier one when the hash was
@@ -88,7 +92,7 @@ class TileRenderer {
                               const SceneCache::Cancelled& cancelled);
   // The body of render(): logs nothing, render() logs what it returns.
   grpc::Status render_rect(const v1::RenderTileRequest& request, TileBuffer& pixels,
-                           v1::TileStats& stats, const RenderControl& control);
+                           v1::TileStats& stats, const RenderControl& control, TileBuffer* film);
   void log_call(const v1::RenderTileRequest& request, const grpc::Status& status,
                 const v1::TileStats& stats) const;
 

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <atomic>
 #include <cstring>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -17,10 +19,14 @@
 #include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
 #include "server/common/tile_codec.h"
+#include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/jobs/frame_assembly.h"
 #include "server/scheduler/jobs/job_merger.h"
+#include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/store/job_store.h"
+#include "tests/support/eventually.h"
 #include "tests/support/farm_cli_fixture.h"
+#include "tests/support/in_process_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 
@@ -180,6 +186,116 @@ TEST(EmbeddedFarmTest, CheapTilesGoOutInRowBatchesAndThePixelsStayTheSame) {
       EXPECT_GT(calls.size(), 8u) << "batches are at most one row";
     }
   }
+}
+
+// An in-process worker that counts how its calls came back: written into the frame's film
+// (RenderedTiles::in_film) or as pixels of their own.
+class CountingWorker final : public TileWorker {
+ public:
+  explicit CountingWorker(const TileRendererOptions& options) : inner_(options) {}
+  grpc::Status render(const v1::RenderTileRequest& request, RenderedTiles& result,
+                      std::chrono::system_clock::time_point deadline, TileCancel& cancel) override {
+    const grpc::Status status = inner_.render(request, result, deadline, cancel);
+    if (status.ok()) ++(result.in_film ? in_film : with_pixels);
+    return status;
+  }
+  bool probe(std::chrono::milliseconds) override { return true; }
+  std::string describe() const override { return "in-process"; }
+  std::atomic<int> in_film{0}, with_pixels{0};
+
+ private:
+  InProcessTileWorker inner_;
+};
+
+// The embedded farm's worker pastes a frame's sub-tiles straight into the film the merge writes
+// (FrameAssembly::film_to_render_into): every call of a frame without passes comes back written
+// into it, none with a buffer of its own to copy, and the pixels are render_frame's. A frame of
+// sample passes (folded in order), and a worker whose replies a spot check may hold, get no
+// film: their calls bring their pixels as before, to the same frame.
+TEST(EmbeddedFarmTest, ItsWorkerRendersStraightIntoTheFilmUnlessPassesOrSpotChecksNeedItsOwnPixels) {
+  struct Case {
+    std::string what, engine;
+    int pass_spp;
+    double verify_fraction;
+    bool into_film;
+  };
+  for (const Case& c : {Case{"raster", "raster", 0, 0.0, true}, Case{"path, one pass", "path", 0, 0.0, true},
+                        Case{"path in passes", "path", 1, 0.0, false},
+                        Case{"spot checks on", "raster", 0, 1.0, false}}) {
+    SCOPED_TRACE(c.what);
+    test::TempDir dir;
+    nlohmann::json job = nlohmann::json::parse(test::cornell_job_json(c.engine, 96, 64, 2));
+    job["render"]["tile_size"] = 16;
+    if (c.pass_spp > 0) job["render"]["pass_spp"] = c.pass_spp;
+    const v1::JobSpec spec = test::make_job_spec(job.dump(), test::cornell_assets(), "cornell.json");
+    SchedulerOptions options;
+    options.data_dir = dir / "farm";
+    options.log_level = LogLevel::warn;
+    options.in_memory = true;
+    options.exr_type = ExrPixelType::Float;
+    options.verify_fraction = c.verify_fraction;
+    options.batch_target = std::chrono::milliseconds(0);  // a call a unit: several calls a frame
+    SchedulerCore core(options);
+    test::add_cornell_assets(core);
+    const auto worker = std::make_shared<CountingWorker>(test::in_process_worker_options(dir / "farm", dir / "worker", 2));
+    core.add_worker(worker);
+    const std::string id = core.submit(core.check(spec)).job_id();
+    test::eventually([&] { return is_final(core.get_job(id)->state()); }, std::chrono::seconds(120));
+    ASSERT_EQ(core.get_job(id)->state(), v1::JOB_STATE_SUCCEEDED) << core.get_job(id)->failure_reason();
+    const int calls = worker->in_film + worker->with_pixels;
+    EXPECT_GT(calls, 4);
+    EXPECT_EQ(worker->in_film, c.into_film ? calls : 0);
+    const std::optional<std::filesystem::path> exr = core.result_file(id, false);
+    ASSERT_TRUE(exr.has_value());
+    expect_same_pixels(read_exr(*exr), render_locally(spec), c.what);
+  }
+}
+
+// What the in-memory film takes from a call that rendered into it: the part alone, its pixels
+// being there already; a film it never handed out (or of another frame) is refused, and only the
+// in-memory assembly hands films out, for frames without passes.
+TEST(FrameAssemblyTest, BatchesRenderedIntoTheMemoryFilmAreRecordedNotCopied) {
+  const v1::JobSpec spec = test::cornell_job_spec("whitted", 40, 30, 1);
+  const Job job = parse_job(spec.job_json(), test::kSource / "jobs" / spec.file_name());
+  const PreparedScene scene(build_scene(job));
+  const FrameLayout frame{Rect{0, 0, 40, 30}, job.render.aovs};
+  const TileBuffer local = render_frame(scene, job.render);
+  InMemoryAssembly memory;
+  const std::shared_ptr<TileBuffer> film = memory.film_to_render_into("job", frame);
+  ASSERT_TRUE(film);
+  EXPECT_EQ(film->rect(), frame.image);
+  EXPECT_EQ(memory.film_to_render_into("job", frame), film) << "one film a frame";
+  std::vector<FramePart> parts;
+  const std::vector<Rect> tiles = split_into_tiles(40, 30, 13);
+  for (std::uint32_t i = 0; i < tiles.size(); ++i) {
+    TileBuffer tile;
+    render_tile(scene, job.render, tiles[i], tile);
+    film->paste(tile);  // as the in-process worker's render threads do
+    RenderedTiles rendered;
+    encode_stats(tile.stats(), *rendered.response.mutable_stats());
+    rendered.film = film;
+    rendered.in_film = true;
+    memory.add("job", frame, {i, 0}, rendered);
+    parts.push_back({i, 0});
+  }
+  const TileBuffer merged = memory.assemble("job", frame, parts);
+  expect_same_pixels(merged, local, "rendered into the film");
+  EXPECT_EQ(merged.stats().rays, local.stats().rays);
+
+  RenderedTiles stray;
+  stray.film = std::make_shared<TileBuffer>(frame.image, frame.aovs);  // not the assembly's
+  stray.in_film = true;
+  EXPECT_THROW(memory.add("other", frame, {0, 0}, stray), std::runtime_error);
+
+  FrameLayout folded = frame;
+  folded.passes = {SampleRange{0, 1}, SampleRange{1, 2}};
+  EXPECT_EQ(memory.film_to_render_into("job", folded), nullptr);
+  test::TempDir dir;
+  TileFileAssembly files(dir / "tiles");
+  EXPECT_EQ(files.film_to_render_into("job", frame), nullptr);
+  RenderedTiles written;
+  written.in_film = true;
+  EXPECT_THROW(files.add("job", frame, {0, 0}, written), std::logic_error);
 }
 
 // Both places a job's tiles wait for the merge give the frame render_frame gives, from encoded

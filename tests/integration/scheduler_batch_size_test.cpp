@@ -8,11 +8,11 @@
 #include <set>
 #include <thread>
 
-#include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
 #include "server/scheduler/store/job_store.h"
 #include "server/scheduler/workers/tile_worker.h"
+#include "tests/support/in_process_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 
@@ -54,12 +54,9 @@ std::size_t calls_for_job(bool report_cpu) {
     options.log_level = LogLevel::warn;
     options.batch_target = std::chrono::milliseconds(200);
     SchedulerCore core(options);
-    for (const auto& [path, file] : test::cornell_assets()) core.assets().add(read_whole_file(file, "asset"));
-    TileRendererOptions r;
-    r.blobs_dir = dir / "farm" / "assets";
-    r.cache_dir = dir / "worker";
-    r.threads = 2;
-    core.add_worker(std::make_shared<CrowdedWorker>(r, report_cpu));
+    test::add_cornell_assets(core);
+    core.add_worker(std::make_shared<CrowdedWorker>(test::in_process_worker_options(dir / "farm", dir / "worker", 2),
+                                                    report_cpu));
     id = core.submit(core.check(spec)).job_id();
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (core.get_job(id)->state() != v1::JOB_STATE_SUCCEEDED && std::chrono::steady_clock::now() < give_up) {

@@ -18,10 +18,10 @@
 #include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
 #include "server/common/job_state.h"
-#include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
 #include "tests/support/eventually.h"
+#include "tests/support/in_process_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/pixel_diff.h"
 #include "tests/support/run_command.h"
@@ -103,17 +103,10 @@ class SchedulerLostWorkerTest : public ::testing::Test {
   }
 
   std::shared_ptr<TileWorker> honest_renderer(const std::string& name) const {
-    TileRendererOptions r;
-    r.blobs_dir = dir_ / "farm" / "assets";
-    r.cache_dir = dir_ / name;
-    r.threads = 1;
-    r.log_level = LogLevel::off;
-    return std::make_shared<InProcessTileWorker>(r);
+    return std::make_shared<InProcessTileWorker>(test::in_process_worker_options(dir_ / "farm", dir_ / name, 1, LogLevel::off));
   }
 
-  static void add_assets(SchedulerCore& core) {
-    for (const auto& [path, file] : test::cornell_assets()) core.assets().add(read_whole_file(file, "asset"));
-  }
+  static void add_assets(SchedulerCore& core) { test::add_cornell_assets(core); }
 
   static bool final_job(SchedulerCore& core, const std::string& id) {
     const std::optional<v1::Job> job = core.get_job(id);

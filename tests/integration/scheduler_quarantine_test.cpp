@@ -13,11 +13,11 @@
 #include "renderer/job/scene_builder.h"
 #include "renderer/render_frame.h"
 #include "server/common/job_state.h"
-#include "server/common/read_whole_file.h"
 #include "server/embedded/in_process_tile_worker.h"
 #include "server/scheduler/scheduler_core.h"
 #include "tests/support/eventually.h"
 #include "tests/support/fake_worker.h"
+#include "tests/support/in_process_worker.h"
 #include "tests/support/job_specs.h"
 #include "tests/support/temp_dir.h"
 
@@ -59,12 +59,8 @@ TEST(SchedulerQuarantineTest, AWorkerWhoseRepliesBreakTheRulesIsQuarantinedAndIt
   options.batch_target = std::chrono::milliseconds(0);
   options.max_attempts = 5;
   SchedulerCore core(options);
-  for (const auto& [path, file] : test::cornell_assets()) core.assets().add(read_whole_file(file, "asset"));
-  TileRendererOptions r;
-  r.blobs_dir = dir / "farm" / "assets";
-  r.cache_dir = dir / "liar";
-  r.threads = 1;
-  r.log_level = LogLevel::off;
+  test::add_cornell_assets(core);
+  TileRendererOptions r = test::in_process_worker_options(dir / "farm", dir / "liar", 1, LogLevel::off);
   const std::string liar = core.add_worker(std::make_shared<LyingWorker>(r, test::Lie::MissingPlane));
   const std::string id = core.submit(core.check(spec)).job_id();
 

@@ -307,6 +307,10 @@ int Dispatcher::batch_size(const std::string& job_id, int queued_tiles) const {
 grpc::Status Dispatcher::render(WorkerEntry& w, const InFlight& call, RenderedTiles& result) {
   try {
     const std::shared_ptr<const JobInfo> info = jobs_.get(call.batch.job_id);
+    // A reply a spot check may hold must bring its own pixels; a check's too (compared, not kept).
+    if (!call.check && !spot_checks_.may_hold(w)) {
+      result.film = assembly_.film_to_render_into(call.batch.job_id, info->frame(call.batch.frame));
+    }
     return render_units(w, {call.batch, *info, store_.leases().scheduler(), options_.tile_deadline, *call.cancel},
                         assets_, result);
   } catch (const DiskFull&) {
@@ -365,9 +369,9 @@ void Dispatcher::accept(WorkerEntry& w, const InFlight& call, RenderedTiles& res
     store_.units().batch_requeue(batch.job_id, batch.first, batch.count, w.id);
     return;
   }
-  // Pixels from this process were rendered here; a reply from anywhere else is checked before
-  // anything of it is kept.
-  if (!result.pixels) {
+  // Pixels from this process were rendered here (handed over, or written into the film); a reply
+  // from anywhere else is checked before anything of it is kept.
+  if (!result.pixels && !result.in_film) {
     if (const std::string problem = check_tile_reply(result.response, *settings, batch.rect); !problem.empty()) {
       unit_failures_.impossible_result(w, batch, problem);
       return;

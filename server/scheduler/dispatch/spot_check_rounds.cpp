@@ -46,11 +46,17 @@ bool SpotCheckRounds::holds_locked(const std::shared_ptr<SpotCheck>& check) cons
   return std::find(checks_.begin(), checks_.end(), check) != checks_.end();
 }
 
+const SpotCheckChooser& SpotCheckRounds::chooser_for(const WorkerEntry& w) const {
+  // Spot checks by default for workers on other hosts (their replies crossed a network).
+  return on_this_host(w.worker->describe()) ? chooser_ : remote_chooser_;
+}
+
+bool SpotCheckRounds::may_hold(const WorkerEntry& w) const { return chooser_for(w).enabled(); }
+
 bool SpotCheckRounds::hold(const WorkerEntry& w, const UnitBatch& batch, const RenderSettings& settings,
                            RenderedTiles& result) {
   const std::string worker = w.worker->describe();
-  // Spot checks by default for workers on other hosts (their replies crossed a network).
-  const SpotCheckChooser& chooser = on_this_host(worker) ? chooser_ : remote_chooser_;
+  const SpotCheckChooser& chooser = chooser_for(w);
   if (!chooser.enabled()) return false;
   std::optional<UnitSpan> span;
   if (const std::optional<v1::Job> job = store_.jobs().get_job(batch.job_id)) {

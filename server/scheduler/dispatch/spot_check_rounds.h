@@ -63,6 +63,9 @@ class SpotCheckRounds {
   // queued again when the rounds are stopped (true: taken care of, the reply taken); false when
   // nothing of it is chosen or no other worker is there to check it on: keep it now.
   bool hold(const WorkerEntry& w, const UnitBatch& batch, const RenderSettings& settings, RenderedTiles& result);
+  // Whether hold() may keep a reply of this worker's for a check (spot checks on for its host):
+  // such a reply must come back as pixels of its own, not written into the frame's film.
+  bool may_hold(const WorkerEntry& w) const;
   // A held check for worker `worker_id` to render (one it has not rendered or failed), now taken;
   // null when there is none. The batch to render is the check's span.
   std::shared_ptr<SpotCheck> next_for(const std::string& worker_id);
@@ -87,6 +90,7 @@ class SpotCheckRounds {
   // What `j` (an agreement) decides about `check`, which is no longer held.
   void settle(SpotCheck& check, const Judgement& j, const Opinion& agreeing);
   bool holds_locked(const std::shared_ptr<SpotCheck>& check) const;
+  const SpotCheckChooser& chooser_for(const WorkerEntry& w) const;
 
   const SchedulerOptions& options_;
   JobStore& store_;

@@ -19,11 +19,17 @@ grpc::Status render_units(WorkerEntry& w, const UnitCall& call, const AssetStore
   request.set_pass(batch.pass);
   request.set_scheduler_id(call.scheduler_id);
   const auto deadline = std::chrono::system_clock::now() + call.deadline_per_unit * batch.count;
+  // A call again starts from an empty result, with the film it may render into (dispatcher.cpp).
+  const auto fresh_result = [&result] {
+    std::shared_ptr<TileBuffer> film = std::move(result.film);
+    result = RenderedTiles();
+    result.film = std::move(film);
+  };
   grpc::Status status = w.worker->render(request, result, deadline, call.cancel);
   if (status.error_code() == grpc::StatusCode::NOT_FOUND && !request.has_job() && !call.cancel.cancelled()) {
     // The worker no longer holds the scene (evicted, or a new process at the address).
     *request.mutable_job() = spec;
-    result = RenderedTiles();
+    fresh_result();
     status = w.worker->render(request, result, deadline, call.cancel);
   }
   if (status.error_code() == grpc::StatusCode::FAILED_PRECONDITION && !call.cancel.cancelled()) {
@@ -33,7 +39,7 @@ grpc::Status render_units(WorkerEntry& w, const UnitCall& call, const AssetStore
       asset.set_sha256(ref.sha256());
       asset.set_data(read_whole_file(assets.path_of(ref.sha256()), "asset"));
     }
-    result = RenderedTiles();
+    fresh_result();
     status = w.worker->render(request, result, deadline, call.cancel);
   }
   if (status.ok() && request.has_job()) w.scenes_sent.insert(call.job.scene_hash);

@@ -48,6 +48,7 @@ DamagedParts::DamagedParts(std::vector<Part> parts) : std::runtime_error(describ
 
 void TileFileAssembly::add(const std::string& job_id, const FrameLayout&, const FramePart& part,
                            RenderedTiles& tiles) {
+  if (tiles.in_film) throw std::logic_error("TileFileAssembly::add: a batch written into a film it never handed out");
   // A worker in this process hands over pixels, not TileData: the file needs them encoded.
   if (tiles.pixels) {
     encode_tile(*tiles.pixels, *tiles.response.mutable_tile());
@@ -120,8 +121,35 @@ void TileFileAssembly::read_parts(
   if (!damaged.empty()) throw DamagedParts(std::move(damaged));
 }
 
+std::shared_ptr<TileBuffer> InMemoryAssembly::film_to_render_into(const std::string& job_id,
+                                                                  const FrameLayout& frame) {
+  if (frame.folded()) return nullptr;
+  std::lock_guard lock(mutex_);
+  std::shared_ptr<Film>& slot = films_[{job_id, frame.frame}];
+  if (!slot) slot = std::make_shared<Film>();
+  // The batches cover the image exactly: no clearing needed.
+  if (slot->film.rect().empty()) slot->film.reset_for_overwrite(frame.image, frame.aovs);
+  return std::shared_ptr<TileBuffer>(slot, &slot->film);
+}
+
 void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, const FramePart& part,
                            RenderedTiles& tiles) {
+  if (tiles.in_film) {
+    // Its pixels are in the film already (film_to_render_into): only the part is recorded.
+    std::shared_ptr<Film> f;
+    {
+      std::lock_guard lock(mutex_);
+      const auto it = films_.find({job_id, frame.frame});
+      if (it != films_.end()) f = it->second;
+    }
+    if (!f || tiles.film.get() != &f->film) {
+      throw std::runtime_error(fmt::format("result {} of job {} was rendered into a film frame {} no longer has",
+                                           part.part, job_id, frame.frame));
+    }
+    std::lock_guard lock(f->mutex);
+    f->parts.emplace_back(part.part, decode_stats(tiles.response.stats()));
+    return;
+  }
   TileBuffer buffer = pixels_of(tiles);
   check_fits(buffer, frame, job_id, part.part);
   std::shared_ptr<Film> f;
@@ -237,7 +265,10 @@ TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayo
   }
   if (frame.folded()) f->fold.resolve(f->film);
   f->film.stats() = stats;
-  return std::move(f->film);
+  // Taken whole; what stays is an empty film (no rect), never one moved from.
+  TileBuffer merged = std::move(f->film);
+  f->film = TileBuffer();
+  return merged;
 }
 
 std::uintmax_t InMemoryAssembly::remove_job(const std::string& job_id) {

@@ -4,7 +4,8 @@
 // - TileFileAssembly (the farm): each batch is a file (TileResults) written before its tiles are
 //   marked done, so a restarted scheduler merges what an earlier process rendered.
 // - InMemoryAssembly (the embedded farm of `farm render`): each batch is pasted into the job's
-//   film as it arrives (a frame of sample passes: folded, see below). Nothing is encoded, written,
+//   film as it arrives, or rendered straight into it by the worker in this process
+//   (film_to_render_into); a frame of sample passes is folded, see below. Nothing is encoded, written,
 //   read back or decoded; nothing survives the process, which `farm render` does not need (its
 //   job store lives in memory too).
 //
@@ -61,6 +62,9 @@ class FrameAssembly {
   // when it cannot: the batch is then not marked done.
   virtual void add(const std::string& job_id, const FrameLayout& frame, const FramePart& part,
                    RenderedTiles& tiles) = 0;
+  // The frame's film, for a worker in this process to render a batch straight into (its call
+  // then comes back `in_film`, and add() only records it); null where batches are kept apart.
+  virtual std::shared_ptr<TileBuffer> film_to_render_into(const std::string&, const FrameLayout&) { return nullptr; }
   // The job's frame from its parts (each once, as the job store lists them: every pass's), with
   // the render statistics summed. DamagedParts (every such part, once all are read) when parts'
   // kept data is damaged; std::runtime_error when a part was never kept or does not fit.
@@ -132,6 +136,11 @@ class InMemoryAssembly final : public FrameAssembly {
  public:
   void add(const std::string& job_id, const FrameLayout& frame, const FramePart& part,
            RenderedTiles& tiles) override;
+  // A frame without passes to fold: its film, made now if no batch has come yet. The embedded
+  // worker's sub-tiles are pasted into it as they finish, so a batch needs no buffer of its own
+  // and the dispatcher's thread copies nothing (the 100-cow grid: 19 MiB of batch buffers at the
+  // peak, and 33 MB copied, gone).
+  std::shared_ptr<TileBuffer> film_to_render_into(const std::string& job_id, const FrameLayout& frame) override;
   TileBuffer assemble(const std::string& job_id, const FrameLayout& frame,
                       const std::vector<FramePart>& parts) override;
   bool reads_parts_back() const override { return false; }

@@ -41,6 +41,12 @@ class TileCancel {
 struct RenderedTiles {
   v1::RenderTileResponse response;
   std::optional<TileBuffer> pixels;
+  // Handed to the call by the dispatcher when the frame's film is kept in this process
+  // (FrameAssembly::film_to_render_into): a worker in this process may paste the batch's pixels
+  // straight into it, and says so with `in_film` (no `pixels` then). The call holds the film
+  // alive; a remote worker ignores it.
+  std::shared_ptr<TileBuffer> film;
+  bool in_film = false;
 };
 
 class TileWorker {
