@@ -168,7 +168,9 @@ void add_render_bench(CLI::App& bench, CommandTable& commands) {
   auto o = std::make_shared<RenderBenchOptions>();
   CLI::App* render = bench.add_subcommand(
       "render", "The whole `farm render` command (process start to exit) against the bare engine frame "
-                "on the same scene: the lab's cow job and a 100-cow grid at 1920x1080, 1 and 2 threads");
+                "on the same scene: the lab's cow job and a 100-cow grid at 1920x1080, 1 and 2 threads; "
+                "with the command's cores, kernel time (its page faults: on a VM, what moves most between "
+                "runs) and peak memory");
   render->add_option("--cow-job", o->cow_job, "The cow job")->capture_default_str();
   render->add_option("--asset-root", o->asset_root, "The cow job's asset root")->capture_default_str();
   add_thread_counts_option(*render, o->threads, "Thread counts")->capture_default_str();

@@ -237,7 +237,8 @@ TEST(EmbeddedFarmTest, ItsWorkerRendersStraightIntoTheFilmUnlessPassesOrSpotChec
     options.batch_target = std::chrono::milliseconds(0);  // a call a unit: several calls a frame
     SchedulerCore core(options);
     test::add_cornell_assets(core);
-    const auto worker = std::make_shared<CountingWorker>(test::in_process_worker_options(dir / "farm", dir / "worker", 2));
+    const auto worker =
+        std::make_shared<CountingWorker>(test::in_process_worker_options(dir / "farm", dir / "worker", 2));
     core.add_worker(worker);
     const std::string id = core.submit(core.check(spec)).job_id();
     test::eventually([&] { return is_final(core.get_job(id)->state()); }, std::chrono::seconds(120));

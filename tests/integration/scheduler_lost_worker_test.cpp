@@ -103,7 +103,8 @@ class SchedulerLostWorkerTest : public ::testing::Test {
   }
 
   std::shared_ptr<TileWorker> honest_renderer(const std::string& name) const {
-    return std::make_shared<InProcessTileWorker>(test::in_process_worker_options(dir_ / "farm", dir_ / name, 1, LogLevel::off));
+    return std::make_shared<InProcessTileWorker>(
+        test::in_process_worker_options(dir_ / "farm", dir_ / name, 1, LogLevel::off));
   }
 
   static void add_assets(SchedulerCore& core) { test::add_cornell_assets(core); }
