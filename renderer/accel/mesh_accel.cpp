@@ -115,7 +115,7 @@ class BvhAccel final : public MeshAccel {
         const std::uint32_t t = order[leaf.first + lane];
         const glm::uvec3& tri = triangles.triangles[t];
         blocks_[k].triangles.set(static_cast<int>(lane), triangles.positions[tri.x], triangles.positions[tri.y],
-                        triangles.positions[tri.z]);
+                                 triangles.positions[tri.z]);
         blocks_[k].ids[lane] = t;
       }
     }
@@ -147,8 +147,9 @@ class BvhAccel final : public MeshAccel {
       if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
         const std::uint32_t* ids = blocks_[leaf.number].ids.data();
-        const unsigned met = intersect_triangle4_packet(packet_rays, blocks_[leaf.number].triangles, static_cast<int>(leaf.count),
-                                                        ids, t_max, leaf_lanes, leaf_hits);
+        const unsigned met = intersect_triangle4_packet(packet_rays, blocks_[leaf.number].triangles,
+                                                        static_cast<int>(leaf.count), ids, t_max, leaf_lanes,
+                                                        leaf_hits);
         for (unsigned rest = met; rest; rest &= rest - 1) {
           const int i = __builtin_ctz(rest);
           const unsigned bit = 1u << i;
@@ -195,14 +196,17 @@ class BvhAccel final : public MeshAccel {
     return bvh_.any_packet(rays, lanes, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
       if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
-        return intersect_triangle4_packet(packet_rays, blocks_[leaf.number].triangles, static_cast<int>(leaf.count),
-                                          blocks_[leaf.number].ids.data(), t_max, leaf_lanes, leaf_hits);
+        const LeafBlock& block = blocks_[leaf.number];
+        return intersect_triangle4_packet(packet_rays, block.triangles, static_cast<int>(leaf.count), block.ids.data(),
+                                          t_max, leaf_lanes, leaf_hits);
       }
       unsigned met = 0;
       for (; leaf_lanes; leaf_lanes &= leaf_lanes - 1) {
         const int i = __builtin_ctz(leaf_lanes);
         __m128 t, u, v;
-        if (intersect_triangle4(lane_rays[i], blocks_[leaf.number].triangles, t_max[i], t, u, v) != 0) met |= 1u << i;
+        if (intersect_triangle4(lane_rays[i], blocks_[leaf.number].triangles, t_max[i], t, u, v) != 0) {
+          met |= 1u << i;
+        }
       }
       return met;
     });
