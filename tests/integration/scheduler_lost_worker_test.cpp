@@ -107,8 +107,6 @@ class SchedulerLostWorkerTest : public ::testing::Test {
         test::in_process_worker_options(dir_ / "farm", dir_ / name, 1, LogLevel::off));
   }
 
-  static void add_assets(SchedulerCore& core) { test::add_cornell_assets(core); }
-
   static bool final_job(SchedulerCore& core, const std::string& id) {
     const std::optional<v1::Job> job = core.get_job(id);
     return job && is_final(job->state());
@@ -121,7 +119,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkerCrashesMoreOftenThanMaxAttemptsS
   SchedulerOptions o = options();
   ASSERT_EQ(o.max_attempts, 3);  // the default
   SchedulerCore core(o);
-  add_assets(core);
+  test::add_cornell_assets(core);
   constexpr int kLosses = 5;  // more than max_attempts, fewer than max_lost_worker_attempts
   ASSERT_LT(kLosses, o.max_lost_worker_attempts);
   auto crashing = std::make_shared<CrashingWorker>(honest_renderer("w"), kLosses, "crashing");
@@ -146,7 +144,7 @@ TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkerCrashesMoreOftenThanMaxAttemptsS
 
 TEST_F(SchedulerLostWorkerTest, ATileWhoseWorkersStopAndAreDroppedMoreOftenThanMaxAttemptsStillSucceeds) {
   SchedulerCore core(options());
-  add_assets(core);
+  test::add_cornell_assets(core);
   const std::string id = core.submit(core.check(one_tile_job())).job_id();
   // Four workers in turn take the tile and stop answering; each is dropped as the heartbeat
   // monitor drops a silent one, which cancels its call.
@@ -178,7 +176,7 @@ TEST_F(SchedulerLostWorkerTest, ATileThatCrashesEveryWorkerFailsItsJobAtTheLostW
   SchedulerOptions o = options();
   o.max_lost_worker_attempts = 4;
   SchedulerCore core(o);
-  add_assets(core);
+  test::add_cornell_assets(core);
   auto first = std::make_shared<CrashingWorker>(honest_renderer("a"), -1, "crashing-a");
   auto second = std::make_shared<CrashingWorker>(honest_renderer("b"), -1, "crashing-b");
   core.add_worker(first);

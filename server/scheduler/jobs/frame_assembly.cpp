@@ -121,6 +121,12 @@ void TileFileAssembly::read_parts(
   if (!damaged.empty()) throw DamagedParts(std::move(damaged));
 }
 
+std::shared_ptr<InMemoryAssembly::Film> InMemoryAssembly::film_of(const std::string& job_id, int frame) {
+  std::lock_guard lock(mutex_);
+  const auto it = films_.find({job_id, frame});
+  return it != films_.end() ? it->second : nullptr;
+}
+
 std::shared_ptr<TileBuffer> InMemoryAssembly::film_to_render_into(const std::string& job_id,
                                                                   const FrameLayout& frame) {
   if (frame.folded()) return nullptr;
@@ -136,12 +142,7 @@ void InMemoryAssembly::add(const std::string& job_id, const FrameLayout& frame, 
                            RenderedTiles& tiles) {
   if (tiles.in_film) {
     // Its pixels are in the film already (film_to_render_into): only the part is recorded.
-    std::shared_ptr<Film> f;
-    {
-      std::lock_guard lock(mutex_);
-      const auto it = films_.find({job_id, frame.frame});
-      if (it != films_.end()) f = it->second;
-    }
+    const std::shared_ptr<Film> f = film_of(job_id, frame.frame);
     if (!f || tiles.film.get() != &f->film) {
       throw std::runtime_error(fmt::format("result {} of job {} was rendered into a film frame {} no longer has",
                                            part.part, job_id, frame.frame));
@@ -234,12 +235,7 @@ void InMemoryAssembly::discard(const std::string& job_id, std::uint32_t part) {
 
 TileBuffer InMemoryAssembly::assemble(const std::string& job_id, const FrameLayout& frame,
                                       const std::vector<FramePart>& parts) {
-  std::shared_ptr<Film> f;
-  {
-    std::lock_guard lock(mutex_);
-    const auto it = films_.find({job_id, frame.frame});
-    if (it != films_.end()) f = it->second;
-  }
+  const std::shared_ptr<Film> f = film_of(job_id, frame.frame);
   if (!f) throw std::runtime_error(fmt::format("job {}: no tiles were kept for frame {}", job_id, frame.frame));
   std::lock_guard lock(f->mutex);
   std::vector<std::uint32_t> kept;

@@ -177,6 +177,8 @@ class InMemoryAssembly final : public FrameAssembly {
   };
   // Folds every waiting part that can be, until none can. Under f.mutex.
   static void fold_waiting(Film& f, const FrameLayout& frame);
+  // The frame's film, or null when none is kept. Takes mutex_.
+  std::shared_ptr<Film> film_of(const std::string& job_id, int frame);
   std::mutex mutex_;
   std::map<std::pair<std::string, int>, std::shared_ptr<Film>> films_;  // by job and frame
 };
