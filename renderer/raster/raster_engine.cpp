@@ -44,10 +44,10 @@ struct TextureAttributes {
 
 // A triangle's uv length per unit of length on it (texture_footprint's measure, the same in
 // view and world space, and unchanged by clipping, which keeps the plane and the uv map): the
-// square root of its uv area over its area.
-float uv_per_length(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, glm::vec2 ua, glm::vec2 ub,
+// square root of its uv area over its area, from its corners in view space.
+float uv_per_length(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, glm::vec2 ua, glm::vec2 ub,
                     glm::vec2 uc) {
-  const float area = glm::length(glm::cross(b.view_position - a.view_position, c.view_position - a.view_position));
+  const float area = glm::length(glm::cross(b - a, c - a));
   const glm::vec2 e1 = ub - ua, e2 = uc - ua;
   const float uv_area = std::fabs(e1.x * e2.y - e1.y * e2.x);
   const float ratio = area > 0.0f ? std::sqrt(uv_area / area) : 0.0f;
@@ -100,11 +100,11 @@ class RegionRasterizer {
   [[gnu::always_inline]] void draw(const ScreenTriangle& t) {
     const ScreenVertex &s0 = frame_.vertex(t.v[0]), &s1 = frame_.vertex(t.v[1]),
                        &s2 = frame_.vertex(t.v[2]);
-    const FixedPoint &p0 = s0.position, &p1 = s1.position, &p2 = s2.position;
-    const int x_begin = std::max({region_.x0, t.x0, first_sample_pixel(std::min({p0.x, p1.x, p2.x}), offset_.x)});
-    const int x_end = std::min({region_.x1 - 1, t.x1, last_sample_pixel(std::max({p0.x, p1.x, p2.x}), offset_.x)});
-    const int y_begin = std::max({region_.y0, t.y0, first_sample_pixel(std::min({p0.y, p1.y, p2.y}), offset_.y)});
-    const int y_end = std::min({region_.y1 - 1, t.y1, last_sample_pixel(std::max({p0.y, p1.y, p2.y}), offset_.y)});
+    const FixedPoint p0 = s0.position.fixed(), p1 = s1.position.fixed(), p2 = s2.position.fixed();
+    const int x_begin = std::max({region_.x0, int{t.x0}, first_sample_pixel(std::min({p0.x, p1.x, p2.x}), offset_.x)});
+    const int x_end = std::min({region_.x1 - 1, int{t.x1}, last_sample_pixel(std::max({p0.x, p1.x, p2.x}), offset_.x)});
+    const int y_begin = std::max({region_.y0, int{t.y0}, first_sample_pixel(std::min({p0.y, p1.y, p2.y}), offset_.y)});
+    const int y_end = std::min({region_.y1 - 1, int{t.y1}, last_sample_pixel(std::max({p0.y, p1.y, p2.y}), offset_.y)});
     if (x_begin > x_end || y_begin > y_end) return;
 
     // Edge i is opposite vertex i, so its value is vertex i's barycentric weight times the area.
@@ -117,11 +117,11 @@ class RegionRasterizer {
     const float inv_area = 1.0f / static_cast<float>(area);
     const Material* material = frame_.materials[t.material & kMaterialIndex];
     const bool front_side = (t.material & kBackFace) == 0;
-    const ClipVertex &a0 = s0.attributes, &a1 = s1.attributes, &a2 = s2.attributes;
     const TextureVertex t0 = kTextured ? frame_.texture_vertex(t.v[0]) : TextureVertex{},
                         t1 = kTextured ? frame_.texture_vertex(t.v[1]) : TextureVertex{},
                         t2 = kTextured ? frame_.texture_vertex(t.v[2]) : TextureVertex{};
-    const float uv_per_world = kTextured ? uv_per_length(a0, a1, a2, t0.uv, t1.uv, t2.uv) : 0.0f;
+    const float uv_per_world =
+        kTextured ? uv_per_length(s0.view_position, s1.view_position, s2.view_position, t0.uv, t1.uv, t2.uv) : 0.0f;
 
     for (int y = y_begin; y <= y_end; ++y) {
       const FixedPoint start{x_begin * kSubpixelScale + offset_.x, y * kSubpixelScale + offset_.y};
@@ -147,9 +147,9 @@ class RegionRasterizer {
         depth_[i] = depth;
         material_[i] = material;
         attributes_[i].view_position =
-            (q0 * a0.view_position + q1 * a1.view_position + q2 * a2.view_position) * inv_q;
+            (q0 * s0.view_position + q1 * s1.view_position + q2 * s2.view_position) * inv_q;
         attributes_[i].world_normal =
-            (q0 * a0.world_normal + q1 * a1.world_normal + q2 * a2.world_normal) * inv_q;
+            (q0 * s0.world_normal + q1 * s1.world_normal + q2 * s2.world_normal) * inv_q;
         if constexpr (kTextured) {
           texture_attributes_[i].uv = uv;
           texture_attributes_[i].uv_per_world = uv_per_world;
@@ -291,9 +291,9 @@ StopReason render_tile_from_frame(const RasterFrame& frame, const PreparedScene&
         for (std::uint32_t i = first; i < last; ++i) {
           if (poll()) return stop();
           // The triangles of a bin sit far apart in memory: fetch ahead to hide the latency.
-          if (i + 8 < last) __builtin_prefetch(frame.bin_triangles[i + 8]);
-          if (i + 4 < last) frame.prefetch_vertices(*frame.bin_triangles[i + 4]);
-          raster.draw(*frame.bin_triangles[i]);
+          if (i + 8 < last) __builtin_prefetch(&frame.triangle(frame.bin_triangles[i + 8]));
+          if (i + 4 < last) frame.prefetch_vertices(frame.triangle(frame.bin_triangles[i + 4]));
+          raster.draw(frame.triangle(frame.bin_triangles[i]));
         }
         shade_region(raster, frame, scene.scene(), region, sample_offset(s), s == 0, out);
       }

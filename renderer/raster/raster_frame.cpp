@@ -39,6 +39,7 @@ struct MeshRange {
   const Mesh* mesh;
   std::size_t first_vertex;
   std::size_t first_triangle;
+  glm::mat4 to_clip;  // model to clip space: the vertex stage's, and clipping's again
   bool outside_view = false;  // wholly outside the view: its vertices and triangles are skipped
 };
 
@@ -58,23 +59,31 @@ TextureVertex texture_vertex_at(const glm::vec3& p, const glm::vec3& a, const gl
 // What one set-up chunk produces, merged in chunk order afterwards. The chunks lie side by side
 // in one vector and two threads write the counts of neighbouring ones for every triangle: each on
 // cache lines of its own, or the lines bounce between the cores (false sharing, issue #32).
+// The merge files each chunk's triangles in their bins from their pixel bounds, walking them in
+// scene order; the set-up only counts the entries per bin. (A list of (bin, triangle) pairs made
+// by the set-up cost 8 bytes an entry of fresh memory, 4.4 MB for a 1080p frame of the grid.)
 struct alignas(64) SetupChunk {
-  TriangleChunk triangles;
+  std::size_t first_slot = 0;    // its first input triangle's slot in RasterFrame::direct_triangles
+  std::size_t direct_count = 0;  // triangles kept without clipping, in the slots from first_slot on
+  std::vector<ScreenTriangle> from_clipping;
+  // Per triangle of from_clipping: how many direct ones come before it in scene order.
+  std::vector<std::uint32_t> direct_before;
   std::vector<ScreenVertex> clipped_vertices;
   std::vector<TextureVertex> clipped_textures;  // beside clipped_vertices, when the frame has uvs
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> binned;  // (bin, local triangle)
-  std::vector<std::uint32_t> bin_counts;                          // entries per bin
+  std::vector<std::uint32_t> bin_counts;        // entries per bin
   std::uint64_t unreported_entries = 0;  // filed here, not yet added to the frame's count
 };
-
-// A local triangle index with this bit refers to TriangleChunk::from_clipping.
-constexpr std::uint32_t kFromClipping = 0x80000000u;
 
 class FrameBuilder {
  public:
   FrameBuilder(const PreparedScene& scene, const RenderSettings& settings, RasterFrame& frame,
                const CancelFlag& cancel, SetupObserver* observer)
       : frame_(frame), cancel_(cancel), observer_(observer), centres_only_(settings.spp <= 1) {
+    if (settings.width > kMaxImageSide || settings.height > kMaxImageSide) {
+      // Positions on the sample grid are stored in 32 bits (SnappedPosition); jobs never get here.
+      throw InputError(fmt::format("render: a {}x{} image is larger than the rasterizer's {} pixels a side",
+                                   settings.width, settings.height, kMaxImageSide));
+    }
     const Camera& camera = scene.scene().camera;
     view_ = camera.view_matrix();
     view_projection_ = camera.projection_matrix(camera.aspect_for(settings.width, settings.height)) * view_;
@@ -87,7 +96,7 @@ class FrameBuilder {
     std::size_t vertices = 0, triangles = 0;
     for (const PreparedObject& object : scene.placements()) {  // the meshes, not the flattened triangles
       for (const Mesh& mesh : object.source->model->meshes) {
-        ranges_.push_back({&object, &mesh, vertices, triangles});
+        ranges_.push_back({&object, &mesh, vertices, triangles, view_projection_ * object.model_to_world});
         frame.materials.push_back(&object.source->materials.at(mesh.material));
         mirrored_.push_back(glm::determinant(glm::mat3(object.model_to_world)) < 0.0f);
         // Textured: the fragments carry texture coordinates, for the textures and for the alpha
@@ -100,13 +109,17 @@ class FrameBuilder {
         has_uvs_ = has_uvs_ || !mesh.uvs.empty();
       }
     }
+    if (vertices >= kClippedVertex || triangles >= kClippedTriangle) {  // the ids' flag bits
+      throw InputError(fmt::format("render: the rasterizer takes fewer than {} vertices and triangles a "
+                                   "frame; this scene has {} and {}", kClippedVertex, vertices, triangles));
+    }
     // Meshes out of sight are skipped by both stages below (view_culling.h): each model's box is
     // worked out once, however many objects place it.
     std::unordered_map<const Mesh*, AABB> mesh_boxes;
     for (MeshRange& range : ranges_) {
       auto [box, fresh] = mesh_boxes.try_emplace(range.mesh);
       if (fresh) box->second = range.mesh->bounds();
-      range.outside_view = wholly_outside_view(box->second, view_projection_ * range.object->model_to_world);
+      range.outside_view = wholly_outside_view(box->second, range.to_clip);
       if (range.outside_view) ++frame.meshes_outside_view;
     }
     frame.vertices.allocate(vertices);
@@ -144,7 +157,7 @@ class FrameBuilder {
     });
     check();
     plan_merge();
-    frame_.triangle_chunks.resize(chunks_.size());
+    frame_.setup_chunks = chunks_.size();
     parallel(chunks_.size(), 1, [&](std::size_t b, std::size_t e, int worker) {
       observe(SetupObserver::Stage::merge, worker, e - b);
       for (std::size_t c = b; c < e; ++c) {
@@ -167,17 +180,24 @@ class FrameBuilder {
     return static_cast<std::size_t>(it - ranges_.begin()) - 1;
   }
 
-  void project(ScreenVertex& v) const {
-    if (!(v.attributes.clip.w > 0.0f)) return;  // behind the camera: only used after clipping
-    const glm::vec4& c = v.attributes.clip;
+  // Vertex i of the range's mesh in clip space: computed for the vertex stage and again for
+  // clipping, by this one expression, so both see the same bits.
+  static glm::vec4 clip_position(const MeshRange& range, std::size_t local) {
+    return range.to_clip * glm::vec4(range.mesh->positions[local], 1.0f);
+  }
+
+  // Sets v's screen fields from its clip-space position c.
+  void project(ScreenVertex& v, const glm::vec4& c) const {
+    if (!(c.w > 0.0f)) return;  // behind the camera: only used after clipping
     v.inv_w = 1.0f / c.w;
     const float ndc_x = c.x * v.inv_w, ndc_y = c.y * v.inv_w;
     v.ndc_depth = c.z * v.inv_w;
     // Guard-band clipping keeps every rasterized vertex well inside the fixed-point range; the
     // margin covers rounding at the band's edge. Vertices beyond it are only ever clipped.
     if (std::fabs(ndc_x) <= 2.0f * kGuardBand && std::fabs(ndc_y) <= 2.0f * kGuardBand) {
-      v.position = {to_fixed((ndc_x * 0.5f + 0.5f) * static_cast<float>(frame_.width)),
-                    to_fixed((0.5f - ndc_y * 0.5f) * static_cast<float>(frame_.height))};
+      // Within 4.5 image sides of the corner: 32 bits hold it (SnappedPosition).
+      v.position = {static_cast<std::int32_t>(to_fixed((ndc_x * 0.5f + 0.5f) * static_cast<float>(frame_.width))),
+                    static_cast<std::int32_t>(to_fixed((0.5f - ndc_y * 0.5f) * static_cast<float>(frame_.height)))};
     }
   }
 
@@ -191,18 +211,17 @@ class FrameBuilder {
         begin = stop;
         continue;
       }
-      const glm::mat4 to_clip = view_projection_ * range.object->model_to_world;
       const glm::mat4 to_view = view_ * range.object->model_to_world;
       const glm::mat3& to_world_normal = range.object->normal_to_world;
       for (std::size_t i = begin; i < stop; ++i) {
         const std::size_t local = i - range.first_vertex;
         const glm::vec4 p(range.mesh->positions[local], 1.0f);
         ScreenVertex& v = frame_.vertices[i];
-        v.attributes.clip = to_clip * p;
-        v.attributes.view_position = glm::vec3(to_view * p);
+        const glm::vec4 clip = clip_position(range, local);
+        v.view_position = glm::vec3(to_view * p);
         const glm::vec3 n = to_world_normal * range.mesh->normals[local];
         const float len = glm::length(n);
-        v.attributes.world_normal = len > 0.0f ? n / len : n;
+        v.world_normal = len > 0.0f ? n / len : n;
         if (has_uvs_) {
           TextureVertex& t = frame_.vertex_textures[i];
           t.uv = range.mesh->uvs.empty() ? glm::vec2(0.0f) : range.mesh->uvs[local];
@@ -214,8 +233,8 @@ class FrameBuilder {
                                   (tangent.w < 0.0f) != (glm::determinant(linear) < 0.0f) ? -1.0f : 1.0f);
           }
         }
-        v.outcode = outcode(v.attributes.clip);
-        project(v);
+        v.outcode = outcode(clip);
+        project(v, clip);
       }
       begin = stop;
     }
@@ -228,8 +247,8 @@ class FrameBuilder {
 
   void emit(SetupChunk& chunk, CancelPoll& poll, bool from_clipping, std::uint32_t material,
             std::uint32_t i0, std::uint32_t i1, std::uint32_t i2) const {
-    const FixedPoint &p0 = vertex(chunk, i0).position, &p1 = vertex(chunk, i1).position,
-                     &p2 = vertex(chunk, i2).position;
+    const FixedPoint p0 = vertex(chunk, i0).position.fixed(), p1 = vertex(chunk, i1).position.fixed(),
+                     p2 = vertex(chunk, i2).position.fixed();
     const std::int64_t area = edge_function(p0, p1, p2);
     if (area == 0) return;  // covers no sample
     // Counter-clockwise seen from the front is clockwise on the y-down screen (area < 0), unless
@@ -243,49 +262,54 @@ class FrameBuilder {
     t.material = material | (back_face ? kBackFace : 0u) | (textured_[material] ? kTexturedMaterial : 0u);
     const std::int64_t min_x = std::min({p0.x, p1.x, p2.x}), max_x = std::max({p0.x, p1.x, p2.x}),
                        min_y = std::min({p0.y, p1.y, p2.y}), max_y = std::max({p0.y, p1.y, p2.y});
+    int x0, y0, x1, y1;
     if (centres_only_) {
       // Pixels whose centre lies in the bounding box: none means the triangle covers no sample.
       const std::int64_t centre = kSubpixelScale / 2;
-      t.x0 = std::max(0, first_sample_pixel(min_x, centre));
-      t.y0 = std::max(0, first_sample_pixel(min_y, centre));
-      t.x1 = std::min(frame_.width - 1, last_sample_pixel(max_x, centre));
-      t.y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, centre));
+      x0 = std::max(0, first_sample_pixel(min_x, centre));
+      y0 = std::max(0, first_sample_pixel(min_y, centre));
+      x1 = std::min(frame_.width - 1, last_sample_pixel(max_x, centre));
+      y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, centre));
     } else {
       // Every pixel a sample of which (at any sub-pixel offset) could fall inside.
-      t.x0 = std::max(0, last_sample_pixel(min_x, 0));
-      t.y0 = std::max(0, last_sample_pixel(min_y, 0));
-      t.x1 = std::min(frame_.width - 1, last_sample_pixel(max_x, 0));
-      t.y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, 0));
+      x0 = std::max(0, last_sample_pixel(min_x, 0));
+      y0 = std::max(0, last_sample_pixel(min_y, 0));
+      x1 = std::min(frame_.width - 1, last_sample_pixel(max_x, 0));
+      y1 = std::min(frame_.height - 1, last_sample_pixel(max_y, 0));
     }
-    if (t.x0 > t.x1 || t.y0 > t.y1) return;  // off screen, or between samples
-    TriangleChunk& out = chunk.triangles;
-    std::uint32_t local;
+    if (x0 > x1 || y0 > y1) return;  // off screen, or between samples
+    // Now within the image: 16 bits hold them.
+    t.x0 = static_cast<std::uint16_t>(x0);
+    t.y0 = static_cast<std::uint16_t>(y0);
+    t.x1 = static_cast<std::uint16_t>(x1);
+    t.y1 = static_cast<std::uint16_t>(y1);
     if (from_clipping) {
-      local = static_cast<std::uint32_t>(out.from_clipping.size()) | kFromClipping;
-      out.from_clipping.push_back(t);
+      chunk.from_clipping.push_back(t);
+      chunk.direct_before.push_back(static_cast<std::uint32_t>(chunk.direct_count));
     } else {
-      local = static_cast<std::uint32_t>(out.direct_count);
-      out.direct[out.direct_count++] = t;
+      frame_.direct_triangles[chunk.first_slot + chunk.direct_count++] = t;
     }
-    const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
-    const auto bins = static_cast<std::uint64_t>(t.y1 / kBinSize - t.y0 / kBinSize + 1) *
-                      static_cast<std::uint64_t>(row_bins);
-    chunk.unreported_entries += bins;
+    const int row_bins = x1 / kBinSize - x0 / kBinSize + 1;
+    chunk.unreported_entries += static_cast<std::uint64_t>(y1 / kBinSize - y0 / kBinSize + 1) *
+                                static_cast<std::uint64_t>(row_bins);
     if (chunk.unreported_entries >= kEntriesPerReport) report_entries(chunk);
+    for_each_bin(t, [&](std::size_t bin) { ++chunk.bin_counts[bin]; }, [&] { poll.throw_if_stopped(row_bins); });
+  }
+
+  // Calls on_bin(bin) for every bin t's pixel bounds overlap, row by row, and before_row() before
+  // each row: the set-up counts the entries this way and the merge files them, in the same order.
+  template <typename OnBin, typename BeforeRow>
+  void for_each_bin(const ScreenTriangle& t, OnBin&& on_bin, BeforeRow&& before_row) const {
     for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by) {
-      poll.throw_if_stopped(row_bins);
-      for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) {
-        const auto bin = static_cast<std::uint32_t>(by * frame_.bins_x + bx);
-        chunk.binned.emplace_back(bin, local);
-        ++chunk.bin_counts[bin];
-      }
+      before_row();
+      const std::size_t row = static_cast<std::size_t>(by) * static_cast<std::size_t>(frame_.bins_x);
+      for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) on_bin(row + static_cast<std::size_t>(bx));
     }
   }
 
   void set_up(std::size_t begin, std::size_t end, SetupChunk& chunk) const {
-    chunk.triangles.direct = frame_.direct_triangles.begin() + begin;
+    chunk.first_slot = begin;
     chunk.bin_counts.assign(static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y), 0);
-    chunk.binned.reserve(end - begin + (end - begin) / 4);
     std::size_t r = range_of_triangle(begin);
     CancelPoll poll(cancel_, kSetupUnitsPerPoll);
     for (std::size_t i = begin; i < end; ++i) {
@@ -306,19 +330,24 @@ class FrameBuilder {
         emit(chunk, poll, false, material, ia, ib, ic);
         continue;
       }
-      const ClippedPolygon poly = clip_triangle(a.attributes, b.attributes, c.attributes);
+      const auto clip_vertex = [&range](const ScreenVertex& v, std::uint32_t local_index) {
+        return ClipVertex{clip_position(range, local_index), v.view_position, v.world_normal};
+      };
+      const ClippedPolygon poly =
+          clip_triangle(clip_vertex(a, local.x), clip_vertex(b, local.y), clip_vertex(c, local.z));
       if (poly.size < 3) continue;
       const auto first = static_cast<std::uint32_t>(chunk.clipped_vertices.size()) | kClippedVertex;
       for (std::size_t k = 0; k < poly.size; ++k) {
         ScreenVertex v;
-        v.attributes = poly.vertices[k];
-        project(v);
+        v.view_position = poly.vertices[k].view_position;
+        v.world_normal = poly.vertices[k].world_normal;
+        v.outcode = 0;  // clipped: inside every plane
+        project(v, poly.vertices[k].clip);
         chunk.clipped_vertices.push_back(v);
         if (has_uvs_) {
           chunk.clipped_textures.push_back(texture_vertex_at(
-              v.attributes.view_position, a.attributes.view_position, b.attributes.view_position,
-              c.attributes.view_position, frame_.vertex_textures[ia], frame_.vertex_textures[ib],
-              frame_.vertex_textures[ic]));
+              v.view_position, a.view_position, b.view_position, c.view_position,
+              frame_.vertex_textures[ia], frame_.vertex_textures[ib], frame_.vertex_textures[ic]));
         }
       }
       for (std::uint32_t k = 2; k < poly.size; ++k) {
@@ -347,13 +376,17 @@ class FrameBuilder {
   void plan_merge() {
     const std::size_t bins = static_cast<std::size_t>(frame_.bins_x) * static_cast<std::size_t>(frame_.bins_y);
     vertex_base_.resize(chunks_.size());
-    std::size_t vertices = 0;
+    triangle_base_.resize(chunks_.size());
+    std::size_t vertices = 0, triangles = 0;
     for (std::size_t c = 0; c < chunks_.size(); ++c) {
       vertex_base_[c] = vertices;
       vertices += chunks_[c].clipped_vertices.size();
+      triangle_base_[c] = triangles;
+      triangles += chunks_[c].from_clipping.size();
     }
     frame_.clipped_vertices.resize(vertices);
     if (has_uvs_) frame_.clipped_textures.resize(vertices);
+    frame_.clipped_triangles.resize(triangles);  // fewer than the bin entries (kMaxBinEntries)
 
     // Counting sort by bin, stable in chunk order, so every bin lists triangles in scene order.
     // Loops run chunk by chunk so that each walks one contiguous count array.
@@ -378,8 +411,8 @@ class FrameBuilder {
     frame_.bin_triangles.allocate(total);
   }
 
-  // Rebases the chunk's clipped vertex indices, hands its triangles to the frame where they
-  // lie, and files them in their bins.
+  // Copies the chunk's clipped vertices and triangles to the frame (rebasing the triangles'
+  // indices of clipped vertices), and files all its triangles in their bins in scene order.
   void merge_chunk(std::size_t c) {
     SetupChunk& chunk = chunks_[c];
     const std::size_t bins = frame_.bin_start.size() - 1;
@@ -388,18 +421,29 @@ class FrameBuilder {
               frame_.clipped_vertices.begin() + static_cast<std::ptrdiff_t>(vertex_base));
     std::copy(chunk.clipped_textures.begin(), chunk.clipped_textures.end(),
               frame_.clipped_textures.begin() + static_cast<std::ptrdiff_t>(vertex_base));
-    // Only triangles made by clipping use clipped vertices.
-    for (ScreenTriangle& tri : chunk.triangles.from_clipping) {
+    const std::size_t triangle_base = triangle_base_[c];
+    for (std::size_t k = 0; k < chunk.from_clipping.size(); ++k) {
+      ScreenTriangle& tri = frame_.clipped_triangles[triangle_base + k];
+      tri = chunk.from_clipping[k];
+      // Only triangles made by clipping use clipped vertices.
       for (std::uint32_t& v : tri.v) {
         if (v & kClippedVertex) v = kClippedVertex | (vertex_base + (v & ~kClippedVertex));
       }
     }
-    TriangleChunk& triangles = frame_.triangle_chunks[c];
-    triangles = std::move(chunk.triangles);  // the buffers move; pointers into them stay valid
-    for (const auto& [bin, local] : chunk.binned) {
-      frame_.bin_triangles[bin_cursor_[c * bins + bin]++] =
-          (local & kFromClipping) ? &triangles.from_clipping[local & ~kFromClipping]
-                                  : &triangles.direct[local];
+    std::uint32_t* cursor = &bin_cursor_[c * bins];
+    CancelPoll poll(cancel_, kSetupUnitsPerPoll);  // a large triangle files many thousand entries
+    const auto file = [&](const ScreenTriangle& t, std::size_t id) {
+      const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
+      for_each_bin(t, [&](std::size_t bin) { frame_.bin_triangles[cursor[bin]++] = static_cast<std::uint32_t>(id); },
+                   [&] { poll.throw_if_stopped(row_bins); });
+    };
+    // The direct triangles in their slots and the clipped ones between them, in scene order.
+    std::size_t k = 0;
+    for (std::size_t d = 0; d <= chunk.direct_count; ++d) {
+      for (; k < chunk.from_clipping.size() && chunk.direct_before[k] == d; ++k) {
+        file(chunk.from_clipping[k], kClippedTriangle | (triangle_base + k));
+      }
+      if (d < chunk.direct_count) file(frame_.direct_triangles[chunk.first_slot + d], chunk.first_slot + d);
     }
   }
 
@@ -413,7 +457,8 @@ class FrameBuilder {
   std::vector<std::uint8_t> mirrored_;  // per range: its object's transform flips handedness
   std::vector<std::uint8_t> textured_;  // per range: its material has textures
   std::vector<SetupChunk> chunks_;
-  std::vector<std::size_t> vertex_base_;
+  std::vector<std::size_t> vertex_base_;    // per chunk: its first clipped vertex in the frame's
+  std::vector<std::size_t> triangle_base_;  // per chunk: its first clipped triangle in the frame's
   std::vector<std::uint32_t> bin_cursor_;
   // Bin entries filed so far by every chunk, reported kEntriesPerReport at a time: bounded, as
   // their memory and the tiles' work grow with it (a frame's total must also fit the 32-bit bin

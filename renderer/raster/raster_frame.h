@@ -8,11 +8,13 @@
 // that can cover it in that order, so depth ties resolve the same way for any tiling.
 #include <cstdint>
 #include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 #include <memory>
 #include <vector>
 
 #include "renderer/accel/prepared_scene.h"
+#include "renderer/image/image_limits.h"
 #include "renderer/image/tile_buffer.h"
 #include "renderer/job/render_settings.h"
 #include "renderer/raster/clip_polygon.h"
@@ -27,13 +29,26 @@ namespace farm::raster {
 // that miss it, large enough that a typical triangle lands in one bin.
 inline constexpr int kBinSize = 32;
 
-// A vertex after the vertex stage. Its screen fields are set only when it lies inside the guard
-// band in front of the camera; a vertex outside is only ever used through clipping.
+// A vertex's place on the sample grid, 32 bits a coordinate (the rasterizer's edge functions
+// widen it to FixedPoint's 64). A vertex gets one only within twice the guard band, i.e. at most
+// 4.5 image sides from the image's corner, and the frame refuses an image side beyond
+// kMaxImageSide, so every coordinate fits.
+struct SnappedPosition {
+  std::int32_t x, y;
+  FixedPoint fixed() const { return {x, y}; }
+};
+static_assert(std::int64_t{5} * kMaxImageSide * kSubpixelScale < std::int64_t{1} << 31);
+
+// A vertex after the vertex stage: what the tiles read of it, 44 bytes. Its screen fields are set
+// only when it lies inside the guard band in front of the camera; a vertex outside is only ever
+// used through clipping, which works out its clip-space position again from the mesh (the tiles
+// never need it: 16 bytes a vertex, 4.7 MB of a 1080p frame of the 100-cow grid, not written).
 struct ScreenVertex {
-  ClipVertex attributes;
-  FixedPoint position;
+  SnappedPosition position;
   float ndc_depth;
   float inv_w;
+  glm::vec3 view_position;
+  glm::vec3 world_normal;
   std::uint8_t outcode;  // clip planes it lies outside of
 };
 
@@ -59,16 +74,14 @@ struct TextureVertex {
 struct ScreenTriangle {
   std::uint32_t v[3];            // RasterFrame::vertex() indices
   std::uint32_t material;        // index into RasterFrame::materials, | kBackFace, | kTexturedMaterial
-  int x0, y0, x1, y1;            // pixels whose samples it may cover, inclusive, in the image
+  // Pixels whose samples it may cover, inclusive, in the image (of at most kMaxImageSide a side).
+  std::uint16_t x0, y0, x1, y1;
 };
+static_assert(kMaxImageSide <= 65536 && sizeof(ScreenTriangle) == 24);
 
-// The set-up triangles of one chunk of the scene's triangles: at most one per input triangle in
-// `direct` (the chunk's slots of RasterFrame::direct_triangles), and the fans of clipped ones aside.
-struct TriangleChunk {
-  ScreenTriangle* direct = nullptr;
-  std::size_t direct_count = 0;
-  std::vector<ScreenTriangle> from_clipping;
-};
+// Marks a triangle id in RasterFrame::bin_triangles as an index into RasterFrame::clipped_triangles;
+// without it, the id is the input triangle's slot in RasterFrame::direct_triangles.
+inline constexpr std::uint32_t kClippedTriangle = 0x80000000u;
 
 struct RasterFrame {
   int width = 0, height = 0;
@@ -77,13 +90,12 @@ struct RasterFrame {
   glm::vec3 eye{0.0f};
   UninitializedArray<ScreenVertex> vertices;  // one per scene vertex
   std::vector<ScreenVertex> clipped_vertices;  // made by clipping, in scene order
-  // Set-up triangles in the chunks the set-up ran in (never copied together); the bins give
-  // the order.
-  std::vector<TriangleChunk> triangle_chunks;
-  // One slot per input triangle, the chunks' `direct` triangles: one block (recycled frame memory,
-  // in huge pages) rather than one a chunk, whose 4 KiB pages each faulted on first touch: 4,600
-  // faults, a quarter of a fresh `farm render` of the 100-cow grid's (72 chunks of 256 KiB).
+  // One slot per input triangle, written where the triangle needs no clipping and is kept: one
+  // block (recycled frame memory, in huge pages) rather than one a set-up chunk, whose 4 KiB pages
+  // each faulted on first touch: 4,600 faults, a quarter of a fresh `farm render` of the 100-cow
+  // grid's (72 chunks of 256 KiB). Only the slots the bins name are read.
   UninitializedArray<ScreenTriangle> direct_triangles;
+  std::vector<ScreenTriangle> clipped_triangles;  // the fans of clipped triangles, in scene order
   std::vector<const Material*> materials;
   // Texture coordinates and tangent frames beside the vertices, kept apart so that scenes without
   // them pay nothing per vertex: one per scene vertex and one per clipped vertex, or none when no
@@ -91,9 +103,15 @@ struct RasterFrame {
   std::vector<TextureVertex> vertex_textures;
   std::vector<TextureVertex> clipped_textures;
   bool textured = false;  // some material has textures (with or without texture coordinates)
-  // Bin b holds bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order.
+  // Bin b holds the triangle ids bin_triangles[bin_start[b] .. bin_start[b + 1]), in scene order:
+  // 4 bytes an entry rather than a pointer's 8.
   std::vector<std::uint32_t> bin_start;
-  UninitializedArray<const ScreenTriangle*> bin_triangles;
+  UninitializedArray<std::uint32_t> bin_triangles;
+  std::size_t setup_chunks = 0;  // how many pieces the set-up split the triangles into
+
+  const ScreenTriangle& triangle(std::uint32_t id) const {
+    return (id & kClippedTriangle) ? clipped_triangles[id & ~kClippedTriangle] : direct_triangles[id];
+  }
 
   const ScreenVertex& vertex(std::uint32_t i) const {
     return (i & kClippedVertex) ? clipped_vertices[i & ~kClippedVertex] : vertices[i];
@@ -115,10 +133,10 @@ struct RasterFrame {
   Rect bin_rect(int bx, int by) const;
 };
 
-// At most this many (triangle, bin) pairs in a frame: 1 GiB at the peak of the set-up (16 bytes
-// each: the chunks' pairs and the frame's pointers), and far more than an honest scene files
-// (each triangle lands in one bin or a few: a 10M-triangle model at 4K files about 20M). Beyond it, the frame is refused with an InputError that says
-// why, before its memory or its tiles' work can grow with resolution x triangle area.
+// At most this many (triangle, bin) entries in a frame: 256 MiB of triangle ids, and far more than
+// an honest scene files (each triangle lands in one bin or a few: a 10M-triangle model at 4K
+// files about 20M). Beyond it, the frame is refused with an InputError that says why, before its
+// memory or its tiles' work can grow with resolution x triangle area.
 inline constexpr std::uint64_t kMaxBinEntries = std::uint64_t{1} << 26;
 
 // What the set-up's threads did, counted: how each stage was split across the pool's threads and

@@ -95,7 +95,7 @@ TEST(RasterSetupSplit, EveryStageIsSplitAcrossThePoolsThreadsAndTheSharesAddUp) 
 
   const std::size_t vertices = 401 * 401, triangles = 400 * 400 * 2;
   const std::array<std::pair<Stage, std::size_t>, 3> stages{
-      {{Stage::vertices, vertices}, {Stage::triangles, triangles}, {Stage::merge, frame->triangle_chunks.size()}}};
+      {{Stage::vertices, vertices}, {Stage::triangles, triangles}, {Stage::merge, frame->setup_chunks}}};
   for (const auto& [stage, whole] : stages) {
     SCOPED_TRACE("stage " + std::to_string(static_cast<int>(stage)));
     const CountingObserver::Counts c = observer.counts(stage);
@@ -126,7 +126,8 @@ TEST(RasterSetupSplit, ThePoolsFrameBinsTheSameTrianglesInTheSameOrderAsOneThrea
   const auto split = raster::build_raster_frame(scene, settings, &pool, CancelFlag::never());
   ASSERT_EQ(alone->bin_start, split->bin_start);
   for (std::size_t i = 0; i < alone->bin_start.back(); ++i) {
-    const raster::ScreenTriangle &a = *alone->bin_triangles[i], &b = *split->bin_triangles[i];
+    const raster::ScreenTriangle &a = alone->triangle(alone->bin_triangles[i]),
+                                 &b = split->triangle(split->bin_triangles[i]);
     ASSERT_EQ(a.material, b.material) << i;
     for (int k = 0; k < 3; ++k) {
       ASSERT_EQ(alone->vertex(a.v[k]).position.x, split->vertex(b.v[k]).position.x) << i;

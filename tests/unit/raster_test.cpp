@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "renderer/engine.h"
+#include "renderer/raster/raster_frame.h"
 #include "renderer/render_frame.h"
 #include "renderer/scene/transform.h"
 #include "tests/support/scene_fixtures.h"
@@ -237,6 +238,45 @@ TEST(RasterDepth, ExactTiesGoToTheTriangleEarlierInSceneOrder) {
     }
   }
   EXPECT_GT(tie_pixels, 100);  // the tied quads are in view
+}
+
+// The merge files each set-up chunk's triangles in their bins from their pixel bounds, the
+// triangles clipping made between the ones kept whole, as they come in the scene. Meshes are
+// numbered in scene order (a triangle's material index), so in every bin the numbers must never
+// fall, and each entry must name a triangle that overlaps its bin.
+TEST(RasterBinning, EveryBinListsItsTrianglesInSceneOrderClippedOnesInTheirPlace) {
+  Scene scene;
+  // One set-up chunk of whole and clipped triangles in turn: a floor under and behind the camera
+  // (clipped at the near plane), a grid in view (whole), the floor again a little lower.
+  scene.objects.push_back(object_of(make_box({-6, -1.6f, -6}, {6, -1.2f, 6})));
+  scene.objects.push_back(object_of(make_grid(12), glm::scale(glm::mat4(1.0f), glm::vec3(3.0f))));
+  scene.objects.push_back(object_of(make_box({-6, -1.9f, -6}, {6, -1.7f, 6})));
+  scene.camera.position = {0.5f, 0.5f, 3.5f};
+  scene.camera.target = {0, -0.5f, 0};
+  const PreparedScene prepared(std::move(scene));
+  const auto frame = raster::build_raster_frame(prepared, raster_settings(160, 120), nullptr, CancelFlag::never());
+  ASSERT_FALSE(frame->clipped_triangles.empty()) << "no triangle was clipped";
+  std::size_t mixed_bins = 0;
+  for (int by = 0; by < frame->bins_y; ++by) {
+    for (int bx = 0; bx < frame->bins_x; ++bx) {
+      const std::size_t bin = static_cast<std::size_t>(by) * frame->bins_x + bx;
+      const Rect rect = frame->bin_rect(bx, by);
+      std::uint32_t last_mesh = 0;
+      bool clipped = false, whole = false;
+      for (std::uint32_t i = frame->bin_start[bin]; i < frame->bin_start[bin + 1]; ++i) {
+        const std::uint32_t id = frame->bin_triangles[i];
+        const raster::ScreenTriangle& t = frame->triangle(id);
+        const std::uint32_t mesh = t.material & raster::kMaterialIndex;
+        EXPECT_GE(mesh, last_mesh) << "bin " << bx << "," << by << " entry " << i - frame->bin_start[bin];
+        last_mesh = mesh;
+        EXPECT_TRUE(t.x0 < rect.x1 && t.x1 >= rect.x0 && t.y0 < rect.y1 && t.y1 >= rect.y0)
+            << "a triangle filed in bin " << bx << "," << by << " that it does not overlap";
+        (id & raster::kClippedTriangle ? clipped : whole) = true;
+      }
+      if (clipped && whole) ++mixed_bins;
+    }
+  }
+  EXPECT_GT(mixed_bins, 5u) << "too few bins hold both clipped and whole triangles to tell their order";
 }
 
 TEST(RasterRenderTile, AnyTilingAndThreadCountGivesTheSameBitsAsOnePiece) {

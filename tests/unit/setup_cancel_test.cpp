@@ -132,6 +132,34 @@ TEST(SetupCancel, BinningLargeTrianglesPollsByTheEntriesItFiles) {
   EXPECT_THROW(raster::build_raster_frame(scene, settings, nullptr, flag), RenderStopped);
 }
 
+// Asks for a stop at the flag's `look`th look from the start of the set-up's merge on.
+class StopInTheMerge final : public raster::SetupObserver {
+ public:
+  StopInTheMerge(CancelFlag& flag, std::int64_t look) : flag_(flag), look_(look) {}
+  void chunk(Stage stage, int, std::size_t) override {
+    if (stage == Stage::merge) flag_.cancel_at_poll(look_);
+  }
+  void shared_write() override {}
+
+ private:
+  CancelFlag& flag_;
+  std::int64_t look_;
+};
+
+// The merge files the entries the set-up counted, and polls by them too: the same million entries
+// in one set-up chunk give it a hundred looks or more, so a stop at its 50th stops the frame,
+// where one look per chunk would let it run to the end.
+TEST(SetupCancel, TheMergePollsByTheEntriesItFiles) {
+  const PreparedScene scene = screen_covering_quads(8);
+  RenderSettings settings = test::raster_settings(8192, 8192);
+  CancelFlag flag;
+  StopInTheMerge observer(flag, 50);
+  EXPECT_THROW(raster::build_raster_frame(scene, settings, nullptr, flag, &observer), RenderStopped);
+  CancelFlag fresh;
+  StopInTheMerge never_reached(fresh, 100'000);  // past the merge's last look: the frame is whole
+  EXPECT_NO_THROW(raster::build_raster_frame(scene, settings, nullptr, fresh, &never_reached));
+}
+
 // 2^26 bin entries at most: 300 quads (600 triangles) over a 16384x16384 image would file each
 // triangle in all 262,144 bins, 157 million entries.
 TEST(SetupCancel, AFrameOfTooManyBinEntriesIsRefusedSayingWhy) {
