@@ -61,6 +61,7 @@ struct RectRender {
   std::shared_ptr<const CachedScene> scene;
   RenderSettings settings;  // the scene's, at the call's sample pass
   std::vector<Rect> subs;
+  std::atomic<std::size_t> next{0};  // the next sub-tile a render thread takes
   TileBuffer out;
   TileBuffer* into = &out;  // where sub-tiles are pasted: `out`, or the caller's film
   // The call's: cancelled by the handler when its client goes away (or a sub-tile fails); the
@@ -92,19 +93,24 @@ double thread_cpu_ms() {
   return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
 }
 
-void render_sub_tile(RectRender& r, const Rect& sub) {
+// One render thread's share of a call: it takes the call's sub-tiles one at a time until none
+// is left (or the call stops), so the threads balance as finely as with a pool chunk a sub-tile,
+// while the thread's CPU clock, a system call (0.6 us on a 2-core VM), is read twice a share
+// rather than twice a sub-tile (28,800 reads for a 48-frame 640x480 turntable), and one tile
+// buffer serves all its sub-tiles.
+void render_share(RectRender& r) {
   RenderStats stats;
   const double cpu_start = thread_cpu_ms();
-  if (!r.flag.stop_requested()) {
+  TileBuffer tile;
+  for (std::size_t i = 0; !r.flag.stop_requested() && (i = r.next.fetch_add(1)) < r.subs.size();) {
     try {
-      TileBuffer tile;
       // A stopped sub-tile comes back without pixels and is never pasted: `out` is incomplete
       // then, and the call says CANCELLED or DEADLINE_EXCEEDED instead of sending it.
-      if (render_tile(r.scene->prepared, r.settings, sub, tile, r.flag) == StopReason::None) {
+      if (render_tile(r.scene->prepared, r.settings, r.subs[i], tile, r.flag) == StopReason::None) {
         r.into->paste(tile);  // sub-tiles are disjoint: no lock needed
         r.complete.fetch_add(1);
       }
-      stats = tile.stats();
+      stats += tile.stats();
     } catch (...) {
       {
         // Recorded before the flag stops the others, so the handler reports this, not a cancel.
@@ -384,9 +390,10 @@ grpc::Status TileRenderer::render_rect(const v1::RenderTileRequest& req, TileBuf
     }
     r->subs = split_into_tiles(rect.width(), rect.height(), sub_tile_size(settings, rect, pool_.size()));
     for (Rect& sub : r->subs) sub = {sub.x0 + rect.x0, sub.y0 + rect.y0, sub.x1 + rect.x0, sub.y1 + rect.y0};
+    const std::size_t shares = std::min(static_cast<std::size_t>(pool_.size()), r->subs.size());
     const std::shared_ptr<ThreadPool::Work> work =
-        pool_.start(r->subs.size(), 1, [r](std::size_t begin, std::size_t end, int) {
-          for (std::size_t i = begin; i < end; ++i) render_sub_tile(*r, r->subs[i]);
+        pool_.start(shares, 1, [r](std::size_t begin, std::size_t end, int) {
+          for (std::size_t i = begin; i < end; ++i) render_share(*r);
         });
     const bool finished = finish_unless_stopped(*work, is_stopped);
     // A sub-tile still running after a stop would paste into the film after the call has ended:
