@@ -51,6 +51,7 @@ struct ScreenVertex {
   glm::vec3 world_normal;
   std::uint8_t outcode;  // clip planes it lies outside of
 };
+static_assert(sizeof(ScreenVertex) == 44);
 
 // Marks a triangle's vertex index as one into RasterFrame::clipped_vertices.
 inline constexpr std::uint32_t kClippedVertex = 0x80000000u;
