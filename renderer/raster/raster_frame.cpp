@@ -293,17 +293,19 @@ class FrameBuilder {
     chunk.unreported_entries += static_cast<std::uint64_t>(y1 / kBinSize - y0 / kBinSize + 1) *
                                 static_cast<std::uint64_t>(row_bins);
     if (chunk.unreported_entries >= kEntriesPerReport) report_entries(chunk);
-    for_each_bin(t, [&](std::size_t bin) { ++chunk.bin_counts[bin]; }, [&] { poll.throw_if_stopped(row_bins); });
+    for_each_bin(t, poll, [&](std::size_t bin) { ++chunk.bin_counts[bin]; });
   }
 
-  // Calls on_bin(bin) for every bin t's pixel bounds overlap, row by row, and before_row() before
-  // each row: the set-up counts the entries this way and the merge files them, in the same order.
-  template <typename OnBin, typename BeforeRow>
-  void for_each_bin(const ScreenTriangle& t, OnBin&& on_bin, BeforeRow&& before_row) const {
+  // Calls on_bin(bin) for every bin t's pixel bounds overlap, row by row, counting each row's bins
+  // to `poll` first: the set-up counts the entries this way and the merge files them, in the
+  // same order.
+  template <typename OnBin>
+  void for_each_bin(const ScreenTriangle& t, CancelPoll& poll, OnBin&& on_bin) const {
+    const int bx0 = t.x0 / kBinSize, bx1 = t.x1 / kBinSize;
     for (int by = t.y0 / kBinSize; by <= t.y1 / kBinSize; ++by) {
-      before_row();
+      poll.throw_if_stopped(bx1 - bx0 + 1);
       const std::size_t row = static_cast<std::size_t>(by) * static_cast<std::size_t>(frame_.bins_x);
-      for (int bx = t.x0 / kBinSize; bx <= t.x1 / kBinSize; ++bx) on_bin(row + static_cast<std::size_t>(bx));
+      for (int bx = bx0; bx <= bx1; ++bx) on_bin(row + static_cast<std::size_t>(bx));
     }
   }
 
@@ -433,9 +435,7 @@ class FrameBuilder {
     std::uint32_t* cursor = &bin_cursor_[c * bins];
     CancelPoll poll(cancel_, kSetupUnitsPerPoll);  // a large triangle files many thousand entries
     const auto file = [&](const ScreenTriangle& t, std::size_t id) {
-      const int row_bins = t.x1 / kBinSize - t.x0 / kBinSize + 1;
-      for_each_bin(t, [&](std::size_t bin) { frame_.bin_triangles[cursor[bin]++] = static_cast<std::uint32_t>(id); },
-                   [&] { poll.throw_if_stopped(row_bins); });
+      for_each_bin(t, poll, [&](std::size_t bin) { frame_.bin_triangles[cursor[bin]++] = static_cast<std::uint32_t>(id); });
     };
     // The direct triangles in their slots and the clipped ones between them, in scene order.
     std::size_t k = 0;
