@@ -90,6 +90,9 @@ class Builder {
     }
   }
 
+  std::uint32_t max_leaf() const { return max_leaf_; }
+  std::uint32_t group() const { return group_; }
+
   // The primitives in leaf order, once run() has built the tree.
   std::vector<std::uint32_t> order() const {
     std::vector<std::uint32_t> order(refs_.size());
@@ -272,60 +275,169 @@ Bvh Bvh::build(std::span<const AABB> primitive_bounds, const Options& options) {
   Builder builder(primitive_bounds, options, bvh.nodes_);
   bvh.depth_ = builder.run();
   bvh.order_ = builder.order();
-  bvh.build_wide();
+  bvh.build_wide(builder.max_leaf(), builder.group());
   return bvh;
 }
 
-// Each wide node takes a binary node's two children and keeps opening its largest inner child
-// (by surface area, the likeliest to be entered) until it has kWideBvhWidth.
-void Bvh::build_wide() {
+namespace {
+
+// The collapse's costs, per unit of surface area: entering a wide node (its eight slab tests)
+// and one leaf test (a Triangle4, or one primitive where leaves test one at a time) take about as
+// long.
+constexpr float kWideNodeCost = 1.0f;
+constexpr float kLeafTestCost = 1.0f;
+
+// What the collapse works out for one binary node's subtree.
+struct Spread {
+  // cost[k - 1]: the least cost of the subtree given at most k slots of a wide node, its area
+  // times kWideNodeCost for each wide node it needs and times kLeafTestCost for each leaf test.
+  std::array<float, kWideBvhWidth> cost;
+  // first_slots[k - 1]: of those k slots, how many the first child's subtree takes; 0: the subtree
+  // takes one slot itself. first_slots[kWideBvhWidth - 1]: how a wide node made of this
+  // subtree shares its slots between the two children.
+  std::array<std::uint8_t, kWideBvhWidth> first_slots;
+  bool leaf;                   // one slot as a leaf: a binary leaf, or a subtree merged into one
+  std::uint32_t first, count;  // its primitives: order()[first, first + count)
+};
+
+// Bottom-up over the binary tree (a node's children lie after it in `nodes`).
+std::vector<Spread> spread_costs(const std::vector<BvhNode>& nodes, std::uint32_t max_leaf, std::uint32_t group) {
+  std::vector<Spread> spread(nodes.size());
+  const auto tests = [group](std::uint32_t count) { return static_cast<float>((count + group - 1) / group); };
+  for (std::size_t i = nodes.size(); i-- > 0;) {
+    const BvhNode& node = nodes[i];
+    Spread& s = spread[i];
+    const float area = node.bounds.half_area();
+    if (node.count != 0) {
+      s.cost.fill(area * kLeafTestCost * tests(node.count));
+      s.first_slots.fill(0);
+      s.leaf = true;
+      s.first = node.offset;
+      s.count = node.count;
+      continue;
+    }
+    const Spread& a = spread[i + 1];
+    const Spread& b = spread[node.offset];
+    s.first = a.first;
+    s.count = a.count + b.count;
+    // The children over k slots: j for the first, k - j for the second.
+    std::array<float, kWideBvhWidth> split{};
+    for (int k = 2; k <= kWideBvhWidth; ++k) {
+      float best = std::numeric_limits<float>::infinity();
+      int best_j = 1;
+      for (int j = 1; j < k; ++j) {
+        const float cost = a.cost[static_cast<std::size_t>(j - 1)] + b.cost[static_cast<std::size_t>(k - j - 1)];
+        if (cost < best) {
+          best = cost;
+          best_j = j;
+        }
+      }
+      split[static_cast<std::size_t>(k - 1)] = best;
+      s.first_slots[static_cast<std::size_t>(k - 1)] = static_cast<std::uint8_t>(best_j);
+    }
+    // One slot: a wide node of its own, or a leaf of all its primitives where they fit one.
+    float one = area * kWideNodeCost + split[kWideBvhWidth - 1];
+    s.leaf = false;
+    if (s.count <= max_leaf) {
+      const float leaf = area * kLeafTestCost * tests(s.count);
+      if (leaf <= one) {
+        one = leaf;
+        s.leaf = true;
+      }
+    }
+    s.cost[0] = one;
+    s.first_slots[0] = 0;
+    for (std::size_t k = 1; k + 1 < kWideBvhWidth; ++k) {
+      if (split[k] < one) {
+        s.cost[k] = split[k];
+      } else {
+        s.cost[k] = one;
+        s.first_slots[k] = 0;
+      }
+    }
+    // Never read as a spread over eight slots (a parent gives a child at most seven).
+    s.cost[kWideBvhWidth - 1] = std::min(one, split[kWideBvhWidth - 1]);
+  }
+  return spread;
+}
+
+}  // namespace
+
+// The binary tree collapsed into wide nodes by the least total cost (spread_costs): which binary
+// nodes to open into a wide node's slots, and which small subtrees to merge into one leaf, is
+// chosen over the whole tree by dynamic programming, the optimal collapse of the wide-BVH
+// literature (Ylitie, Karras and Laine, 2017), instead of opening each node's largest child.
+void Bvh::build_wide(std::uint32_t max_leaf, std::uint32_t group) {
   wide_.clear();
   leaves_.clear();
   if (nodes_.empty()) return;
-  // Leaves numbered depth-first, as they lie in nodes_ (and so in order()).
-  std::vector<std::uint32_t> leaf_number(nodes_.size(), 0);
-  for (std::size_t i = 0; i < nodes_.size(); ++i) {
-    if (nodes_[i].count == 0) continue;
-    leaf_number[i] = static_cast<std::uint32_t>(leaves_.size());
-    leaves_.push_back({nodes_[i].offset, nodes_[i].count});
-  }
+  const std::vector<Spread> spread = spread_costs(nodes_, max_leaf, group);
+  // Each wide node's slots as binary nodes, depth-first from the root.
+  struct Slots {
+    std::array<std::uint32_t, kWideBvhWidth> binary{};
+    int used = 0;
+  };
+  std::vector<Slots> layout(1);
+  std::vector<std::uint32_t> wide_of(nodes_.size(), 0);  // a slot's wide node, where it is one
   struct Pending {
-    std::uint32_t binary;  // binary node whose children the wide node holds
-    std::uint32_t wide;    // the wide node to fill
+    std::uint32_t binary;  // the binary node whose children the wide node holds
+    std::uint32_t wide;
   };
   std::vector<Pending> work;
-  wide_.emplace_back();
-  work.push_back({0, 0});
+  if (spread[0].leaf) {
+    layout[0].binary[static_cast<std::size_t>(layout[0].used++)] = 0;  // the whole tree one leaf
+  } else {
+    work.push_back({0, 0});
+  }
   while (!work.empty()) {
     const Pending p = work.back();
     work.pop_back();
-    std::array<std::uint32_t, kWideBvhWidth> slots{};
-    int used = 0;
-    if (nodes_[p.binary].count != 0) {
-      slots[used++] = p.binary;  // a root that is a leaf
-    } else {
-      slots[used++] = p.binary + 1;
-      slots[used++] = nodes_[p.binary].offset;
-      while (used < kWideBvhWidth) {
-        int widest = -1;
-        float widest_area = -1.0f;
-        for (int i = 0; i < used; ++i) {
-          const BvhNode& n = nodes_[slots[static_cast<std::size_t>(i)]];
-          if (n.count == 0 && n.bounds.half_area() > widest_area) {
-            widest = i;
-            widest_area = n.bounds.half_area();
-          }
-        }
-        if (widest < 0) break;
-        const std::uint32_t opened = slots[static_cast<std::size_t>(widest)];
-        slots[static_cast<std::size_t>(widest)] = opened + 1;
-        slots[static_cast<std::size_t>(used++)] = nodes_[opened].offset;
+    Slots slots;
+    // (binary node, slots it may take), first child first.
+    std::array<std::pair<std::uint32_t, int>, 2 * kWideBvhWidth> todo;
+    int pending = 0;
+    const int first = spread[p.binary].first_slots[kWideBvhWidth - 1];
+    todo[static_cast<std::size_t>(pending++)] = {nodes_[p.binary].offset, kWideBvhWidth - first};
+    todo[static_cast<std::size_t>(pending++)] = {p.binary + 1, first};
+    while (pending > 0) {
+      const auto [binary, k] = todo[static_cast<std::size_t>(--pending)];
+      const int j = spread[binary].first_slots[static_cast<std::size_t>(k - 1)];
+      if (j == 0) {
+        slots.binary[static_cast<std::size_t>(slots.used++)] = binary;
+        continue;
       }
+      todo[static_cast<std::size_t>(pending++)] = {nodes_[binary].offset, k - j};
+      todo[static_cast<std::size_t>(pending++)] = {binary + 1, j};
     }
-    WideBvhNode node;
+    for (int i = 0; i < slots.used; ++i) {
+      const std::uint32_t binary = slots.binary[static_cast<std::size_t>(i)];
+      if (spread[binary].leaf) continue;
+      wide_of[binary] = static_cast<std::uint32_t>(layout.size());
+      work.push_back({binary, wide_of[binary]});
+      layout.emplace_back();
+    }
+    layout[p.wide] = slots;
+  }
+  // Leaves numbered depth-first, as their primitives lie in order().
+  std::vector<std::uint8_t> is_leaf_slot(nodes_.size(), 0);
+  for (const Slots& slots : layout) {
+    for (int i = 0; i < slots.used; ++i) {
+      const std::uint32_t binary = slots.binary[static_cast<std::size_t>(i)];
+      if (spread[binary].leaf) is_leaf_slot[binary] = 1;
+    }
+  }
+  std::vector<std::uint32_t> leaf_number(nodes_.size(), 0);
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    if (!is_leaf_slot[i]) continue;
+    leaf_number[i] = static_cast<std::uint32_t>(leaves_.size());
+    leaves_.push_back({spread[i].first, spread[i].count});
+  }
+  wide_.resize(layout.size());
+  for (std::size_t w = 0; w < layout.size(); ++w) {
+    WideBvhNode& node = wide_[w];
     for (int i = 0; i < kWideBvhWidth; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      if (i >= used) {
+      if (i >= layout[w].used) {
         for (int a = 0; a < 3; ++a) {
           node.bounds[2 * a][k] = INFINITY;
           node.bounds[2 * a + 1][k] = -INFINITY;
@@ -334,22 +446,21 @@ void Bvh::build_wide() {
         node.count[k] = 0;
         continue;
       }
-      const BvhNode& n = nodes_[slots[k]];
+      const std::uint32_t binary = layout[w].binary[k];
+      const BvhNode& n = nodes_[binary];
       for (int a = 0; a < 3; ++a) {
         node.bounds[2 * a][k] = n.bounds.min[a];
         node.bounds[2 * a + 1][k] = n.bounds.max[a];
       }
-      node.count[k] = static_cast<std::uint8_t>(n.count);
-      if (n.count != 0) {
+      if (spread[binary].leaf) {
+        node.count[k] = static_cast<std::uint8_t>(spread[binary].count);
         node.leaf_mask = static_cast<std::uint8_t>(node.leaf_mask | (1u << i));
-        node.child[k] = leaf_number[slots[k]];
+        node.child[k] = leaf_number[binary];
       } else {
-        node.child[k] = static_cast<std::uint32_t>(wide_.size());
-        wide_.emplace_back();
-        work.push_back({slots[k], node.child[k]});
+        node.count[k] = 0;
+        node.child[k] = wide_of[binary];
       }
     }
-    wide_[p.wide] = node;
   }
 }
 

@@ -3,9 +3,12 @@
 // bottom level) or object instances (the top level). Built top-down by the surface area
 // heuristic over binned centroids, or by splitting at the median of the longest axis (the
 // lab's build); stored as one flat array, depth-first, the first child right after its parent.
-// Traversal runs over an 8-wide collapse of the tree (WideBvhNode), visiting nearer children
-// first and skipping nodes farther than the closest hit so far. Leaves are numbered in the order
-// of order(), so that a caller may keep a leaf's primitives together (mesh_accel's Triangle4s).
+// Traversal runs over an 8-wide collapse of the tree (WideBvhNode), the one of least surface
+// area cost, visiting nearer children first and skipping nodes farther than the closest hit so
+// far. The collapse may merge a small subtree into one leaf (up to Options::max_leaf_size
+// primitives), so leaves() are the wide tree's, not the binary nodes'. Leaves are numbered in the
+// order of order(), so that a caller may keep a leaf's primitives together (mesh_accel's
+// Triangle4s).
 #include <array>
 #include <cstdint>
 #include <immintrin.h>
@@ -58,7 +61,7 @@ inline constexpr std::array<std::array<std::uint32_t, 4>, 8> kWideBvhNearRows = 
   return rows;
 }();
 
-// A leaf: entries [first, first + count) of Bvh::order().
+// A leaf of the wide tree: entries [first, first + count) of Bvh::order().
 struct BvhLeaf {
   std::uint32_t first = 0;
   std::uint32_t count = 0;
@@ -98,6 +101,8 @@ class Bvh {
   const std::vector<std::uint32_t>& order() const { return order_; }
   // The leaves, depth-first (so in the order of their entries in order(), each covered once).
   const std::vector<BvhLeaf>& leaves() const { return leaves_; }
+  // What closest() and any() walk: the binary tree collapsed into wide nodes, the root first.
+  const std::vector<WideBvhNode>& wide_nodes() const { return wide_; }
   // The deepest level (a lone root leaf: 0; no nodes at all: -1).
   int depth() const { return depth_; }
 
@@ -160,7 +165,7 @@ class Bvh {
   template <typename Test>
   void walk_packet_avx2(unsigned lanes, const std::size_t* near_row, const __m256* origin, const __m256* inv,
                         const __m256* inv_far, const __m256* t_min, float* t_max, Test& test) const;
-  void build_wide();
+  void build_wide(std::uint32_t max_leaf, std::uint32_t group);
 
   std::vector<BvhNode> nodes_;
   std::vector<WideBvhNode> wide_;  // what closest() and any() walk; nodes_ is for drawing
