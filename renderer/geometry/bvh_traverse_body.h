@@ -99,14 +99,15 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
     // The children met, leaves and inner nodes apart (bits by slot).
     unsigned leaves_met = static_cast<unsigned>(mask) & node.leaf_mask;
     unsigned inner_met = static_cast<unsigned>(mask) & ~static_cast<unsigned>(node.leaf_mask);
-    // Leaf children first, nearest first for the closest hit (so the hit found shortens the rest);
-    // in slot order for any hit, which any occluder ends and so gains little from the order:
-    // sorting cost it more than it saved (farm bench rt, incoherent any hit 16-19% faster on the
-    // cow and the bunny). A node's children are nearly always all leaves or all inner nodes, and
-    // a ray meets one or two of them: those cases take no sort.
+    // Leaf children first. Primitives tested one at a time (the top level's instances, each a
+    // whole walk of its model) are taken nearest first for the closest hit, so that the hit found
+    // shortens the rest. A leaf tested at once (a mesh's Triangle4) costs little more than
+    // picking the nearest did: such leaves, and any hit's (which any occluder ends), are taken in
+    // slot order, those that start beyond a hit found skipped (farm bench rt, incoherent closest
+    // hit on the cow and the bunny 3% faster than nearest first; any hit 16-19% faster).
     while (leaves_met) {
       int c = __builtin_ctz(leaves_met);
-      if constexpr (!kAnyHit) {
+      if constexpr (!kAnyHit && !kLeafTest) {
         for (unsigned rest = leaves_met & (leaves_met - 1); rest; rest &= rest - 1) {
           const int other = __builtin_ctz(rest);
           if (entry[other] < entry[c]) c = other;  // the lower slot of equals: ctz order
@@ -114,6 +115,9 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
         if (entry[c] > t_max) break;  // and so are the others
       }
       leaves_met &= ~(1u << c);
+      if constexpr (!kAnyHit && kLeafTest) {
+        if (entry[c] > t_max) continue;  // beyond a hit an earlier leaf of the node found
+      }
       const auto k = static_cast<std::size_t>(c);
       if constexpr (kLeafTest) {
         if constexpr (kCount) primitives_tested += node.count[k];
