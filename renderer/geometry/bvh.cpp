@@ -378,27 +378,26 @@ void Bvh::build_wide(std::uint32_t max_leaf, std::uint32_t group) {
     int used = 0;
   };
   std::vector<Slots> layout(1);
-  std::vector<std::uint32_t> wide_of(nodes_.size(), 0);  // a slot's wide node, where it is one
-  struct Pending {
-    std::uint32_t binary;  // the binary node whose children the wide node holds
-    std::uint32_t wide;
-  };
-  std::vector<Pending> work;
+  // The wide node a binary node's children fill, where it is one (the root's: 0).
+  std::vector<std::uint32_t> wide_of(nodes_.size(), 0);
+  std::vector<std::uint8_t> is_leaf_slot(nodes_.size(), 0);
+  std::vector<std::uint32_t> work;  // binary nodes whose wide nodes are still to fill
   if (spread[0].leaf) {
     layout[0].binary[static_cast<std::size_t>(layout[0].used++)] = 0;  // the whole tree one leaf
+    is_leaf_slot[0] = 1;
   } else {
-    work.push_back({0, 0});
+    work.push_back(0);
   }
   while (!work.empty()) {
-    const Pending p = work.back();
+    const std::uint32_t parent = work.back();
     work.pop_back();
     Slots slots;
     // (binary node, slots it may take), first child first.
     std::array<std::pair<std::uint32_t, int>, 2 * kWideBvhWidth> todo;
     int pending = 0;
-    const int first = spread[p.binary].first_slots[kWideBvhWidth - 1];
-    todo[static_cast<std::size_t>(pending++)] = {nodes_[p.binary].offset, kWideBvhWidth - first};
-    todo[static_cast<std::size_t>(pending++)] = {p.binary + 1, first};
+    const int first = spread[parent].first_slots[kWideBvhWidth - 1];
+    todo[static_cast<std::size_t>(pending++)] = {nodes_[parent].offset, kWideBvhWidth - first};
+    todo[static_cast<std::size_t>(pending++)] = {parent + 1, first};
     while (pending > 0) {
       const auto [binary, k] = todo[static_cast<std::size_t>(--pending)];
       const int j = spread[binary].first_slots[static_cast<std::size_t>(k - 1)];
@@ -411,21 +410,17 @@ void Bvh::build_wide(std::uint32_t max_leaf, std::uint32_t group) {
     }
     for (int i = 0; i < slots.used; ++i) {
       const std::uint32_t binary = slots.binary[static_cast<std::size_t>(i)];
-      if (spread[binary].leaf) continue;
+      if (spread[binary].leaf) {
+        is_leaf_slot[binary] = 1;
+        continue;
+      }
       wide_of[binary] = static_cast<std::uint32_t>(layout.size());
-      work.push_back({binary, wide_of[binary]});
+      work.push_back(binary);
       layout.emplace_back();
     }
-    layout[p.wide] = slots;
+    layout[wide_of[parent]] = slots;
   }
   // Leaves numbered depth-first, as their primitives lie in order().
-  std::vector<std::uint8_t> is_leaf_slot(nodes_.size(), 0);
-  for (const Slots& slots : layout) {
-    for (int i = 0; i < slots.used; ++i) {
-      const std::uint32_t binary = slots.binary[static_cast<std::size_t>(i)];
-      if (spread[binary].leaf) is_leaf_slot[binary] = 1;
-    }
-  }
   std::vector<std::uint32_t> leaf_number(nodes_.size(), 0);
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
     if (!is_leaf_slot[i]) continue;
