@@ -1,14 +1,15 @@
 #include "renderer/accel/mesh_accel.h"
 
 #include <array>
-#include <bit>
 #include <new>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "renderer/geometry/bvh.h"
 #include "renderer/geometry/ray_hit_order.h"
+#include "renderer/geometry/ray_packet.h"
 #include "renderer/geometry/traversal_isa.h"
 #include "renderer/geometry/triangle4.h"
 #include "renderer/geometry/triangle4_packet.h"
@@ -137,17 +138,15 @@ class BvhAccel final : public MeshAccel {
     // the packet walk runs only there); one that a few rays meet, ray by ray, each lane's
     // Triangle4Ray made when a leaf first asks for it. Both give each ray the same hit.
     const bool transposed = traversal_isa() != TraversalIsa::Sse;
-    Triangle4PacketRays packet_rays;
-    if (transposed) {
-      for (unsigned rest = lanes; rest; rest &= rest - 1) packet_rays.set(__builtin_ctz(rest), rays[__builtin_ctz(rest)]);
-    }
+    std::optional<Triangle4PacketRays> packet_rays;
+    if (transposed) packet_rays.emplace(rays, lanes);
     LaneRays lane_rays(rays);
     unsigned found = 0;
     bvh_.closest_packet(rays, lanes, t_max, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
-      if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
+      if (transposed && lane_count(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
         const std::uint32_t* ids = blocks_[leaf.number].ids.data();
-        const unsigned met = intersect_triangle4_packet(packet_rays, blocks_[leaf.number].triangles,
+        const unsigned met = intersect_triangle4_packet(*packet_rays, blocks_[leaf.number].triangles,
                                                         static_cast<int>(leaf.count), ids, t_max, leaf_lanes,
                                                         leaf_hits);
         for (unsigned rest = met; rest; rest &= rest - 1) {
@@ -185,26 +184,21 @@ class BvhAccel final : public MeshAccel {
     // As closest_hit_packet: a leaf most of the packet meets tested a ray per lane, else ray by
     // ray; either way a ray is hit when intersect_triangle4 finds a hit for it, as in any_hit.
     const bool transposed = traversal_isa() != TraversalIsa::Sse;
-    Triangle4PacketRays packet_rays;
-    alignas(32) float t_max[Bvh::kPacketWidth] = {};
-    for (unsigned rest = lanes; rest; rest &= rest - 1) {
-      const int i = __builtin_ctz(rest);
-      t_max[i] = rays[i].t_max;
-      if (transposed) packet_rays.set(i, rays[i]);
-    }
+    std::optional<Triangle4PacketRays> packet_rays;
+    if (transposed) packet_rays.emplace(rays, lanes);
     LaneRays lane_rays(rays);
     return bvh_.any_packet(rays, lanes, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
-      if (transposed && std::popcount(leaf_lanes) >= kTransposedFrom) {
+      if (transposed && lane_count(leaf_lanes) >= kTransposedFrom) {
         Triangle4PacketHits leaf_hits;
         const LeafBlock& block = blocks_[leaf.number];
-        return intersect_triangle4_packet(packet_rays, block.triangles, static_cast<int>(leaf.count), block.ids.data(),
-                                          t_max, leaf_lanes, leaf_hits);
+        return intersect_triangle4_packet(*packet_rays, block.triangles, static_cast<int>(leaf.count), block.ids.data(),
+                                          packet_rays->ray_t_max, leaf_lanes, leaf_hits);
       }
       unsigned met = 0;
       for (; leaf_lanes; leaf_lanes &= leaf_lanes - 1) {
         const int i = __builtin_ctz(leaf_lanes);
         __m128 t, u, v;
-        if (intersect_triangle4(lane_rays[i], blocks_[leaf.number].triangles, t_max[i], t, u, v) != 0) {
+        if (intersect_triangle4(lane_rays[i], blocks_[leaf.number].triangles, rays[i].t_max, t, u, v) != 0) {
           met |= 1u << i;
         }
       }

@@ -123,7 +123,8 @@ class Bvh {
   bool any(const Ray& ray, Test&& test, TraversalStats* stats) const;
 
   // Closest-hit traversal of up to kPacketWidth rays at once: rays[i] for each bit i of `lanes`.
-  // t_max[i] starts as the ray's bound and is lowered by `test(leaf, leaf_lanes)`, which tests
+  // t_max holds kPacketWidth floats (those of lanes left out are read, never used); t_max[i]
+  // starts as the ray's bound and is lowered by `test(leaf, leaf_lanes)`, which tests
   // the leaf against each ray of `leaf_lanes` (those whose slab test met the leaf's box) and
   // lowers their t_max on a hit. Each ray meets exactly the boxes its own closest() would meet
   // at the same t_max (the same slab arithmetic, lane by lane), so with a leaf test that keeps
@@ -160,9 +161,11 @@ class Bvh {
   template <bool kAnyHit, typename Test>
   bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
   // closest_packet with AVX2 (bvh_packet_body.h): the rays' set-up, then one walk per octant.
-  template <typename Test>
+  // t_max: kPacketWidth bounds. kAnyHit: the walk sets them from the rays' t_max, ray i's drops
+  // to -inf when it is hit, and children are taken in slot order.
+  template <bool kAnyHit, typename Test>
   void traverse_packet_avx2(const Ray* rays, unsigned lanes, float* t_max, Test& test) const;
-  template <typename Test>
+  template <bool kAnyHit, typename Test>
   void walk_packet_avx2(unsigned lanes, const std::size_t* near_row, const __m256* origin, const __m256* inv,
                         const __m256* inv_far, const __m256* t_min, float* t_max, Test& test) const;
   void build_wide(std::uint32_t max_leaf, std::uint32_t group);

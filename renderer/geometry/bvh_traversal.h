@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "renderer/geometry/bvh.h"
+#include "renderer/geometry/ray_packet.h"
 
 namespace farm {
 
@@ -138,7 +139,7 @@ void Bvh::closest_packet(const Ray* rays, unsigned lanes, float* t_max, Test&& t
     }
     return;
   }
-  traverse_packet_avx2(rays, lanes, t_max, test);
+  traverse_packet_avx2<false>(rays, lanes, t_max, test);
 }
 
 template <typename Test>
@@ -155,9 +156,9 @@ unsigned Bvh::any_packet(const Ray* rays, unsigned lanes, Test&& test) const {
     return hit;
   }
   // The closest-hit walk with bounds that never shrink, but for a ray hit: its bound drops to
-  // -inf, which no box's slab test meets, so it leaves the walk.
+  // -inf, which no box's slab test meets, so it leaves the walk. The walk sets each ray's bound
+  // from its t_max.
   alignas(32) float t_max[kPacketWidth];
-  for (unsigned rest = lanes; rest; rest &= rest - 1) t_max[__builtin_ctz(rest)] = rays[__builtin_ctz(rest)].t_max;
   auto leaf_test = [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
     // A ray hit at an earlier leaf of the same node met this one before it left the walk.
     leaf_lanes &= ~hit;
@@ -166,7 +167,7 @@ unsigned Bvh::any_packet(const Ray* rays, unsigned lanes, Test&& test) const {
     hit |= met;
     for (unsigned rest = met; rest; rest &= rest - 1) t_max[__builtin_ctz(rest)] = -INFINITY;
   };
-  traverse_packet_avx2(rays, lanes, t_max, leaf_test);
+  traverse_packet_avx2<true>(rays, lanes, t_max, leaf_test);
   return hit;
 }
 

@@ -4,7 +4,30 @@
 
 #include <limits>
 
+#include "renderer/geometry/ray_packet.h"
+
 namespace farm {
+
+__attribute__((target("avx2"))) Triangle4PacketRays::Triangle4PacketRays(const Ray* rays, unsigned lanes,
+                                                                         float t_epsilon) {
+  static constexpr float kAbsent[8] = {};
+  __m256 rows[8];
+  load_ray_packet(rays, lanes, kAbsent, rows);
+  for (int axis = 0; axis < 3; ++axis) {
+    _mm256_store_ps(origin[axis], rows[kOriginX + axis]);
+    _mm256_store_ps(direction[axis], rows[kDirectionX + axis]);
+  }
+  // triangle_t_lower and triangle_direction_dot (triangle4.h) lane by lane: the same compare and
+  // the same products and sums in the same order.
+  const __m256 epsilon = _mm256_set1_ps(t_epsilon), t_min = rows[kTMin];
+  const __m256 in_packet = lane_mask(lanes);
+  _mm256_store_ps(t_lower, _mm256_and_ps(in_packet, _mm256_blendv_ps(t_min, epsilon,
+                                                                      _mm256_cmp_ps(t_min, epsilon, _CMP_LT_OS))));
+  _mm256_store_ps(ray_t_max, rows[kTMax]);
+  const __m256 dx = rows[kDirectionX], dy = rows[kDirectionY], dz = rows[kDirectionZ];
+  _mm256_store_ps(direction_dot, _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                               _mm256_mul_ps(dz, dz)));
+}
 
 // AVX2 alone has no fused multiply-add, so nothing here can be contracted: every product and sum
 // rounds as intersect_triangle4's do.
@@ -20,9 +43,7 @@ __attribute__((target("avx2"))) unsigned intersect_triangle4_packet(const Triang
   const __m256 direction_dot = _mm256_load_ps(rays.direction_dot);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), tiny = _mm256_set1_ps(1e-24f);
   const __m256i sign = _mm256_set1_epi32(static_cast<int>(0x80000000u));  // unsigned order as signed
-  const __m256 in_packet = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-      _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(lanes)), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-      _mm256_setzero_si256()));
+  const __m256 in_packet = lane_mask(lanes);
   __m256 best_t = _mm256_set1_ps(std::numeric_limits<float>::infinity()), best_u = zero, best_v = zero;
   __m256i best_id = _mm256_setzero_si256();
   __m256 any = zero;

@@ -14,8 +14,15 @@ namespace farm {
 
 // A packet's rays as every leaf test reads them, lane by lane what Triangle4Ray holds.
 struct alignas(32) Triangle4PacketRays {
-  float origin[3][8] = {}, direction[3][8] = {};
-  float t_lower[8] = {}, direction_dot[8] = {};
+  float origin[3][8], direction[3][8];
+  float t_lower[8], direction_dot[8];
+  float ray_t_max[8];  // the rays' own t_max: any hit's bounds (the closest hit keeps its own)
+
+  // Every lane zero, for set() to fill lane by lane.
+  Triangle4PacketRays() : origin{}, direction{}, t_lower{}, direction_dot{}, ray_t_max{} {}
+  // rays[i] for each bit i of `lanes`, as set() makes each, zero in the other lanes: the whole
+  // packet at once (ray_packet.h). Needs AVX2 (the caller asks traversal_isa() first).
+  __attribute__((target("avx2"))) Triangle4PacketRays(const Ray* rays, unsigned lanes, float t_epsilon = 1e-6f);
 
   void set(int lane, const Ray& ray, float t_epsilon = 1e-6f) {
     for (int axis = 0; axis < 3; ++axis) {
@@ -24,6 +31,7 @@ struct alignas(32) Triangle4PacketRays {
     }
     t_lower[lane] = triangle_t_lower(ray, t_epsilon);
     direction_dot[lane] = triangle_direction_dot(ray);
+    ray_t_max[lane] = ray.t_max;
   }
 };
 

@@ -178,5 +178,40 @@ TEST(Triangle4, APacketsRaysEachGetTheHitTheirOwnTestGivesBitForBit) {
   EXPECT_GT(ties, 1000);  // rays meeting more than one of a leaf's triangles: the nearest picked
 }
 
+// A whole packet's rays loaded at once (an 8x8 transpose for a full packet) are, byte for byte,
+// what set() writes lane by lane: every lane of a full packet, and for a partial one the lanes
+// asked, the others left zero. Rays with t_min below, at and above the test's epsilon, NaN and
+// infinite components included.
+TEST(Triangle4, APacketLoadedWholeHoldsWhatSetWritesLaneByLane) {
+  if (!cpu_has_avx2()) GTEST_SKIP() << "the packet test needs AVX2";
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<float> unit(-4.0f, 4.0f);
+  const float specials[] = {0.0f, -0.0f, 1e-6f, 2e-6f, 1e-7f, std::numeric_limits<float>::infinity(),
+                            std::numeric_limits<float>::quiet_NaN()};
+  const auto pick = [&](int k) { return k % 5 == 0 ? specials[static_cast<std::size_t>(k / 5) % 7] : unit(rng); };
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::array<Ray, 8> rays;
+    for (std::size_t i = 0; i < 8; ++i) {
+      const int k = trial * 8 + static_cast<int>(i);
+      rays[i].origin = glm::vec3(unit(rng), pick(k), unit(rng));
+      rays[i].direction = glm::vec3(pick(k + 1), unit(rng), pick(k + 3));
+      rays[i].t_min = k % 3 == 0 ? pick(k) : std::abs(unit(rng)) * 1e-5f;
+      rays[i].t_max = k % 4 == 0 ? std::numeric_limits<float>::infinity() : std::abs(unit(rng));
+    }
+    const unsigned lanes = trial % 2 ? 0xFFu : static_cast<unsigned>(trial * 37 % 255 + 1);
+    const Triangle4PacketRays whole(rays.data(), lanes);
+    Triangle4PacketRays by_lane;
+    for (int i = 0; i < 8; ++i) {
+      if (lanes >> i & 1u) by_lane.set(i, rays[static_cast<std::size_t>(i)]);
+    }
+    const auto* got = reinterpret_cast<const unsigned char*>(&whole);
+    const auto* want = reinterpret_cast<const unsigned char*>(&by_lane);
+    for (std::size_t b = 0; b < sizeof(Triangle4PacketRays); ++b) {
+      ASSERT_EQ(got[b], want[b]) << "trial " << trial << ", lanes " << lanes << ", byte " << b << " (row "
+                                 << b / 32 << ", lane " << b % 32 / 4 << ")";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace farm
