@@ -99,6 +99,14 @@ bool Bvh::FARM_BVH_TRAVERSE(const Ray& ray, Test& test, TraversalStats* stats) c
     // The children met, leaves and inner nodes apart (bits by slot).
     unsigned leaves_met = static_cast<unsigned>(mask) & node.leaf_mask;
     unsigned inner_met = static_cast<unsigned>(mask) & ~static_cast<unsigned>(node.leaf_mask);
+    // Any hit enters the lowest inner slot met next (below). When leaves come first, that node's
+    // lines are asked for before the leaf tests, so that its misses overlap theirs: incoherent
+    // any hit on the bunny and the cow 4-6% faster, timed in turns against Embree. The closest
+    // hit, whose leaves may rule the next node out, gained nothing from the same.
+    if (kAnyHit && leaves_met != 0 && inner_met != 0) {
+      const char* next = reinterpret_cast<const char*>(&wide_[node.child[__builtin_ctz(inner_met)]]);
+      for (std::size_t line = 0; line < sizeof(WideBvhNode); line += 64) _mm_prefetch(next + line, _MM_HINT_T0);
+    }
     // Leaf children first. Primitives tested one at a time (the top level's instances, each a
     // whole walk of its model) are taken nearest first for the closest hit, so that the hit found
     // shortens the rest. A leaf tested at once (a mesh's Triangle4) costs little more than
