@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -543,6 +544,80 @@ TEST(BvhTraversalIsa, EveryBuildFindsTheSameHitsThroughTheSameNodesAsSse) {
     EXPECT_GT(hits, rays.size() / 10);
   }
   EXPECT_GE(builds, 1);
+}
+
+// A packet's walk, by counting the leaves it hands its test (Bvh::any_packet, a test that never
+// hits, so that every box a ray meets is walked): each ray of a packet is handed exactly the
+// leaves any() hands it alone, once each; and eight copies of one ray share one walk, every leaf
+// handed once with all eight lanes (AVX2: the walk tests a box against the packet at once; the
+// build for any x86-64 runs each ray alone). Coherent rays from an eye, rows of eight, and
+// random ones, whose octants split a packet; full and partial packets.
+TEST(BvhPacket, EachRayMeetsTheLeavesItMeetsAloneAndCopiesShareOneWalk) {
+  const ModelTriangles triangles(test::random_soup(2000, 17));
+  const Bvh bvh = Bvh::build(bounds_of(triangles), {BvhSplit::Sah, 4, nullptr, 4});
+  const AABB& box = triangles.bounds;
+  std::vector<Ray> rays;
+  const glm::vec3 eye = box.center() + glm::vec3(0.3f, 0.4f, 2.5f) * glm::length(box.extent());
+  for (int y = 0; y < 16; ++y) {
+    for (int x = 0; x < 64; ++x) {
+      const glm::vec3 at = box.min + box.extent() * glm::vec3((x + 0.5f) / 64.0f, (y + 0.5f) / 16.0f, 0.5f);
+      rays.push_back(Ray{eye, at - eye});
+    }
+  }
+  const std::vector<Ray> random = test::random_rays(box, 1024 / kRayDivisor, 17);
+  rays.insert(rays.end(), random.begin(), random.end());
+  rays.resize(rays.size() / 8 * 8);
+  const auto alone = [&](const Ray& ray) {
+    std::vector<std::uint32_t> leaves;
+    bvh.any(ray, [&](const BvhLeafRef& leaf) { leaves.push_back(leaf.number); return false; }, nullptr);
+    std::sort(leaves.begin(), leaves.end());
+    return leaves;
+  };
+  for (const TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2}) {
+    if (!cpu_runs(isa)) continue;
+    SCOPED_TRACE(std::string(to_string(isa)));
+    force_traversal_isa(isa);
+    std::size_t leaves_met = 0;
+    for (std::size_t first = 0; first < rays.size(); first += 8) {
+      const unsigned lanes = (first / 8) % 3 == 2 ? 0b01011101u : 0xFFu;
+      std::array<std::vector<std::uint32_t>, 8> handed;
+      const unsigned hit = bvh.any_packet(&rays[first], lanes, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+        EXPECT_EQ(leaf_lanes & ~lanes, 0u) << "ray " << first;
+        for (unsigned rest = leaf_lanes; rest; rest &= rest - 1) handed[__builtin_ctz(rest)].push_back(leaf.number);
+        return 0u;
+      });
+      EXPECT_EQ(hit, 0u);
+      for (std::size_t i = 0; i < 8; ++i) {
+        if (!(lanes >> i & 1u)) {
+          EXPECT_TRUE(handed[i].empty()) << "ray " << first + i << ", left out";
+          continue;
+        }
+        std::sort(handed[i].begin(), handed[i].end());
+        ASSERT_EQ(handed[i], alone(rays[first + i])) << "ray " << first + i;
+        leaves_met += handed[i].size();
+      }
+      // Eight copies of this packet's first ray.
+      const std::array<Ray, 8> copies = {rays[first], rays[first], rays[first], rays[first],
+                                         rays[first], rays[first], rays[first], rays[first]};
+      std::vector<std::uint32_t> shared;
+      bvh.any_packet(copies.data(), 0xFFu, [&](const BvhLeafRef& leaf, unsigned leaf_lanes) {
+        if (isa != TraversalIsa::Sse) {
+          EXPECT_EQ(leaf_lanes, 0xFFu) << "ray " << first;
+        }
+        shared.push_back(leaf.number);
+        return 0u;
+      });
+      const std::vector<std::uint32_t> one = alone(rays[first]);
+      if (isa == TraversalIsa::Sse) {
+        EXPECT_EQ(shared.size(), 8 * one.size()) << "ray " << first;  // eight walks, one a ray
+        continue;
+      }
+      std::sort(shared.begin(), shared.end());
+      ASSERT_EQ(shared, one) << "ray " << first;
+    }
+    force_traversal_isa(std::nullopt);
+    EXPECT_GT(leaves_met, rays.size());  // the rays meet leaves: the walks were not empty
+  }
 }
 
 // A build the CPU cannot run is refused by name; the best one is what runs unless forced.
