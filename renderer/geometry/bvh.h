@@ -162,7 +162,7 @@ class Bvh {
   bool traverse(const Ray& ray, Test& test, TraversalStats* stats) const;
   // closest_packet with AVX2 (bvh_packet_body.h): the rays' set-up, then one walk per octant.
   // t_max: kPacketWidth bounds. kAnyHit: the walk sets them from the rays' t_max, ray i's drops
-  // to -inf when it is hit, and children are taken in slot order.
+  // to -inf when it is hit, and children are taken unsorted.
   template <bool kAnyHit, typename Test>
   void traverse_packet_avx2(const Ray* rays, unsigned lanes, float* t_max, Test& test) const;
   template <bool kAnyHit, typename Test>
