@@ -250,6 +250,26 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
                    n.closest / an.closest, n.any / an.any, p.packet / ap.packet, p.packet_any / ap.packet_any);
       }
     }
+    // Each round's own bvh/embree-direct, its two timings a few seconds apart: how far one round
+    // of this machine strays from the ratio of the medians above (a shared machine's slow spells
+    // move a single cell by 10-20%), so that a ratio near a target is read with its spread.
+    const auto round_spread = [&](auto pick) {
+      double low = INFINITY, high = 0.0;
+      for (std::size_t r = 0; r < rounds[0].size(); ++r) {
+        const double ratio = pick(rounds[0][r]) / pick(rounds[direct][r]);
+        low = std::min(low, ratio);
+        high = std::max(high, ratio);
+      }
+      return fmt::format("{:.2f}-{:.2f}x", low, high);
+    };
+    fmt::print("{:<24} {:>9} {:>16} {:>12} {:>19} {:>15} {:>14} {:>14}\n",
+               subjects[0].name + "/" + subjects[direct].name + ", rounds", "",
+               round_spread([](const auto& run) { return run.first.closest; }),
+               round_spread([](const auto& run) { return run.first.any; }),
+               round_spread([](const auto& run) { return run.second.closest; }),
+               round_spread([](const auto& run) { return run.second.any; }),
+               round_spread([](const auto& run) { return run.first.packet; }),
+               round_spread([](const auto& run) { return run.first.packet_any; }));
     // Packets find each ray's own hit: the same rays hit as one by one, for every structure.
     for (std::size_t i = 0; i < subjects.size(); ++i) {
       const RayRates& p = rates[i].first;

@@ -89,7 +89,8 @@ void add_rt_bench(CLI::App& bench, CommandTable& commands) {
       ->capture_default_str();
   add_thread_counts_option(*rt, o->threads, "Thread counts, comma-separated: a table each (e.g. 1,2,4,8,16)")
       ->capture_default_str();
-  rt->add_option("--repeats", o->repeats, "Rounds over every structure (medians reported)")
+  rt->add_option("--repeats", o->repeats,
+                 "Rounds over every structure (medians reported, and bvh/embree-direct's lowest and highest round)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   add_runner(commands, rt, o, run_rt_bench);

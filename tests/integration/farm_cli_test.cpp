@@ -305,7 +305,7 @@ TEST_F(FarmCliTest, BenchRtTimesEmbreeDirectlyAtEachThreadCountOnTheSameScene) {
   const auto r = run_command(farm("bench rt --rays 2000 --threads 1,2 --assets " + shell_quote(FARM_SHARED_ASSETS)));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::set<std::string> tables;  // "scene, N thread(s)"
-  int direct = 0, ratios = 0;
+  int direct = 0, ratios = 0, spreads = 0;
   std::istringstream lines(r.output);
   for (std::string line; std::getline(lines, line);) {
     for (const char* threads : {" 1 thread,", " 2 threads,"}) {
@@ -315,10 +315,28 @@ TEST_F(FarmCliTest, BenchRtTimesEmbreeDirectlyAtEachThreadCountOnTheSameScene) {
     }
     direct += line.rfind("embree-direct ", 0) == 0;
     ratios += line.rfind("bvh/embree-direct ", 0) == 0;
+    // Under each table, the spread of the rounds' own ratios: six "low-highx" cells, low <= high.
+    if (line.rfind("bvh/embree-direct, rounds ", 0) == 0) {
+      ++spreads;
+      std::istringstream cells(line.substr(std::string("bvh/embree-direct, rounds ").size()));
+      int columns = 0;
+      for (std::string cell; cells >> cell; ++columns) {
+        double low = 0.0, high = 0.0;
+        char dash = 0, x = 0;
+        std::istringstream parts(cell);
+        ASSERT_TRUE(parts >> low >> dash >> high >> x) << line;
+        EXPECT_EQ(dash, '-') << line;
+        EXPECT_EQ(x, 'x') << line;
+        EXPECT_GT(low, 0.0) << line;
+        EXPECT_LE(low, high) << line;
+      }
+      EXPECT_EQ(columns, 6) << line;
+    }
   }
   EXPECT_EQ(tables.size(), 8u) << r.output;  // four scenes, two thread counts
   EXPECT_EQ(direct, 8) << r.output;
   EXPECT_EQ(ratios, 8) << r.output;
+  EXPECT_EQ(spreads, 8) << r.output;
   // Its first line names the machine the figures belong to: the CPU as /proc/cpuinfo calls it,
   // the hardware threads and the traversal build this CPU runs.
   std::string model = "unknown CPU";
