@@ -9,7 +9,8 @@
 // the same predicate). So a ray meets a box here exactly when it would meet it in closest() at
 // the same t_max; only the order the boxes are visited in is the packet's, which the hit rule
 // (ray_hit_order.h) makes irrelevant to the hit found. Children are taken nearest first for the
-// packet's first ray (any hit: unsorted, its leaves in slot order); a stacked node keeps the rays that met it.
+// packet's first ray (any hit: unsorted, its leaves in slot order); a stacked node keeps the rays
+// that met it.
 template <bool kAnyHit, typename Test>
 void Bvh::traverse_packet_avx2(const Ray* rays, unsigned lanes, float* t_max, Test& test) const {
   // The rays axis by axis (lanes outside `lanes` get a harmless direction, never read back).

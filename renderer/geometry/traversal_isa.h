@@ -31,6 +31,17 @@ TraversalIsa best_traversal_isa();
 // build this CPU cannot run.
 void force_traversal_isa(std::optional<TraversalIsa> isa);
 
+// force_traversal_isa(isa) for a scope: the CPU's best again when it ends, however it ends (an
+// exception, or a test's failed assertion returning early, would otherwise leave later queries,
+// and later tests, on the forced build).
+class ForcedTraversalIsa {
+ public:
+  explicit ForcedTraversalIsa(std::optional<TraversalIsa> isa) { force_traversal_isa(isa); }
+  ~ForcedTraversalIsa() { force_traversal_isa(std::nullopt); }
+  ForcedTraversalIsa(const ForcedTraversalIsa&) = delete;
+  ForcedTraversalIsa& operator=(const ForcedTraversalIsa&) = delete;
+};
+
 std::string_view to_string(TraversalIsa isa);
 
 }  // namespace farm

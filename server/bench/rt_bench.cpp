@@ -207,10 +207,9 @@ void bench_scene(const std::string& name, Scene scene, const RtBenchOptions& o, 
       for (std::size_t i = 0; i < subjects.size(); ++i) {
         const Subject& s = subjects[i];
         const bool few = s.rays != o.rays;
-        force_traversal_isa(s.isa);
+        const ForcedTraversalIsa forced(s.isa);
         rounds[i].emplace_back(measure(few ? few_primary : primary, threads, s.closest, s.any, &s.packets),
                                measure(few ? few_incoherent : incoherent, threads, s.closest, s.any));
-        force_traversal_isa(std::nullopt);
       }
     }
     std::vector<std::pair<RayRates, RayRates>> rates;

@@ -505,7 +505,7 @@ TEST(BvhTraversalIsa, EveryBuildFindsTheSameHitsThroughTheSameNodesAsSse) {
     TraversalStats closest_work, any_work;
   };
   auto answers = [&](TraversalIsa isa) {
-    force_traversal_isa(isa);
+    const ForcedTraversalIsa forced(isa);
     std::vector<Answer> out(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) {
       out[i].hit = sah->closest_hit(rays[i], out[i].nearest, &out[i].closest_work);
@@ -514,7 +514,6 @@ TEST(BvhTraversalIsa, EveryBuildFindsTheSameHitsThroughTheSameNodesAsSse) {
       out[i].hit_uncounted = sah->closest_hit(rays[i], out[i].nearest_uncounted, nullptr);
       out[i].any_uncounted = sah->any_hit(rays[i], nullptr);
     }
-    force_traversal_isa(std::nullopt);
     return out;
   };
   const std::vector<Answer> sse = answers(TraversalIsa::Sse);
@@ -576,7 +575,7 @@ TEST(BvhPacket, EachRayMeetsTheLeavesItMeetsAloneAndCopiesShareOneWalk) {
   for (const TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2}) {
     if (!cpu_runs(isa)) continue;
     SCOPED_TRACE(std::string(to_string(isa)));
-    force_traversal_isa(isa);
+    const ForcedTraversalIsa forced(isa);
     std::size_t leaves_met = 0;
     for (std::size_t first = 0; first < rays.size(); first += 8) {
       const unsigned lanes = (first / 8) % 3 == 2 ? 0b01011101u : 0xFFu;
@@ -615,7 +614,6 @@ TEST(BvhPacket, EachRayMeetsTheLeavesItMeetsAloneAndCopiesShareOneWalk) {
       std::sort(shared.begin(), shared.end());
       ASSERT_EQ(shared, one) << "ray " << first;
     }
-    force_traversal_isa(std::nullopt);
     EXPECT_GT(leaves_met, rays.size());  // the rays meet leaves: the walks were not empty
   }
 }

@@ -600,7 +600,7 @@ TEST(InstanceIntersector, APacketsRaysFindTheHitsEachFindsAloneBitForBit) {
       const auto ours = build_scene_intersector(scene, kind);
       for (const TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2, TraversalIsa::Avx512}) {
         if (!cpu_runs(isa)) continue;
-        force_traversal_isa(isa);
+        const ForcedTraversalIsa forced(isa);
         std::size_t hits = 0;
         for (std::size_t first = 0; first < rays.size(); first += 8) {
           const unsigned lanes = (first / 8) % 2 ? partial : 0xFFu;
@@ -629,7 +629,6 @@ TEST(InstanceIntersector, APacketsRaysFindTheHitsEachFindsAloneBitForBit) {
                 << ", triangle " << p.triangle << " vs " << alone.triangle;
           }
         }
-        force_traversal_isa(std::nullopt);
         EXPECT_GT(hits, rays.size() / 8) << name << ", " << to_string(kind) << ", " << to_string(isa);
       }
     }
@@ -658,7 +657,7 @@ TEST(InstanceIntersector, APacketOfShadowRaysIsBlockedWhereEachRayAloneIs) {
       const auto ours = build_scene_intersector(scene, kind);
       for (const TraversalIsa isa : {TraversalIsa::Sse, TraversalIsa::Avx2, TraversalIsa::Avx512}) {
         if (!cpu_runs(isa)) continue;
-        force_traversal_isa(isa);
+        const ForcedTraversalIsa forced(isa);
         std::size_t blocked = 0, free = 0;
         for (std::size_t first = 0; first < rays.size(); first += 8) {
           const unsigned lanes = (first / 8) % 2 ? partial : 0xFFu;
@@ -672,7 +671,6 @@ TEST(InstanceIntersector, APacketOfShadowRaysIsBlockedWhereEachRayAloneIs) {
             ++(alone ? blocked : free);
           }
         }
-        force_traversal_isa(std::nullopt);
         EXPECT_GT(blocked, rays.size() / 8) << name << ", " << to_string(kind) << ", " << to_string(isa);
         EXPECT_GT(free, rays.size() / 8) << name << ", " << to_string(kind) << ", " << to_string(isa);
       }
