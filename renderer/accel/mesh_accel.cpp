@@ -14,6 +14,7 @@
 #include "renderer/geometry/triangle4.h"
 #include "renderer/geometry/triangle4_packet.h"
 #include "renderer/geometry/triangle_intersect.h"
+#include "renderer/util/huge_pages.h"
 
 namespace farm {
 namespace {
@@ -240,7 +241,7 @@ class BvhAccel final : public MeshAccel {
     std::array<std::uint32_t, 4> ids{};
   };
   static_assert(sizeof(LeafBlock) == 192);
-  std::vector<LeafBlock> blocks_;  // per leaf (Bvh::leaves())
+  std::vector<LeafBlock, LargeArrayAllocator<LeafBlock>> blocks_;  // per leaf (Bvh::leaves()); huge pages when large
 };
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include "renderer/geometry/traversal_isa.h"
 #include "renderer/geometry/traversal_stats.h"
 #include "renderer/util/cancel_flag.h"
+#include "renderer/util/huge_pages.h"
 
 namespace farm {
 
@@ -102,7 +103,7 @@ class Bvh {
   // The leaves, depth-first (so in the order of their entries in order(), each covered once).
   const std::vector<BvhLeaf>& leaves() const { return leaves_; }
   // What closest() and any() walk: the binary tree collapsed into wide nodes, the root first.
-  const std::vector<WideBvhNode>& wide_nodes() const { return wide_; }
+  std::span<const WideBvhNode> wide_nodes() const { return wide_; }
   // The deepest level (a lone root leaf: 0; no nodes at all: -1).
   int depth() const { return depth_; }
 
@@ -171,7 +172,8 @@ class Bvh {
   void build_wide(std::uint32_t max_leaf, std::uint32_t group);
 
   std::vector<BvhNode> nodes_;
-  std::vector<WideBvhNode> wide_;  // what closest() and any() walk; nodes_ is for drawing
+  // What closest() and any() walk (nodes_ is for drawing); a large tree's on huge pages.
+  std::vector<WideBvhNode, LargeArrayAllocator<WideBvhNode>> wide_;
   std::vector<std::uint32_t> order_;
   std::vector<BvhLeaf> leaves_;
   int depth_ = -1;

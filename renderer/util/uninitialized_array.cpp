@@ -1,15 +1,13 @@
 #include "renderer/util/uninitialized_array.h"
 
-#include <sys/mman.h>
-
 #include <mutex>
 #include <vector>
+
+#include "renderer/util/huge_pages.h"
 
 namespace farm::detail {
 namespace {
 
-constexpr std::size_t kHugePage = std::size_t{2} << 20;
-constexpr std::size_t kPage = 4096;
 constexpr std::size_t kRecycled = 64 * 1024;               // below this, plain malloc
 constexpr std::size_t kRecycledBytesLimit = std::size_t{1} << 30;
 
@@ -61,13 +59,6 @@ BlockRecycler& recycler() {
   return *instance;
 }
 
-// Huge pages only pay off for big blocks; smaller ones are page-aligned.
-std::size_t alignment_for(std::size_t bytes) { return bytes >= 2 * kHugePage ? kHugePage : kPage; }
-std::size_t rounded_size(std::size_t bytes) {
-  const std::size_t a = alignment_for(bytes);
-  return (bytes + a - 1) / a * a;
-}
-
 }  // namespace
 
 void* allocate_frame_memory(std::size_t bytes) {
@@ -77,19 +68,17 @@ void* allocate_frame_memory(std::size_t bytes) {
     if (!p) throw std::bad_alloc();
     return p;
   }
-  const std::size_t rounded = rounded_size(bytes);
-  if (void* p = recycler().take(rounded)) return p;
-  void* p = std::aligned_alloc(alignment_for(bytes), rounded);
-  if (!p) throw std::bad_alloc();
-  // A hint: without huge pages this is plain memory.
-  if (alignment_for(bytes) == kHugePage) madvise(p, rounded, MADV_HUGEPAGE);
-  return p;
+  if (void* p = recycler().take(large_array_size(bytes))) return p;
+  return allocate_large_array(bytes);
 }
 
 void free_frame_memory(void* p, std::size_t bytes) {
   if (!p) return;
-  if (bytes >= kRecycled && recycler().keep(p, rounded_size(bytes))) return;
-  std::free(p);
+  if (bytes < kRecycled) {
+    std::free(p);
+  } else if (!recycler().keep(p, large_array_size(bytes))) {
+    free_large_array(p);
+  }
 }
 
 }  // namespace farm::detail

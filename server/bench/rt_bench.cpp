@@ -312,6 +312,13 @@ Scene single(const std::shared_ptr<const Model>& model) {
 }  // namespace
 
 void run_rt_bench(const RtBenchOptions& options) {
+  if (!options.models.empty()) {
+    fmt::print("farm bench rt ({})\n", bench::machine_summary());
+    for (const std::filesystem::path& model : options.models) {
+      bench_scene(model.filename().string(), single(load(model)), options, false);
+    }
+    return;
+  }
   const std::filesystem::path assets =
       options.assets.empty() ? bench::default_cow_path().parent_path().parent_path() : options.assets;
   const auto cow = load(assets / "dae/cow.dae");

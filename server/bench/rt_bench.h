@@ -13,6 +13,7 @@ namespace farm {
 
 struct RtBenchOptions {
   std::filesystem::path assets;       // folder with dae/cow.dae, dae/bunny.dae, dae/CBbunny.dae
+  std::vector<std::filesystem::path> models;  // when given, these instead of the lab's four scenes
   std::uint64_t rays = 1'000'000;     // per ray set
   std::uint64_t naive_rays = 20'000;  // `naive` tests every triangle: fewer rays, same Mrays/s
   std::vector<int> threads = {1};     // a table for each count

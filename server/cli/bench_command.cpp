@@ -84,6 +84,9 @@ void add_rt_bench(CLI::App& bench, CommandTable& commands) {
       "rt", "Our BVHs against Embree (through the farm's adapter, and called directly): build time and Mrays/s "
             "(primary and incoherent, closest and any hit) on cow, bunny, CBbunny and the 100-cow grid");
   rt->add_option("--assets", o->assets, "The lab's assets folder (default ../shared/assets)");
+  rt->add_option("--model", o->models,
+                 "A model file to time instead of the lab's four scenes (any format farm reads; repeat for more)")
+      ->check(CLI::ExistingFile);
   rt->add_option("--rays", o->rays, "Rays per set")
       ->check(CLI::Range(1000, 100'000'000))
       ->capture_default_str();

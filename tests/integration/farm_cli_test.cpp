@@ -352,6 +352,28 @@ TEST_F(FarmCliTest, BenchRtTimesEmbreeDirectlyAtEachThreadCountOnTheSameScene) {
   EXPECT_NE(r.output.substr(0, r.output.find('\n')).find(machine), std::string::npos) << machine << "\n" << r.output;
 }
 
+// `bench rt --model`: the models named, each one object, instead of the lab's four scenes; the
+// same anchors (and the same check that Embree called directly hits what our BVH hits).
+TEST_F(FarmCliTest, BenchRtTimesTheModelsItIsGivenInsteadOfTheLabsScenes) {
+  const std::string assets = FARM_SHARED_ASSETS;
+  const auto r = run_command(farm("bench rt --rays 2000 --repeats 1 --model " + shell_quote(assets + "/dae/teapot.dae") +
+                                  " --model " + shell_quote(assets + "/obj/cube.obj")));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\nteapot.dae: 2464 triangles, 1 object(s); 2000 rays per set"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\ncube.obj: 12 triangles, 1 object(s); 2000 rays per set"), std::string::npos) << r.output;
+  for (const char* lab : {"cow.dae:", "bunny.dae:", "CBbunny.dae:", "cow-grid-100:", "\nnaive "}) {
+    EXPECT_EQ(r.output.find(lab), std::string::npos) << lab << "\n" << r.output;
+  }
+  std::istringstream lines(r.output);
+  int direct = 0;
+  for (std::string line; std::getline(lines, line);) direct += line.rfind("bvh/embree-direct ", 0) == 0;
+  EXPECT_EQ(direct, 2) << r.output;
+
+  const auto missing = run_command(farm("bench rt --model /nonexistent/scan.obj"));
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("/nonexistent/scan.obj"), std::string::npos) << missing.output;
+}
+
 // The dispatch benchmark claims every queued job once, as many as asked or as are queued (it
 // stops with an error naming the claim otherwise). Plain, every job claimed in queue order (the bench checks it, exit 1 otherwise); in play, the
 // jobs that need a tag the bench worker lacks are never claimed: 1 of 3, 4 of 40.

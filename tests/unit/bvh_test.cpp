@@ -10,6 +10,7 @@
 #include <limits>
 #include <random>
 #include <stdexcept>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -105,7 +106,7 @@ AABB slot_box(const WideBvhNode& node, int i) {
 // order; a slot's box holds its leaf's primitives or its child node's slots; an unused slot
 // holds an empty box and no leaf bit.
 void expect_wide_well_formed(const Bvh& bvh, const std::vector<AABB>& primitives, int max_leaf) {
-  const std::vector<WideBvhNode>& wide = bvh.wide_nodes();
+  const std::span<const WideBvhNode> wide = bvh.wide_nodes();
   const std::vector<BvhLeaf>& leaves = bvh.leaves();
   const std::vector<std::uint32_t>& order = bvh.order();
   ASSERT_EQ(wide.empty(), order.empty());
