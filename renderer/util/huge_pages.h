@@ -3,7 +3,7 @@
 // nodes and leaf blocks (bvh.h, mesh_accel.cpp). From 4 MiB up, such an array is placed on 2 MiB
 // boundaries and offered to the kernel for transparent huge pages (madvise: a hint, plain pages
 // where the kernel has none), so that a walk over a large tree misses in the TLB far less: a
-// 2M-triangle model's incoherent closest hits ran 11% faster with them (docs/architecture.md
+// 2M-triangle model's incoherent closest hits ran 12% faster with them (docs/architecture.md
 // 8.6). Below 4 MiB the rounding to 2 MiB would waste too much for the few pages saved.
 #include <cstddef>
 #include <limits>
