@@ -18,12 +18,14 @@ std::size_t large_array_size(std::size_t bytes);
 void* allocate_large_array(std::size_t bytes);
 void free_large_array(void* p) noexcept;
 
-// For std::vector: arrays of at least 64 KiB come from allocate_large_array, smaller ones from
-// the ordinary heap.
+// Below this an array comes from the ordinary heap, not allocate_large_array (both
+// LargeArrayAllocator and UninitializedArray's frame memory draw the line here).
+inline constexpr std::size_t kLargeArrayMinBytes = std::size_t{64} << 10;
+
+// For std::vector: arrays of kLargeArrayMinBytes or more come from allocate_large_array.
 template <typename T>
 struct LargeArrayAllocator {
   using value_type = T;
-  static constexpr std::size_t kLargeBytes = std::size_t{64} << 10;
 
   LargeArrayAllocator() = default;
   template <typename U>
@@ -31,13 +33,13 @@ struct LargeArrayAllocator {
 
   T* allocate(std::size_t n) {
     if (n > std::numeric_limits<std::size_t>::max() / sizeof(T)) throw std::bad_alloc();
-    if (n * sizeof(T) < kLargeBytes) {
+    if (n * sizeof(T) < kLargeArrayMinBytes) {
       return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{alignof(T)}));
     }
     return static_cast<T*>(allocate_large_array(n * sizeof(T)));
   }
   void deallocate(T* p, std::size_t n) noexcept {
-    if (n * sizeof(T) < kLargeBytes) {
+    if (n * sizeof(T) < kLargeArrayMinBytes) {
       ::operator delete(p, std::align_val_t{alignof(T)});
     } else {
       free_large_array(p);

@@ -8,7 +8,6 @@
 namespace farm::detail {
 namespace {
 
-constexpr std::size_t kRecycled = 64 * 1024;               // below this, plain malloc
 constexpr std::size_t kRecycledBytesLimit = std::size_t{1} << 30;
 
 // Blocks freed by one frame, kept for the next: a fresh block costs a page fault and a
@@ -63,7 +62,7 @@ BlockRecycler& recycler() {
 
 void* allocate_frame_memory(std::size_t bytes) {
   if (bytes == 0) bytes = 1;
-  if (bytes < kRecycled) {
+  if (bytes < kLargeArrayMinBytes) {
     void* p = std::malloc(bytes);
     if (!p) throw std::bad_alloc();
     return p;
@@ -74,7 +73,7 @@ void* allocate_frame_memory(std::size_t bytes) {
 
 void free_frame_memory(void* p, std::size_t bytes) {
   if (!p) return;
-  if (bytes < kRecycled) {
+  if (bytes < kLargeArrayMinBytes) {
     std::free(p);
   } else if (!recycler().keep(p, large_array_size(bytes))) {
     free_large_array(p);
