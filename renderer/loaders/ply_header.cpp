@@ -38,6 +38,14 @@ const std::map<std::string, std::uint64_t, std::less<>>& scalar_sizes() {
   return sizes;
 }
 
+// Where `line` (without its \n) holds a byte Assimp's line reader ends a line at (ParsingUtils'
+// IsLineEnd: \r, NUL, form feed) anywhere but a \r last, or npos: the two readers agree on where
+// its lines end only without one.
+std::size_t mid_line_break(std::string_view line) {
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  return line.find_first_of(std::string_view("\r\0\f", 3));
+}
+
 std::vector<std::string> words_of(std::string_view line) {
   std::vector<std::string> words;
   std::istringstream in{std::string(line)};
@@ -67,6 +75,13 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& file) {
     const std::string_view line = head.substr(pos, end - pos);
     const std::vector<std::string> w = words_of(line);
     pos = end + 1;
+    // Assimp's line reader also ends a line at \r, NUL and form feed, in comments too: a comment
+    // holding "\relement face 1" would be a header line to it and none here.
+    if (const std::size_t at = mid_line_break(line); at != std::string_view::npos) {
+      fail(fmt::format("byte 0x{:02x} inside the line (Assimp's reader would end the line there; a line "
+                       "ends with \\n or \\r\\n)",
+                       static_cast<unsigned char>(line[at])));
+    }
     if (line_number == 1) {
       if (w.size() != 1 || w[0] != "ply") fail("a PLY file starts with the line 'ply'");
       continue;
@@ -178,6 +193,13 @@ void check_ply_ascii_body(const PlyHeader& header, std::string_view body, std::u
                           const std::string& file) {
   for (std::size_t i = 0; i < body.size(); ++i) {
     const auto c = static_cast<unsigned char>(body[i]);
+    // A \r is whitespace to the line checks below but a line end to Assimp: one inside a line
+    // ("0 1 0\r-1") made a face of it whose list length -1 asked for 32 GiB (found by the fuzzer).
+    if (c == '\r' && i + 1 < body.size() && body[i + 1] != '\n') {
+      throw InputError(fmt::format("{}: byte {} of this ASCII PLY file is a carriage return inside a line "
+                                   "(a line ends with \\n or \\r\\n)",
+                                   file, body_offset + i));
+    }
     if ((c >= 0x20 && c < 0x7f) || c == '\n' || c == '\r' || c == '\t') continue;
     throw InputError(fmt::format("{}: byte {} of this ASCII PLY file is {:#04x}, which no number or "
                                  "separator holds (is it binary?)",

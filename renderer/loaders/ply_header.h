@@ -34,7 +34,9 @@ struct PlyHeader {
 };
 
 // Parses the header at the start of `bytes` (at most kMaxPlyHeaderBytes of it are looked at).
-// Throws InputError naming `file` and the header line for anything malformed.
+// Throws InputError naming `file` and the header line for anything malformed, and for a line,
+// a comment's too, that Assimp would split where this reader does not (a \r, NUL or form feed
+// inside it).
 PlyHeader parse_ply_header(std::string_view bytes, const std::string& file);
 
 // Throws InputError naming `file`, the element, its declared count and the bytes it would need
@@ -44,7 +46,8 @@ void check_ply_counts(const PlyHeader& header, std::uint64_t file_bytes, const s
 inline constexpr std::size_t kMaxPlyHeaderBytes = 64 * 1024;
 
 // An ASCII body read against its header: each element is one line of exactly the values its
-// properties take, every value a number, every list's length a whole number its count type holds. Assimp's
+// properties take (a \r only before a \n, where Assimp's reader and this one both end the line),
+// every value a number, every list's length a whole number its count type holds. Assimp's
 // ASCII reader trusts all of this (a list length of 1111111111111113 in a 200-byte file, a NUL
 // among the numbers), so the body is checked before it reads it. Throws InputError naming
 // `file`, the element and its index, or the byte.

@@ -1,6 +1,7 @@
 // PLY headers: element counts are held against the bytes after the header before Assimp reads a
 // PLY file (renderer/loaders/ply_header.h), so a tiny file declaring millions of faces is refused
 // at once; honest ASCII and binary files still load.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -140,6 +141,30 @@ TEST(PlyHeader, AnAsciiBodyThatDoesNotFitItsHeaderIsRefusedNamingThePlace) {
   EXPECT_EQ(load_error(honest), "");
 }
 
+// Found by the fuzzer: a carriage return inside a body line is whitespace to the line checks and
+// a line end to Assimp, which read "0 1 0\r-1" as a vertex and then a face whose list length of
+// -1 it allocated 32 GiB for (std::bad_alloc here; ASan's out-of-memory under the fuzzer). CRLF
+// line ends still load.
+TEST(PlyHeader, ACarriageReturnInsideAnAsciiLineIsRefusedAndCrlfLineEndsLoad) {
+  TempDir dir;
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property float w\nelement face 1\nproperty list int int vertex_indices\nend_header\n";
+  const std::string split = header + "0 0 0 0\n1 0 0 0\n0 1 0\r-1\n3 0 1 2\n";
+  const std::size_t at = split.find('\r');
+  const auto file = dir.write("split.ply", split);
+  EXPECT_NE(load_error(file).find("byte " + std::to_string(at) + " of this ASCII PLY file is a carriage return inside a line"),
+            std::string::npos) << load_error(file);
+  std::string crlf;
+  for (const char c : ascii_triangle("1")) {
+    if (c == '\n') crlf += '\r';
+    crlf += c;
+  }
+  const Model m = load_model(dir.write("crlf.ply", crlf));
+  ASSERT_EQ(m.meshes.size(), 1u);
+  EXPECT_EQ(m.meshes[0].triangles.size(), 1u);
+}
+
 // Found by the fuzzer: a binary face whose char length field is -1 (0xff), which Assimp takes
 // for 4 billion indices and allocates 32 GiB for; and a length whose values run past the file.
 TEST(PlyHeader, ABinaryListLengthOutsideItsTypeOrTheFileIsRefused) {
@@ -177,6 +202,15 @@ TEST(PlyHeader, MalformedHeadersNameTheFileAndTheLine) {
                                  "property float x\nend_header\n"))
                 .find("line 3: byte 0xff in a 'element' line"), std::string::npos);
   EXPECT_EQ(error_of("ply\nformat ascii 1.0\ncomment caf\xc3\xa9\nelement vertex 0\nproperty float x\nend_header\n"), "");
+  // A \r, NUL or form feed inside a line, a comment's too, ends the line for Assimp's reader,
+  // which would then read a header line this one never saw; a \r before the \n is a CRLF end.
+  for (const char c : {'\r', '\0', '\f'}) {
+    std::string hidden = "ply\nformat ascii 1.0\ncomment a_element face 9\nelement vertex 0\nproperty float x\nend_header\n";
+    hidden[hidden.find('_')] = c;
+    EXPECT_NE(error_of(hidden).find(fmt::format("line 3: byte 0x{:02x} inside the line", static_cast<int>(c))),
+              std::string::npos) << error_of(hidden);
+  }
+  EXPECT_EQ(error_of("ply\r\nformat ascii 1.0\r\ncomment crlf\r\nelement vertex 0\r\nproperty float x\r\nend_header\r\n"), "");
   EXPECT_NE(error_of("ply\nformat ascii 1.0\nelement vertex 3\n").find("ends before end_header"),
             std::string::npos);
   EXPECT_NE(error_of("ply\nelement vertex 3\nend_header\n").find("no format line"), std::string::npos);
