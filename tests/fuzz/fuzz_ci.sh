@@ -35,10 +35,11 @@ case "$mode" in
     # -timeout: one input may take 10 s (the services' calls have 10 s deadlines); -rss_limit_mb:
     # the largest model the limits let through stays far below 2 GiB; -max_len: the seeds' size
     # or 64 KiB, whichever is larger, so mutations can grow models past their seeds.
-    # -seed: a fixed one, so that every CI run of the same code tries the same inputs, in the same
-    # order (a run that stops sooner tries a prefix of them): a landing is never refused for a
-    # crash a luckier draw found in code it did not touch. New ground is broken by longer runs by
-    # hand (README, Fuzzing), whose findings join regressions/.
+    # -seed: a fixed one, so that the mutations' random draws are the same in every CI run. The
+    # inputs tried still differ from run to run and machine to machine: the values libFuzzer
+    # traces at comparisons include addresses and hashes that move with ASLR, and a faster machine
+    # gets further in its seconds. A crash CI finds is real, so it is minimised into regressions/
+    # and fixed, however unlucky the draw; longer runs by hand (README, Fuzzing) break new ground.
     status=0
     # Leaks inside Debian's Assimp are the one kind tolerated, by lsan.supp's single rule.
     ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1} \
