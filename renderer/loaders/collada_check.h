@@ -7,7 +7,9 @@
 //   - <p>, <v>, <vcount> and <h> hold only non-negative integers and whitespace;
 //   - an array's `count` (<float_array>, <int_array>, ...) is no more than the values it holds;
 //   - a primitive element's `count` (<triangles>, <polylist>, ...) is no more than the numbers of
-//     its index lists, since every primitive takes at least one.
+//     its index lists, since every primitive takes at least one;
+//   - a <polylist>'s corners (its <vcount> summed) are no more than the indices of its <p>, since
+//     every corner takes at least one (Assimp reserves them all first).
 // Each failure is an InputError naming the file, the element and its line.
 #include <string>
 #include <string_view>

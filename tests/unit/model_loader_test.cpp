@@ -189,6 +189,47 @@ TEST(LoaderCollada, CBbunnyPointLightAndCameraAreReturned) {
   EXPECT_LT(bunny.cameras[0].fov_y_degrees, 179.0f);
 }
 
+// Found by the fuzzer: Assimp reserves a <polylist>'s corners (the sum of its <vcount>) times its
+// inputs before it reads <p>, so a vcount of 20 digits in a 1 kB file asked for 4.4 GB (22.9 GB
+// in the fuzzer's input). The sum is held against the indices <p> holds; the honest polylist
+// still loads.
+TEST(LoaderCollada, APolylistWhoseVcountsNeedMoreIndicesThanItsPHoldsIsRefused) {
+  TempDir dir;
+  const auto polylist = [](const std::string& vcount) {
+    return std::string(R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><up_axis>Y_UP</up_axis></asset>
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
+      <technique_common><accessor source="#pa" count="3" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <polylist count="1"><input semantic="VERTEX" source="#v" offset="0"/><vcount>)") + vcount +
+           R"(</vcount><p>0 1 2</p></polylist>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n">
+    <instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+)";
+  };
+  EXPECT_EQ(load_model(dir.write("honest.dae", polylist("3"))).triangle_count(), 1u);
+  const auto error_of = [&](const std::string& name, const std::string& vcount) {
+    try {
+      load_model(dir.write(name, polylist(vcount)));
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("loaded");
+  };
+  EXPECT_NE(error_of("huge.dae", "33333333333333333333").find(
+                "huge.dae:10: <vcount>: polygons of more than 2^64 corners in all but 3 indices in <p>"),
+            std::string::npos) << error_of("huge.dae", "33333333333333333333");
+  EXPECT_NE(error_of("four.dae", "4").find("polygons of 4 corners in all but 3 indices in <p>"), std::string::npos)
+      << error_of("four.dae", "4");
+}
+
 // Each of these is broken in its own way (a one-corner face, indices out of range, a zero index,
 // a face that fails to triangulate, a missing .mtl). Either Assimp rejects it, and the message
 // names the file, or Assimp loads it and the model is whole.
