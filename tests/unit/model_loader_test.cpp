@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <glm/geometric.hpp>
 #include <glm/trigonometric.hpp>
 #include <nlohmann/json.hpp>
@@ -195,24 +196,17 @@ TEST(LoaderCollada, CBbunnyPointLightAndCameraAreReturned) {
 // still loads.
 TEST(LoaderCollada, APolylistWhoseVcountsNeedMoreIndicesThanItsPHoldsIsRefused) {
   TempDir dir;
-  const auto polylist = [](const std::string& vcount) {
-    return std::string(R"(<?xml version="1.0" encoding="utf-8"?>
-<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
-  <asset><up_axis>Y_UP</up_axis></asset>
-  <library_geometries><geometry id="g"><mesh>
-    <source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array>
-      <technique_common><accessor source="#pa" count="3" stride="3">
-        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
-      </accessor></technique_common></source>
-    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
-    <polylist count="1"><input semantic="VERTEX" source="#v" offset="0"/><vcount>)") + vcount +
-           R"(</vcount><p>0 1 2</p></polylist>
-  </mesh></geometry></library_geometries>
-  <library_visual_scenes><visual_scene id="s"><node id="n">
-    <instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
-  <scene><instance_visual_scene url="#s"/></scene>
-</COLLADA>
-)";
+  // The fuzzer's one-triangle seed (tests/fuzz/make_seeds.py), its <triangles> as a <polylist>.
+  std::ifstream seed_file(std::string(FARM_SOURCE_DIR) + "/tests/fuzz/corpus/collada_loader/seed-triangle.dae");
+  const std::string seed{std::istreambuf_iterator<char>(seed_file), std::istreambuf_iterator<char>()};
+  const std::string triangles =
+      R"(<triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>)";
+  ASSERT_NE(seed.find(triangles), std::string::npos);
+  const auto polylist = [&](const std::string& vcount) {
+    std::string text = seed;
+    return text.replace(text.find(triangles), triangles.size(),
+                        R"(<polylist count="1"><input semantic="VERTEX" source="#v" offset="0"/><vcount>)" + vcount +
+                            "</vcount><p>0 1 2</p></polylist>");
   };
   EXPECT_EQ(load_model(dir.write("honest.dae", polylist("3"))).triangle_count(), 1u);
   const auto error_of = [&](const std::string& name, const std::string& vcount) {
